@@ -1,0 +1,28 @@
+/* The subcommands of the `testbed` command: each is a main() of its own,
+ * called with argv[0] set to the subcommand name. */
+#ifndef TB_TOOLS_TESTBED_COMMANDS_H
+#define TB_TOOLS_TESTBED_COMMANDS_H
+
+/* One row of the subcommand table. */
+typedef struct tb_command {
+    const char *name;                 /* as typed after `testbed` */
+    const char *summary;              /* one line for `testbed help` */
+    int (*run)(int argc, char **argv);
+} tb_command;
+
+/* `testbed help [CMD]`. */
+int tb_cmd_help(int argc, char **argv);
+/* `testbed version`. */
+int tb_cmd_version(int argc, char **argv);
+
+/* Exit statuses shared by all subcommands. */
+enum {
+    TB_EXIT_OK = 0,
+    TB_EXIT_FAIL = 1,   /* the command ran and the answer is "no" or the input is bad */
+    TB_EXIT_USAGE = 2,  /* bad command line */
+};
+
+/* True if argv holds -h or --help before any "--". */
+int tb_wants_help(int argc, char **argv);
+
+#endif

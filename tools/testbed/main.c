@@ -1,0 +1,87 @@
+/* `testbed`: one command, many subcommands, all built from the library. */
+#include <stdio.h>
+#include <string.h>
+
+#include "commands.h"
+#include "tb_version.h"
+
+/* Add a subcommand here and in commands.h; keep the table in alphabetical order. */
+static const tb_command tb__commands[] = {
+    {"help", "list the subcommands, or show one's help", tb_cmd_help},
+    {"version", "print the version and git revision", tb_cmd_version},
+};
+
+static const size_t tb__ncommands = sizeof tb__commands / sizeof tb__commands[0];
+
+static const tb_command *tb__find(const char *name)
+{
+    for (size_t i = 0; i < tb__ncommands; i++)
+        if (strcmp(tb__commands[i].name, name) == 0)
+            return &tb__commands[i];
+    return NULL;
+}
+
+int tb_wants_help(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--") == 0)
+            return 0;
+        if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0)
+            return 1;
+    }
+    return 0;
+}
+
+static void tb__usage(FILE *out)
+{
+    fprintf(out, "usage: testbed <command> [options]\n\n"
+                 "Testbed for Image Synthesis %s. Commands:\n", TB_VERSION_STRING);
+    for (size_t i = 0; i < tb__ncommands; i++)
+        fprintf(out, "  %-10s %s\n", tb__commands[i].name, tb__commands[i].summary);
+    fprintf(out, "\nRun `testbed <command> --help` for a command's options.\n");
+}
+
+int tb_cmd_help(int argc, char **argv)
+{
+    if (argc < 2 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0) {
+        tb__usage(stdout);
+        return TB_EXIT_OK;
+    }
+    const tb_command *c = tb__find(argv[1]);
+    if (!c) {
+        fprintf(stderr, "testbed: error: no command '%s' (see `testbed help`)\n", argv[1]);
+        return TB_EXIT_USAGE;
+    }
+    char *sub[] = {(char *)c->name, "--help", NULL};
+    return c->run(2, sub);
+}
+
+int tb_cmd_version(int argc, char **argv)
+{
+    if (tb_wants_help(argc, argv)) {
+        printf("usage: testbed version\n\nPrints the library version and the git revision it was built from.\n");
+        return TB_EXIT_OK;
+    }
+    printf("testbed %s (%s)\n", TB_VERSION_STRING, TB_GIT_REVISION);
+    return TB_EXIT_OK;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        tb__usage(stderr);
+        return TB_EXIT_USAGE;
+    }
+    if (strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0) {
+        tb__usage(stdout);
+        return TB_EXIT_OK;
+    }
+    if (strcmp(argv[1], "--version") == 0)
+        return tb_cmd_version(1, argv);
+    const tb_command *c = tb__find(argv[1]);
+    if (!c) {
+        fprintf(stderr, "testbed: error: no command '%s' (see `testbed help`)\n", argv[1]);
+        return TB_EXIT_USAGE;
+    }
+    return c->run(argc - 1, argv + 1);
+}

@@ -1,0 +1,57 @@
+#include "util/base/error.h"
+
+#include <stdio.h>
+#include <string.h>
+
+/* Long enough for a path, a location and a sentence. */
+#define TB__ERROR_LEN 1024
+
+static _Thread_local char tb__message[TB__ERROR_LEN];
+
+tb_status tb_verror(tb_status st, const char *fmt, va_list ap)
+{
+    vsnprintf(tb__message, sizeof tb__message, fmt, ap);
+    return st;
+}
+
+tb_status tb_error(tb_status st, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    tb_verror(st, fmt, ap);
+    va_end(ap);
+    return st;
+}
+
+tb_status tb_error_context(tb_status st, const char *fmt, ...)
+{
+    char old[TB__ERROR_LEN];
+    memcpy(old, tb__message, sizeof old);
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(tb__message, sizeof tb__message, fmt, ap);
+    va_end(ap);
+    if (n >= 0 && (size_t)n < sizeof tb__message)
+        snprintf(tb__message + n, sizeof tb__message - (size_t)n, ": %s", old);
+    return st;
+}
+
+const char *tb_last_error(void) { return tb__message; }
+
+void tb_clear_error(void) { tb__message[0] = '\0'; }
+
+const char *tb_status_name(tb_status st)
+{
+    switch (st) {
+    case TB_OK: return "ok";
+    case TB_ERR_ARG: return "invalid argument";
+    case TB_ERR_NOMEM: return "out of memory";
+    case TB_ERR_IO: return "I/O error";
+    case TB_ERR_FORMAT: return "format error";
+    case TB_ERR_UNSUPPORTED: return "unsupported";
+    case TB_ERR_NUMERIC: return "numerical failure";
+    case TB_ERR_NOT_FOUND: return "not found";
+    case TB_ERR_DEVICE: return "device error";
+    }
+    return "unknown status";
+}
