@@ -106,10 +106,6 @@ tb_status tb_png_write(FILE *f, const char *name, const tb_image *img, const tb_
 tb_status tb_pfm_write(FILE *f, const char *name, const tb_image *img, const tb_image_write_options *opts);
 tb_status tb_exr_write(const char *path, const tb_image *img, const tb_image_write_options *opts);
 
-/* sRGB transfer curve (IEC 61966-2-1): linear -> encoded and back, on [0,1]. */
-float tb_srgb_encode(float linear);
-float tb_srgb_decode(float encoded);
-
 /* Linear float -> 8-bit integer through `enc`, clamped and rounded to nearest. */
 unsigned char tb_image_quantize8(float v, tb_image_encoding enc);
 
