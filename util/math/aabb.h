@@ -132,9 +132,12 @@ static inline void tb__aabb_slab(float o, float inv, float lo, float hi, float *
 /* Slab test with a precomputed inv_d = 1 / d (per component; +-inf for a
  * +-0 component): true if the segment [tmin, tmax] of o + t d meets the
  * closed box, and then [*t0, *t1] (within [tmin, tmax]) holds every t at
- * which it is inside. Conservative: a float-rounding error can only make the
- * interval larger (by a relative 2 gamma(3) at most, for normal floats), never
- * miss a hit. Never produces NaN. An empty box is never hit. */
+ * which it is inside. Conservative: rounding can only make the interval
+ * larger, never miss a hit; each end lies within a relative
+ * 2 gamma(3) + gamma(4) (~6e-7) of the exact value (rounding, widening and
+ * the widening's own rounding; for results in the normal float range).
+ * Never produces NaN.
+ * An empty box is never hit. */
 static inline bool tb_aabb_slab(const tb_aabb *b, tb_vec3 o, tb_vec3 inv_d, float tmin, float tmax,
                                 float *t0, float *t1)
 {

@@ -28,6 +28,15 @@ tb_status tb_transform_scale(tb_dvec3 s, tb_transform *out)
     if (s.x == 0.0 || s.y == 0.0 || s.z == 0.0)
         return tb_error(TB_ERR_ARG, "scale (%g, %g, %g) has a zero factor (not invertible)", s.x,
                         s.y, s.z);
+    /* The same verdict tb_mat4_inverse gives for the diagonal matrix:
+     * reciprocal condition number min|s| / max|s|. */
+    tb_dvec3 a = tb_dvec3_abs(s);
+    double smax = tb_dvec3_max_comp(a), smin = fmin(a.x, fmin(a.y, a.z));
+    if (!(smin / smax >= TB_MAT_RCOND_MIN))
+        return tb_error(TB_ERR_NUMERIC,
+                        "scale (%g, %g, %g) is ill-conditioned: smallest / largest factor "
+                        "%.3g < %.3g",
+                        s.x, s.y, s.z, smin / smax, TB_MAT_RCOND_MIN);
     tb_transform r = tb_transform_identity();
     r.m.m[0][0] = s.x;
     r.m.m[1][1] = s.y;

@@ -32,7 +32,10 @@ tb_transform tb_transform_identity(void);
 /* Translation by t. */
 tb_transform tb_transform_translate(tb_dvec3 t);
 /* Non-uniform scale by s (negative factors mirror). TB_ERR_ARG for a zero or
- * non-finite factor: a zero scale flattens space and has no inverse. */
+ * non-finite factor: a zero scale flattens space and has no inverse.
+ * TB_ERR_NUMERIC when min|s| / max|s| < TB_MAT_RCOND_MIN (the verdict
+ * tb_mat4_inverse gives for the same matrix); a uniform scale is always
+ * accepted however small, since it loses no relative precision. */
 tb_status tb_transform_scale(tb_dvec3 s, tb_transform *out);
 /* Rotation by `radians` about `axis` through the origin (right-hand rule).
  * The axis need not be unit length; TB_ERR_ARG when it is zero or
