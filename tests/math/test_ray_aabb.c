@@ -8,6 +8,7 @@
 #include <float.h>
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "util/math/aabb.h"
 #include "util/math/float.h"
@@ -20,6 +21,17 @@
             fail_msg("%s = (%.9g, %.9g, %.9g), want (%.9g, %.9g, %.9g)", #v, tb__v.x, tb__v.y, \
                      tb__v.z, (double)(X), (double)(Y), (double)(Z));                        \
     } while (0)
+
+/* v[i] = x (named fields: indexing past &v->x would be undefined behaviour). */
+static void set3(tb_vec3 *v, int i, float x)
+{
+    if (i == 0)
+        v->x = x;
+    else if (i == 1)
+        v->y = x;
+    else
+        v->z = x;
+}
 
 static void test_ray_layout_and_at(void **state)
 {
@@ -57,10 +69,10 @@ static void test_ray_validity(void **state)
     for (int i = 0; i < 3; ++i) {
         for (int c = 0; c < 3; ++c) {
             r = ok;
-            (&r.o.x)[c] = bad[i];
+            set3(&r.o, c, bad[i]);
             assert_false(tb_ray_is_valid(&r));
             r = ok;
-            (&r.d.x)[c] = bad[i];
+            set3(&r.d, c, bad[i]);
             assert_false(tb_ray_is_valid(&r));
         }
     }
@@ -363,9 +375,9 @@ static void test_slab_conservative_random(void **state)
          * that slab half of the time, so some of these rays graze). */
         for (int i = 0; i < 3; ++i) {
             if (tb_rng_below(&r, 6) == 0) {
-                (&d.x)[i] = (tb_rng_u32(&r) & 1) ? 0.0f : -0.0f;
+                set3(&d, i, (tb_rng_u32(&r) & 1) ? 0.0f : -0.0f);
                 uint32_t w = tb_rng_below(&r, 3);
-                (&o.x)[i] = w == 0 ? lo[i] : (w == 1 ? hi[i] : (&o.x)[i]);
+                set3(&o, i, w == 0 ? lo[i] : (w == 1 ? hi[i] : tb_vec3_get(o, i)));
                 grazing += w < 2;
             }
         }

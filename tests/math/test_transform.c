@@ -255,14 +255,13 @@ static tb_transform random_affine(tb_rng *r)
     tb_dvec3 axis = {2 * tb_rng_double(r) - 1, 2 * tb_rng_double(r) - 1, 2 * tb_rng_double(r) - 1};
     if (tb_transform_rotate(TB_2PI * tb_rng_double(r), axis, &rot))
         rot = tb_transform_identity();
-    tb_dvec3 s;
+    double s[3];
     for (int i = 0; i < 3; ++i) {
-        double v = exp(3.0 * (tb_rng_double(r) - 0.5)); /* 0.22 .. 4.5 */
+        s[i] = exp(3.0 * (tb_rng_double(r) - 0.5)); /* 0.22 .. 4.5 */
         if (tb_rng_u32(r) & 1)
-            v = -v;
-        (&s.x)[i] = v;
+            s[i] = -s[i];
     }
-    sc = scale3(s.x, s.y, s.z);
+    sc = scale3(s[0], s[1], s[2]);
     tb_mat4 m = tb_mat4_identity();
     m.m[0][1] = tb_rng_double(r) - 0.5;
     m.m[1][2] = tb_rng_double(r) - 0.5;
