@@ -43,19 +43,26 @@ static void test_counters_exact_over_omp_threads(void **state)
     for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++) {
         int nt = counts[k];
         tb_stats_reset();
-        int team = 0;
-#pragma omp parallel num_threads(nt)
+        int team = 0, busy = 0;
+#pragma omp parallel num_threads(nt) reduction(+ : busy)
         {
 #pragma omp single
             team = omp_get_num_threads();
-#pragma omp for schedule(dynamic, 997)
+            int mine = 0;
+            /* Static schedule: every thread gets a contiguous share, so each
+             * one's minimum and maximum differ and the merge must pick right. */
+#pragma omp for schedule(static)
             for (int i = 0; i < n; i++) {
                 TB_STAT_INC(t_items);
                 tb_stat_add(&t_weighted, i % 7);
                 tb_stat_sample(&t_dist, i);
+                mine++;
             }
+            busy += mine > 0;
         }
-        assert_int_equal(team, nt); /* the work really was spread over nt threads */
+        /* The work really was spread over nt threads. */
+        assert_int_equal(team, nt);
+        assert_int_equal(busy, nt);
         assert_int_equal(tb__get("Test/items", TB_STAT_KIND_COUNTER, 0), n);
         assert_int_equal(tb__get("Test/weighted", TB_STAT_KIND_COUNTER, 0), weighted);
         assert_int_equal(tb__get("Test/dist", TB_STAT_KIND_DISTRIBUTION, 0), n);
@@ -217,6 +224,7 @@ TB_STAT_COUNTER(g_beta_two, "Beta/two");
 TB_STAT_COUNTER(g_alpha_three, "Alpha/three hundred");
 TB_STAT_COUNTER(g_plain, "plain");
 TB_STAT_COUNTER(g_unused, "Alpha/never touched");
+TB_STAT_COUNTER(g_alp, "Alp/prefix of another category");
 
 /* Index of the line that equals `s`, or -1. */
 static int tb__find_line(char **lines, int n, const char *s)
@@ -244,6 +252,7 @@ static void test_table_groups_by_category(void **state)
     tb_stat_add(&g_beta_two, 22);
     tb_stat_add(&g_alpha_three, 300);
     tb_stat_add(&g_plain, 4444);
+    tb_stat_add(&g_alp, 5);
     assert_int_equal(tb_stats_set_value("rays", 1000), TB_OK);
     char *buf = NULL;
     size_t len = 0;
@@ -258,7 +267,12 @@ static void test_table_groups_by_category(void **state)
         lines[n++] = l;
     int alpha = tb__find_line(lines, n, "  Alpha"), beta = tb__find_line(lines, n, "  Beta");
     int general = tb__find_line(lines, n, "  General");
-    assert_true(alpha >= 0 && beta >= 0 && general >= 0);
+    int alp = tb__find_line(lines, n, "  Alp");
+    assert_true(alpha >= 0 && beta >= 0 && general >= 0 && alp >= 0);
+    /* "Alp" sorts first and is a prefix of "Alpha": its group holds only its own entry. */
+    assert_true(alp < alpha);
+    assert_int_equal(tb__find_prefix(lines, n, "    prefix of another category "), alp + 1);
+    assert_int_equal(alpha, alp + 2);
     int one = tb__find_prefix(lines, n, "    one "), three = tb__find_prefix(lines, n, "    three hundred ");
     int two = tb__find_prefix(lines, n, "    two "), plain = tb__find_prefix(lines, n, "    plain ");
     /* Each entry sits under its own category header, before the next header. */
