@@ -10,6 +10,8 @@ typedef struct tb_command {
     int (*run)(int argc, char **argv);
 } tb_command;
 
+/* `testbed compare A B`: error metrics against a reference image (cmd_compare.c). */
+int tb_cmd_compare(int argc, char **argv);
 /* `testbed help [CMD]`. */
 int tb_cmd_help(int argc, char **argv);
 /* `testbed version`. */

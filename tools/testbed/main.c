@@ -7,6 +7,7 @@
 
 /* Add a subcommand here and in commands.h; keep the table in alphabetical order. */
 static const tb_command tb__commands[] = {
+    {"compare", "error metrics (MSE, PSNR, SSIM, ...) of an image against a reference", tb_cmd_compare},
     {"help", "list the subcommands, or show one's help", tb_cmd_help},
     {"version", "print the version and git revision", tb_cmd_version},
 };
