@@ -14,7 +14,7 @@ packages=(
   # Vulkan: loader, Mesa's CPU driver (lavapipe), shader compiler and tools, validation layers
   libvulkan-dev mesa-vulkan-drivers glslang-tools spirv-tools vulkan-validationlayers vulkan-tools
   # tests: unit framework, independent RLE reader/writer, importer test models, plots
-  libcmocka-dev netpbm assimp-testmodels gnuplot-nox
+  libcmocka-dev netpbm assimp-testmodels gnuplot-nox python3
 )
 if [[ "${1:-}" == "--bench" ]]; then
   packages+=(libembree-dev povray hyperfine)
