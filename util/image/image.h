@@ -12,6 +12,13 @@
 /* Longest channel name, including the terminating zero. */
 #define TB_IMAGE_CHANNEL_NAME_MAX 32
 
+/* Most channels an image may have (a guard against absurd file headers). */
+#define TB_IMAGE_MAX_CHANNELS 1024
+
+/* Most floats (width * height * channels) an image may hold: 8 GiB of pixels.
+ * Readers reject larger headers before allocating anything. */
+#define TB_IMAGE_MAX_SAMPLES ((size_t)1 << 31)
+
 /* One string attribute (provenance, comments, format-specific keys). */
 typedef struct tb_image_attr {
     char *key;
@@ -85,6 +92,9 @@ const char *tb_image_get_attr(const tb_image *img, const char *key);
 /* Format implied by the extension of `path` (case-insensitive), or TB_IMAGE_UNKNOWN. */
 tb_image_format tb_image_format_from_path(const char *path);
 
+/* Short display name of a format ("PNG", "OpenEXR", ...; "unknown"). */
+const char *tb_image_format_name(tb_image_format fmt);
+
 /* Reads `path` in the format its extension names; `opts` may be NULL. */
 tb_status tb_image_read(const char *path, const tb_image_read_options *opts, tb_image **out);
 
@@ -99,17 +109,30 @@ tb_status tb_png_read(FILE *f, const char *name, const tb_image_read_options *op
 tb_status tb_pfm_read(FILE *f, const char *name, tb_image **out);
 /* OpenEXR's C API reads by path, not stream. */
 tb_status tb_exr_read(const char *path, tb_image **out);
+/* OpenEXR from a seekable stream (a file, or fmemopen() memory), starting at
+ * its current position. */
+tb_status tb_exr_read_stream(FILE *f, const char *name, tb_image **out);
 
 /* Per-format writers to an open stream (tb_image_write adds the temporary-file step). */
 tb_status tb_rle_write(FILE *f, const char *name, const tb_image *img, const tb_image_write_options *opts);
 tb_status tb_png_write(FILE *f, const char *name, const tb_image *img, const tb_image_write_options *opts);
 tb_status tb_pfm_write(FILE *f, const char *name, const tb_image *img, const tb_image_write_options *opts);
 tb_status tb_exr_write(const char *path, const tb_image *img, const tb_image_write_options *opts);
+/* OpenEXR to a seekable stream at its current position (the chunk offset table
+ * is filled in last); tb_exr_write() wraps this in a temporary file. */
+tb_status tb_exr_write_stream(FILE *f, const char *name, const tb_image *img,
+                              const tb_image_write_options *opts);
 
 /* Linear float -> 8-bit integer through `enc`, clamped and rounded to nearest. */
 unsigned char tb_image_quantize8(float v, tb_image_encoding enc);
 
 /* 8-bit integer -> linear float through `enc` (exact inverse of tb_image_quantize8 on integers). */
 float tb_image_dequantize8(unsigned char v, tb_image_encoding enc);
+
+/* Linear float -> 16-bit integer through `enc`, clamped and rounded to nearest. */
+unsigned short tb_image_quantize16(float v, tb_image_encoding enc);
+
+/* 16-bit integer -> linear float through `enc` (exact inverse of tb_image_quantize16 on integers). */
+float tb_image_dequantize16(unsigned short v, tb_image_encoding enc);
 
 #endif
