@@ -114,6 +114,12 @@ static void test_round_trip_equal_energy(void **state)
     tb__measure("Smits round trip, illuminant E", tb_illuminant_e(), inv, 500, &named, &random);
     assert_true(named <= TB__BOUND_E);
     assert_true(random <= TB__BOUND_E);
+    /* White comes back white. */
+    const double one[3] = {1, 1, 1};
+    double out[3];
+    tb__round_trip(one, tb_illuminant_e(), inv, out);
+    for (int c = 0; c < 3; c++)
+        tb_assert_near(out[c], 1.0, 1e-3);
 }
 
 static void test_round_trip_d65_srgb(void **state)
@@ -124,6 +130,11 @@ static void test_round_trip_d65_srgb(void **state)
                 &named, &random);
     assert_true(named <= TB__BOUND_D65);
     assert_true(random <= TB__BOUND_D65);
+    const double one[3] = {1, 1, 1};
+    double out[3];
+    tb__round_trip(one, tb_illuminant_d65(), tb_xyz_to_srgb_matrix, out);
+    for (int c = 0; c < 3; c++)
+        tb_assert_near(out[c], 1.0, 1e-3);
     /* The error is systematic, not noise: D65 is not the white Smits fitted for. */
     assert_true(named > TB__BOUND_E);
 }
