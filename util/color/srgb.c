@@ -2,6 +2,8 @@
 
 #include <math.h>
 
+#include "util/math/mat.h"
+
 /* Computed in double so that decode(encode(x)) round-trips every 8- and 16-bit
  * code exactly after rounding; the curve itself is the standard's. */
 float tb_srgb_encode(float linear)
@@ -63,27 +65,6 @@ double tb_linear_srgb_luminance(const double rgb[3])
     return y[0] * rgb[0] + y[1] * rgb[1] + y[2] * rgb[2];
 }
 
-tb_status tb_mat3_inverse(const double m[3][3], double inv[3][3])
-{
-    double c[3][3]; /* cofactors, transposed: the adjugate */
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) {
-            int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
-            c[i][j] = m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
-        }
-    double det = m[0][0] * c[0][0] + m[0][1] * c[1][0] + m[0][2] * c[2][0];
-    double scale = 0.0; /* largest entry: det is compared with its cube */
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            scale = fmax(scale, fabs(m[i][j]));
-    if (!isfinite(det) || !(fabs(det) > 1e-12 * scale * scale * scale))
-        return tb_error(TB_ERR_NUMERIC, "3x3 inverse: the matrix is singular (det = %g)", det);
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            inv[i][j] = c[i][j] / det;
-    return TB_OK;
-}
-
 tb_status tb_rgb_to_xyz_matrix(const double primaries_xy[3][2], const double white_xy[2],
                                double m[3][3])
 {
@@ -93,20 +74,19 @@ tb_status tb_rgb_to_xyz_matrix(const double primaries_xy[3][2], const double whi
             return tb_error(TB_ERR_ARG, "RGB matrix: chromaticity (%g, %g) needs finite x, y > 0",
                             xy[k][0], xy[k][1]);
     /* Columns: XYZ of each primary at Y = 1; then scale them so they sum to the white. */
-    double p[3][3], pinv[3][3];
+    tb_mat3 p, pinv;
     for (int k = 0; k < 3; k++) {
-        p[0][k] = xy[k][0] / xy[k][1];
-        p[1][k] = 1.0;
-        p[2][k] = (1.0 - xy[k][0] - xy[k][1]) / xy[k][1];
+        p.m[0][k] = xy[k][0] / xy[k][1];
+        p.m[1][k] = 1.0;
+        p.m[2][k] = (1.0 - xy[k][0] - xy[k][1]) / xy[k][1];
     }
-    tb_status st = tb_mat3_inverse(p, pinv);
-    if (st)
+    if (tb_mat3_inverse(&p, &pinv))
         return tb_error_context(TB_ERR_ARG, "RGB matrix: primaries are collinear");
     double w[3] = {white_xy[0] / white_xy[1], 1.0, (1.0 - white_xy[0] - white_xy[1]) / white_xy[1]};
     double s[3];
-    tb__mat3_apply(pinv, w, s);
+    tb__mat3_apply(pinv.m, w, s);
     for (int r = 0; r < 3; r++)
         for (int k = 0; k < 3; k++)
-            m[r][k] = p[r][k] * s[k];
+            m[r][k] = p.m[r][k] * s[k];
     return TB_OK;
 }

@@ -34,12 +34,9 @@ double tb_linear_srgb_luminance(const double rgb[3]);
 
 /* The RGB -> XYZ matrix of an RGB space with primaries (x, y) red, green, blue
  * and white point (x, y); RGB (1,1,1) maps to the white with Y = 1.
- * TB_ERR_ARG for a y <= 0, non-finite input or collinear primaries. */
+ * TB_ERR_ARG for a y <= 0, non-finite input or collinear primaries. The inverse
+ * (XYZ -> RGB) is tb_mat3_inverse() of util/math/mat.h. */
 tb_status tb_rgb_to_xyz_matrix(const double primaries_xy[3][2], const double white_xy[2],
                                double m[3][3]);
-
-/* Inverse of a 3x3 matrix (cofactors, in double); TB_ERR_NUMERIC if singular
- * (|det| <= 1e-12 times the cube of the largest entry) or not finite. */
-tb_status tb_mat3_inverse(const double m[3][3], double inv[3][3]);
 
 #endif
