@@ -12,6 +12,8 @@ typedef struct tb_command {
 
 /* `testbed compare A B`: error metrics against a reference image (cmd_compare.c). */
 int tb_cmd_compare(int argc, char **argv);
+/* `testbed convert IN OUT`: image format conversion (cmd_convert.c). */
+int tb_cmd_convert(int argc, char **argv);
 /* `testbed help [CMD]`. */
 int tb_cmd_help(int argc, char **argv);
 /* `testbed version`. */
