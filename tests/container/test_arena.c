@@ -245,7 +245,7 @@ static void test_arena_random_scopes(void **state)
                 p[i] = pattern(rec.tag, i);
             assert_int_equal(tb_array_push(&recs, &rec), TB_OK);
         }
-        if (op % 1000 == 0)
+        if (op % 4096 == 0)
             check_all(&recs);
     }
     check_all(&recs);

@@ -141,6 +141,18 @@ static void test_array_self_reference(void **state)
     assert_int_equal(a.len, len + 40);
     for (size_t i = 0; i < a.len; i++)
         assert_elem(TB_ARRAY_AT(&a, elem3, i), i >= 50 && i <= 90 ? 99 : 1);
+    /* Distinct values: insert at the front a copy of an element behind the
+     * insertion point, which moves up by one slot during the insertion. */
+    tb_array d = TB_ARRAY_INIT(elem3);
+    for (uint32_t i = 0; i < 8; i++) /* exactly full: the insert also reallocates */
+        assert_int_equal(TB_ARRAY_PUSH(&d, elem3, mk(i)), TB_OK);
+    assert_int_equal(d.cap, 8);
+    assert_int_equal(tb_array_insert(&d, 0, tb_array_at(&d, 5)), TB_OK);
+    assert_int_equal(tb_array_insert(&d, 3, tb_array_at(&d, 1)), TB_OK);
+    const uint32_t want[10] = {5, 0, 1, 0, 2, 3, 4, 5, 6, 7};
+    for (size_t i = 0; i < 10; i++)
+        assert_elem(TB_ARRAY_AT(&d, elem3, i), want[i]);
+    tb_array_free(&d);
     /* Append a slice of itself. */
     len = a.len;
     assert_int_equal(tb_array_push_n(&a, tb_array_at(&a, 0), len), TB_OK);
