@@ -111,5 +111,16 @@ rletopnm --alphaout=craft/rgba.np.a.pgm craft/rgba.rle > /dev/null
 "$tool" topnm craft/rgba.rle craft/rgba.ours2.pnm craft/rgba.ours.a.pgm
 same craft/rgba.np.a.pgm craft/rgba.ours.a.pgm "hand-built rgba.rle: alpha"
 
+# ---- the same files through `testbed convert` (format chosen by extension)
+"${TESTBED:?}" convert madras.np.rle madras.conv.rle --linear
+rletopnm madras.conv.rle > madras.conv.ppm
+same madras.ppm madras.conv.ppm "testbed convert --linear: pnmtorle file -> rle -> rletopnm"
+# default sRGB: decoding and re-encoding 8-bit codes is exact, so PNG holds the same codes
+"$TESTBED" convert madras.alpha.rle madras.conv.png
+pngtopam -alphapam madras.conv.png | pamchannel -infile=- 0 1 2 | pamtopnm -assume > madras.conv2.ppm
+same madras.ppm madras.conv2.ppm "testbed convert: pnmtorle -alpha file -> png, colour"
+pngtopam -alphapam madras.conv.png | pamchannel -infile=- 3 | pamtopnm -assume > madras.conv2.pgm
+same madras.alpha.np.pgm madras.conv2.pgm "testbed convert: pnmtorle -alpha file -> png, alpha"
+
 echo "$checks checks, $fails failed"
 [ "$fails" -eq 0 ]
