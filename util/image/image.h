@@ -107,7 +107,7 @@ tb_status tb_image_write(const char *path, const tb_image *img, const tb_image_w
 tb_status tb_rle_read(FILE *f, const char *name, const tb_image_read_options *opts, tb_image **out);
 tb_status tb_png_read(FILE *f, const char *name, const tb_image_read_options *opts, tb_image **out);
 tb_status tb_pfm_read(FILE *f, const char *name, tb_image **out);
-/* OpenEXR's C API reads by path, not stream. */
+/* OpenEXR from a file (by path; the stream form follows). */
 tb_status tb_exr_read(const char *path, tb_image **out);
 /* OpenEXR from a seekable stream (a file, or fmemopen() memory), starting at
  * its current position. */
@@ -117,6 +117,7 @@ tb_status tb_exr_read_stream(FILE *f, const char *name, tb_image **out);
 tb_status tb_rle_write(FILE *f, const char *name, const tb_image *img, const tb_image_write_options *opts);
 tb_status tb_png_write(FILE *f, const char *name, const tb_image *img, const tb_image_write_options *opts);
 tb_status tb_pfm_write(FILE *f, const char *name, const tb_image *img, const tb_image_write_options *opts);
+/* OpenEXR to `path`, through a temporary file of its own (all or nothing). */
 tb_status tb_exr_write(const char *path, const tb_image *img, const tb_image_write_options *opts);
 /* OpenEXR to a seekable stream at its current position (the chunk offset table
  * is filled in last); tb_exr_write() wraps this in a temporary file. */
