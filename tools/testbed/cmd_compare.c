@@ -247,7 +247,7 @@ int tb_cmd_compare(int argc, char **argv)
     }
     tb_compare_result r;
     if (tb_image_compare(img[0], img[1], &co, &r)) {
-        fprintf(stderr, "testbed compare: error: %s: %s\n", paths[0], tb_last_error());
+        fprintf(stderr, "testbed compare: error: %s\n", tb_last_error());
         goto done;
     }
     double scale_used = 0.0;

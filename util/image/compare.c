@@ -21,13 +21,13 @@ static tb_status tb__cmp_add(tb__cmp_sel *s, const tb_image *a, const tb_image *
 {
     int ia = tb_image_channel(a, name), ib = tb_image_channel(b, name);
     if (ia < 0 || ib < 0)
-        return tb_error(TB_ERR_ARG, "compare: channel \"%s\" is missing from image %s", name,
+        return tb_error(TB_ERR_ARG, "channel \"%s\" is missing from image %s", name,
                         ia < 0 ? "A" : "B");
     for (int i = 0; i < s->n; i++)
         if (s->ia[i] == ia)
-            return tb_error(TB_ERR_ARG, "compare: channel \"%s\" named twice", name);
+            return tb_error(TB_ERR_ARG, "channel \"%s\" named twice", name);
     if (s->n == TB_COMPARE_MAX_CHANNELS)
-        return tb_error(TB_ERR_ARG, "compare: more than %d channels", TB_COMPARE_MAX_CHANNELS);
+        return tb_error(TB_ERR_ARG, "more than %d channels", TB_COMPARE_MAX_CHANNELS);
     s->ia[s->n] = ia;
     s->ib[s->n] = ib;
     snprintf(s->names[s->n], sizeof s->names[s->n], "%s", name);
@@ -55,7 +55,7 @@ static tb_status tb__cmp_select(const tb_image *a, const tb_image *b, const tb_c
             while (n > 0 && p[n - 1] == ' ')
                 n--;
             if (n == 0 || n >= TB_IMAGE_CHANNEL_NAME_MAX)
-                return tb_error(TB_ERR_ARG, "compare: bad channel list \"%s\"", o->channels);
+                return tb_error(TB_ERR_ARG, "bad channel list \"%s\"", o->channels);
             char name[TB_IMAGE_CHANNEL_NAME_MAX];
             memcpy(name, p, n);
             name[n] = '\0';
@@ -89,7 +89,7 @@ static tb_status tb__cmp_select(const tb_image *a, const tb_image *b, const tb_c
             return st;
     if (s->n == 0)
         return tb_error(TB_ERR_ARG,
-                        "compare: the images have no colour channel in common (A has %d "
+                        "the images have no colour channel in common (A has %d "
                         "channels starting \"%s\", B has %d starting \"%s\"); name them with "
                         "the channels option",
                         a->channels, a->names[0], b->channels, b->names[0]);
@@ -99,9 +99,9 @@ static tb_status tb__cmp_select(const tb_image *a, const tb_image *b, const tb_c
 static tb_status tb__cmp_check(const tb_image *a, const tb_image *b)
 {
     if (!a || !b || !a->pixels || !b->pixels)
-        return tb_error(TB_ERR_ARG, "compare: NULL image");
+        return tb_error(TB_ERR_ARG, "tb_image_compare: NULL image");
     if (a->width != b->width || a->height != b->height)
-        return tb_error(TB_ERR_ARG, "compare: size mismatch: A is %dx%d, B is %dx%d", a->width,
+        return tb_error(TB_ERR_ARG, "size mismatch: A is %dx%d, B is %dx%d", a->width,
                         a->height, b->width, b->height);
     return TB_OK;
 }
@@ -195,7 +195,7 @@ static tb_status tb__ssim_channel(const tb_image *a, int ca, const tb_image *b, 
     if (!buf || !row) {
         free(buf);
         free(row);
-        return tb_error(TB_ERR_NOMEM, "compare: no memory for SSIM of a %dx%d image", w, h);
+        return tb_error(TB_ERR_NOMEM, "no memory for SSIM of a %dx%d image", w, h);
     }
     double *hx = buf, *hy = buf + n, *hxx = buf + 2 * n, *hyy = buf + 3 * n, *hxy = buf + 4 * n;
     double *rx = row, *ry = row + w;
@@ -263,14 +263,14 @@ tb_status tb_image_compare(const tb_image *a, const tb_image *b, const tb_compar
                            tb_compare_result *res)
 {
     if (!res)
-        return tb_error(TB_ERR_ARG, "compare: result is NULL");
+        return tb_error(TB_ERR_ARG, "tb_image_compare: result is NULL");
     memset(res, 0, sizeof *res);
     tb_status st = tb__cmp_check(a, b);
     if (st)
         return st;
     double peak = opts && opts->peak != 0.0 ? opts->peak : 1.0;
     if (!(peak > 0.0) || !isfinite(peak))
-        return tb_error(TB_ERR_ARG, "compare: peak must be positive and finite, not %g", peak);
+        return tb_error(TB_ERR_ARG, "peak must be positive and finite, not %g", peak);
     tb__cmp_sel s;
     if ((st = tb__cmp_select(a, b, opts, &s)))
         return st;
@@ -284,7 +284,7 @@ tb_status tb_image_compare(const tb_image *a, const tb_image *b, const tb_compar
     res->pixels = (long long)w * h;
     unsigned char *valid = tb__cmp_valid(a, b, &s, &res->nonfinite_a, &res->nonfinite_b);
     if (!valid)
-        return tb_error(TB_ERR_NOMEM, "compare: no memory for a %dx%d mask", w, h);
+        return tb_error(TB_ERR_NOMEM, "no memory for a %dx%d mask", w, h);
 
     long long nvalid = 0;
     size_t npix = (size_t)w * (size_t)h;
@@ -297,7 +297,7 @@ tb_status tb_image_compare(const tb_image *a, const tb_image *b, const tb_compar
         ok = tb__ssim_window_ok(valid, w, h);
         if (!ok) {
             free(valid);
-            return tb_error(TB_ERR_NOMEM, "compare: no memory for SSIM of a %dx%d image", w, h);
+            return tb_error(TB_ERR_NOMEM, "no memory for SSIM of a %dx%d image", w, h);
         }
     }
 
@@ -401,13 +401,13 @@ tb_status tb_compare_error_image(const tb_image *a, const tb_image *b,
                                  double *scale_used)
 {
     if (!out)
-        return tb_error(TB_ERR_ARG, "compare: out is NULL");
+        return tb_error(TB_ERR_ARG, "tb_compare_error_image: out is NULL");
     *out = NULL;
     tb_status st = tb__cmp_check(a, b);
     if (st)
         return st;
     if (isnan(scale) || isinf(scale))
-        return tb_error(TB_ERR_ARG, "compare: error scale must be finite");
+        return tb_error(TB_ERR_ARG, "error scale must be finite");
     tb__cmp_sel s;
     if ((st = tb__cmp_select(a, b, opts, &s)))
         return st;
@@ -415,7 +415,7 @@ tb_status tb_compare_error_image(const tb_image *a, const tb_image *b,
     size_t npix = (size_t)w * (size_t)h;
     double *err = malloc(npix * sizeof *err);
     if (!err)
-        return tb_error(TB_ERR_NOMEM, "compare: no memory for a %dx%d error map", w, h);
+        return tb_error(TB_ERR_NOMEM, "no memory for a %dx%d error map", w, h);
     double emax = 0.0;
     for (size_t i = 0; i < npix; i++) {
         double se = 0.0;
@@ -437,7 +437,7 @@ tb_status tb_compare_error_image(const tb_image *a, const tb_image *b,
     tb_image *img = tb_image_create(w, h, 3, NULL);
     if (!img) {
         free(err);
-        return tb_error_context(TB_ERR_NOMEM, "compare: error image");
+        return tb_error_context(TB_ERR_NOMEM, "error image");
     }
     for (size_t i = 0; i < npix; i++)
         tb_compare_colormap(isnan(err[i]) ? NAN : err[i] / scale, img->pixels + 3 * i);
