@@ -146,67 +146,48 @@ static void tb__ssim_kernel(double g[TB_COMPARE_SSIM_WINDOW])
         g[i] /= sum;
 }
 
-/* Which windows (by top-left corner, (w-10) x (h-10) of them) are free of
- * excluded pixels: separable box sums of the invalid mask. */
-static unsigned char *tb__ssim_window_ok(const unsigned char *valid, int w, int h)
-{
-    const int W = TB_COMPARE_SSIM_WINDOW;
-    int ow = w - W + 1, oh = h - W + 1;
-    int *rows = malloc((size_t)ow * (size_t)h * sizeof *rows);
-    unsigned char *ok = malloc((size_t)ow * (size_t)oh);
-    if (!rows || !ok) {
-        free(rows);
-        free(ok);
-        return NULL;
-    }
-    for (int y = 0; y < h; y++)
-        for (int x = 0; x < ow; x++) {
-            int bad = 0;
-            for (int i = 0; i < W; i++)
-                bad += !valid[(size_t)y * (size_t)w + (size_t)(x + i)];
-            rows[(size_t)y * (size_t)ow + (size_t)x] = bad;
-        }
-    for (int y = 0; y < oh; y++)
-        for (int x = 0; x < ow; x++) {
-            int bad = 0;
-            for (int j = 0; j < W; j++)
-                bad += rows[(size_t)(y + j) * (size_t)ow + (size_t)x];
-            ok[(size_t)y * (size_t)ow + (size_t)x] = bad == 0;
-        }
-    free(rows);
-    return ok;
-}
-
-/* Mean SSIM of one channel over the windows marked in `ok`. The Gaussian
- * filter is applied separably (rows, then columns) to x, y, x^2, y^2, xy;
- * excluded pixels read as 0, which only matters in windows `ok` rejects. */
+/* Mean SSIM of one channel over the windows that hold no excluded pixel.
+ * The Gaussian filter is separable: each input row is filtered horizontally
+ * (x, y, x^2, y^2, xy, and a count of excluded pixels) into a ring of
+ * 11 rows, and each output row sums 11 of those vertically, so memory grows
+ * with the width only. Excluded pixels read as 0; the windows holding them
+ * are skipped. */
 static tb_status tb__ssim_channel(const tb_image *a, int ca, const tb_image *b, int cb,
-                                  const unsigned char *valid, const unsigned char *ok, double peak,
-                                  double *ssim, long long *nwin)
+                                  const unsigned char *valid, double peak, double *ssim,
+                                  long long *nwin)
 {
-    const int W = TB_COMPARE_SSIM_WINDOW;
+    enum { W = TB_COMPARE_SSIM_WINDOW, NQ = 5 };
     int w = a->width, h = a->height;
-    int ow = w - W + 1, oh = h - W + 1;
+    int ow = w - W + 1;
     double g[TB_COMPARE_SSIM_WINDOW];
     tb__ssim_kernel(g);
-    size_t n = (size_t)ow * (size_t)h;
-    double *buf = malloc(5 * n * sizeof *buf);
+    size_t ring = (size_t)W * (size_t)ow; /* per quantity: W filtered rows */
+    double *hq = malloc(NQ * ring * sizeof *hq);
+    int *hbad = malloc(ring * sizeof *hbad);
     double *row = malloc(2 * (size_t)w * sizeof *row);
-    if (!buf || !row) {
-        free(buf);
+    if (!hq || !hbad || !row) {
+        free(hq);
+        free(hbad);
         free(row);
         return tb_error(TB_ERR_NOMEM, "no memory for SSIM of a %dx%d image", w, h);
     }
-    double *hx = buf, *hy = buf + n, *hxx = buf + 2 * n, *hyy = buf + 3 * n, *hxy = buf + 4 * n;
+    const double c1 = (TB_COMPARE_SSIM_K1 * peak) * (TB_COMPARE_SSIM_K1 * peak);
+    const double c2 = (TB_COMPARE_SSIM_K2 * peak) * (TB_COMPARE_SSIM_K2 * peak);
     double *rx = row, *ry = row + w;
+    double sum = 0.0;
+    long long count = 0;
     for (int y = 0; y < h; y++) {
+        /* horizontal pass of input row y into ring slot y % W */
+        size_t slot = (size_t)(y % W) * (size_t)ow;
+        const unsigned char *vrow = valid + (size_t)y * (size_t)w;
         for (int x = 0; x < w; x++) {
             size_t i = (size_t)y * (size_t)w + (size_t)x;
-            rx[x] = valid[i] ? (double)a->pixels[i * (size_t)a->channels + (size_t)ca] : 0.0;
-            ry[x] = valid[i] ? (double)b->pixels[i * (size_t)b->channels + (size_t)cb] : 0.0;
+            rx[x] = vrow[x] ? (double)a->pixels[i * (size_t)a->channels + (size_t)ca] : 0.0;
+            ry[x] = vrow[x] ? (double)b->pixels[i * (size_t)b->channels + (size_t)cb] : 0.0;
         }
         for (int x = 0; x < ow; x++) {
             double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+            int bad = 0;
             for (int k = 0; k < W; k++) {
                 double vx = rx[x + k], vy = ry[x + k];
                 sx += g[k] * vx;
@@ -214,34 +195,39 @@ static tb_status tb__ssim_channel(const tb_image *a, int ca, const tb_image *b, 
                 sxx += g[k] * vx * vx;
                 syy += g[k] * vy * vy;
                 sxy += g[k] * vx * vy;
+                bad += !vrow[x + k];
             }
-            size_t o = (size_t)y * (size_t)ow + (size_t)x;
-            hx[o] = sx, hy[o] = sy, hxx[o] = sxx, hyy[o] = syy, hxy[o] = sxy;
+            size_t o = slot + (size_t)x;
+            hq[o] = sx, hq[ring + o] = sy, hq[2 * ring + o] = sxx;
+            hq[3 * ring + o] = syy, hq[4 * ring + o] = sxy;
+            hbad[o] = bad;
         }
-    }
-    const double c1 = (TB_COMPARE_SSIM_K1 * peak) * (TB_COMPARE_SSIM_K1 * peak);
-    const double c2 = (TB_COMPARE_SSIM_K2 * peak) * (TB_COMPARE_SSIM_K2 * peak);
-    double sum = 0.0;
-    long long count = 0;
-    for (int y = 0; y < oh; y++)
+        /* vertical pass: output row oy = y - W + 1 uses input rows oy..y */
+        int oy = y - W + 1;
+        if (oy < 0)
+            continue;
         for (int x = 0; x < ow; x++) {
-            if (!ok[(size_t)y * (size_t)ow + (size_t)x])
-                continue;
             double mx = 0, my = 0, exx = 0, eyy = 0, exy = 0;
+            int bad = 0;
             for (int k = 0; k < W; k++) {
-                size_t o = (size_t)(y + k) * (size_t)ow + (size_t)x;
-                mx += g[k] * hx[o];
-                my += g[k] * hy[o];
-                exx += g[k] * hxx[o];
-                eyy += g[k] * hyy[o];
-                exy += g[k] * hxy[o];
+                size_t o = (size_t)((oy + k) % W) * (size_t)ow + (size_t)x;
+                mx += g[k] * hq[o];
+                my += g[k] * hq[ring + o];
+                exx += g[k] * hq[2 * ring + o];
+                eyy += g[k] * hq[3 * ring + o];
+                exy += g[k] * hq[4 * ring + o];
+                bad += hbad[o];
             }
+            if (bad)
+                continue;
             double vx = exx - mx * mx, vy = eyy - my * my, cxy = exy - mx * my;
             sum += ((2.0 * mx * my + c1) * (2.0 * cxy + c2)) /
                    ((mx * mx + my * my + c1) * (vx + vy + c2));
             count++;
         }
-    free(buf);
+    }
+    free(hq);
+    free(hbad);
     free(row);
     *ssim = count > 0 ? sum / (double)count : NAN;
     *nwin = count;
@@ -292,14 +278,7 @@ tb_status tb_image_compare(const tb_image *a, const tb_image *b, const tb_compar
         nvalid += valid[i];
     res->valid_pixels = nvalid;
 
-    unsigned char *ok = NULL;
-    if (w >= TB_COMPARE_SSIM_WINDOW && h >= TB_COMPARE_SSIM_WINDOW) {
-        ok = tb__ssim_window_ok(valid, w, h);
-        if (!ok) {
-            free(valid);
-            return tb_error(TB_ERR_NOMEM, "no memory for SSIM of a %dx%d image", w, h);
-        }
-    }
+    int ssim_fits = w >= TB_COMPARE_SSIM_WINDOW && h >= TB_COMPARE_SSIM_WINDOW;
 
     double sum_mse = 0, sum_rel = 0, sum_ssim = 0;
     res->all.max_abs = nvalid > 0 ? 0.0 : NAN;
@@ -333,9 +312,8 @@ tb_status tb_image_compare(const tb_image *a, const tb_image *b, const tb_compar
         cs->max_x = mxx;
         cs->max_y = mxy;
         cs->ssim = NAN;
-        if (ok && (st = tb__ssim_channel(a, s.ia[c], b, s.ib[c], valid, ok, peak, &cs->ssim,
-                                         &res->ssim_windows))) {
-            free(ok);
+        if (ssim_fits && (st = tb__ssim_channel(a, s.ia[c], b, s.ib[c], valid, peak, &cs->ssim,
+                                                &res->ssim_windows))) {
             free(valid);
             return st;
         }
@@ -354,7 +332,6 @@ tb_status tb_image_compare(const tb_image *a, const tb_image *b, const tb_compar
     res->all.relmse = sum_rel / s.n;
     res->all.psnr = tb__psnr(res->all.mse, peak);
     res->all.ssim = sum_ssim / s.n;
-    free(ok);
     free(valid);
     return TB_OK;
 }
