@@ -249,7 +249,8 @@ static tb_status tb__string(tb__mid_lexer *lx)
                                   "control character 0x%02x in a string (write it as an escape such as \\n or \\u{%x})",
                                   (unsigned)c, (unsigned)c);
         if (c >= 0x80) {
-            if (o + 4 > limit)
+            int n = c >= 0xF0 ? 4 : c >= 0xE0 ? 3 : 2; /* an invalid lead byte fails in tb__utf8 */
+            if (o + n > limit)
                 return tb__mid_errorf(lx, start, "string longer than %d bytes", TB_MID_MAX_TOKEN);
             tb_status st = tb__utf8(lx, &o);
             if (st)
@@ -305,7 +306,7 @@ static tb_status tb__string(tb__mid_lexer *lx)
                 return tb__mid_errorf(lx, esc, "unknown escape '\\%c' in a string (use \\\" \\\\ \\n \\t \\r or \\u{HEX})", e);
             return tb__mid_errorf(lx, esc, "unknown escape in a string (use \\\" \\\\ \\n \\t \\r or \\u{HEX})");
         }
-        if (o + 4 > limit)
+        if (o + (u < 0x80 ? 1 : u < 0x800 ? 2 : u < 0x10000 ? 3 : 4) > limit)
             return tb__mid_errorf(lx, start, "string longer than %d bytes", TB_MID_MAX_TOKEN);
         tb__put_utf8(&o, u);
     }

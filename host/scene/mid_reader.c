@@ -227,3 +227,10 @@ void tb_mid_reader_version(const tb_mid_reader *r, int *major, int *minor)
 }
 
 uint64_t tb_mid_reader_offset(const tb_mid_reader *r) { return tb__mid_lexer_offset(&r->lx); }
+
+size_t tb_mid_reader_memory(const tb_mid_reader *r)
+{
+    return TB__MID_BUF + 1 + TB_MID_MAX_TOKEN + 1 + tb_arena_capacity(&r->item) + tb_arena_capacity(&r->keep) +
+           r->values.cap * r->values.elem_size + r->attrs.cap * r->attrs.elem_size +
+           r->nodes.cap * r->nodes.elem_size + r->refs.cap * r->refs.elem_size + r->order.cap * r->order.elem_size;
+}

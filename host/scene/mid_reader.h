@@ -52,6 +52,11 @@ void tb_mid_reader_version(const tb_mid_reader *r, int *major, int *minor);
 /* Bytes of MID text consumed so far. */
 uint64_t tb_mid_reader_offset(const tb_mid_reader *r);
 
+/* Bytes the reader holds from the system: read buffer, arenas and scratch
+ * stacks (not counting the two hash tables of material names and checked
+ * file paths). Stays flat while reading a stream of similar objects. */
+size_t tb_mid_reader_memory(const tb_mid_reader *r);
+
 /* Closes the reader (and the file it opened); NULL is allowed. */
 void tb_mid_reader_close(tb_mid_reader *r);
 

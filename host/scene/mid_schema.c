@@ -556,7 +556,7 @@ static tb_status tb__conic_check(tb_mid_reader *r, tb_mid_loc loc, const tb_geom
     double zs[3] = {g->z0, g->z1, 0.0};
     int n = 2;
     if (g->c[2] != 0.0) {
-        double zv = -g->c[1] / (2.0 * g->c[2]); /* the parabola's vertex */
+        double zv = -g->c[1] / (2.0 * g->c[2]) + 0.0; /* the parabola's vertex (+0.0: no -0 in messages) */
         if (zv > g->z0 && zv < g->z1)
             zs[n++] = zv;
     }
@@ -1138,14 +1138,14 @@ static tb_status tb__camera(tb_mid_reader *r, const tb__mid_node *n, tb_mid_came
     tb_dvec3 d = tb_dvec3_sub(c->look_at, c->eye);
     if (d.x == 0.0 && d.y == 0.0 && d.z == 0.0)
         return TB__ERR(r, n->loc, "camera 'eye' and 'look_at' must differ");
+    double dist = tb_dvec3_length(d);
+    if (!isfinite(dist))
+        return TB__ERR(r, n->loc, "camera 'look_at' is too far from 'eye'");
     tb_transform view;
     if (tb_transform_look_at(c->eye, c->look_at, c->up, &view))
         return TB__ERR(r, n->loc, "camera 'up' must be non-zero and not parallel to the view direction");
-    if (!focus) {
-        c->focus_distance = tb_dvec3_length(d);
-        if (!isfinite(c->focus_distance))
-            return TB__ERR(r, n->loc, "camera 'look_at' is too far from 'eye'");
-    }
+    if (!focus)
+        c->focus_distance = dist;
     return TB_OK;
 }
 
