@@ -575,6 +575,104 @@ static void test_scan_random_polygons(void **state)
     }
 }
 
+/* Span sink that only checks the contract and sums lengths (for buffers too
+ * large to hold counters). */
+typedef struct span_sum {
+    int w, h, last_y, last_x1;
+    long long pixels;
+} span_sum;
+
+static void sum_span(void *user, int y, int x0, int x1)
+{
+    span_sum *s = user;
+    if (!(y >= 0 && y < s->h && x0 >= 0 && x0 < x1 && x1 <= s->w))
+        fail_msg("bad span y=%d [%d, %d) in %dx%d", y, x0, x1, s->w, s->h);
+    if (y < s->last_y || (y == s->last_y && x0 < s->last_x1))
+        fail_msg("span y=%d [%d, %d) out of order", y, x0, x1);
+    s->last_y = y;
+    s->last_x1 = x1;
+    s->pixels += x1 - x0;
+}
+
+/* A coordinate from the ranges where the integer arithmetic is tightest:
+ * around the clipping limit, far beyond it, near the largest buffer size. */
+static float extreme_coord(tb_rng *r, int size)
+{
+    const double L = TB_SCAN_COORD_LIMIT;
+    switch (tb_rng_below(r, 6)) {
+    case 0: return (float)(tb_rng_below(r, 2) ? L : -L);
+    case 1: return (float)((tb_rng_double(r) * 2 - 1) * L * 1.001);
+    case 2: return (float)((tb_rng_double(r) * 2 - 1) * 3e38);
+    case 3: return (float)(size * tb_rng_double(r));
+    case 4: return (float)(tb_rng_below(r, 2) ? size : 0);
+    default: return (float)((tb_rng_double(r) * 2 - 1) * 1e7);
+    }
+}
+
+/* Random polygons with extreme coordinates on buffers up to the largest size:
+ * spans stay in bounds and in order, the integer arithmetic never overflows
+ * (the sanitizer build checks), a polygon around the whole buffer covers it
+ * once, and two triangles splitting such a polygon also cover it once. */
+static void test_scan_extreme_coordinates(void **state)
+{
+    (void)state;
+    tb_rng rng;
+    tb_rng_seed(&rng, tb_test_seed("scan_extreme", 606), 6);
+    const int sizes[] = {1, 3, 1000, TB_SCAN_MAX_DIM};
+    for (int trial = 0; trial < 400; trial++) {
+        /* Cost grows with rows, not columns: the tallest buffer only once. */
+        int W = sizes[tb_rng_below(&rng, 4)], H = trial == 0 ? TB_SCAN_MAX_DIM : sizes[tb_rng_below(&rng, 3)];
+        float p[8][2];
+        int n = 3 + (int)tb_rng_below(&rng, 6);
+        for (int k = 0; k < n; k++) {
+            p[k][0] = extreme_coord(&rng, W);
+            p[k][1] = extreme_coord(&rng, H);
+        }
+        span_sum s = {W, H, -1, 0, 0};
+        int counts[1] = {n};
+        assert_int_equal(tb_scan_contours(W, H, p, counts, 1, (tb_fill_rule)(trial & 1), sum_span, &s),
+                         TB_OK);
+        assert_true(s.pixels <= (long long)W * H);
+    }
+    /* A quad far around the largest buffer, whole and split along a diagonal
+     * whose ends are both beyond the clipping limit. */
+    const int W = TB_SCAN_MAX_DIM, H = 2048;
+    /* The diagonal q0-q2 runs through the middle of the buffer. */
+    const float q[4][2] = {{-3e9f, -1e9f}, {4e9f, -3e9f}, {3e9f + W, 1e9f + H}, {-3e9f, 4e9f}};
+    span_sum s = {W, H, -1, 0, 0};
+    assert_int_equal(tb_scan_polygon(W, H, q, 4, sum_span, &s), TB_OK);
+    assert_true(s.pixels == (long long)W * H);
+    const float t1[3][2] = {{q[0][0], q[0][1]}, {q[1][0], q[1][1]}, {q[2][0], q[2][1]}};
+    const float t2[3][2] = {{q[2][0], q[2][1]}, {q[3][0], q[3][1]}, {q[0][0], q[0][1]}};
+    span_sum s1 = {W, H, -1, 0, 0}, s2 = {W, H, -1, 0, 0};
+    assert_int_equal(tb_scan_polygon(W, H, t1, 3, sum_span, &s1), TB_OK);
+    assert_int_equal(tb_scan_polygon(W, H, t2, 3, sum_span, &s2), TB_OK);
+    assert_true(s1.pixels + s2.pixels == (long long)W * H);
+    assert_true(s1.pixels > 0 && s2.pixels > 0);
+}
+
+/* Regression for the clipping of shared edges. The edge q-p below leaves the
+ * [-2^21, 2^21] box; its intersection with x = 2^21 lies, in exact arithmetic,
+ * almost exactly between two points of the 1/256 grid, and computing it from
+ * q towards p or from p towards q rounds to different grid points (found by a
+ * random search). The scan converter computes it in one fixed order, so both
+ * triangles, walking the edge in opposite directions, clip it to the same
+ * point and cover the 2^20 x 2^20 buffer exactly once (about a thousand
+ * pixels along the edge would otherwise be lost or doubled). */
+static void test_scan_shared_edge_clipped_identically(void **state)
+{
+    (void)state;
+    const int S = TB_SCAN_MAX_DIM;
+    const float q[2] = {-1, -1}, p[2] = {2163071.0f, 1076917.25f};
+    const float t1[3][2] = {{q[0], q[1]}, {p[0], p[1]}, {-1e6f, 2e6f}};
+    const float t2[3][2] = {{p[0], p[1]}, {q[0], q[1]}, {2e6f, -1e6f}};
+    span_sum s1 = {S, S, -1, 0, 0}, s2 = {S, S, -1, 0, 0};
+    assert_int_equal(tb_scan_polygon(S, S, t1, 3, sum_span, &s1), TB_OK);
+    assert_int_equal(tb_scan_polygon(S, S, t2, 3, sum_span, &s2), TB_OK);
+    if (s1.pixels + s2.pixels != (long long)S * S)
+        fail_msg("%lld + %lld pixels, expected %lld", s1.pixels, s2.pixels, (long long)S * S);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -591,6 +689,8 @@ int main(void)
         cmocka_unit_test(test_scan_resolutions),
         cmocka_unit_test(test_scan_degenerate),
         cmocka_unit_test(test_scan_random_polygons),
+        cmocka_unit_test(test_scan_extreme_coordinates),
+        cmocka_unit_test(test_scan_shared_edge_clipped_identically),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
