@@ -290,6 +290,14 @@ static void test_degrees_and_nonfinite(void **state)
     assert_true(r[0] == 1 && r[1] == 2 && r[2] == 3 && r[3] == 4);
     assert_int_equal(tb_cubic(0x1p-1000, -6 * 0x1p-1000, 11 * 0x1p-1000, -6 * 0x1p-1000, r), 3);
     assert_true(r[0] == 1 && r[1] == 2 && r[2] == 3);
+    /* roots far from 1 (x = 2^+-200 y is substituted, exactly) */
+    const double s = 0x1p-200, t = 0x1p200;
+    assert_int_equal(tb_quartic(1, -10 * s, 35 * s * s, -50 * s * s * s, 24 * s * s * s * s, r), 4);
+    assert_true(r[0] == 1 * s && r[1] == 2 * s && r[2] == 3 * s && r[3] == 4 * s);
+    assert_int_equal(tb_quartic(1, -10 * t, 35 * t * t, -50 * t * t * t, 24 * t * t * t * t, r), 4);
+    assert_true(r[0] == 1 * t && r[1] == 2 * t && r[2] == 3 * t && r[3] == 4 * t);
+    assert_int_equal(tb_cubic(0x1p-1000, -6 * 0x1p-500, 11 * 0x1p0, -6 * 0x1p500, r), 3);
+    assert_true(r[0] == 0x1p500 && r[1] == 2 * 0x1p500 && r[2] == 3 * 0x1p500);
 
     const double bad[3] = {NAN, INFINITY, -INFINITY};
     for (int pos = 0; pos < 5; ++pos)

@@ -53,6 +53,12 @@ static void test_quadratic_special_cases(void **state)
     expect_roots(0x1p-1000, -3 * 0x1p-1000, 2 * 0x1p-1000, 2, 1, 2);
     expect_roots(0x1p1000, -0x1p1001, 0x1p1000, 2, 1, 1);
 
+    /* Products that would underflow: x = 2^k y rebalances them (exact here). */
+    expect_roots(1.0, -4.5 * 0x1p-500, 4.5 * 0x1p-1000, 2, 1.5 * 0x1p-500, 3 * 0x1p-500);
+    expect_roots(0x1p-1000, -4.5 * 0x1p-500, 4.5, 2, 1.5 * 0x1p500, 3 * 0x1p500);
+    expect_roots(0x1p-1074, 0x1p-1074, -2 * 0x1p-1074, 2, -2, 1);
+    expect_roots(1.0, 0.0, -0x1p-1000, 2, -0x1p-500, 0x1p-500);
+    expect_roots(0x1p-900, 0x1p200, 0.0, 1, 0, 0); /* the root -2^1100 overflows: dropped */
     /* A root that overflows is dropped, the other kept: 1e-300 x^2 + 1e10 x + 1. */
     double r[2];
     assert_int_equal(tb_quadratic(1e-300, 1e10, 1.0, r), 1);
@@ -214,6 +220,71 @@ static void test_quadratic_property_float(void **state)
     assert_true(counts[0] > 2000 && counts[2] > 2000);
 }
 
+/* Coefficients anywhere in the exponent range (double: 2^+-1000, float:
+ * 2^+-120): counts exact and roots within 4 ulps wherever the root itself is
+ * a normal number. The long double reference has no range problems. */
+static void test_quadratic_wide_range(void **state)
+{
+    (void)state;
+    tb_rng rng;
+    tb_rng_seed(&rng, tb_test_seed("quadratic_wide_range", 0x31de5u), 6);
+    double worst = 0.0, worst_f = 0.0;
+    for (int t = 0; t < 20000; ++t) {
+        double c3[3];
+        for (int i = 0; i < 3; ++i) {
+            double v = ldexp(tb_rng_double(&rng) + 0.5, (int)tb_rng_below(&rng, 2000) - 1000);
+            c3[i] = (tb_rng_u32(&rng) & 1u) ? -v : v;
+        }
+        if (t % 4 == 1) /* nearly tangent */
+            c3[2] = c3[1] * c3[1] / (4.0 * c3[0]) * (1.0 + ldexp(tb_rng_double(&rng) - 0.5, -40));
+        if (!isfinite(c3[2]) || c3[2] == 0.0)
+            continue;
+        long double ref[2];
+        int nref = ref_quadratic(c3[0], c3[1], c3[2], ref);
+        double r[2];
+        int n = tb_quadratic(c3[0], c3[1], c3[2], r);
+        int normal = 1;
+        for (int i = 0; i < nref; ++i)
+            normal &= fabsl(ref[i]) >= 0x1p-1000L && fabsl(ref[i]) <= 0x1p1000L;
+        if (!normal)
+            continue;
+        if (n != nref)
+            fail_msg("t=%d: %a x^2 + %a x + %a: %d roots, reference %d", t, c3[0], c3[1], c3[2], n, nref);
+        for (int i = 0; i < n; ++i) {
+            double e = ref_ulps(r[i], ref[i]);
+            worst = fmax(worst, e);
+            if (e > QUAD_ULPS)
+                fail_msg("t=%d: %a x^2 + %a x + %a: root %.17g, reference %.20Lg (%.2f ulps)", t, c3[0], c3[1],
+                         c3[2], r[i], ref[i], e);
+        }
+
+        float cf[3];
+        for (int i = 0; i < 3; ++i)
+            cf[i] = (float)ldexp(tb_rng_double(&rng) + 0.5, (int)tb_rng_below(&rng, 240) - 120);
+        if (t & 1)
+            cf[1] = -cf[1];
+        nref = ref_quadratic(cf[0], cf[1], cf[2], ref);
+        float rf[2];
+        n = tb_quadraticf(cf[0], cf[1], cf[2], rf);
+        normal = 1;
+        for (int i = 0; i < nref; ++i)
+            normal &= fabsl(ref[i]) >= 0x1p-120L && fabsl(ref[i]) <= 0x1p120L;
+        if (!normal)
+            continue;
+        if (n != nref)
+            fail_msg("t=%d: float %a x^2 + %a x + %a: %d roots, reference %d", t, cf[0], cf[1], cf[2], n, nref);
+        for (int i = 0; i < n; ++i) {
+            double e = ref_ulpsf(rf[i], ref[i]);
+            worst_f = fmax(worst_f, e);
+            if (e > QUAD_ULPS)
+                fail_msg("t=%d: float %a x^2 + %a x + %a: root %.9g, reference %.12Lg (%.2f ulps)", t, cf[0],
+                         cf[1], cf[2], rf[i], ref[i], e);
+        }
+    }
+    print_message("[ measured ] quadratic wide exponent range: double worst %.2f ulps, float worst %.2f ulps\n",
+                  worst, worst_f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -222,6 +293,7 @@ int main(void)
         cmocka_unit_test(test_quadratic_constructed),
         cmocka_unit_test(test_quadratic_property_double),
         cmocka_unit_test(test_quadratic_property_float),
+        cmocka_unit_test(test_quadratic_wide_range),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -41,7 +41,7 @@ static double tb__fujiwara(const double *a, int n)
 
 static int tb__sign(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
 
-/* Isolation for n >= 3 with a[0] != 0 and a[n] != 0, coefficients below 2^200. */
+/* Isolation for n >= 3 with a[0] != 0 and a[n] != 0, coefficients below 2^100. */
 static int tb__isolate(const double *a, int n, double *r)
 {
     double d[TB_POLY_MAX_DEGREE] = {0};
@@ -50,11 +50,13 @@ static int tb__isolate(const double *a, int n, double *r)
     double crit[TB_POLY_MAX_DEGREE];
     int nc = tb_poly_roots(d, n - 1, crit);
 
-    /* Beyond 2^(790/n) a term of p could overflow (coefficients are below
-     * 2^200), so the bound is capped there and the end values are then
-     * evaluated; roots beyond the cap (only when the coefficients span more
-     * than ~2^600) are not reported. */
-    double cap = ldexp(1.0, 790 / n);
+    /* Beyond 2^(890/n) a term of p could overflow (coefficients are below
+     * 2^100), so the bound is capped there and the end values are then
+     * evaluated. Unbalanced coefficients within 2^+-100 never reach the cap
+     * (Fujiwara <= 2^201); balanced ones only with a tiny leading coefficient
+     * that still fails the negligibility test, and roots beyond the cap are
+     * then not reported. */
+    double cap = ldexp(1.0, 890 / n);
     double bound = tb__fujiwara(a, n);
     int capped = !(bound < cap);
     if (capped)
@@ -180,40 +182,74 @@ int tb_poly_roots(const double *coef, int degree, double *r)
 {
     if (!coef || !r || degree < 0 || degree > TB_POLY_MAX_DEGREE)
         return 0;
-    double m = 0.0;
+    int in_range = 1, off = -1;
     for (int i = 0; i <= degree; ++i) {
         if (!isfinite(coef[i]))
             return 0;
-        if (fabs(coef[i]) > m)
-            m = fabs(coef[i]);
+        double m = fabs(coef[i]);
+        if (m != 0.0 && off < 0)
+            off = i;
+        in_range &= m == 0.0 || (m >= 0x1p-100 && m <= 0x1p100);
     }
-    if (m == 0.0)
+    if (off < 0)
         return 0; /* 0 = 0 holds for every x: reported as no roots */
-
-    int off = 0;
-    while (coef[off] == 0.0)
-        ++off;
     int n = degree - off;
-    /* Coefficients beyond 2^+-200 get a power-of-two scale (exact) that puts
-     * the largest in [0.5, 1), so no product of a coefficient and a power of a
-     * root overflows or underflows before the root does. */
+    if (n <= 2) { /* the closed forms handle any scale themselves */
+        if (n == 2)
+            return tb_quadratic(coef[off], coef[off + 1], coef[off + 2], r);
+        if (n == 0)
+            return 0; /* a nonzero constant */
+        r[0] = -coef[off + 1] / coef[off];
+        return isfinite(r[0]) ? 1 : 0;
+    }
     double a[TB_POLY_MAX_DEGREE + 1];
     for (int i = 0; i <= n; ++i)
         a[i] = coef[off + i];
-    if (m > 0x1p200 || m < 0x1p-200) {
-        int e;
-        frexp(m, &e);
-        for (int i = 0; i <= n; ++i)
-            a[i] = ldexp(a[i], -e);
-    }
 
     /* Zero constant terms are exact roots at 0; divide them out. */
     int k = 0;
-    while (n > 0 && a[n] == 0.0) {
+    while (a[n] == 0.0) {
         r[k++] = 0.0;
         --n;
     }
+
+    /* Coefficients beyond 2^+-100: substitute x = 2^shift y, with shift
+     * making the first and last coefficients about equal, and scale by one
+     * power of two so the largest is in [1, 2); all exact, and no product of
+     * a coefficient and a power of a root then over- or underflows before the
+     * root itself does. A coefficient that still underflows (the set spans
+     * more than ~2^1000 after balancing) becomes 0. */
+    int shift = 0;
+    if (!in_range && n > 0) {
+        shift = (ilogb(a[n]) - ilogb(a[0])) / n;
+        int top = INT_MIN;
+        for (int i = 0; i <= n; ++i)
+            if (a[i] != 0.0 && ilogb(a[i]) + (n - i) * shift > top)
+                top = ilogb(a[i]) + (n - i) * shift;
+        for (int i = 0; i <= n; ++i)
+            a[i] = ldexp(a[i], (n - i) * shift - top);
+        int lead = 0;
+        while (a[lead] == 0.0)
+            ++lead;
+        for (int i = 0; lead > 0 && i + lead <= n; ++i)
+            a[i] = a[i + lead];
+        n -= lead;
+        while (n > 0 && a[n] == 0.0) {
+            r[k++] = 0.0;
+            --n;
+        }
+    }
+    int z = k;
     k += tb__roots_core(a, n, r + k);
+    if (shift != 0) { /* back to x, dropping roots that overflow */
+        int kept = z;
+        for (int i = z; i < k; ++i) {
+            double x = ldexp(r[i], shift);
+            if (isfinite(x))
+                r[kept++] = x;
+        }
+        k = kept;
+    }
 
     for (int i = 1; i < k; ++i) /* insertion sort: k <= 4 */
         for (int j = i; j > 0 && r[j - 1] > r[j]; --j) {

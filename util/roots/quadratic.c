@@ -12,41 +12,59 @@
 
 #include "util/math/float.h"
 
+/* Both solvers follow the same steps; the double one is commented.
+ *
+ * Overflow and underflow: when every nonzero coefficient lies within
+ * 2^+-480 (2^+-60 for float) no product in the discriminant can overflow or
+ * lose digits to underflow. Otherwise x = 2^k y is substituted with k chosen
+ * so that the y^2 and constant coefficients have about the same exponent,
+ * then all three are scaled by one power of two to a largest in [1, 2): all
+ * exact, and it leaves b^2 or 4ac negligible whenever either underflows. */
 int tb_quadratic(double a, double b, double c, double r[2])
 {
     if (!(isfinite(a) && isfinite(b) && isfinite(c)))
         return 0;
-    /* A power-of-two scale keeps b^2 and 4ac away from overflow and
-     * underflow without changing the roots or rounding anything. */
-    double m = fmax(fabs(a), fmax(fabs(b), fabs(c)));
-    if (m == 0.0)
-        return 0; /* 0 = 0: every x, reported as none */
-    if (m > 0x1p480 || m < 0x1p-480) {
-        int e;
-        frexp(m, &e);
-        a = ldexp(a, -e);
-        b = ldexp(b, -e);
-        c = ldexp(c, -e);
-    }
     if (a == 0.0) {
         if (b == 0.0)
-            return 0;
+            return 0; /* c = 0: none, or every x when c == 0 (reported as none) */
         r[0] = -c / b;
         return isfinite(r[0]) ? 1 : 0;
+    }
+    if (c == 0.0) { /* x (a x + b): exact, whatever the magnitudes */
+        double x = -b / a + 0.0; /* + 0.0 turns -0 into +0 */
+        r[0] = 0.0;
+        if (!isfinite(x))
+            return 1;
+        r[0] = x < 0.0 ? x : 0.0;
+        r[1] = x < 0.0 ? 0.0 : x;
+        return 2;
+    }
+    int k = 0;
+    const double lo = 0x1p-480, hi = 0x1p480;
+    double fa = fabs(a), fb = fabs(b), fc = fabs(c);
+    if (!(fa >= lo && fa <= hi && fc >= lo && fc <= hi && (b == 0.0 || (fb >= lo && fb <= hi)))) {
+        int ea = ilogb(a), ec = ilogb(c);
+        k = (ec - ea) / 2;
+        int m = ea + 2 * k > ec ? ea + 2 * k : ec;
+        if (b != 0.0 && ilogb(b) + k > m)
+            m = ilogb(b) + k;
+        a = ldexp(a, 2 * k - m);
+        b = ldexp(b, k - m);
+        c = ldexp(c, -m);
     }
     double disc = tb_diff_of_products(b, b, 4.0 * a, c);
     if (disc < 0.0)
         return 0;
     double q = -0.5 * (b + copysign(sqrt(disc), b));
-    if (q == 0.0) { /* b == 0 and disc == 0, so c == 0: double root at 0 */
-        r[0] = r[1] = 0.0;
-        return 2;
-    }
-    double x0 = q / a, x1 = c / q;
+    double x0 = q / a, x1 = c / q; /* q != 0: c != 0 here */
     if (x0 > x1) {
         double t = x0;
         x0 = x1;
         x1 = t;
+    }
+    if (k != 0) {
+        x0 = ldexp(x0, k);
+        x1 = ldexp(x1, k);
     }
     int n = 0;
     if (isfinite(x0))
@@ -60,35 +78,47 @@ int tb_quadraticf(float a, float b, float c, float r[2])
 {
     if (!(isfinite(a) && isfinite(b) && isfinite(c)))
         return 0;
-    float m = fmaxf(fabsf(a), fmaxf(fabsf(b), fabsf(c)));
-    if (m == 0.0f)
-        return 0;
-    if (m > 0x1p60f || m < 0x1p-60f) {
-        int e;
-        frexpf(m, &e);
-        a = ldexpf(a, -e);
-        b = ldexpf(b, -e);
-        c = ldexpf(c, -e);
-    }
     if (a == 0.0f) {
         if (b == 0.0f)
             return 0;
         r[0] = -c / b;
         return isfinite(r[0]) ? 1 : 0;
     }
+    if (c == 0.0f) {
+        float x = -b / a + 0.0f;
+        r[0] = 0.0f;
+        if (!isfinite(x))
+            return 1;
+        r[0] = x < 0.0f ? x : 0.0f;
+        r[1] = x < 0.0f ? 0.0f : x;
+        return 2;
+    }
+    int k = 0;
+    const float lo = 0x1p-60f, hi = 0x1p60f;
+    float fa = fabsf(a), fb = fabsf(b), fc = fabsf(c);
+    if (!(fa >= lo && fa <= hi && fc >= lo && fc <= hi && (b == 0.0f || (fb >= lo && fb <= hi)))) {
+        int ea = ilogbf(a), ec = ilogbf(c);
+        k = (ec - ea) / 2;
+        int m = ea + 2 * k > ec ? ea + 2 * k : ec;
+        if (b != 0.0f && ilogbf(b) + k > m)
+            m = ilogbf(b) + k;
+        a = ldexpf(a, 2 * k - m);
+        b = ldexpf(b, k - m);
+        c = ldexpf(c, -m);
+    }
     float disc = tb_diff_of_productsf(b, b, 4.0f * a, c);
     if (disc < 0.0f)
         return 0;
     float q = -0.5f * (b + copysignf(sqrtf(disc), b));
-    if (q == 0.0f) {
-        r[0] = r[1] = 0.0f;
-        return 2;
-    }
     float x0 = q / a, x1 = c / q;
     if (x0 > x1) {
         float t = x0;
         x0 = x1;
         x1 = t;
+    }
+    if (k != 0) {
+        x0 = ldexpf(x0, k);
+        x1 = ldexpf(x1, k);
     }
     int n = 0;
     if (isfinite(x0))
