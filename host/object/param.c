@@ -10,8 +10,12 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
 
+#include "util/container/array.h"
 #include "util/math/float.h"
+#include "util/mesh/triangulate.h"
 #include "util/stats/stats.h"
 
 TB_STAT_COUNTER(tb__param_from_point_calls, "Param/from point");
@@ -57,10 +61,9 @@ static bool tb__finite(double x) { return isfinite(x) != 0; }
 /* r^2 of a conic at height z. */
 static double tb__conic_q(const tb_geom_conic *c, double z) { return c->c[0] + (c->c[1] + c->c[2] * z) * z; }
 
-/* Number of points of a prism's polygon (sides or profile). */
-static int tb__prism_n(const tb_geom_prism *g) { return g->sides > 0 ? g->sides : g->nprofile; }
+int tb_param_prism_npoints(const tb_geom_prism *g) { return g->sides > 0 ? g->sides : g->nprofile; }
 
-static tb_status tb__check_geom(tb_prim_kind kind, const tb_mid_geometry *g)
+tb_status tb_param_check(tb_prim_kind kind, const tb_mid_geometry *g)
 {
     if (!g && kind != TB_PRIM_SPHERE && kind != TB_PRIM_CUBE)
         return tb_error(TB_ERR_ARG, "param: NULL geometry for %s", tb_prim_kind_name(kind));
@@ -118,7 +121,7 @@ static tb_status tb__check_geom(tb_prim_kind kind, const tb_mid_geometry *g)
 
 int tb_param_face_count(tb_prim_kind kind, const tb_mid_geometry *geom)
 {
-    if (tb__check_geom(kind, geom) != TB_OK)
+    if (tb_param_check(kind, geom) != TB_OK)
         return 0;
     switch (kind) {
     case TB_PRIM_SPHERE: return 1;
@@ -126,7 +129,7 @@ int tb_param_face_count(tb_prim_kind kind, const tb_mid_geometry *geom)
     case TB_PRIM_CYLINDER: return 3;
     case TB_PRIM_CONE: return 3;
     case TB_PRIM_PYRAMID: return 6;
-    case TB_PRIM_PRISM: return TB_FACE_PRISM_SIDE0 + tb__prism_n(&geom->prism);
+    case TB_PRIM_PRISM: return TB_FACE_PRISM_SIDE0 + tb_param_prism_npoints(&geom->prism);
     case TB_PRIM_TORUS: return 1;
     case TB_PRIM_POLYGONS: return geom->polygons.nfaces;
     case TB_PRIM_CONIC: return 3;
@@ -391,10 +394,9 @@ static void tb__torus_project(const tb_geom_torus *t, tb_dvec3 p, double *u, dou
 
 /* ------------------------------------------------------------------- prism */
 
-/* Point k (mod n) of the prism's polygon. */
-static void tb__prism_vertex(const tb_geom_prism *g, int k, double *x, double *y)
+void tb_param_prism_point(const tb_geom_prism *g, int k, double *x, double *y)
 {
-    int n = tb__prism_n(g);
+    int n = tb_param_prism_npoints(g);
     k %= n;
     if (k < 0)
         k += n;
@@ -408,8 +410,7 @@ static void tb__prism_vertex(const tb_geom_prism *g, int k, double *x, double *y
     }
 }
 
-/* True if the polygon runs counter-clockwise (a regular one always does). */
-static bool tb__prism_ccw(const tb_geom_prism *g)
+bool tb_param_prism_ccw(const tb_geom_prism *g)
 {
     if (g->sides > 0)
         return true;
@@ -425,14 +426,14 @@ static bool tb__prism_ccw(const tb_geom_prism *g)
 /* The polygon's bounding rectangle. */
 static void tb__prism_bbox(const tb_geom_prism *g, double *x0, double *x1, double *y0, double *y1)
 {
-    int n = tb__prism_n(g);
+    int n = tb_param_prism_npoints(g);
     if (g->sides > 0) {
         /* The extremes are at the points nearest the angles 0, pi/2, pi, 3pi/2. */
         int ks[8] = {0, 0, n / 4, (n + 3) / 4, n / 2, (n + 1) / 2, 3 * n / 4, (3 * n + 3) / 4};
         *x0 = *y0 = INFINITY, *x1 = *y1 = -INFINITY;
         for (int i = 0; i < 8; i++) {
             double x, y;
-            tb__prism_vertex(g, ks[i], &x, &y);
+            tb_param_prism_point(g, ks[i], &x, &y);
             *x0 = fmin(*x0, x), *x1 = fmax(*x1, x), *y0 = fmin(*y0, y), *y1 = fmax(*y1, y);
         }
         return;
@@ -449,11 +450,11 @@ static void tb__prism_edge(const tb_geom_prism *g, bool ccw, int k, double *ax, 
                            double *by)
 {
     if (ccw) {
-        tb__prism_vertex(g, k, ax, ay);
-        tb__prism_vertex(g, k + 1, bx, by);
+        tb_param_prism_point(g, k, ax, ay);
+        tb_param_prism_point(g, k + 1, bx, by);
     } else {
-        tb__prism_vertex(g, k + 1, ax, ay);
-        tb__prism_vertex(g, k, bx, by);
+        tb_param_prism_point(g, k + 1, ax, ay);
+        tb_param_prism_point(g, k, bx, by);
     }
 }
 
@@ -481,14 +482,14 @@ static void tb__prism_side_project(const tb_geom_prism *g, bool ccw, int k, tb_d
  * edge of the point's sector is looked at. */
 static bool tb__prism_inside(const tb_geom_prism *g, double x, double y)
 {
-    int n = tb__prism_n(g);
+    int n = tb_param_prism_npoints(g);
     if (g->sides > 0) {
         int k = (int)floor(tb__angle_u(x, y) * n);
         if (k >= n)
             k = n - 1;
         double ax, ay, bx, by;
-        tb__prism_vertex(g, k, &ax, &ay);
-        tb__prism_vertex(g, k + 1, &bx, &by);
+        tb_param_prism_point(g, k, &ax, &ay);
+        tb_param_prism_point(g, k + 1, &bx, &by);
         return (bx - ax) * (y - ay) - (by - ay) * (x - ax) >= 0.0;
     }
     bool in = false;
@@ -505,7 +506,7 @@ static void tb__prism_cap_closest(const tb_geom_prism *g, double *x, double *y)
 {
     if (tb__prism_inside(g, *x, *y))
         return;
-    int n = tb__prism_n(g), k0 = 0, k1 = n;
+    int n = tb_param_prism_npoints(g), k0 = 0, k1 = n;
     if (g->sides > 0) {
         /* Outside a regular polygon the nearest edge is in or next to the sector. */
         int k = (int)floor(tb__angle_u(*x, *y) * n);
@@ -516,8 +517,8 @@ static void tb__prism_cap_closest(const tb_geom_prism *g, double *x, double *y)
     double bd = INFINITY, bx = *x, by = *y;
     for (int k = k0; k < k1; k++) {
         double ax, ay, cx, cy, qx, qy;
-        tb__prism_vertex(g, k, &ax, &ay);
-        tb__prism_vertex(g, k + 1, &cx, &cy);
+        tb_param_prism_point(g, k, &ax, &ay);
+        tb_param_prism_point(g, k + 1, &cx, &cy);
         double d = tb__seg_closest(*x, *y, ax, ay, cx, cy, &qx, &qy);
         if (d < bd)
             bd = d, bx = qx, by = qy;
@@ -766,12 +767,62 @@ static void tb__poly_closest(const tb_geom_polygons *g, int face, const tb__poly
         *s = bs, *t = bt;
 }
 
-/* Triangle j of a polygon's fan from vertex 0 (corners 0, j+1, j+2), used with
- * per-vertex uvs. A fan covers convex polygons exactly; see docs. */
-static void tb__poly_fan(const tb_geom_polygons *g, int face, int j, int c[3])
+/* A polygon's triangles as corner numbers (0 .. nv-1) into its loop: the fan
+ * from corner 0 when the loop is convex in its plane, else util/mesh's
+ * ear-clipping triangulation of the loop's plane coordinates. */
+typedef struct tb__poly_tris {
+    int n;           /* triangles */
+    uint32_t (*c)[3]; /* corners, or NULL for the fan */
+    tb_array tris;   /* storage of the triangulated case */
+} tb__poly_tris;
+
+static void tb__poly_tris_free(tb__poly_tris *t) { tb_array_free(&t->tris); }
+
+static tb_status tb__poly_tris_of(const tb_geom_polygons *g, int face, const tb__poly_frame *f, tb__poly_tris *t)
+{
+    int nv = tb__poly_nv(g, face);
+    tb_array_init(&t->tris, sizeof(tb_tri));
+    t->n = nv - 2, t->c = NULL;
+    if (nv == 3)
+        return TB_OK;
+    double ps, pt, qs, qt;
+    tb__poly_st(f, tb__pv(g, face, nv - 2), &ps, &pt);
+    tb__poly_st(f, tb__pv(g, face, nv - 1), &qs, &qt);
+    bool convex = true;
+    for (int i = 0; i < nv && convex; i++) {
+        double rs, rt;
+        tb__poly_st(f, tb__pv(g, face, i), &rs, &rt);
+        if ((qs - ps) * (rt - pt) - (qt - pt) * (rs - ps) < 0.0)
+            convex = false;
+        ps = qs, pt = qt, qs = rs, qt = rt;
+    }
+    if (convex)
+        return TB_OK;
+    double *xy = malloc(sizeof(double) * 2 * (size_t)nv);
+    if (!xy)
+        return tb_error(TB_ERR_NOMEM, "param: out of memory");
+    for (int i = 0; i < nv; i++)
+        tb__poly_st(f, tb__pv(g, face, i), &xy[2 * i], &xy[2 * i + 1]);
+    uint32_t ring = (uint32_t)nv;
+    tb_status st = tb_triangulate_2d(xy, &ring, 1, &t->tris, NULL);
+    free(xy);
+    if (st)
+        return st;
+    t->n = (int)t->tris.len;
+    t->c = (uint32_t(*)[3])t->tris.data;
+    return TB_OK;
+}
+
+/* Vertex indices of triangle j. */
+static void tb__poly_tri(const tb_geom_polygons *g, int face, const tb__poly_tris *t, int j, int c[3])
 {
     int b = g->face_start[face];
-    c[0] = g->indices[b], c[1] = g->indices[b + j + 1], c[2] = g->indices[b + j + 2];
+    if (!t->c) {
+        c[0] = g->indices[b], c[1] = g->indices[b + j + 1], c[2] = g->indices[b + j + 2];
+        return;
+    }
+    for (int i = 0; i < 3; i++)
+        c[i] = g->indices[b + (int)t->c[j][i]];
 }
 
 /* Barycentric coordinates of (x, y) in the 2D triangle a b c; false if degenerate. */
@@ -806,12 +857,15 @@ static tb_status tb__poly_eval(const tb_geom_polygons *g, int face, double u, do
         s->dpdv = tb_dvec3_scale(f.e2, f.dt);
         return TB_OK;
     }
-    /* Find the fan triangle whose uv image holds (u, v) (or comes closest). */
-    int nv = tb__poly_nv(g, face), best = -1;
+    /* Find the triangle whose uv image holds (u, v) (or comes closest). */
+    tb__poly_tris tr;
+    if ((st = tb__poly_tris_of(g, face, &f, &tr)))
+        return st;
+    int best = -1;
     double bw[3] = {0, 0, 0}, bo = INFINITY;
-    for (int j = 0; j + 2 < nv; j++) {
+    for (int j = 0; j < tr.n; j++) {
         int c[3];
-        tb__poly_fan(g, face, j, c);
+        tb__poly_tri(g, face, &tr, j, c);
         double A[2] = {g->uvs[c[0]].x, g->uvs[c[0]].y}, B[2] = {g->uvs[c[1]].x, g->uvs[c[1]].y},
                C[2] = {g->uvs[c[2]].x, g->uvs[c[2]].y}, w[3];
         if (!tb__bary2(u, v, A, B, C, w))
@@ -822,10 +876,12 @@ static tb_status tb__poly_eval(const tb_geom_polygons *g, int face, double u, do
         if (o == 0.0)
             break;
     }
+    int c[3];
+    if (best >= 0)
+        tb__poly_tri(g, face, &tr, best, c);
+    tb__poly_tris_free(&tr);
     if (best < 0)
         return tb_error(TB_ERR_ARG, "param: polygon %d has degenerate uvs", face);
-    int c[3];
-    tb__poly_fan(g, face, best, c);
     tb_dvec3 P[3];
     double U[3], V[3];
     for (int i = 0; i < 3; i++)
@@ -838,6 +894,10 @@ static tb_status tb__poly_eval(const tb_geom_polygons *g, int face, double u, do
     double det = du1 * dv2 - du2 * dv1;
     s->dpdu = tb_dvec3_scale(tb_dvec3_sub(tb_dvec3_scale(e1, dv2), tb_dvec3_scale(e2, dv1)), 1.0 / det);
     s->dpdv = tb_dvec3_scale(tb_dvec3_sub(tb_dvec3_scale(e2, du1), tb_dvec3_scale(e1, du2)), 1.0 / det);
+    /* Float vertices leave the triangle's plane a rounding away from the
+     * polygon's: keep the tangents perpendicular to the normal returned. */
+    s->dpdu = tb_dvec3_sub(s->dpdu, tb_dvec3_scale(f.n, tb_dvec3_dot(s->dpdu, f.n)));
+    s->dpdv = tb_dvec3_sub(s->dpdv, tb_dvec3_scale(f.n, tb_dvec3_dot(s->dpdv, f.n)));
     return TB_OK;
 }
 
@@ -855,11 +915,14 @@ static tb_status tb__poly_project(const tb_geom_polygons *g, int face, tb_dvec3 
         *v = f.dt > 0.0 ? tb__clamp01((t - f.t0) / f.dt) : 0.0;
         return TB_OK;
     }
-    int nv = tb__poly_nv(g, face), best = -1;
+    tb__poly_tris tr;
+    if ((st = tb__poly_tris_of(g, face, &f, &tr)))
+        return st;
+    int best = -1;
     double bw[3] = {0, 0, 0}, bo = INFINITY;
-    for (int j = 0; j + 2 < nv; j++) {
+    for (int j = 0; j < tr.n; j++) {
         int c[3];
-        tb__poly_fan(g, face, j, c);
+        tb__poly_tri(g, face, &tr, j, c);
         double P[3][2];
         for (int i = 0; i < 3; i++)
             tb__poly_st(&f, tb_vec3_to_d(g->vertices[c[i]]), &P[i][0], &P[i][1]);
@@ -872,12 +935,14 @@ static tb_status tb__poly_project(const tb_geom_polygons *g, int face, tb_dvec3 
         if (o == 0.0)
             break;
     }
+    int c[3];
+    if (best >= 0)
+        tb__poly_tri(g, face, &tr, best, c);
+    tb__poly_tris_free(&tr);
     if (best < 0) {
         *u = *v = 0.0;
         return TB_OK;
     }
-    int c[3];
-    tb__poly_fan(g, face, best, c);
     *u = tb__clamp01(bw[0] * g->uvs[c[0]].x + bw[1] * g->uvs[c[1]].x + bw[2] * g->uvs[c[2]].x);
     *v = tb__clamp01(bw[0] * g->uvs[c[0]].y + bw[1] * g->uvs[c[1]].y + bw[2] * g->uvs[c[2]].y);
     return TB_OK;
@@ -925,7 +990,7 @@ static tb_status tb__eval(tb_prim_kind kind, const tb_mid_geometry *g, int face,
     case TB_PRIM_PRISM: {
         const tb_geom_prism *pr = &g->prism;
         if (face >= TB_FACE_PRISM_SIDE0) {
-            tb__prism_side_eval(pr, tb__prism_ccw(pr), face - TB_FACE_PRISM_SIDE0, u, v, s);
+            tb__prism_side_eval(pr, tb_param_prism_ccw(pr), face - TB_FACE_PRISM_SIDE0, u, v, s);
         } else {
             double x0, x1, y0, y1;
             tb__prism_bbox(pr, &x0, &x1, &y0, &y1);
@@ -1003,7 +1068,7 @@ static tb_status tb__project(tb_prim_kind kind, const tb_mid_geometry *g, int fa
     case TB_PRIM_PRISM: {
         const tb_geom_prism *pr = &g->prism;
         if (face >= TB_FACE_PRISM_SIDE0) {
-            tb__prism_side_project(pr, tb__prism_ccw(pr), face - TB_FACE_PRISM_SIDE0, p, u, v);
+            tb__prism_side_project(pr, tb_param_prism_ccw(pr), face - TB_FACE_PRISM_SIDE0, p, u, v);
         } else {
             double x0, x1, y0, y1, x = p.x, y = p.y;
             tb__prism_bbox(pr, &x0, &x1, &y0, &y1);
@@ -1067,7 +1132,7 @@ tb_status tb_param_from_point(tb_prim_kind kind, const tb_mid_geometry *geom, tb
                               int *face, double *u, double *v)
 {
     TB_STAT_INC(tb__param_from_point_calls);
-    tb_status st = tb__check_geom(kind, geom);
+    tb_status st = tb_param_check(kind, geom);
     if (st)
         return st;
     if (!face || !u || !v)
@@ -1112,7 +1177,7 @@ tb_status tb_param_eval(tb_prim_kind kind, const tb_mid_geometry *geom, int face
                         tb_dvec3 *p, tb_dvec3 *n, tb_dvec3 *dpdu, tb_dvec3 *dpdv)
 {
     TB_STAT_INC(tb__param_eval_calls);
-    tb_status st = tb__check_geom(kind, geom);
+    tb_status st = tb_param_check(kind, geom);
     if (st)
         return st;
     if (!(u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0))

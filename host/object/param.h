@@ -109,6 +109,23 @@ enum {
 
 /* --------------------------------------------------------------- functions */
 
+/* TB_OK if `geom` holds valid parameters for `kind` (docs/mid.md, 6.3: the
+ * ranges the reader enforces), else TB_ERR_ARG with a message;
+ * TB_ERR_UNSUPPORTED for polygons given as a FED mesh file (the functions
+ * here take inline polygons; the object level converts a loaded mesh). */
+tb_status tb_param_check(tb_prim_kind kind, const tb_mid_geometry *geom);
+
+/* Number of points of a prism's polygon (sides, or profile points). */
+int tb_param_prism_npoints(const tb_geom_prism *g);
+
+/* Point k (taken mod n) of a prism's polygon: (cos 2 pi k/n, sin 2 pi k/n) for
+ * a regular one (exactly (1, 0) for k = 0), else profile[k]. The one formula
+ * param, bounds and polygonize all use. */
+void tb_param_prism_point(const tb_geom_prism *g, int k, double *x, double *y);
+
+/* True if the prism's polygon turns counter-clockwise (positive area). */
+bool tb_param_prism_ccw(const tb_geom_prism *g);
+
 /* Number of face IDs of the primitive: valid IDs are 0 .. count - 1 (some may
  * be absent, see tb_param_face_present). 0 for CSG kinds and bad input. */
 int tb_param_face_count(tb_prim_kind kind, const tb_mid_geometry *geom);
