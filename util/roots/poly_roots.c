@@ -5,8 +5,9 @@
  * exactly when its values at the ends differ in sign. The critical points
  * come from the same solver one degree down (down to the quadratic formula),
  * the outermost intervals end at Fujiwara's root bound, and every root is
- * found by safeguarded Newton on the original polynomial with compensated
- * evaluation (polish.c), so the sign tests and the roots are accurate even
+ * found by safeguarded Laguerre/Newton iteration on the original polynomial
+ * with compensated evaluation (polish.c), so the sign tests and the roots
+ * are accurate to the last bit even
  * when the closed-form (Cardano, Ferrari) formulas would lose digits or miss
  * a pair of close roots. This is the approach of C. Yuksel, "High-Performance
  * Polynomial Root Finding for Graphics" (HPG 2022), made exact-sign with
