@@ -38,12 +38,12 @@ typedef struct ts_shape {
     int indices[TS_MAXI];
 } ts_shape;
 
-static double ts_uniform(tb_rng *r, double a, double b) { return a + (b - a) * tb_rng_double(r); }
+static inline double ts_uniform(tb_rng *r, double a, double b) { return a + (b - a) * tb_rng_double(r); }
 
 /* A random star-shaped loop of n >= 3 points: angles jittered about 2 pi i / n
  * (consecutive ones less than pi apart, so the loop is simple and turns
  * counter-clockwise about the origin), radii in [rmin, 1]. */
-static void ts_star(tb_rng *r, int n, double rmin, double *xs, double *ys)
+static inline void ts_star(tb_rng *r, int n, double rmin, double *xs, double *ys)
 {
     for (int i = 0; i < n; i++) {
         double ang = 2.0 * TS_PI * (i + 0.3 + 0.4 * tb_rng_double(r)) / n;
@@ -54,7 +54,7 @@ static void ts_star(tb_rng *r, int n, double rmin, double *xs, double *ys)
 
 /* A random conic r^2 = c2 (z - zv)^2 + k (or c1 z + c0), >= 0 on [z0, z1],
  * touching 0 at an end (a pole) about a third of the time. */
-static void ts_random_conic(tb_rng *r, tb_geom_conic *c)
+static inline void ts_random_conic(tb_rng *r, tb_geom_conic *c)
 {
     double z0 = ts_uniform(r, -1.5, 0.5), z1 = z0 + ts_uniform(r, 0.3, 2.0);
     int fam = (int)tb_rng_below(r, 4);
@@ -91,7 +91,7 @@ static void ts_random_conic(tb_rng *r, tb_geom_conic *c)
 /* A random primitive of kind k. Polygons: 1..4 planar star-shaped polygons in
  * random planes (uvs: an orientation-preserving affine image of plane
  * coordinates, about half the time). */
-static void ts_random_shape(tb_rng *r, tb_prim_kind k, ts_shape *s)
+static inline void ts_random_shape(tb_rng *r, tb_prim_kind k, ts_shape *s)
 {
     memset(s, 0, sizeof *s);
     s->kind = k;
@@ -180,7 +180,7 @@ static void ts_random_shape(tb_rng *r, tb_prim_kind k, ts_shape *s)
 
 /* A random affine transform: rotation, non-uniform scale (mirroring a
  * quarter of the time), shear and translation. */
-static tb_transform ts_random_transform(tb_rng *r)
+static inline tb_transform ts_random_transform(tb_rng *r)
 {
     tb_transform rot, sc, out;
     tb_transform_rotate(ts_uniform(r, 0, 2 * TS_PI),
@@ -199,7 +199,7 @@ static tb_transform ts_random_transform(tb_rng *r)
 /* ----------------------------------------------------------- 2D helpers */
 
 /* Even-odd point-in-polygon for a loop of n 2D points. */
-static bool ts_in_loop(const double *xs, const double *ys, int n, double x, double y)
+static inline bool ts_in_loop(const double *xs, const double *ys, int n, double x, double y)
 {
     bool in = false;
     for (int i = 0, j = n - 1; i < n; j = i++)
@@ -209,7 +209,7 @@ static bool ts_in_loop(const double *xs, const double *ys, int n, double x, doub
 }
 
 /* The prism's polygon (regular or profile) as loops. */
-static int ts_prism_loop(const tb_geom_prism *p, double *xs, double *ys, int cap)
+static inline int ts_prism_loop(const tb_geom_prism *p, double *xs, double *ys, int cap)
 {
     int n = p->sides > 0 ? p->sides : p->nprofile;
     if (n > cap)
@@ -224,10 +224,10 @@ static int ts_prism_loop(const tb_geom_prism *p, double *xs, double *ys, int cap
 }
 
 /* r^2 of a conic. */
-static double ts_conic_q(const tb_geom_conic *c, double z) { return c->c[0] + c->c[1] * z + c->c[2] * z * z; }
+static inline double ts_conic_q(const tb_geom_conic *c, double z) { return c->c[0] + c->c[1] * z + c->c[2] * z * z; }
 
 /* True if (x, z) is inside an arch's opening (open set). */
-static bool ts_in_opening(tb_prim_kind k, const tb_geom_arch *a, double x, double z)
+static inline bool ts_in_opening(tb_prim_kind k, const tb_geom_arch *a, double x, double z)
 {
     double hw = 0.5 * a->width;
     if (!(fabs(x) < hw))
@@ -240,7 +240,7 @@ static bool ts_in_opening(tb_prim_kind k, const tb_geom_arch *a, double x, doubl
 
 /* Independent inside test of the solid (object space, open interior) for
  * every kind but polygons. */
-static bool ts_inside(const ts_shape *s, tb_dvec3 p)
+static inline bool ts_inside(const ts_shape *s, tb_dvec3 p)
 {
     double rho = hypot(p.x, p.y);
     switch (s->kind) {
@@ -273,7 +273,7 @@ static bool ts_inside(const ts_shape *s, tb_dvec3 p)
 /* True if object-space point p (from eval of `face`) lies on the face proper
  * for faces whose (u, v) square is larger than the face (arch faces with the
  * opening, prism caps, polygons); true for every other face. */
-static bool ts_on_face_domain(const ts_shape *s, int face, tb_dvec3 p, double u, double v)
+static inline bool ts_on_face_domain(const ts_shape *s, int face, tb_dvec3 p, double u, double v)
 {
     const double eps = 1e-9;
     switch (s->kind) {
