@@ -414,8 +414,10 @@ static void test_torus_random_rays(void **state)
         o[0] = dist * s * cos(th);
         o[1] = dist * s * sin(th);
         o[2] = dist * z;
-        double target[3] = {2.6 * tb_rng_double(&rng) - 1.3, 2.6 * tb_rng_double(&rng) - 1.3,
-                            0.7 * tb_rng_double(&rng) - 0.35};
+        double target[3]; /* one per statement: the order inside an initializer list is unspecified */
+        target[0] = 2.6 * tb_rng_double(&rng) - 1.3;
+        target[1] = 2.6 * tb_rng_double(&rng) - 1.3;
+        target[2] = 0.7 * tb_rng_double(&rng) - 0.35;
         double len = 0.0;
         for (int i = 0; i < 3; ++i) {
             d[i] = target[i] - o[i];

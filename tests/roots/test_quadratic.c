@@ -117,7 +117,8 @@ static void test_quadratic_constructed(void **state)
 /* A random double in +-[0.5, 1.5) * 2^[-20, 20). */
 static double rand_coef(tb_rng *rng)
 {
-    double v = ldexp(tb_rng_double(rng) + 0.5, (int)tb_rng_below(rng, 40) - 20);
+    double m = tb_rng_double(rng) + 0.5; /* separate statements: argument order is unspecified */
+    double v = ldexp(m, (int)tb_rng_below(rng, 40) - 20);
     return (tb_rng_u32(rng) & 1u) ? -v : v;
 }
 
@@ -135,7 +136,8 @@ static void test_quadratic_property_double(void **state)
     for (int t = 0; t < 20000; ++t) {
         double a = rand_coef(&rng), b = rand_coef(&rng), c;
         if (t & 1) {
-            double rel = ldexp(tb_rng_double(&rng) - 0.5, -(int)tb_rng_below(&rng, 60));
+            double m = tb_rng_double(&rng) - 0.5;
+            double rel = ldexp(m, -(int)tb_rng_below(&rng, 60));
             c = b * b / (4.0 * a) * (1.0 + rel);
         } else {
             c = rand_coef(&rng);
@@ -232,7 +234,8 @@ static void test_quadratic_wide_range(void **state)
     for (int t = 0; t < 20000; ++t) {
         double c3[3];
         for (int i = 0; i < 3; ++i) {
-            double v = ldexp(tb_rng_double(&rng) + 0.5, (int)tb_rng_below(&rng, 2000) - 1000);
+            double m = tb_rng_double(&rng) + 0.5;
+            double v = ldexp(m, (int)tb_rng_below(&rng, 2000) - 1000);
             c3[i] = (tb_rng_u32(&rng) & 1u) ? -v : v;
         }
         if (t % 4 == 1) /* nearly tangent */
@@ -259,8 +262,10 @@ static void test_quadratic_wide_range(void **state)
         }
 
         float cf[3];
-        for (int i = 0; i < 3; ++i)
-            cf[i] = (float)ldexp(tb_rng_double(&rng) + 0.5, (int)tb_rng_below(&rng, 240) - 120);
+        for (int i = 0; i < 3; ++i) {
+            double m = tb_rng_double(&rng) + 0.5;
+            cf[i] = (float)ldexp(m, (int)tb_rng_below(&rng, 240) - 120);
+        }
         if (t & 1)
             cf[1] = -cf[1];
         nref = ref_quadratic(cf[0], cf[1], cf[2], ref);
