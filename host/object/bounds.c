@@ -52,8 +52,8 @@ static double tb__verts_support(tb_dvec3 d, const tb_dvec3 *vs, int n)
     return h;
 }
 
-/* r^2 of a conic at z. */
-static double tb__conic_q(const tb_geom_conic *c, double z) { return c->c[0] + (c->c[1] + c->c[2] * z) * z; }
+/* r^2 of a conic at z (compensated, as param.c's points). */
+static double tb__conic_q(const tb_geom_conic *c, double z) { return tb_param_conic_r2(c, z); }
 
 /* a z + s r(z) at z: the support of the rim at height z (s = |d_xy|). */
 static double tb__conic_f(const tb_geom_conic *c, double a, double s, double z)

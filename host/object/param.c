@@ -58,8 +58,27 @@ static double tb__seg_closest(double px, double py, double ax, double ay, double
 
 static bool tb__finite(double x) { return isfinite(x) != 0; }
 
-/* r^2 of a conic at height z. */
-static double tb__conic_q(const tb_geom_conic *c, double z) { return c->c[0] + (c->c[1] + c->c[2] * z) * z; }
+/* The rounding error of s = a + b (Knuth's TwoSum). */
+static double tb__two_sum_err(double a, double b, double s)
+{
+    double bb = s - a;
+    return (a - (s - bb)) + (b - bb);
+}
+
+double tb_param_conic_r2(const tb_geom_conic *c, double z)
+{
+    /* Graillat, Langlois, Louvet, "Compensated Horner scheme" (2005). */
+    double s = c->c[2], err = 0.0;
+    for (int i = 1; i >= 0; i--) {
+        double p = s * z, pe = fma(s, z, -p);
+        double t = p + c->c[i], te = tb__two_sum_err(p, c->c[i], t);
+        err = err * z + (pe + te);
+        s = t;
+    }
+    return s + err;
+}
+
+static double tb__conic_q(const tb_geom_conic *c, double z) { return tb_param_conic_r2(c, z); }
 
 int tb_param_prism_npoints(const tb_geom_prism *g) { return g->sides > 0 ? g->sides : g->nprofile; }
 

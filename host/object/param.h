@@ -126,6 +126,12 @@ void tb_param_prism_point(const tb_geom_prism *g, int k, double *x, double *y);
 /* True if the prism's polygon turns counter-clockwise (positive area). */
 bool tb_param_prism_ccw(const tb_geom_prism *g);
 
+/* r^2 = c0 + c1 z + c2 z^2 of a conic at height z, by compensated Horner
+ * evaluation (error-free products and sums): accurate to a few ulps of the
+ * result even where the terms cancel (near a pole or a narrow waist), where
+ * plain evaluation would leave r off by sqrt of the rounding. */
+double tb_param_conic_r2(const tb_geom_conic *c, double z);
+
 /* Number of face IDs of the primitive: valid IDs are 0 .. count - 1 (some may
  * be absent, see tb_param_face_present). 0 for CSG kinds and bad input. */
 int tb_param_face_count(tb_prim_kind kind, const tb_mid_geometry *geom);

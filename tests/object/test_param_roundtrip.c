@@ -42,6 +42,15 @@ static double pdist(double a, double b, bool periodic)
     return periodic ? fmin(d, 1.0 - d) : d;
 }
 
+/* A conic cap whose radius is a rounding residue of r^2 = 0 (a pole the
+ * generator placed at the end): too small for the 1e-7 inside/outside steps. */
+static bool tiny_face(const ts_shape *s, int face)
+{
+    if (s->kind != TB_PRIM_CONIC || face == TB_FACE_CONIC_SIDE)
+        return false;
+    return ts_conic_q(&s->g.conic, face == TB_FACE_CONIC_BOTTOM ? s->g.conic.z0 : s->g.conic.z1) < 1e-6;
+}
+
 static double dist(tb_dvec3 a, tb_dvec3 b) { return tb_dvec3_length(tb_dvec3_sub(a, b)); }
 
 /* ------------------------------------------------------------ by hand */
@@ -265,7 +274,7 @@ static void test_tangents_and_normals(void **state)
                 if (dist(fd, dv) > 1e-5 * fmax(1, ldv))
                     fail_msg("%s face %d: dp/dv off by %.3g", tb_prim_kind_name(k), face, dist(fd, dv));
                 /* outward: the solid is behind the normal, empty space in front */
-                if (k != TB_PRIM_POLYGONS) {
+                if (k != TB_PRIM_POLYGONS && !tiny_face(&s, face)) {
                     const double d = 1e-7;
                     if (!ts_inside(&s, tb_dvec3_sub(p, tb_dvec3_scale(n, d))) ||
                         ts_inside(&s, tb_dvec3_add(p, tb_dvec3_scale(n, d))))
@@ -301,12 +310,12 @@ static void test_world_wrappers(void **state)
                 tb_assert_near(tb_dvec3_length(nw), 1, 1e-12);
                 tb_assert_near(tb_dvec3_dot(nw, duw), 0, 1e-9 * tb_dvec3_length(duw));
                 tb_assert_near(tb_dvec3_dot(nw, dvw), 0, 1e-9 * tb_dvec3_length(dvw));
-                if (k != TB_PRIM_POLYGONS) {
+                if (k != TB_PRIM_POLYGONS && !tiny_face(&s, face)) {
                     const double d = 1e-7;
                     tb_dvec3 in = tb_transform_dpoint(&inv, tb_dvec3_sub(pw, tb_dvec3_scale(nw, d)));
                     tb_dvec3 out = tb_transform_dpoint(&inv, tb_dvec3_add(pw, tb_dvec3_scale(nw, d)));
-                    assert_true(ts_inside(&s, in));
-                    assert_false(ts_inside(&s, out));
+                    if (!ts_inside(&s, in) || ts_inside(&s, out))
+                        fail_msg("%s face %d (%.9g, %.9g): world normal not outward", tb_prim_kind_name(k), face, u, v);
                 }
                 assert_int_equal(tb_param_from_point_world(k, &s.g, &tw, pw, face, &f2, &u2, &v2), TB_OK);
                 assert_int_equal(f2, face);
