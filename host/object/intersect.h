@@ -1,0 +1,47 @@
+/* Ray intersection for every primitive kind and CSG tree (docs/primitives.md,
+ * "Intersection"). One function per query, each switching over all kinds.
+ *
+ *     tb_hit hit;
+ *     if (tb_object_intersect(obj, &ray, &hit)) ray.tmax = hit.t;   // closest so far
+ *     ...
+ *     tb_vec3 p, perr;                       // to shade and spawn from the hit:
+ *     tb_object_hit_point(obj, &ray, &hit, &p, &perr);
+ *     tb_vec3 o2 = tb_spawn_ray_origin(p, perr, hit.ng, wi);   // hit.h
+ *
+ * The world ray (float) is mapped to object space by the object's inverse
+ * transform in double, without normalising the direction, so t means the same
+ * in both spaces; the primitive is then solved in double. Rays with a NaN or
+ * infinite component, a zero direction or tmin > tmax are rejected (no hit,
+ * counted as "Intersect/invalid rays"); every test is counted per kind
+ * ("Intersect/sphere", ...). Thread-safe: objects are only read. */
+#ifndef TB_HOST_OBJECT_INTERSECT_H
+#define TB_HOST_OBJECT_INTERSECT_H
+
+#include <stdbool.h>
+
+#include "host/object/hit.h"
+#include "host/object/object.h"
+#include "util/math/ray.h"
+
+/* Closest hit of the ray with the object's surface with tmin <= t <= tmax;
+ * fills *hit (t, object index, face ID, (u, v) from host/object/param.h, unit
+ * geometric normal out of the solid) and returns true, or returns false and
+ * leaves *hit unchanged. A ray starting inside a solid hits its surface on
+ * the way out. */
+bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit);
+
+/* True if the ray hits the object's surface anywhere with tmin <= t <= tmax
+ * (any-hit: may stop at the first one found). */
+bool tb_object_occluded(const tb_object *obj, const tb_ray *ray);
+
+/* The world-space point of a hit found by tb_object_intersect(obj, ray, hit),
+ * recomputed in double (the float t alone cannot give it: its rounding moves
+ * the point by up to |t d| 2^-24 along the ray), rounded to float, with a
+ * bound on its absolute error per component: the distance of the double
+ * point from the surface, the transform's rounding and the final rounding
+ * (docs/primitives.md, "Hit points and error bounds"). `ray` is the ray of
+ * the query (a tmax shortened to the hit's t is fine). Returns false, with p
+ * and perr untouched, if the ray does not give that hit again. */
+bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *hit, tb_vec3 *p, tb_vec3 *perr);
+
+#endif

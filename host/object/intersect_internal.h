@@ -1,0 +1,110 @@
+/* Internals shared by object.c, intersect*.c and csg.c: the crossings of a
+ * line with a primitive, computed in the primitive's object space in double
+ * (docs/primitives.md, "Intersection"). Not installed. */
+#ifndef TB_HOST_OBJECT_INTERSECT_INTERNAL_H
+#define TB_HOST_OBJECT_INTERSECT_INTERNAL_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "host/object/object.h"
+#include "util/math/vec.h"
+
+/* A ray in object space, in double: the world ray's origin and direction
+ * mapped by the inverse transform without rounding (the direction is not
+ * normalised, so t means the same as in world space). */
+typedef struct tb__oray {
+    tb_dvec3 o, d;
+} tb__oray;
+
+/* One crossing of the line o + t d with a primitive's surface. */
+typedef struct tb__xing {
+    double t;              /* line parameter */
+    tb_dvec3 n;            /* outward normal in the leaf's object space (any length, non-zero) */
+    const tb_object *leaf; /* the primitive */
+    uint32_t face;         /* face ID within the leaf */
+    uint32_t tri;          /* polygons: the triangle hit; 0 otherwise */
+    int dir;               /* +1: the line enters the solid here (hits the outside); -1: leaves it */
+} tb__xing;
+
+/* A growable list of crossings with room for a few on the stack. */
+typedef struct tb__xbuf {
+    tb__xing *x;
+    int n, cap;
+    bool oom;              /* an allocation failed: the list is incomplete */
+    tb__xing local[8];
+} tb__xbuf;
+
+/* An empty list. */
+static inline void tb__xbuf_init(tb__xbuf *b)
+{
+    b->x = b->local;
+    b->n = 0;
+    b->cap = (int)(sizeof b->local / sizeof b->local[0]);
+    b->oom = false;
+}
+
+/* Grows b (slow path of tb__xbuf_push); false when out of memory. */
+bool tb__xbuf_grow(tb__xbuf *b);
+
+/* Appends x (sets b->oom and drops it when out of memory). */
+static inline void tb__xbuf_push(tb__xbuf *b, const tb__xing *x)
+{
+    if (b->n == b->cap && !tb__xbuf_grow(b))
+        return;
+    b->x[b->n++] = *x;
+}
+
+/* Frees heap storage. */
+void tb__xbuf_free(tb__xbuf *b);
+
+/* Every crossing of the whole line (t from -inf to +inf) with primitive
+ * `leaf`, sorted by t. For a closed solid they alternate +1, -1, starting
+ * with +1 (the intervals inside the solid; a tangent touch gives an empty
+ * interval [t, t]); for an open surface they are the surface points, with dir
+ * telling which side was hit. */
+void tb__prim_xings(const tb_object *leaf, const tb__oray *r, tb__xbuf *out);
+
+/* Per family (called by tb__prim_xings). */
+void tb__xings_sphere(const tb_object *o, const tb__oray *r, tb__xbuf *out);
+void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out); /* cylinder, cone, conic */
+void tb__xings_torus(const tb_object *o, const tb__oray *r, tb__xbuf *out);
+void tb__xings_cube(const tb_object *o, const tb__oray *r, tb__xbuf *out);
+void tb__xings_pyramid(const tb_object *o, const tb__oray *r, tb__xbuf *out);
+void tb__xings_prism(const tb_object *o, const tb__oray *r, tb__xbuf *out);
+void tb__xings_arch(const tb_object *o, const tb__oray *r, tb__xbuf *out);
+void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out);
+
+/* Closest triangle hit with t in [tmin, tmax] (polygons); false if none. */
+bool tb__mesh_closest(const tb_object *o, const tb__oray *r, double tmin, double tmax, tb__xing *hit);
+/* True if any triangle is hit with t in [tmin, tmax]. */
+bool tb__mesh_any(const tb_object *o, const tb__oray *r, double tmin, double tmax);
+
+/* Triangulates o->geom.polygons into o->mesh and builds its BVH (object.c
+ * calls it after copying the polygons). */
+tb_status tb__mesh_build(tb_object *o);
+/* Frees a mesh (NULL allowed). */
+void tb__mesh_free(tb_object_mesh *m);
+
+/* Vertex k of the regular n-gon (cos 2 pi k/n, sin 2 pi k/n). */
+void tb__prism_vertex(int n, int k, double *x, double *y);
+
+/* Face IDs of a primitive (as tb_param_face_count). */
+uint32_t tb__face_count(tb_prim_kind kind, const tb_mid_geometry *g);
+
+/* Distance (object units, approximate to first order) from p to the surface
+ * of face `face` (triangle `tri` for polygons) of primitive o: used to bound
+ * the error of a recomputed hit point. */
+double tb__face_residual(const tb_object *o, uint32_t face, uint32_t tri, tb_dvec3 p);
+
+/* The crossings of a CSG node (or a primitive) with the whole line, in the
+ * same form as tb__prim_xings: intervals of the solid, sorted (csg.c). */
+void tb__csg_xings(const tb_object *node, const tb_ray *world_ray, tb__xbuf *out);
+
+/* Adds one to the "Intersect/<kind>" counter. */
+void tb__count_kind(tb_prim_kind k);
+
+/* The world ray in o's object space. */
+tb__oray tb__object_ray(const tb_object *o, const tb_ray *world_ray);
+
+#endif

@@ -1,0 +1,602 @@
+/* Polygons: triangulation once at build time, a BVH over the triangles, and
+ * the watertight ray/triangle test of Woop, Benthin and Wald ("Watertight
+ * Ray/Triangle Intersection", JCGT 2(1), 2013), evaluated in double.
+ *
+ * Watertightness: the ray is made the z axis of a sheared space; a vertex's
+ * sheared coordinates are computed once per vertex, and the edge function of
+ * an edge shared by two triangles is computed from the same two vertices in
+ * the same products, so the two triangles see exactly opposite values and a
+ * ray cannot slip between them. When an edge function comes out exactly 0 in
+ * double, its sign is recomputed exactly (Shewchuk's orient2d, util/mesh), and
+ * if it is truly 0 (the ray passes exactly through the edge or a vertex) a
+ * tie rule claims the point for exactly one of the triangles around it: the
+ * one the ray would hit if shifted by (eps, eps^2) in the sheared plane (a
+ * symbolic perturbation, like the top-left rule of rasterisers). So each
+ * crossing of a closed mesh is counted exactly once, which the CSG winding
+ * count relies on. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "host/object/intersect_internal.h"
+#include "util/container/array.h"
+#include "util/math/float.h"
+#include "util/mesh/predicates.h"
+#include "util/mesh/triangulate.h"
+
+/* Triangles per leaf (at most). */
+#define TB__BVH_LEAF 4
+/* SAH bins per split. */
+#define TB__BVH_BINS 16
+/* Traversal stack depth (the build falls back to median splits long before). */
+#define TB__BVH_STACK 128
+/* Depth after which the build stops trusting SAH and splits at the median. */
+#define TB__BVH_SAH_DEPTH 60
+
+/* ------------------------------------------------------------------ build */
+
+void tb__mesh_free(tb_object_mesh *m)
+{
+    if (!m)
+        return;
+    free(m->vertices);
+    free(m->tris);
+    free(m->tri_face);
+    free(m->nodes);
+    free(m);
+}
+
+typedef struct tb__bprim {
+    float lo[3], hi[3];
+    float c[3]; /* centroid */
+} tb__bprim;
+
+typedef struct tb__bctx {
+    tb__bprim *prims;
+    uint32_t *order; /* triangle index per position */
+    tb_object_bvh_node *nodes;
+    uint32_t nnodes;
+} tb__bctx;
+
+static float tb__area(const float lo[3], const float hi[3])
+{
+    float e0 = hi[0] - lo[0], e1 = hi[1] - lo[1], e2 = hi[2] - lo[2];
+    if (!(e0 >= 0.0f))
+        return 0.0f;
+    return e0 * e1 + e1 * e2 + e2 * e0;
+}
+
+static void tb__grow(float lo[3], float hi[3], const float plo[3], const float phi[3])
+{
+    for (int i = 0; i < 3; i++) {
+        lo[i] = fminf(lo[i], plo[i]);
+        hi[i] = fmaxf(hi[i], phi[i]);
+    }
+}
+
+typedef struct tb__kv {
+    float key;
+    uint32_t idx;
+} tb__kv;
+
+static int tb__kv_cmp(const void *pa, const void *pb)
+{
+    const tb__kv *a = pa, *b = pb;
+    if (a->key != b->key)
+        return a->key < b->key ? -1 : 1;
+    return (a->idx > b->idx) - (a->idx < b->idx);
+}
+
+/* Median split of order[begin, end) along axis (by centroid, then index: deterministic). */
+static uint32_t tb__median(tb__bctx *c, uint32_t begin, uint32_t end, int axis)
+{
+    uint32_t n = end - begin;
+    tb__kv *tmp = malloc(sizeof *tmp * n);
+    if (!tmp)
+        return begin + n / 2; /* unsorted halves still give a valid (if poor) tree */
+    for (uint32_t i = 0; i < n; i++)
+        tmp[i] = (tb__kv){c->prims[c->order[begin + i]].c[axis], c->order[begin + i]};
+    qsort(tmp, n, sizeof *tmp, tb__kv_cmp);
+    for (uint32_t i = 0; i < n; i++)
+        c->order[begin + i] = tmp[i].idx;
+    free(tmp);
+    return begin + n / 2;
+}
+
+static uint32_t tb__build_node(tb__bctx *c, uint32_t begin, uint32_t end, int depth)
+{
+    uint32_t id = c->nnodes++;
+    tb_object_bvh_node *nd = &c->nodes[id];
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = begin; i < end; i++) {
+        const tb__bprim *p = &c->prims[c->order[i]];
+        tb__grow(lo, hi, p->lo, p->hi);
+        tb__grow(clo, chi, p->c, p->c);
+    }
+    /* Widen by one float outward: the double ray/triangle test may accept a
+     * point a double rounding outside the float box; one float is far more. */
+    for (int i = 0; i < 3; i++) {
+        nd->lo[i] = tb_next_float_down(lo[i]);
+        nd->hi[i] = tb_next_float_up(hi[i]);
+    }
+    uint32_t n = end - begin;
+    if (n <= TB__BVH_LEAF) {
+        nd->index = begin;
+        nd->count = (uint16_t)n;
+        nd->axis = 0;
+        return id;
+    }
+    int axis = 0;
+    float ext[3] = {chi[0] - clo[0], chi[1] - clo[1], chi[2] - clo[2]};
+    if (ext[1] > ext[axis])
+        axis = 1;
+    if (ext[2] > ext[axis])
+        axis = 2;
+    uint32_t mid = begin;
+    if (ext[axis] > 0.0f && depth < TB__BVH_SAH_DEPTH) {
+        /* Binned SAH (Wald 2007) on the widest centroid axis. */
+        uint32_t cnt[TB__BVH_BINS] = {0};
+        float blo[TB__BVH_BINS][3], bhi[TB__BVH_BINS][3];
+        for (int b = 0; b < TB__BVH_BINS; b++)
+            for (int i = 0; i < 3; i++) {
+                blo[b][i] = INFINITY;
+                bhi[b][i] = -INFINITY;
+            }
+        float k = (float)TB__BVH_BINS / ext[axis];
+        for (uint32_t i = begin; i < end; i++) {
+            const tb__bprim *p = &c->prims[c->order[i]];
+            int b = (int)((p->c[axis] - clo[axis]) * k);
+            b = b < 0 ? 0 : (b >= TB__BVH_BINS ? TB__BVH_BINS - 1 : b);
+            cnt[b]++;
+            tb__grow(blo[b], bhi[b], p->lo, p->hi);
+        }
+        float rarea[TB__BVH_BINS];
+        uint32_t rcnt[TB__BVH_BINS];
+        float alo[3] = {INFINITY, INFINITY, INFINITY}, ahi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        uint32_t acc = 0;
+        for (int b = TB__BVH_BINS - 1; b > 0; b--) {
+            tb__grow(alo, ahi, blo[b], bhi[b]);
+            acc += cnt[b];
+            rarea[b] = tb__area(alo, ahi);
+            rcnt[b] = acc;
+        }
+        float best = INFINITY;
+        int best_b = -1;
+        for (int i = 0; i < 3; i++) {
+            alo[i] = INFINITY;
+            ahi[i] = -INFINITY;
+        }
+        acc = 0;
+        for (int b = 1; b < TB__BVH_BINS; b++) {
+            tb__grow(alo, ahi, blo[b - 1], bhi[b - 1]);
+            acc += cnt[b - 1];
+            if (acc == 0 || rcnt[b] == 0)
+                continue;
+            float cost = tb__area(alo, ahi) * (float)acc + rarea[b] * (float)rcnt[b];
+            if (cost < best) {
+                best = cost;
+                best_b = b;
+            }
+        }
+        if (best_b > 0) {
+            /* Partition in place: bins below best_b to the left. */
+            uint32_t i = begin, j = end;
+            while (i < j) {
+                const tb__bprim *p = &c->prims[c->order[i]];
+                int b = (int)((p->c[axis] - clo[axis]) * k);
+                b = b < 0 ? 0 : (b >= TB__BVH_BINS ? TB__BVH_BINS - 1 : b);
+                if (b < best_b) {
+                    i++;
+                } else {
+                    uint32_t t = c->order[i];
+                    c->order[i] = c->order[--j];
+                    c->order[j] = t;
+                }
+            }
+            mid = i;
+        }
+    }
+    if (mid == begin || mid == end) {
+        if (n <= 0xffff && ext[axis] == 0.0f && n <= 4 * TB__BVH_LEAF) {
+            nd->index = begin;
+            nd->count = (uint16_t)n;
+            nd->axis = 0;
+            return id;
+        }
+        mid = tb__median(c, begin, end, axis);
+    }
+    tb__build_node(c, begin, mid, depth + 1);
+    uint32_t right = tb__build_node(c, mid, end, depth + 1);
+    nd = &c->nodes[id];
+    nd->index = right;
+    nd->count = 0;
+    nd->axis = (uint16_t)axis;
+    return id;
+}
+
+/* Directed edge key: (min << 32 | max) << 1 | (a < b). */
+static int tb__cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* True if every polygon edge is matched by exactly one edge running the other way. */
+static bool tb__polygons_closed(const tb_geom_polygons *g)
+{
+    size_t n = (size_t)g->face_start[g->nfaces];
+    uint64_t *e = malloc(sizeof *e * (n ? n : 1));
+    if (!e)
+        return false;
+    size_t m = 0;
+    for (int f = 0; f < g->nfaces; f++) {
+        int s = g->face_start[f], t = g->face_start[f + 1];
+        for (int i = s; i < t; i++) {
+            uint64_t a = (uint64_t)g->indices[i], b = (uint64_t)g->indices[i + 1 < t ? i + 1 : s];
+            if (a == b)
+                continue;
+            uint64_t lo = a < b ? a : b, hi = a < b ? b : a;
+            e[m++] = ((lo << 32 | hi) << 1) | (a < b ? 1u : 0u);
+        }
+    }
+    qsort(e, m, sizeof *e, tb__cmp_u64);
+    bool closed = m > 0;
+    for (size_t i = 0; i < m && closed;) {
+        size_t j = i;
+        while (j < m && e[j] >> 1 == e[i] >> 1)
+            j++;
+        if (j - i != 2 || (e[i] & 1) == (e[i + 1] & 1))
+            closed = false;
+        i = j;
+    }
+    free(e);
+    return closed;
+}
+
+tb_status tb__mesh_build(tb_object *o)
+{
+    const tb_geom_polygons *g = &o->geom.polygons;
+    tb_object_mesh *m = calloc(1, sizeof *m);
+    if (!m)
+        return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
+    o->mesh = m;
+    m->nvertices = (uint32_t)g->nvertices;
+    m->vertices = malloc(sizeof(tb_vec3) * (g->nvertices ? (size_t)g->nvertices : 1));
+    if (!m->vertices)
+        return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
+    memcpy(m->vertices, g->vertices, sizeof(tb_vec3) * (size_t)g->nvertices);
+
+    /* Triangulate: triangles as they are, larger polygons by ear clipping. */
+    tb_array tris, faces, tmp;
+    tb_array_init(&tris, sizeof(uint32_t) * 3);
+    tb_array_init(&faces, sizeof(uint32_t));
+    tb_array_init(&tmp, sizeof(tb_tri));
+    uint32_t *idx = NULL;
+    size_t idx_cap = 0;
+    tb_status st = TB_OK;
+    for (int f = 0; f < g->nfaces && !st; f++) {
+        int s = g->face_start[f];
+        uint32_t nv = (uint32_t)(g->face_start[f + 1] - s);
+        if (nv > idx_cap) {
+            uint32_t *ni = realloc(idx, sizeof *idx * nv);
+            if (!ni) {
+                st = tb_error(TB_ERR_NOMEM, "polygons: out of memory");
+                break;
+            }
+            idx = ni;
+            idx_cap = nv;
+        }
+        for (uint32_t i = 0; i < nv; i++)
+            idx[i] = (uint32_t)g->indices[s + (int)i];
+        tb_array_clear(&tmp);
+        if (nv == 3) {
+            tb_tri t = {{idx[0], idx[1], idx[2]}};
+            st = tb_array_push(&tmp, &t);
+        } else {
+            st = tb_triangulate_3d(m->vertices, idx, &nv, 1, &tmp, NULL);
+            if (st)
+                tb_error_context(st, "polygons: face %d", f);
+        }
+        for (size_t i = 0; i < tmp.len && !st; i++) {
+            const tb_tri *t = &TB_ARRAY_AT(&tmp, tb_tri, i);
+            uint32_t ff = (uint32_t)f;
+            if (!(st = tb_array_push(&tris, t->v)))
+                st = tb_array_push(&faces, &ff);
+        }
+    }
+    free(idx);
+    tb_array_free(&tmp);
+    if (st) {
+        tb_array_free(&tris);
+        tb_array_free(&faces);
+        return st;
+    }
+    m->ntris = (uint32_t)tris.len;
+    m->closed = tb__polygons_closed(g);
+
+    /* BVH. */
+    size_t nt = tris.len;
+    const uint32_t *tv = tris.data;
+    tb__bctx c = {0};
+    c.prims = malloc(sizeof *c.prims * (nt ? nt : 1));
+    c.order = malloc(sizeof *c.order * (nt ? nt : 1));
+    c.nodes = malloc(sizeof *c.nodes * (nt ? 2 * nt : 1));
+    m->tris = malloc(sizeof(uint32_t) * 3 * (nt ? nt : 1));
+    m->tri_face = malloc(sizeof(uint32_t) * (nt ? nt : 1));
+    if (!c.prims || !c.order || !c.nodes || !m->tris || !m->tri_face) {
+        free(c.prims);
+        free(c.order);
+        free(c.nodes);
+        tb_array_free(&tris);
+        tb_array_free(&faces);
+        return tb_error(TB_ERR_NOMEM, "polygons: out of memory for %zu triangles", nt);
+    }
+    for (size_t i = 0; i < nt; i++) {
+        tb__bprim *p = &c.prims[i];
+        for (int a = 0; a < 3; a++) {
+            p->lo[a] = INFINITY;
+            p->hi[a] = -INFINITY;
+        }
+        for (int k = 0; k < 3; k++) {
+            tb_vec3 v = m->vertices[tv[3 * i + k]];
+            float vv[3] = {v.x, v.y, v.z};
+            tb__grow(p->lo, p->hi, vv, vv);
+        }
+        for (int a = 0; a < 3; a++)
+            p->c[a] = 0.5f * p->lo[a] + 0.5f * p->hi[a];
+        c.order[i] = (uint32_t)i;
+    }
+    if (nt > 0)
+        tb__build_node(&c, 0, (uint32_t)nt, 0);
+    for (size_t i = 0; i < nt; i++) {
+        uint32_t t = c.order[i];
+        memcpy(&m->tris[3 * i], &tv[3 * t], sizeof(uint32_t) * 3);
+        m->tri_face[i] = TB_ARRAY_AT(&faces, uint32_t, t);
+    }
+    m->nnodes = c.nnodes;
+    m->nodes = c.nodes;
+    free(c.prims);
+    free(c.order);
+    tb_array_free(&tris);
+    tb_array_free(&faces);
+    o->closed = m->closed;
+    return TB_OK;
+}
+
+/* ------------------------------------------------------------------ traversal */
+
+/* The ray prepared for the watertight test and the box test. */
+typedef struct tb__wray {
+    double o[3], d[3], inv[3];
+    int kx, ky, kz;
+    double sx, sy, sz;
+} tb__wray;
+
+static void tb__wray_init(tb__wray *w, const tb__oray *r)
+{
+    w->o[0] = r->o.x;
+    w->o[1] = r->o.y;
+    w->o[2] = r->o.z;
+    w->d[0] = r->d.x;
+    w->d[1] = r->d.y;
+    w->d[2] = r->d.z;
+    for (int i = 0; i < 3; i++)
+        w->inv[i] = 1.0 / w->d[i];
+    int kz = 0;
+    if (fabs(w->d[1]) > fabs(w->d[kz]))
+        kz = 1;
+    if (fabs(w->d[2]) > fabs(w->d[kz]))
+        kz = 2;
+    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+    if (w->d[kz] < 0.0) { /* keep the winding direction */
+        int t = kx;
+        kx = ky;
+        ky = t;
+    }
+    w->kx = kx;
+    w->ky = ky;
+    w->kz = kz;
+    w->sx = w->d[kx] / w->d[kz];
+    w->sy = w->d[ky] / w->d[kz];
+    w->sz = 1.0 / w->d[kz];
+}
+
+/* Slab test of a node's box in double; the near/far plane is chosen by the
+ * sign bit of 1/d so a zero component works (a NaN from 0 * inf, the origin
+ * exactly on a plane, leaves the interval unchanged: inside a closed box). */
+static bool tb__box(const tb_object_bvh_node *nd, const tb__wray *w, double t0, double t1)
+{
+    for (int i = 0; i < 3; i++) {
+        double nearp = signbit(w->inv[i]) ? nd->hi[i] : nd->lo[i];
+        double farp = signbit(w->inv[i]) ? nd->lo[i] : nd->hi[i];
+        double a = (nearp - w->o[i]) * w->inv[i], b = (farp - w->o[i]) * w->inv[i];
+        if (a > t0)
+            t0 = a;
+        if (b < t1)
+            t1 = b;
+    }
+    return t0 <= t1;
+}
+
+/* Sign of the edge function E(P, Q) = Qx Py - Qy Px, exact. */
+static int tb__edge_sign(double e, double px, double py, double qx, double qy)
+{
+    if (e != 0.0)
+        return e > 0.0 ? 1 : -1;
+    return -tb_orient2d_sign(px, py, qx, qy, 0.0, 0.0);
+}
+
+/* Tie rule for an edge P -> Q through the ray: claimed if the ray shifted by
+ * (eps, eps^2) would be inside, i.e. s (Q - P) has y > 0, or y == 0 and x < 0. */
+static bool tb__claims(int s, double px, double py, double qx, double qy)
+{
+    double ex = s * (qx - px), ey = s * (qy - py);
+    return ey > 0.0 || (ey == 0.0 && ex < 0.0);
+}
+
+/* Watertight ray/triangle test; on a hit writes t and dir (+1 front: the ray
+ * enters the solid behind the counter-clockwise side). */
+static bool tb__tri(const tb__wray *w, tb_vec3 v0, tb_vec3 v1, tb_vec3 v2, double *t, int *dir)
+{
+    double A[3] = {v0.x - w->o[0], v0.y - w->o[1], v0.z - w->o[2]};
+    double B[3] = {v1.x - w->o[0], v1.y - w->o[1], v1.z - w->o[2]};
+    double C[3] = {v2.x - w->o[0], v2.y - w->o[1], v2.z - w->o[2]};
+    int kx = w->kx, ky = w->ky, kz = w->kz;
+    double ax = A[kx] - w->sx * A[kz], ay = A[ky] - w->sy * A[kz];
+    double bx = B[kx] - w->sx * B[kz], by = B[ky] - w->sy * B[kz];
+    double cx = C[kx] - w->sx * C[kz], cy = C[ky] - w->sy * C[kz];
+    double U = cx * by - cy * bx;
+    double V = ax * cy - ay * cx;
+    double W = bx * ay - by * ax;
+    if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0))
+        return false;
+    int s;
+    if (U == 0.0 || V == 0.0 || W == 0.0) {
+        int su = tb__edge_sign(U, bx, by, cx, cy);
+        int sv = tb__edge_sign(V, cx, cy, ax, ay);
+        int sw = tb__edge_sign(W, ax, ay, bx, by);
+        if ((su < 0 || sv < 0 || sw < 0) && (su > 0 || sv > 0 || sw > 0))
+            return false;
+        s = su + sv + sw > 0 ? 1 : (su + sv + sw < 0 ? -1 : 0);
+        if (s == 0)
+            return false; /* the triangle is edge-on to the ray */
+        if ((su == 0 && !tb__claims(s, bx, by, cx, cy)) || (sv == 0 && !tb__claims(s, cx, cy, ax, ay)) ||
+            (sw == 0 && !tb__claims(s, ax, ay, bx, by)))
+            return false;
+    }
+    double det = U + V + W;
+    if (det == 0.0)
+        return false;
+    double az = w->sz * A[kz], bz = w->sz * B[kz], cz = w->sz * C[kz];
+    double T = U * az + V * bz + W * cz;
+    *t = T / det;
+    *dir = det > 0.0 ? 1 : -1;
+    (void)s;
+    return isfinite(*t);
+}
+
+static tb_dvec3 tb__tri_normal(const tb_object_mesh *m, uint32_t i)
+{
+    const uint32_t *t = &m->tris[3 * i];
+    tb_vec3 v0 = m->vertices[t[0]], v1 = m->vertices[t[1]], v2 = m->vertices[t[2]];
+    tb_dvec3 e1 = {(double)v1.x - v0.x, (double)v1.y - v0.y, (double)v1.z - v0.z};
+    tb_dvec3 e2 = {(double)v2.x - v0.x, (double)v2.y - v0.y, (double)v2.z - v0.z};
+    tb_dvec3 n = tb_dvec3_cross(e1, e2);
+    if (n.x == 0.0 && n.y == 0.0 && n.z == 0.0)
+        n.z = 1.0;
+    return n;
+}
+
+/* Visits triangles whose boxes the ray passes within [tmin, *tmax]; `mode`
+ * 0: closest (shrinks *tmax), 1: any (stops), 2: all (collects into out). */
+static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, double *tmax, int mode, tb__xing *hit,
+                         tb__xbuf *out)
+{
+    const tb_object_mesh *m = o->mesh;
+    if (!m || m->nnodes == 0)
+        return false;
+    tb__wray w;
+    tb__wray_init(&w, r);
+    uint32_t stack[TB__BVH_STACK];
+    int sp = 0;
+    stack[sp++] = 0;
+    bool found = false;
+    while (sp > 0) {
+        const tb_object_bvh_node *nd = &m->nodes[stack[--sp]];
+        if (!tb__box(nd, &w, tmin, *tmax))
+            continue;
+        if (nd->count == 0) {
+            uint32_t left = (uint32_t)(nd - m->nodes) + 1, right = nd->index;
+            if (sp + 2 > TB__BVH_STACK)
+                continue; /* cannot happen for trees built here (depth is bounded) */
+            /* Near child on top. */
+            if (w.d[nd->axis] < 0.0) {
+                stack[sp++] = left;
+                stack[sp++] = right;
+            } else {
+                stack[sp++] = right;
+                stack[sp++] = left;
+            }
+            continue;
+        }
+        for (uint32_t i = nd->index; i < nd->index + nd->count; i++) {
+            const uint32_t *tv = &m->tris[3 * i];
+            double t;
+            int dir;
+            if (!tb__tri(&w, m->vertices[tv[0]], m->vertices[tv[1]], m->vertices[tv[2]], &t, &dir))
+                continue;
+            if (!(t >= tmin && t <= *tmax))
+                continue;
+            found = true;
+            tb__xing x = {t, {0, 0, 0}, o, m->tri_face[i], i, dir};
+            if (mode == 1)
+                return true;
+            x.n = tb__tri_normal(m, i);
+            if (mode == 0) {
+                *tmax = t;
+                *hit = x;
+            } else {
+                tb__xbuf_push(out, &x);
+            }
+        }
+    }
+    return found;
+}
+
+bool tb__mesh_closest(const tb_object *o, const tb__oray *r, double tmin, double tmax, tb__xing *hit)
+{
+    return tb__traverse(o, r, tmin, &tmax, 0, hit, NULL);
+}
+
+bool tb__mesh_any(const tb_object *o, const tb__oray *r, double tmin, double tmax)
+{
+    return tb__traverse(o, r, tmin, &tmax, 1, NULL, NULL);
+}
+
+static int tb__xing_cmp(const void *pa, const void *pb)
+{
+    const tb__xing *a = pa, *b = pb;
+    if (a->t != b->t)
+        return a->t < b->t ? -1 : 1;
+    return (a->tri > b->tri) - (a->tri < b->tri);
+}
+
+void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out)
+{
+    tb__xbuf all;
+    tb__xbuf_init(&all);
+    double tmax = INFINITY;
+    tb__traverse(o, r, -INFINITY, &tmax, 2, NULL, &all);
+    if (all.oom)
+        out->oom = true;
+    qsort(all.x, (size_t)all.n, sizeof *all.x, tb__xing_cmp);
+    if (!o->mesh->closed) {
+        for (int i = 0; i < all.n; i++)
+            tb__xbuf_push(out, &all.x[i]);
+    } else {
+        /* Winding number along the line: inside where it is positive. Each
+         * crossing is counted exactly once (see the top of the file), so a
+         * closed mesh gives whole intervals even through edges and vertices. */
+        int wnd = 0;
+        for (int i = 0; i < all.n; i++) {
+            int next = wnd + all.x[i].dir;
+            if (wnd <= 0 && next > 0) {
+                tb__xing x = all.x[i];
+                x.dir = +1;
+                tb__xbuf_push(out, &x);
+            } else if (wnd > 0 && next <= 0) {
+                tb__xing x = all.x[i];
+                x.dir = -1;
+                tb__xbuf_push(out, &x);
+            }
+            wnd = next;
+        }
+        if (wnd > 0 && out->n % 2 == 1) { /* unbalanced (a lost crossing): close the interval */
+            tb__xing x = out->x[out->n - 1];
+            x.dir = -1;
+            tb__xbuf_push(out, &x);
+        }
+    }
+    tb__xbuf_free(&all);
+}

@@ -1,0 +1,104 @@
+/* The persistent scene object: one top-level MID object (a primitive or a CSG
+ * tree) copied out of the streaming reader, whose items die at its next read,
+ * and prepared once for the object-level functions (intersect.h, csg.h,
+ * param.h, bounds, polygonize).
+ *
+ *     tb_object *obj;
+ *     if (tb_object_from_mid(item.object, index, NULL, NULL, &obj)) fail(tb_last_error());
+ *     ... tb_object_intersect(obj, &ray, &hit) ...
+ *     tb_object_free(obj);
+ *
+ * The struct is public so that the other object-level modules and the
+ * renderers can read it; treat it as read-only after construction (a built
+ * object may be shared by any number of threads). */
+#ifndef TB_HOST_OBJECT_OBJECT_H
+#define TB_HOST_OBJECT_OBJECT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "host/scene/mid.h"
+#include "util/base/error.h"
+#include "util/math/aabb.h"
+#include "util/math/transform.h"
+#include "util/math/vec.h"
+
+/* One node of a triangle mesh's bounding volume hierarchy (32 bytes). Inner
+ * nodes have their left child right after them and the right child at
+ * `index`; leaves hold triangles index .. index + count - 1. */
+typedef struct tb_object_bvh_node {
+    float lo[3], hi[3]; /* box of the node's triangles, widened outward by one float */
+    uint32_t index;     /* inner: right child; leaf: first triangle */
+    uint16_t count;     /* triangles in a leaf; 0 for an inner node */
+    uint16_t axis;      /* inner: split axis (0 x, 1 y, 2 z), for front-to-back traversal */
+} tb_object_bvh_node;
+
+/* The triangulated form of a polygons primitive, built once for intersection:
+ * every polygon is split into triangles (util/mesh/triangulate.h) that
+ * remember the polygon (face ID) they came from. Object space. */
+typedef struct tb_object_mesh {
+    uint32_t nvertices;
+    tb_vec3 *vertices;          /* object-space positions */
+    uint32_t ntris;
+    uint32_t *tris;             /* 3 vertex indices per triangle, counter-clockwise seen from the front; BVH leaf order */
+    uint32_t *tri_face;         /* polygon index (face ID) of each triangle */
+    uint32_t nnodes;
+    tb_object_bvh_node *nodes;  /* BVH over the triangles; node 0 is the root (nnodes == 0 when ntris == 0) */
+    bool closed;                /* every polygon edge is matched by exactly one edge running the other way: a solid */
+} tb_object_mesh;
+
+typedef struct tb_object tb_object;
+
+/* A primitive or a CSG node with its children. */
+struct tb_object {
+    tb_prim_kind kind;
+    uint32_t index;          /* index of the top-level object (MID order, from 0); children carry their root's */
+    int material;            /* opaque material index from the build callback (-1 without one) */
+    char *name;              /* copy of the MID name, or NULL */
+    tb_transform to_world;   /* object space to world (double, with inverse): the full product for children too */
+    tb_mid_geometry geom;    /* deep copy of the parameters; pointers owned by the object */
+    tb_object_mesh *mesh;    /* polygons: the triangulated mesh; NULL for other kinds */
+    int nchildren;
+    tb_object *children;     /* CSG nodes: the children, in MID order */
+    const tb_object *parent; /* the CSG node holding this one, NULL at the top */
+    uint32_t face_base;      /* first face ID of this node within the top-level object's numbering (0 for a lone primitive) */
+    uint32_t nfaces;         /* face IDs this node uses: tb_param_face_count for a primitive, the sum over children for CSG */
+    bool closed;             /* a solid (closed surface), so usable inside CSG */
+    bool flip;               /* a CSG leaf subtracted an odd number of times on its path: its normals point inward in the result */
+    /* Derived at build time for intersection (docs/primitives.md). */
+    double conic[3];         /* cylinder, cone, conic: r^2 = conic[0] + conic[1] z + conic[2] z^2 */
+    double zrange[2];        /* cylinder, cone, conic: the z range */
+    int nprofile;            /* prism: profile points used by the test (0: large regular prism, tested by sectors) */
+    double *profile;         /* prism: those points as x y pairs (owned) */
+    double profile_orient;   /* prism: +1 if the profile turns counter-clockwise, -1 if clockwise */
+    bool profile_convex;     /* prism: the profile is convex (clipped by planes, else crossings are counted) */
+    double scale;            /* Frobenius norm of the linear part of to_world (bounds world error from object error) */
+};
+
+/* Maps a resolved MID material to the renderer's material index; returns
+ * TB_OK or an error (with tb_error) that aborts the build. */
+typedef tb_status (*tb_object_material_fn)(void *user, const tb_mid_material *m, int *index);
+
+/* Builds the persistent object of the streamed MID object `m` (deep copy:
+ * `m` may die afterwards). `index` is its top-level index; `material` (may be
+ * NULL: every material index is then -1) is called for each node. Polygons
+ * are triangulated and a BVH built. Rejected with TB_ERR_ARG and a message:
+ * non-finite, projective, singular or ill-conditioned transforms, parameters
+ * outside their MID ranges, polygons with out-of-range indices or fewer than
+ * three vertices, CSG nodes with too few children, and CSG children that are
+ * not closed solids (open cylinders, cones, pyramids, prisms, conics without
+ * caps, polygon meshes whose edges do not pair up). A polygons primitive that
+ * refers to a FED mesh file gives TB_ERR_UNSUPPORTED until util/mesh can
+ * load one. *out is NULL on failure. */
+tb_status tb_object_from_mid(const tb_mid_object *m, uint32_t index, tb_object_material_fn material,
+                             void *user, tb_object **out);
+
+/* Frees an object and its children; NULL is allowed. */
+void tb_object_free(tb_object *obj);
+
+/* The CSG leaf (a primitive of the tree, or obj itself when it is a
+ * primitive) owning face ID `face` of top-level object `obj`, and that face's
+ * ID within the leaf (*local, may be NULL). NULL if no leaf has that face. */
+const tb_object *tb_object_leaf_for_face(const tb_object *obj, uint32_t face, uint32_t *local);
+
+#endif
