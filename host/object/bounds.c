@@ -289,8 +289,10 @@ tb_status tb_bounds_world(tb_prim_kind kind, const tb_mid_geometry *geom, const 
 /* Largest singular value of the linear part: sqrt of the largest eigenvalue
  * of L^T L, by the trigonometric solution of the symmetric 3x3 eigenproblem
  * (Smith 1961), rounded up by a relative 1e-12. */
-static double tb__sigma_max(const tb_transform *t)
+double tb_bounds_max_stretch(const tb_transform *t)
 {
+    if (!t)
+        return 1.0;
     double a[3][3];
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) {
@@ -429,7 +431,7 @@ tb_status tb_bounds_sphere(tb_prim_kind kind, const tb_mid_geometry *geom, const
     }
     if (tb__affine(tw)) {
         tb_dvec3 oc;
-        double orad = tb__object_sphere(kind, geom, &oc) * tb__sigma_max(tw);
+        double orad = tb__object_sphere(kind, geom, &oc) * tb_bounds_max_stretch(tw);
         if (orad < r) {
             *center = tb_transform_dpoint(tw, oc), *radius = orad;
             return TB_OK;

@@ -57,6 +57,10 @@ tb_status tb_bounds_points_sphere(const tb_vec3 *pts, size_t n, const tb_transfo
  * difference -> the first child's box. Empty for n == 0 or a non-CSG kind. */
 tb_aabb tb_bounds_csg(tb_prim_kind op, const tb_aabb *children, int n);
 
+/* Largest singular value of the transform's linear part (its largest
+ * stretch of a length), rounded up by a relative 1e-12; 1 for NULL. */
+double tb_bounds_max_stretch(const tb_transform *t);
+
 /* The double box [lo, hi] rounded outward to float. */
 tb_aabb tb_bounds_round_out(tb_dvec3 lo, tb_dvec3 hi);
 
