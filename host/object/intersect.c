@@ -116,8 +116,10 @@ static bool tb__closest(const tb_object *obj, const tb_ray *ray, double tmin, do
         tb__prim_xings(obj, &r, &b);
     }
     bool found = false;
+    /* The range is checked on t rounded to float, the t the caller sees: a
+     * hit reported at t is found again with tmin = t or tmax = t. */
     for (int i = 0; i < b.n; i++)
-        if (b.x[i].t >= tmin && b.x[i].t <= tmax) {
+        if ((float)b.x[i].t >= tmin && (float)b.x[i].t <= tmax) {
             *hit = b.x[i];
             found = true;
             break;

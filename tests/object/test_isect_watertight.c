@@ -1,0 +1,150 @@
+/* Watertight ray/triangle intersection (Woop, Benthin, Wald 2013): 10^6 rays
+ * from inside a closed tessellated sphere and 10^6 from inside a closed
+ * subdivided cube mesh, aimed at vertices, at points on edges and at face
+ * interiors, must all hit (zero leaks). Rays from the centre aimed at the
+ * cube mesh's lattice points pass exactly through edges and vertices, where
+ * the exact tie rule decides. Every 8th ray also checks that the whole line
+ * crosses the (convex) mesh exactly once each way: one interval, containing
+ * the origin (no crossing counted twice). The meshes are placed by random
+ * transforms (mirrors included) half of the time. */
+#include "test_isect_common.h"
+
+#include "host/object/csg.h"
+#include "host/object/intersect.h"
+
+typedef struct ti_leaks {
+    long rays, leaks, double_counted, wrong_side;
+} ti_leaks;
+
+/* A target point on the mesh surface in object space: a vertex, a point on
+ * an edge (midpoint or random), or a random point inside a triangle. */
+static tb_dvec3 ti_target(const ti_mesh *m, tb_rng *r, int kind)
+{
+    int f = (int)tb_rng_below(r, (uint32_t)m->nf);
+    int s = m->start[f], n = m->start[f + 1] - s;
+    int k = (int)tb_rng_below(r, (uint32_t)n);
+    tb_vec3 a = m->v[m->idx[s + k]], b = m->v[m->idx[s + (k + 1) % n]], c = m->v[m->idx[s + (k + 2) % n]];
+    if (kind == 0)
+        return (tb_dvec3){a.x, a.y, a.z};
+    if (kind == 1 || kind == 2) {
+        double l = kind == 1 ? 0.5 : tb_rng_double(r);
+        return (tb_dvec3){a.x + l * (b.x - a.x), a.y + l * (b.y - a.y), a.z + l * (b.z - a.z)};
+    }
+    double u = tb_rng_double(r), v = tb_rng_double(r);
+    if (u + v > 1.0)
+        u = 1.0 - u, v = 1.0 - v;
+    return (tb_dvec3){a.x + u * (b.x - a.x) + v * (c.x - a.x), a.y + u * (b.y - a.y) + v * (c.y - a.y),
+                      a.z + u * (b.z - a.z) + v * (c.z - a.z)};
+}
+
+static void ti_shoot(const tb_object *o, tb_dvec3 ow, tb_dvec3 tw, bool check_line, ti_leaks *L)
+{
+    tb_vec3 orig = {(float)ow.x, (float)ow.y, (float)ow.z};
+    tb_vec3 d = {(float)(tw.x - orig.x), (float)(tw.y - orig.y), (float)(tw.z - orig.z)};
+    if (d.x == 0.0f && d.y == 0.0f && d.z == 0.0f)
+        return;
+    tb_ray ray = tb_ray_make(orig, d, 0.0f, INFINITY);
+    L->rays++;
+    tb_hit h;
+    if (!tb_object_intersect(o, &ray, &h)) {
+        if (L->leaks++ < 5)
+            print_message("leak: o = (%.9g %.9g %.9g) d = (%.9g %.9g %.9g)\n", orig.x, orig.y, orig.z, d.x, d.y,
+                          d.z);
+        return;
+    }
+    /* From inside, the way out is through the back of a front-facing polygon. */
+    if (h.ng.x * d.x + h.ng.y * d.y + h.ng.z * d.z < 0.0f)
+        L->wrong_side++;
+    if (check_line) {
+        float a[4], b[4];
+        int n = tb_object_intervals(o, &ray, a, b, 4);
+        if (n != 1 || !(a[0] <= 0.0f && b[0] >= 0.0f)) {
+            if (L->double_counted++ < 5)
+                print_message("line: %d intervals, first [%g %g]\n", n, n ? a[0] : 0.0, n ? b[0] : 0.0);
+        }
+    }
+}
+
+static void ti_run(const ti_mesh *mesh, bool lattice, uint64_t seed, long nrays, const char *what)
+{
+    tb_rng r;
+    tb_rng_seed(&r, seed, 1);
+    tb_object *objs[4];
+    for (int i = 0; i < 4; i++) {
+        tb_transform xf = i < 2 ? tb_transform_identity() : ti_random_transform(&r, 0.5, 3.0, 5.0, true);
+        if (i == 1) { /* exact: a power-of-two scale and an integer shift keep the lattice */
+            tb_transform s;
+            assert_int_equal(tb_transform_scale((tb_dvec3){2, 0.5, 4}, &s), TB_OK);
+            tb_transform t = tb_transform_translate((tb_dvec3){3, -1, 8});
+            xf = tb_transform_compose(&t, &s);
+        }
+        tb_mid_object m = ti_prim(TB_PRIM_POLYGONS, ti_mesh_geom(mesh), xf);
+        objs[i] = ti_build(&m, 0);
+        assert_true(objs[i]->closed);
+    }
+    ti_leaks L = {0};
+    for (long i = 0; i < nrays; i++) {
+        const tb_object *o = objs[i % 4];
+        int kind = (int)tb_rng_below(&r, 4);
+        tb_dvec3 target = ti_target(mesh, &r, kind);
+        tb_dvec3 orig;
+        int mode = (int)tb_rng_below(&r, 4);
+        if (mode == 0) {
+            orig = (tb_dvec3){0, 0, 0};
+        } else if (lattice && mode == 1) {
+            /* A grid point of a face, strictly inside it (a vertex, or the
+             * middle of a grid edge or of a quad, where the split diagonal
+             * runs), shot at along the face's axis from the centre plane:
+             * the ray passes exactly through the vertex or edge. */
+            int ax = (int)tb_rng_below(&r, 3), n = 8;
+            double c[3];
+            for (int q = 0; q < 3; q++)
+                c[q] = -1.0 + (double)(1 + (int)tb_rng_below(&r, (uint32_t)(2 * n - 1))) / n;
+            c[ax] = tb_rng_below(&r, 2) ? 1.0 : -1.0;
+            target = (tb_dvec3){c[0], c[1], c[2]};
+            c[ax] = 0.0;
+            orig = (tb_dvec3){c[0], c[1], c[2]};
+        } else {
+            tb_dvec3 u = ti_sphere_dir(&r);
+            double rad = 0.85 * cbrt(tb_rng_double(&r));
+            orig = (tb_dvec3){rad * u.x, rad * u.y, rad * u.z};
+        }
+        tb_dvec3 ow = tb_transform_dpoint(&o->to_world, orig);
+        tb_dvec3 tw = tb_transform_dpoint(&o->to_world, target);
+        ti_shoot(o, ow, tw, i % 8 == 0, &L);
+    }
+    print_message("[ %-8s ] %ld rays, %ld leaks, %ld lines not crossed exactly once each way, %ld exits on the "
+                  "wrong side\n",
+                  what, L.rays, L.leaks, L.double_counted, L.wrong_side);
+    for (int i = 0; i < 4; i++)
+        tb_object_free(objs[i]);
+    assert_true(L.rays > nrays * 9 / 10);
+    assert_int_equal(L.leaks, 0);
+    assert_int_equal(L.double_counted, 0);
+    assert_int_equal(L.wrong_side, 0);
+}
+
+static void test_watertight_sphere(void **state)
+{
+    (void)state;
+    ti_mesh m = ti_icosphere(4); /* 5120 triangles */
+    ti_run(&m, false, tb_test_seed("watertight_sphere", 20240601), ti_count(1000000, 2000), "sphere");
+    ti_mesh_free(&m);
+}
+
+static void test_watertight_cube(void **state)
+{
+    (void)state;
+    ti_mesh m = ti_cube_mesh(8); /* 384 quads, 768 triangles */
+    ti_run(&m, true, tb_test_seed("watertight_cube", 20240602), ti_count(1000000, 2000), "cube");
+    ti_mesh_free(&m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_watertight_sphere),
+        cmocka_unit_test(test_watertight_cube),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
