@@ -1,0 +1,153 @@
+/* Self-intersection: a ray leaving a convex surface from a hit point, with its
+ * origin moved off the surface by tb_spawn_ray_origin (pbrt-v4's error-bound
+ * offset, hit.h) using the point and error bound of tb_object_hit_point, must
+ * never hit that surface again, for 10^6 trials per convex primitive (after
+ * pbrt-v4's shapes_test "reintersect"). Each trial: a random ray from outside
+ * toward a random point near the object (under one of 9 transforms, mirrors
+ * and 25:1 scale ratios included), then a random direction in the hemisphere
+ * of the geometric normal. The offsets stay small: at most 2^-14 of the
+ * point's size (checked), so the test cannot pass by pushing origins away. */
+#include "test_isect_common.h"
+
+#include "host/object/hit.h"
+#include "host/object/intersect.h"
+
+typedef struct ti_case {
+    const char *name;
+    tb_prim_kind kind;
+    tb_mid_geometry g;
+} ti_case;
+
+static void ti_spawn_case(const ti_case *c, uint64_t seed, long trials)
+{
+    tb_rng r;
+    tb_rng_seed(&r, seed, (uint64_t)c->kind);
+    enum { NOBJ = 9 };
+    tb_object *objs[NOBJ];
+    for (int i = 0; i < NOBJ; i++) {
+        tb_transform xf = i == 0 ? tb_transform_identity() : ti_random_transform(&r, 0.2, 5.0, 10.0, true);
+        tb_mid_object m = ti_prim(c->kind, c->g, xf);
+        objs[i] = ti_build(&m, 0);
+    }
+    long hits = 0, rehits = 0, lost = 0;
+    double worst_offset = 0.0;
+    for (long i = 0; i < trials; i++) {
+        const tb_object *o = objs[i % NOBJ];
+        tb_dvec3 q = {ti_uniform(&r, -1.1, 1.1), ti_uniform(&r, -1.1, 1.1), ti_uniform(&r, -1.1, 1.1)};
+        tb_dvec3 target = tb_transform_dpoint(&o->to_world, q);
+        tb_dvec3 u = ti_sphere_dir(&r);
+        double dist = o->scale * ti_uniform(&r, 2.0, 20.0);
+        tb_vec3 orig = {(float)(target.x + dist * u.x), (float)(target.y + dist * u.y),
+                        (float)(target.z + dist * u.z)};
+        tb_vec3 d = {(float)(target.x - orig.x), (float)(target.y - orig.y), (float)(target.z - orig.z)};
+        tb_ray ray = tb_ray_make(orig, d, 0.0f, INFINITY);
+        tb_hit h;
+        if (!tb_object_intersect(o, &ray, &h))
+            continue;
+        hits++;
+        tb_vec3 p, perr;
+        if (!tb_object_hit_point(o, &ray, &h, &p, &perr)) {
+            lost++;
+            continue;
+        }
+        tb_dvec3 w = ti_sphere_dir(&r);
+        double wn = w.x * h.ng.x + w.y * h.ng.y + w.z * h.ng.z;
+        if (wn == 0.0)
+            continue;
+        if (wn < 0.0)
+            w = tb_dvec3_neg(w);
+        tb_vec3 wf = {(float)w.x, (float)w.y, (float)w.z};
+        tb_vec3 o2 = tb_spawn_ray_origin(p, perr, h.ng, wf);
+        double off = fmax(fabs(o2.x - p.x), fmax(fabs(o2.y - p.y), fabs(o2.z - p.z)));
+        double size = fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z))) + o->scale;
+        worst_offset = fmax(worst_offset, off / size);
+        tb_ray out = tb_ray_make(o2, wf, 0.0f, INFINITY);
+        if (tb_object_occluded(o, &out)) {
+            tb_hit h2;
+            if (rehits++ < 3 && tb_object_intersect(o, &out, &h2))
+                print_message("%s: re-hit at t = %g (face %u) from p = (%.9g %.9g %.9g) +- (%g %g %g), ng = (%g %g "
+                              "%g), w.ng = %g\n",
+                              c->name, h2.t, h2.face, p.x, p.y, p.z, perr.x, perr.y, perr.z, h.ng.x, h.ng.y, h.ng.z,
+                              wn);
+        }
+    }
+    print_message("[ %-9s ] %ld trials, %ld hits, %ld re-hits, %ld hit points not recomputed, largest offset %.2g "
+                  "of the point's size\n",
+                  c->name, trials, hits, rehits, lost, worst_offset);
+    for (int i = 0; i < NOBJ; i++)
+        tb_object_free(objs[i]);
+    assert_true(hits > trials / 4);
+    assert_int_equal(lost, 0);
+    assert_int_equal(rehits, 0);
+    assert_true(worst_offset < 0x1p-14);
+}
+
+static long ti_trials(void) { return ti_count(1000000, 2000); }
+
+#define TI_GEOM(k) tb_mid_geometry_default(k)
+
+static void test_spawn_quadrics(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("spawn_quadrics", 7001);
+    ti_case c;
+    c = (ti_case){"sphere", TB_PRIM_SPHERE, TI_GEOM(TB_PRIM_SPHERE)};
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"cylinder", TB_PRIM_CYLINDER, TI_GEOM(TB_PRIM_CYLINDER)};
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"cone", TB_PRIM_CONE, TI_GEOM(TB_PRIM_CONE)};
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"frustum", TB_PRIM_CONE, TI_GEOM(TB_PRIM_CONE)};
+    c.g.cone.top_radius = 1.5;
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"paraboloid", TB_PRIM_CONIC, TI_GEOM(TB_PRIM_CONIC)};
+    c.g.conic.c[0] = 0.5, c.g.conic.c[1] = -0.5, c.g.conic.c[2] = 0.0;
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"ellipsoid", TB_PRIM_CONIC, TI_GEOM(TB_PRIM_CONIC)};
+    c.g.conic.c[0] = 1.0, c.g.conic.c[1] = 0.0, c.g.conic.c[2] = -4.0; /* poles at z = +-1/2 */
+    c.g.conic.z0 = -0.5, c.g.conic.z1 = 0.5;
+    ti_spawn_case(&c, seed, ti_trials());
+}
+
+static void test_spawn_polyhedra(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("spawn_polyhedra", 7002);
+    ti_case c;
+    c = (ti_case){"cube", TB_PRIM_CUBE, TI_GEOM(TB_PRIM_CUBE)};
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"pyramid", TB_PRIM_PYRAMID, TI_GEOM(TB_PRIM_PYRAMID)};
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"pyr-frust", TB_PRIM_PYRAMID, TI_GEOM(TB_PRIM_PYRAMID)};
+    c.g.pyramid.top = 0.4;
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"prism-5", TB_PRIM_PRISM, TI_GEOM(TB_PRIM_PRISM)};
+    c.g.prism.sides = 5;
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"prism-1000", TB_PRIM_PRISM, TI_GEOM(TB_PRIM_PRISM)};
+    c.g.prism.sides = 1000; /* the sector test */
+    ti_spawn_case(&c, seed, ti_trials());
+}
+
+static void test_spawn_meshes(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("spawn_meshes", 7003);
+    ti_mesh s = ti_icosphere(3), b = ti_cube_mesh(4);
+    ti_case c = {"icosphere", TB_PRIM_POLYGONS, ti_mesh_geom(&s)};
+    ti_spawn_case(&c, seed, ti_trials());
+    c = (ti_case){"cube mesh", TB_PRIM_POLYGONS, ti_mesh_geom(&b)};
+    ti_spawn_case(&c, seed, ti_trials());
+    ti_mesh_free(&s);
+    ti_mesh_free(&b);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_spawn_quadrics),
+        cmocka_unit_test(test_spawn_polyhedra),
+        cmocka_unit_test(test_spawn_meshes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
