@@ -7,8 +7,10 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <locale.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "host/scene/mid.h"
 #include "host/scene/mid_reader.h"
@@ -106,6 +108,13 @@ typedef struct tb__name_idx {
     int idx;
 } tb__name_idx;
 
+/* A number of a list being parsed, with its position (needed if the list
+ * turns out not to be all numbers). */
+typedef struct tb__mid_num {
+    double number;
+    tb_mid_loc loc;
+} tb__mid_num;
+
 /* A file reference already checked, kept so a file used by many objects is
  * looked up once. */
 #define TB__MID_REF_CACHE_MAX 4096
@@ -123,6 +132,7 @@ struct tb_mid_reader {
     tb_arena item;            /* everything of the current item; reset per item */
     tb_arena keep;            /* named materials, the camera: live until close */
     tb_array values;          /* scratch stack of tb_mid_value while parsing lists/calls */
+    tb_array nums;            /* scratch stack of tb__mid_num while parsing lists */
     tb_array attrs;           /* scratch stack of tb_mid_attr */
     tb_array nodes;           /* scratch stack of tb__mid_node */
     tb_array refs;            /* scratch tb_mid_ref while collecting an object's references */
@@ -133,7 +143,43 @@ struct tb_mid_reader {
     /* Storage handed out by next(). */
     tb_mid_object *object;
     tb_mid_light light;
+    /* Bump pointer into the current block of `item` (see tb__mid_alloc). */
+    char *bump, *bump_end;
 };
+
+/* AddressSanitizer builds allocate every piece from the arena itself, so
+ * each one keeps its own poisoned bounds (the fuzzer relies on that). */
+#if defined(__SANITIZE_ADDRESS__)
+#define TB__MID_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define TB__MID_ASAN 1
+#endif
+#endif
+
+/* Bytes of the blocks tb__mid_alloc takes from the item arena. */
+#define TB__MID_BLOCK ((size_t)8192)
+
+/* tb__mid_alloc when the current block is full. */
+void *tb__mid_alloc_slow(tb_mid_reader *r, size_t n);
+
+/* n bytes (16-byte aligned) of the current item: an inline bump in blocks of
+ * the item arena, since a parse makes many small allocations. NULL when out
+ * of memory. */
+static inline void *tb__mid_alloc(tb_mid_reader *r, size_t n)
+{
+#ifdef TB__MID_ASAN
+    return tb_arena_alloc(&r->item, n);
+#else
+    size_t k = (n + 15) & ~(size_t)15;
+    if (k >= n && (uintptr_t)r->bump_end - (uintptr_t)r->bump >= k) {
+        void *p = r->bump;
+        r->bump += k;
+        return p;
+    }
+    return tb__mid_alloc_slow(r, n);
+#endif
+}
 
 /* Parses the version header. */
 tb_status tb__mid_parse_header(tb_mid_reader *r);
@@ -145,6 +191,32 @@ tb_status tb__mid_resolve_ref(tb_mid_reader *r, const char *text, tb_mid_loc loc
 
 /* Interprets a parsed top-level node as an item (mid_schema.c). */
 tb_status tb__mid_interpret(tb_mid_reader *r, const tb__mid_node *node, tb_mid_item *item);
+
+/* tb_array_push with the common case (room left) inline: the reader pushes
+ * every value and attribute it parses. */
+static inline tb_status tb__mid_push(tb_array *a, const void *elem)
+{
+    if (a->len < a->cap) {
+        memcpy((char *)a->data + a->len * a->elem_size, elem, a->elem_size);
+        a->len++;
+        return TB_OK;
+    }
+    return tb_array_push(a, elem);
+}
+
+/* The "C" locale for numbers (a '.' decimal point whatever the program's
+ * LC_NUMERIC), created once; (locale_t)0 if it could not be. Used with
+ * uselocale() around strtod and printf of numbers. */
+locale_t tb__mid_c_locale(void);
+
+/* Keyword code of the n bytes at s, or -1. */
+int tb__mid_keyword_n(const char *s, size_t n);
+
+/* The identity transform, as a constant. */
+extern const tb_transform tb__mid_identity;
+
+/* The default material (docs/mid.md, section 7), as a constant. */
+extern const tb_mid_material tb__mid_default_material;
 
 /* Error at `loc` of the reader's file (see tb__mid_errorf). */
 #define TB__MID_ERR(r, loc, ...) tb__mid_errorf(&(r)->lx, (loc), __VA_ARGS__)

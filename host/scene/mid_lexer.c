@@ -6,12 +6,17 @@
 
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
+static void tb__cls_build(void);
+static pthread_once_t tb__cls_once;
+
 tb_status tb__mid_lexer_init(tb__mid_lexer *lx, FILE *fp, const char *name)
 {
+    pthread_once(&tb__cls_once, tb__cls_build);
     memset(lx, 0, sizeof *lx);
     lx->fp = fp;
     lx->name = name;
@@ -86,7 +91,7 @@ static bool tb__refill(tb__mid_lexer *lx)
 
 /* The byte at pos after a zero was seen there: the refilled byte, 0 for a
  * real NUL in the input, -1 at end of file (or after a read error). */
-static int tb__more(tb__mid_lexer *lx)
+__attribute__((noinline)) static int tb__more(tb__mid_lexer *lx)
 {
     if (lx->pos < lx->end)
         return 0;
@@ -102,12 +107,36 @@ static inline int tb__peek(tb__mid_lexer *lx)
     return c ? c : tb__more(lx);
 }
 
-static inline bool tb__is_digit(int c) { return c >= '0' && c <= '9'; }
-static inline bool tb__is_ident_start(int c)
+/* Character classes, one table lookup per byte in the hot loops. */
+enum {
+    TB__C_SPACE = 1,  /* space, tab, carriage return (not newline: it counts lines) */
+    TB__C_DIGIT = 2,  /* 0-9 */
+    TB__C_IDENT = 4,  /* letters, digits, _ */
+    TB__C_START = 8,  /* letters, _ */
+    TB__C_ENDNUM = 16, /* may follow a number: white space, punctuation, # */
+};
+static unsigned char tb__cls[256];
+static pthread_once_t tb__cls_once = PTHREAD_ONCE_INIT;
+
+static void tb__cls_build(void)
 {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
+    for (int c = 0; c < 256; c++) {
+        unsigned char k = 0;
+        if (c == ' ' || c == '\t' || c == '\r')
+            k |= TB__C_SPACE;
+        if (c >= '0' && c <= '9')
+            k |= TB__C_DIGIT | TB__C_IDENT;
+        if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_')
+            k |= TB__C_IDENT | TB__C_START;
+        if (c && strchr(" \t\r\n#{}[]()=,", c))
+            k |= TB__C_ENDNUM;
+        tb__cls[c] = k;
+    }
 }
-static inline bool tb__is_ident(int c) { return tb__is_ident_start(c) || tb__is_digit(c); }
+
+static inline bool tb__is_digit(int c) { return c >= 0 && (tb__cls[c & 255] & TB__C_DIGIT); }
+static inline bool tb__is_ident_start(int c) { return c >= 0 && (tb__cls[c & 255] & TB__C_START); }
+static inline bool tb__is_ident(int c) { return c >= 0 && (tb__cls[c & 255] & TB__C_IDENT); }
 
 /* Error for a failed read, or the given end-of-input situation. */
 static tb_status tb__eof_or_io(tb__mid_lexer *lx) { return lx->io_status; }
@@ -115,7 +144,7 @@ static tb_status tb__eof_or_io(tb__mid_lexer *lx) { return lx->io_status; }
 /* Validates one UTF-8 sequence whose lead byte c0 (>= 0x80) is at pos, and
  * moves pos past it, copying it to *out (advancing *out) if out is not NULL.
  * The caller has set keep so the bytes survive a refill. */
-static tb_status tb__utf8(tb__mid_lexer *lx, char **out)
+__attribute__((noinline)) static tb_status tb__utf8(tb__mid_lexer *lx, char **out)
 {
     size_t start = lx->pos;
     tb_mid_loc loc = tb__loc_at(lx, start);
@@ -159,7 +188,7 @@ static tb_status tb__utf8(tb__mid_lexer *lx, char **out)
 }
 
 /* Skips a comment from '#' to the end of the line (the newline stays). */
-static tb_status tb__comment(tb__mid_lexer *lx)
+__attribute__((noinline)) static tb_status tb__comment(tb__mid_lexer *lx)
 {
     for (;;) {
         lx->keep = lx->pos;
@@ -219,7 +248,7 @@ static int tb__hex(int c)
 /* A string token; pos is at the opening quote. The unescaped text goes to
  * lx->str (raw bytes are not kept, so escapes may make the raw string
  * longer than the buffer). */
-static tb_status tb__string(tb__mid_lexer *lx)
+__attribute__((noinline)) static tb_status tb__string(tb__mid_lexer *lx)
 {
     tb_mid_loc start = lx->loc;
     char *o = lx->str;
@@ -335,7 +364,7 @@ static bool tb__ends_number(int c)
 }
 
 /* Reports the run of number-like characters from the token start. */
-static tb_status tb__malformed_number(tb__mid_lexer *lx)
+__attribute__((noinline)) static tb_status tb__malformed_number(tb__mid_lexer *lx)
 {
     int c;
     while ((c = tb__peek(lx)) >= 0 && (tb__is_ident(c) || c == '.' || c == '+' || c == '-') &&
@@ -349,7 +378,7 @@ static tb_status tb__malformed_number(tb__mid_lexer *lx)
  * path (an integer mantissa below 2^53 times an exact power of ten is
  * correctly rounded by one multiplication or division) covers the numbers
  * people and the writer produce; strtod does the rest. */
-static tb_status tb__number(tb__mid_lexer *lx)
+__attribute__((noinline)) static tb_status tb__number(tb__mid_lexer *lx)
 {
     int c = tb__peek(lx);
     bool neg = false;
@@ -429,11 +458,14 @@ static tb_status tb__number(tb__mid_lexer *lx)
     else if (exact && m <= ((uint64_t)1 << 53) && exp10 >= -22 && exp10 <= 22)
         v = exp10 >= 0 ? (double)m * tb__p10[exp10] : (double)m / tb__p10[-exp10];
     else {
-        /* strtod needs a terminated copy; it reads '.' as the decimal point
-         * in the "C" locale, which a program keeps unless it calls setlocale. */
+        /* strtod needs a terminated copy, and the "C" locale so that '.' is
+         * the decimal point whatever the program set with setlocale. */
         memcpy(lx->str, lx->text, lx->len);
         lx->str[lx->len] = '\0';
+        locale_t c = tb__mid_c_locale(), old = c ? uselocale(c) : (locale_t)0;
         v = fabs(strtod(lx->str, NULL));
+        if (c)
+            uselocale(old);
     }
     if (!isfinite(v))
         return tb__mid_errorf(lx, lx->loc, "number out of range '%.*s' (beyond the largest double)",
@@ -442,11 +474,88 @@ static tb_status tb__number(tb__mid_lexer *lx)
     return TB_OK;
 }
 
+/* The common case of tb__number, scanned with a local pointer: a short
+ * number inside the buffer that Clinger's fast path converts exactly. False
+ * (nothing consumed) for anything else, which tb__number then handles with
+ * refills, limits, strtod and error messages. */
+static bool tb__number_fast(tb__mid_lexer *lx)
+{
+    const char *b = lx->buf + lx->pos, *p = b;
+    bool neg = false;
+    if (*p == '+' || *p == '-') {
+        neg = *p == '-';
+        p++;
+    }
+    /* Find the digit runs first, then accumulate them without checks: with
+     * at most 19 digits in all the mantissa cannot overflow 64 bits. */
+    const char *i0 = p;
+    while (tb__cls[(unsigned char)*p] & TB__C_DIGIT)
+        p++;
+    const char *i1 = p, *f0 = p, *f1 = p;
+    if (*p == '.') {
+        f0 = ++p;
+        while (tb__cls[(unsigned char)*p] & TB__C_DIGIT)
+            p++;
+        f1 = p;
+    }
+    if (i1 == i0 && f1 == f0)
+        return false;
+    if ((i1 - i0) + (f1 - f0) > 19)
+        return false;
+    uint64_t m = 0;
+    for (const char *q = i0; q < i1; q++)
+        m = m * 10 + (uint64_t)(*q - '0');
+    for (const char *q = f0; q < f1; q++)
+        m = m * 10 + (uint64_t)(*q - '0');
+    int exp10 = -(int)(f1 - f0);
+    if (*p == 'e' || *p == 'E') {
+        p++;
+        int esign = 1, e = 0;
+        if (*p == '+' || *p == '-')
+            esign = *p++ == '-' ? -1 : 1;
+        if (!tb__is_digit(*p))
+            return false;
+        for (; tb__is_digit(*p); p++)
+            if (e < 1000)
+                e = e * 10 + (*p - '0');
+        exp10 += esign * e;
+    }
+    /* A zero byte is the buffer end (or a NUL): let the careful path decide. */
+    if (!(tb__cls[(unsigned char)*p] & TB__C_ENDNUM) || p - b > 64)
+        return false;
+    double v;
+    if (m == 0)
+        v = 0.0;
+    else if (m <= ((uint64_t)1 << 53) && exp10 >= -22 && exp10 <= 22)
+        v = exp10 >= 0 ? (double)m * tb__p10[exp10] : (double)m / tb__p10[-exp10];
+    else
+        return false;
+    lx->type = TB__T_NUMBER;
+    lx->text = b;
+    lx->len = (size_t)(p - b);
+    lx->number = neg ? -v : v;
+    lx->pos += lx->len;
+    return true;
+}
+
 tb_status tb__mid_lex(tb__mid_lexer *lx)
 {
     for (;;) {
+        /* White space, scanned with a local pointer (the sentinel stops it). */
+        const char *p = lx->buf + lx->pos;
+        for (;;) {
+            if (tb__cls[(unsigned char)*p] & TB__C_SPACE)
+                p++;
+            else if (*p == '\n') {
+                p++;
+                lx->line++;
+                lx->line_start = lx->base + (uint64_t)(p - lx->buf);
+            } else
+                break;
+        }
+        lx->pos = (size_t)(p - lx->buf);
         lx->keep = lx->pos;
-        int c = (unsigned char)lx->buf[lx->pos];
+        int c = (unsigned char)*p;
         if (c == 0) {
             c = tb__more(lx);
             lx->keep = lx->pos;
@@ -492,9 +601,22 @@ tb_status tb__mid_lex(tb__mid_lexer *lx)
         case '+': case '-': case '.':
         case '0': case '1': case '2': case '3': case '4':
         case '5': case '6': case '7': case '8': case '9':
+            if (tb__number_fast(lx))
+                return TB_OK;
             return tb__number(lx);
         default:
             if (tb__is_ident_start(c)) {
+                /* Fast path: the identifier ends inside the buffer. */
+                const char *b = lx->buf + lx->pos, *q = b + 1;
+                while (tb__is_ident(*q))
+                    q++;
+                if (q < lx->buf + lx->end && q - b <= TB_MID_MAX_TOKEN) {
+                    lx->type = TB__T_IDENT;
+                    lx->text = b;
+                    lx->len = (size_t)(q - b);
+                    lx->pos += lx->len;
+                    return TB_OK;
+                }
                 lx->pos++;
                 while (tb__is_ident(c = tb__peek(lx))) {
                     lx->pos++;

@@ -2,6 +2,7 @@
 #include "host/scene/mid.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <string.h>
 
 #include "host/scene/mid_internal.h"
@@ -28,10 +29,29 @@ static const char *const tb__keywords[TB__K_COUNT] = {
     [TB__K_CAMERA] = "camera",
 };
 
+static locale_t tb__c_locale;
+static pthread_once_t tb__c_locale_once = PTHREAD_ONCE_INIT;
+
+static void tb__c_locale_make(void) { tb__c_locale = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0); }
+
+locale_t tb__mid_c_locale(void)
+{
+    pthread_once(&tb__c_locale_once, tb__c_locale_make);
+    return tb__c_locale;
+}
+
 int tb__mid_keyword(const char *name)
 {
     for (int k = 0; k < TB__K_COUNT; k++)
         if (strcmp(name, tb__keywords[k]) == 0)
+            return k;
+    return -1;
+}
+
+int tb__mid_keyword_n(const char *s, size_t n)
+{
+    for (int k = 0; k < TB__K_COUNT; k++)
+        if (strncmp(s, tb__keywords[k], n) == 0 && tb__keywords[k][n] == '\0')
             return k;
     return -1;
 }
@@ -82,18 +102,21 @@ tb_mid_color tb_mid_color_grey(float v)
     return c;
 }
 
-tb_mid_material tb_mid_material_default(void)
-{
-    tb_mid_material m;
-    memset(&m, 0, sizeof m);
-    m.diffuse = tb_mid_color_grey(0.5f);
-    m.specular = tb_mid_color_grey(0.0f);
-    m.transmission = tb_mid_color_grey(0.0f);
-    m.emission = tb_mid_color_grey(0.0f);
-    m.exponent = 20.0f;
-    m.ior = 1.0f;
-    return m;
-}
+const tb_mid_material tb__mid_default_material = {
+    .diffuse = {.type = TB_MID_COLOR_RGB, .rgb = {0.5f, 0.5f, 0.5f}},
+    .specular = {.type = TB_MID_COLOR_RGB},
+    .transmission = {.type = TB_MID_COLOR_RGB},
+    .emission = {.type = TB_MID_COLOR_RGB},
+    .exponent = 20.0f,
+    .ior = 1.0f,
+};
+
+const tb_transform tb__mid_identity = {
+    {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}},
+    {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}},
+};
+
+tb_mid_material tb_mid_material_default(void) { return tb__mid_default_material; }
 
 bool tb_mid_material_emits(const tb_mid_material *m)
 {
@@ -150,9 +173,20 @@ double tb_mid_camera_fov(double f, const double film[2], int res_w, int res_h)
 
 /* ---------------------------------------------------------------- transforms */
 
+/* True if every entry of t and its inverse is finite (x - x is 0 for a
+ * finite x and NaN for an infinite or NaN one). */
+static bool tb__transform_finite(const tb_transform *t)
+{
+    double s = 0.0;
+    for (int r = 0; r < 4; r++)
+        for (int c = 0; c < 4; c++)
+            s += (t->m.m[r][c] - t->m.m[r][c]) + (t->inv.m[r][c] - t->inv.m[r][c]);
+    return s == 0.0;
+}
+
 tb_status tb_mid_ops_transform(const tb_mid_op *ops, int n, tb_transform *out, int *bad)
 {
-    tb_transform total = tb_transform_identity();
+    tb_transform total = tb__mid_identity;
     for (int i = 0; i < n; i++) {
         const double *v = ops[i].v;
         tb_transform t;
@@ -176,9 +210,11 @@ tb_status tb_mid_ops_transform(const tb_mid_op *ops, int n, tb_transform *out, i
                 *bad = i;
             return st;
         }
-        total = tb_transform_compose(&t, &total); /* ops[i] after the ones before */
+        /* ops[i] after the ones before (the first needs no product: I * t = t exactly). */
+        total = i == 0 ? t : tb_transform_compose(&t, &total);
     }
-    if (!tb_mat4_isfinite(&total.m) || !tb_mat4_isfinite(&total.inv)) {
+    /* One operation is finite by construction; a product may overflow. */
+    if (n > 1 && !tb__transform_finite(&total)) {
         if (bad)
             *bad = n;
         return tb_error(TB_ERR_NUMERIC, "the composed transform overflows");

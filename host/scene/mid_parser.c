@@ -5,6 +5,7 @@
  * into the arena when they close, so nothing is reallocated in the arena. */
 #include "host/scene/mid_internal.h"
 
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,15 +13,85 @@
 
 static tb_status tb__adv(tb_mid_reader *r) { return tb__mid_lex(&r->lx); }
 
-/* The current token's text, copied into the item arena. */
-static char *tb__copy_text(tb_mid_reader *r)
+/* Names the format defines, shared instead of copied for every use (an
+ * attribute name, call name or symbol is compared, never written to). */
+static const char *const tb__known[] = {
+    "transform", "geometry", "rendering", "material", "diffuse", "specular", "exponent", "transmission", "ior",
+    "emission", "diffuse_texture", "specular_texture", "transmission_texture", "emission_texture", "caps",
+    "top_radius", "top", "sides", "profile", "major", "minor", "vertices", "faces", "normals", "uvs", "mesh",
+    "coefficients", "z_range", "width", "height", "position", "direction", "intensity", "irradiance",
+    "cone_angle", "cone_delta", "ies", "eye", "look_at", "up", "fov", "focal_length", "film", "resolution",
+    "aperture", "focus_distance", "translate", "scale", "rotate", "matrix", "spectrum", "file", "true", "false",
+};
+
+/* Open-addressing table over tb__known, built once. */
+#define TB__INTERN_SLOTS 256
+static const char *tb__intern_slot[TB__INTERN_SLOTS];
+static pthread_once_t tb__intern_once = PTHREAD_ONCE_INIT;
+
+static unsigned tb__intern_hash(const char *s, size_t n)
 {
-    char *s = tb_arena_alloc(&r->item, r->lx.len + 1);
+    return ((unsigned)n * 31u + (unsigned char)s[0] * 7u + (unsigned char)s[n - 1] * 131u) & (TB__INTERN_SLOTS - 1);
+}
+
+static void tb__intern_build(void)
+{
+    for (size_t i = 0; i < sizeof tb__known / sizeof tb__known[0]; i++) {
+        unsigned h = tb__intern_hash(tb__known[i], strlen(tb__known[i]));
+        while (tb__intern_slot[h])
+            h = (h + 1) & (TB__INTERN_SLOTS - 1);
+        tb__intern_slot[h] = tb__known[i];
+    }
+}
+
+/* The shared copy of the n bytes at s if the format defines that name, else NULL. */
+static const char *tb__intern(const char *s, size_t n)
+{
+    if (n == 0 || n > 24)
+        return NULL;
+    for (unsigned h = tb__intern_hash(s, n);; h = (h + 1) & (TB__INTERN_SLOTS - 1)) {
+        const char *k = tb__intern_slot[h];
+        if (!k)
+            return NULL;
+        size_t i = 0;
+        while (i < n && k[i] == s[i])
+            i++;
+        if (i == n && k[n] == '\0')
+            return k;
+    }
+}
+
+/* The current token's text (an identifier): shared if the format defines
+ * it, else copied into the item arena. */
+static const char *tb__name(tb_mid_reader *r)
+{
+    const char *k = tb__intern(r->lx.text, r->lx.len);
+    if (k)
+        return k;
+    char *s = tb__mid_alloc(r, r->lx.len + 1);
     if (s) {
         memcpy(s, r->lx.text, r->lx.len);
         s[r->lx.len] = '\0';
     }
     return s;
+}
+
+/* The current token's text, copied into the item arena. */
+static char *tb__copy_text(tb_mid_reader *r)
+{
+    char *s = tb__mid_alloc(r, r->lx.len + 1);
+    if (s) {
+        memcpy(s, r->lx.text, r->lx.len);
+        s[r->lx.len] = '\0';
+    }
+    return s;
+}
+
+/* Element i of a scratch stack; NULL while the stack has no storage (no
+ * arithmetic on a null pointer). */
+static void *tb__slot(const tb_array *a, size_t i)
+{
+    return a->data ? (char *)a->data + i * a->elem_size : NULL;
 }
 
 static tb_status tb__nomem(tb_mid_reader *r)
@@ -34,7 +105,7 @@ static tb_status tb__to_arena(tb_mid_reader *r, const void *src, size_t n, size_
     *out = NULL;
     if (n == 0)
         return TB_OK;
-    void *p = tb_arena_alloc(&r->item, n * size);
+    void *p = tb__mid_alloc(r, n * size);
     if (!p)
         return tb__nomem(r);
     memcpy(p, src, n * size);
@@ -99,22 +170,26 @@ static tb_status tb__check_duplicates(tb_mid_reader *r, const tb_mid_attr *a, si
 
 static tb_status tb__parse_value(tb_mid_reader *r, tb_mid_value *v, int depth, const char *attr);
 
-/* The elements of a list or call up to `close` (the opener is the current
- * token); they are left on r->values from index *first. */
-static tb_status tb__parse_items(tb_mid_reader *r, tb__mid_tok close, tb_mid_loc open,
-                                 const char *what, int depth, size_t *first)
+/* The elements of a list (call == NULL) or of call `call` up to the closing
+ * bracket, pushed on r->values; the current token is the opener (skip_open)
+ * or the next element. */
+static tb_status tb__parse_items(tb_mid_reader *r, const char *call, tb_mid_loc open, int depth, bool skip_open)
 {
     tb__mid_lexer *lx = &r->lx;
-    char closech = close == TB__T_RBRACKET ? ']' : ')';
-    char found[96];
-    *first = r->values.len;
-    tb_status st = tb__adv(r);
-    if (st)
+    tb__mid_tok close = call ? TB__T_RPAREN : TB__T_RBRACKET;
+    char closech = call ? ')' : ']';
+    char found[96], what[64];
+    tb_status st;
+    if (skip_open && (st = tb__adv(r)))
         return st;
     for (;;) {
         if (lx->type == close)
             return TB_OK;
         if (!tb__starts_value(lx->type)) {
+            if (call)
+                snprintf(what, sizeof what, "'%.40s('", call);
+            else
+                snprintf(what, sizeof what, "the list");
             if (lx->type == TB__T_EOF)
                 return TB__MID_ERR(r, lx->loc, "expected '%c' to close %s opened at %ld:%ld, found end of file",
                                    closech, what, open.line, open.col);
@@ -125,7 +200,7 @@ static tb_status tb__parse_items(tb_mid_reader *r, tb__mid_tok close, tb_mid_loc
         tb_mid_value v;
         if ((st = tb__parse_value(r, &v, depth + 1, NULL)))
             return st;
-        if (tb_array_push(&r->values, &v))
+        if (tb__mid_push(&r->values, &v))
             return tb__nomem(r);
         if (lx->type == TB__T_COMMA) {
             if ((st = tb__adv(r)))
@@ -141,16 +216,66 @@ static tb_status tb__parse_items(tb_mid_reader *r, tb__mid_tok close, tb_mid_loc
 /* [ ... ]: a VECTOR when every element is a number, else a LIST. */
 static tb_status tb__parse_list(tb_mid_reader *r, tb_mid_value *v, int depth)
 {
+    tb__mid_lexer *lx = &r->lx;
     if (depth > TB_MID_MAX_DEPTH)
         return tb__too_deep(r);
-    size_t first;
-    tb_status st = tb__parse_items(r, TB__T_RBRACKET, v->loc, "the list", depth, &first);
+    /* Fast path for the common case, a list of numbers: they go to a stack
+     * of (number, position) instead of one generic value each. */
+    size_t first = r->values.len, nums0 = r->nums.len;
+    tb_status st = tb__adv(r);
     if (st)
+        return st;
+    while (lx->type == TB__T_NUMBER) {
+        tb__mid_num x = {lx->number, lx->loc};
+        if (tb__mid_push(&r->nums, &x))
+            return tb__nomem(r);
+        if ((st = tb__adv(r)))
+            return st;
+        if (lx->type == TB__T_COMMA) {
+            if ((st = tb__adv(r)))
+                return st;
+            if (!tb__starts_value(lx->type)) {
+                char found[96];
+                TB__FOUND(r, found);
+                return TB__MID_ERR(r, lx->loc, "expected a value after ',', found %s", found);
+            }
+        }
+    }
+    size_t nn = r->nums.len - nums0;
+    const tb__mid_num *nums = tb__slot(&r->nums, nums0);
+    if (lx->type == TB__T_RBRACKET) {
+        if (nn > INT32_MAX)
+            return TB__MID_ERR(r, v->loc, "list with more than %d elements", INT32_MAX);
+        v->type = TB_MID_VECTOR;
+        v->count = (int)nn;
+        double *d = NULL;
+        if (nn) {
+            if (!(d = tb__mid_alloc(r, nn * sizeof *d)))
+                return tb__nomem(r);
+            for (size_t i = 0; i < nn; i++)
+                d[i] = nums[i].number;
+        }
+        v->numbers = d;
+        r->nums.len = nums0;
+        return tb__adv(r);
+    }
+    /* Something else follows: the numbers so far become generic values. */
+    for (size_t i = 0; i < nn; i++) {
+        tb_mid_value x;
+        memset(&x, 0, sizeof x);
+        x.type = TB_MID_NUMBER;
+        x.number = nums[i].number;
+        x.loc = nums[i].loc;
+        if (tb__mid_push(&r->values, &x))
+            return tb__nomem(r);
+    }
+    r->nums.len = nums0;
+    if ((st = tb__parse_items(r, NULL, v->loc, depth, false)))
         return st;
     size_t n = r->values.len - first;
     if (n > INT32_MAX)
         return TB__MID_ERR(r, v->loc, "list with more than %d elements", INT32_MAX);
-    const tb_mid_value *items = (const tb_mid_value *)r->values.data + first;
+    const tb_mid_value *items = tb__slot(&r->values, first);
     bool numbers = true;
     for (size_t i = 0; i < n && numbers; i++)
         numbers = items[i].type == TB_MID_NUMBER;
@@ -159,7 +284,7 @@ static tb_status tb__parse_list(tb_mid_reader *r, tb_mid_value *v, int depth)
         v->type = TB_MID_VECTOR;
         double *d = NULL;
         if (n) {
-            d = tb_arena_alloc(&r->item, n * sizeof *d);
+            d = tb__mid_alloc(r, n * sizeof *d);
             if (!d)
                 return tb__nomem(r);
             for (size_t i = 0; i < n; i++)
@@ -182,16 +307,14 @@ static tb_status tb__parse_call(tb_mid_reader *r, tb_mid_value *v, const char *n
 {
     if (depth > TB_MID_MAX_DEPTH)
         return tb__too_deep(r);
-    char what[64];
-    snprintf(what, sizeof what, "'%.40s('", name);
-    size_t first;
-    tb_status st = tb__parse_items(r, TB__T_RPAREN, v->loc, what, depth, &first);
+    size_t first = r->values.len;
+    tb_status st = tb__parse_items(r, name, v->loc, depth, true);
     if (st)
         return st;
     size_t n = r->values.len - first;
     if (n > INT32_MAX)
         return TB__MID_ERR(r, v->loc, "call with more than %d arguments", INT32_MAX);
-    const tb_mid_value *items = (const tb_mid_value *)r->values.data + first;
+    const tb_mid_value *items = tb__slot(&r->values, first);
     if (strcmp(name, "file") == 0) {
         if (n != 1 || items[0].type != TB_MID_STRING)
             return TB__MID_ERR(r, v->loc, "file() takes one string: file(\"path/to/data\")");
@@ -216,7 +339,7 @@ static tb_status tb__parse_attr(tb_mid_reader *r, int depth)
 {
     tb__mid_lexer *lx = &r->lx;
     tb_mid_attr a = {.loc = lx->loc};
-    if (!(a.name = tb__copy_text(r)))
+    if (!(a.name = tb__name(r)))
         return tb__nomem(r);
     tb_status st = tb__adv(r);
     if (st)
@@ -228,7 +351,7 @@ static tb_status tb__parse_attr(tb_mid_reader *r, int depth)
     }
     if ((st = tb__adv(r)) || (st = tb__parse_value(r, &a.value, depth, a.name)))
         return st;
-    if (tb_array_push(&r->attrs, &a))
+    if (tb__mid_push(&r->attrs, &a))
         return tb__nomem(r);
     return TB_OK;
 }
@@ -240,7 +363,7 @@ static tb_status tb__take_attrs(tb_mid_reader *r, size_t first, tb_mid_attr **ou
     size_t n = r->attrs.len - first;
     if (n > INT32_MAX)
         return tb_error(TB_ERR_FORMAT, "%s: too many attributes", r->lx.name);
-    const tb_mid_attr *a = (const tb_mid_attr *)r->attrs.data + first;
+    const tb_mid_attr *a = tb__slot(&r->attrs, first);
     tb_status st = tb__check_duplicates(r, a, n);
     if (st)
         return st;
@@ -304,7 +427,7 @@ static tb_status tb__parse_value(tb_mid_reader *r, tb_mid_value *v, int depth, c
             return tb__nomem(r);
         return tb__adv(r);
     case TB__T_IDENT: {
-        char *name = tb__copy_text(r);
+        const char *name = tb__name(r);
         if (!name)
             return tb__nomem(r);
         tb_status st = tb__adv(r);
@@ -390,14 +513,14 @@ static tb_status tb__parse_object(tb_mid_reader *r, tb__mid_node *node, int k, t
         }
         /* An attribute (name =) or a child object (kind { or kind "name"). */
         tb_mid_attr a = {.loc = lx->loc};
-        if (!(a.name = tb__copy_text(r)))
+        if (!(a.name = tb__name(r)))
             return tb__nomem(r);
         if ((st = tb__adv(r)))
             return st;
         if (lx->type == TB__T_EQUAL) {
             if ((st = tb__adv(r)) || (st = tb__parse_value(r, &a.value, depth + 1, a.name)))
                 return st;
-            if (tb_array_push(&r->attrs, &a))
+            if (tb__mid_push(&r->attrs, &a))
                 return tb__nomem(r);
             continue;
         }
@@ -421,7 +544,7 @@ static tb_status tb__parse_object(tb_mid_reader *r, tb__mid_node *node, int k, t
         tb__mid_node child;
         if ((st = tb__parse_object(r, &child, ck, a.loc, depth + 1, false)))
             return st;
-        if (tb_array_push(&r->nodes, &child))
+        if (tb__mid_push(&r->nodes, &child))
             return tb__nomem(r);
     }
     /* Closing brace: move the collected entries into the arena. */
@@ -429,7 +552,7 @@ static tb_status tb__parse_object(tb_mid_reader *r, tb__mid_node *node, int k, t
         return st;
     size_t nn = r->nodes.len - nodes0;
     void *p;
-    if ((st = tb__to_arena(r, (tb__mid_node *)r->nodes.data + nodes0, nn, sizeof(tb__mid_node), &p)))
+    if ((st = tb__to_arena(r, tb__slot(&r->nodes, nodes0), nn, sizeof(tb__mid_node), &p)))
         return st;
     node->children = p;
     node->nchildren = (int)nn;
@@ -440,6 +563,7 @@ static tb_status tb__parse_object(tb_mid_reader *r, tb__mid_node *node, int k, t
 tb_status tb__mid_parse_header(tb_mid_reader *r)
 {
     tb__mid_lexer *lx = &r->lx;
+    pthread_once(&tb__intern_once, tb__intern_build);
     char found[96];
     tb_status st = tb__adv(r);
     if (st)
@@ -502,11 +626,12 @@ tb_status tb__mid_parse_item(tb_mid_reader *r, tb__mid_node *node, bool *eof)
         return TB__MID_ERR(r, lx->loc, "expected an object such as 'sphere { }', found %s", found);
     }
     tb_mid_loc loc = lx->loc;
-    char name[48];
-    snprintf(name, sizeof name, "%.*s", lx->len > 40 ? 40 : (int)lx->len, lx->text);
-    int k = lx->len > 40 ? -1 : tb__mid_keyword(name);
-    if (k < 0)
+    int k = tb__mid_keyword_n(lx->text, lx->len);
+    if (k < 0) {
+        char name[48];
+        snprintf(name, sizeof name, "%.*s", lx->len > 40 ? 40 : (int)lx->len, lx->text);
         return tb__unknown_kind(r, name, loc);
+    }
     if ((st = tb__adv(r)))
         return st;
     return tb__parse_object(r, node, k, loc, 1, true);

@@ -58,6 +58,7 @@ static tb_status tb__reader_new(tb_mid_reader **out, FILE *fp, const char *name,
     tb_arena_init(&r->item, 0);
     tb_arena_init(&r->keep, 0);
     tb_array_init(&r->values, sizeof(tb_mid_value));
+    tb_array_init(&r->nums, sizeof(tb__mid_num));
     tb_array_init(&r->attrs, sizeof(tb_mid_attr));
     tb_array_init(&r->nodes, sizeof(tb__mid_node));
     tb_array_init(&r->refs, sizeof(tb_mid_ref));
@@ -123,6 +124,7 @@ void tb_mid_reader_close(tb_mid_reader *r)
     tb_arena_free(&r->item);
     tb_arena_free(&r->keep);
     tb_array_free(&r->values);
+    tb_array_free(&r->nums);
     tb_array_free(&r->attrs);
     tb_array_free(&r->nodes);
     tb_array_free(&r->refs);
@@ -142,13 +144,13 @@ tb_status tb__mid_resolve_ref(tb_mid_reader *r, const char *text, tb_mid_loc loc
     size_t n = strlen(text);
     char *path;
     if (text[0] == '/') {
-        path = tb_arena_alloc(&r->item, n + 1);
+        path = tb__mid_alloc(r, n + 1);
         if (path)
             memcpy(path, text, n + 1);
     } else {
         size_t nb = strlen(r->base_dir);
         bool root = nb > 0 && r->base_dir[nb - 1] == '/';
-        path = tb_arena_alloc(&r->item, nb + n + 2);
+        path = tb__mid_alloc(r, nb + n + 2);
         if (path)
             snprintf(path, nb + n + 2, "%s%s%s", r->base_dir, root ? "" : "/", text);
     }
@@ -194,7 +196,8 @@ tb_status tb_mid_reader_next(tb_mid_reader *r, tb_mid_item *item)
         r->header_done = true;
     }
     tb_arena_reset(&r->item);
-    r->values.len = r->attrs.len = r->nodes.len = r->refs.len = 0;
+    r->bump = r->bump_end = NULL;
+    r->values.len = r->nums.len = r->attrs.len = r->nodes.len = r->refs.len = 0;
     tb__mid_node node;
     bool eof;
     if ((st = tb__mid_parse_item(r, &node, &eof)))
@@ -231,6 +234,18 @@ uint64_t tb_mid_reader_offset(const tb_mid_reader *r) { return tb__mid_lexer_off
 size_t tb_mid_reader_memory(const tb_mid_reader *r)
 {
     return TB__MID_BUF + 1 + TB_MID_MAX_TOKEN + 1 + tb_arena_capacity(&r->item) + tb_arena_capacity(&r->keep) +
-           r->values.cap * r->values.elem_size + r->attrs.cap * r->attrs.elem_size +
+           r->values.cap * r->values.elem_size + r->nums.cap * r->nums.elem_size + r->attrs.cap * r->attrs.elem_size +
            r->nodes.cap * r->nodes.elem_size + r->refs.cap * r->refs.elem_size + r->order.cap * r->order.elem_size;
+}
+
+void *tb__mid_alloc_slow(tb_mid_reader *r, size_t n)
+{
+    if (n > TB__MID_BLOCK / 4)
+        return tb_arena_alloc(&r->item, n);
+    char *b = tb_arena_alloc(&r->item, TB__MID_BLOCK);
+    if (!b)
+        return NULL;
+    r->bump = b + ((n + 15) & ~(size_t)15);
+    r->bump_end = b + TB__MID_BLOCK;
+    return b;
 }

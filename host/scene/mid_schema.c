@@ -142,7 +142,7 @@ static tb_status tb__extra_push(tb_mid_reader *r, tb__extra *x, const tb_mid_att
 {
     if (x->count == x->cap) {
         int cap = x->cap ? 2 * x->cap : 4;
-        tb_mid_attr *n = tb_arena_alloc(&r->item, (size_t)cap * sizeof *n);
+        tb_mid_attr *n = tb__mid_alloc(r, (size_t)cap * sizeof *n);
         if (!n)
             return tb__nomem(r);
         if (x->count)
@@ -164,7 +164,7 @@ static tb_status tb__collect_refs(tb_mid_reader *r, const tb_mid_value *v)
     tb_status st;
     switch (v->type) {
     case TB_MID_FILE:
-        if (tb_array_push(&r->refs, &v->ref))
+        if (tb__mid_push(&r->refs, &v->ref))
             return tb__nomem(r);
         return TB_OK;
     case TB_MID_LIST:
@@ -184,7 +184,7 @@ static tb_status tb__collect_refs(tb_mid_reader *r, const tb_mid_value *v)
 
 static tb_status tb__push_ref(tb_mid_reader *r, const tb_mid_ref *ref)
 {
-    if (ref->text && tb_array_push(&r->refs, ref))
+    if (ref->text && tb__mid_push(&r->refs, ref))
         return tb__nomem(r);
     return TB_OK;
 }
@@ -211,7 +211,7 @@ static tb_status tb__take_refs(tb_mid_reader *r, size_t first, const tb_mid_ref 
     *out = NULL;
     *count = 0;
     if (n) {
-        tb_mid_ref *refs = tb_arena_alloc(&r->item, n * sizeof *refs);
+        tb_mid_ref *refs = tb__mid_alloc(r, n * sizeof *refs);
         if (!refs)
             return tb__nomem(r);
         memcpy(refs, (tb_mid_ref *)r->refs.data + first, n * sizeof *refs);
@@ -295,8 +295,8 @@ static tb_status tb__color(tb_mid_reader *r, const tb_mid_value *v, const char *
             return TB__ERR(r, v->loc, "spectrum has %d wavelengths but %d values", l->count, s->count);
         if (l->count < 2)
             return TB__ERR(r, v->loc, "a spectrum needs at least 2 samples, found %d", l->count);
-        float *nm = tb_arena_alloc(&r->item, (size_t)l->count * sizeof *nm);
-        float *val = tb_arena_alloc(&r->item, (size_t)l->count * sizeof *val);
+        float *nm = tb__mid_alloc(r, (size_t)l->count * sizeof *nm);
+        float *val = tb__mid_alloc(r, (size_t)l->count * sizeof *val);
         if (!nm || !val)
             return tb__nomem(r);
         for (int i = 0; i < l->count; i++) {
@@ -329,14 +329,14 @@ static tb_status tb__transform(tb_mid_reader *r, const tb_mid_value *v, const tb
     char found[96];
     *ops_out = NULL;
     *nops_out = 0;
-    *local = tb_transform_identity();
+    *local = tb__mid_identity;
     if (v->type == TB_MID_VECTOR && v->count == 0)
         return TB_OK;
     if (v->type != TB_MID_LIST)
         return TB__ERR(r, v->loc,
                        "expected a list of transform operations for 'transform' (e.g. [scale(2) translate([0 0 1])]), found %s",
                        TB__DESC(v));
-    tb_mid_op *ops = tb_arena_alloc(&r->item, (size_t)v->count * sizeof *ops);
+    tb_mid_op *ops = tb__mid_alloc(r, (size_t)v->count * sizeof *ops);
     if (!ops)
         return tb__nomem(r);
     for (int i = 0; i < v->count; i++) {
@@ -397,10 +397,15 @@ static tb_status tb__transform(tb_mid_reader *r, const tb_mid_value *v, const tb
     return TB_OK;
 }
 
-/* parent * local, checked for overflow. */
+/* parent * local, checked for overflow; a NULL parent is the identity (the
+ * product would give back `local` exactly, and local is known finite). */
 static tb_status tb__world(tb_mid_reader *r, tb_mid_loc loc, const tb_transform *parent, const tb_transform *local,
                            tb_transform *out)
 {
+    if (!parent) {
+        *out = *local;
+        return TB_OK;
+    }
     *out = tb_transform_compose(parent, local);
     if (!tb_mat4_isfinite(&out->m) || !tb_mat4_isfinite(&out->inv))
         return TB__ERR(r, loc, "the transform overflows when composed with its parents' transforms");
@@ -422,7 +427,7 @@ static tb_status tb__vec_list(tb_mid_reader *r, const tb_mid_value *v, const cha
     if (v->type != TB_MID_LIST)
         return TB__ERR(r, v->loc, "expected a list of %d-vectors for '%s', e.g. [%s], found %s", n, what,
                        n == 2 ? "[0 0] [1 0] [0 1]" : "[0 0 0] [1 0 0] [0 1 0]", TB__DESC(v));
-    float *f = tb_arena_alloc(&r->item, (size_t)v->count * (size_t)n * sizeof *f);
+    float *f = tb__mid_alloc(r, (size_t)v->count * (size_t)n * sizeof *f);
     if (!f)
         return tb__nomem(r);
     for (int i = 0; i < v->count; i++) {
@@ -462,8 +467,8 @@ static tb_status tb__faces(tb_mid_reader *r, const tb_mid_value *v, int nv, tb_g
         if (total > INT32_MAX)
             return TB__ERR(r, e->loc, "more than %d face indices", INT32_MAX);
     }
-    int *start = tb_arena_alloc(&r->item, ((size_t)v->count + 1) * sizeof *start);
-    int *idx = tb_arena_alloc(&r->item, (size_t)total * sizeof *idx);
+    int *start = tb__mid_alloc(r, ((size_t)v->count + 1) * sizeof *start);
+    int *idx = tb__mid_alloc(r, (size_t)total * sizeof *idx);
     if (!start || !idx)
         return tb__nomem(r);
     int k = 0;
@@ -960,7 +965,7 @@ static tb_status tb__object(tb_mid_reader *r, const tb__mid_node *n, const tb_tr
     o->loc = n->loc;
     const tb_mid_value *geometry = NULL;
     const tb_mid_attr *rendering = NULL;
-    tb_transform local = tb_transform_identity();
+    tb_transform local = tb__mid_identity;
     tb__extra extra = {0};
     for (int i = 0; i < n->nattrs; i++) {
         const tb_mid_attr *a = &n->attrs[i];
@@ -1002,7 +1007,7 @@ static tb_status tb__object(tb_mid_reader *r, const tb__mid_node *n, const tb_tr
         return TB__ERR(r, n->loc, "difference needs at least two child objects, found %d", n->nchildren);
     if (n->nchildren < 1)
         return TB__ERR(r, n->loc, "%s needs at least one child object", tb_prim_kind_name(k));
-    tb_mid_object *ch = tb_arena_alloc(&r->item, (size_t)n->nchildren * sizeof *ch);
+    tb_mid_object *ch = tb__mid_alloc(r, (size_t)n->nchildren * sizeof *ch);
     if (!ch)
         return tb__nomem(r);
     for (int i = 0; i < n->nchildren; i++)
@@ -1024,7 +1029,7 @@ static tb_status tb__light(tb_mid_reader *r, const tb__mid_node *n, tb_mid_light
     l->name = n->name;
     l->loc = n->loc;
     tb__extra extra = {0};
-    tb_transform local = tb_transform_identity();
+    tb_transform local = tb__mid_identity;
     tb_mid_loc cone_loc = n->loc;
     bool spot = kind == TB_LIGHT_SPOT, dir = kind == TB_LIGHT_DIRECTIONAL;
     tb_status st;
@@ -1067,8 +1072,7 @@ static tb_status tb__light(tb_mid_reader *r, const tb__mid_node *n, tb_mid_light
     if ((st = tb__push_color_ref(r, &l->intensity)) || (st = tb__push_ref(r, &l->ies)) ||
         (st = tb__push_attrs_refs(r, &l->extra)) || (st = tb__take_refs(r, first, &l->refs, &l->nrefs)))
         return st;
-    tb_transform id = tb_transform_identity();
-    return tb__world(r, n->loc, &id, &local, &l->to_world);
+    return tb__world(r, n->loc, NULL, &local, &l->to_world);
 }
 
 /* ------------------------------------------------------------------- camera */
@@ -1156,12 +1160,10 @@ tb_status tb__mid_interpret(tb_mid_reader *r, const tb__mid_node *n, tb_mid_item
     tb_status st;
     memset(item, 0, sizeof *item);
     if (n->keyword < TB_PRIM_COUNT) {
-        tb_mid_object *o = tb_arena_alloc(&r->item, sizeof *o);
+        tb_mid_object *o = tb__mid_alloc(r, sizeof *o);
         if (!o)
             return tb__nomem(r);
-        tb_transform id = tb_transform_identity();
-        tb_mid_material def = tb_mid_material_default();
-        if ((st = tb__object(r, n, &id, &def, o)))
+        if ((st = tb__object(r, n, NULL, &tb__mid_default_material, o)))
             return st;
         item->type = TB_MID_ITEM_OBJECT;
         item->object = o;
@@ -1177,8 +1179,8 @@ tb_status tb__mid_interpret(tb_mid_reader *r, const tb__mid_node *n, tb_mid_item
             return TB__ERR(r, n->loc, "material '%.40s' is already defined at %ld:%ld", n->name, old->loc.line,
                            old->loc.col);
         }
-        tb_mid_material def = tb_mid_material_default(), m;
-        if ((st = tb__rendering(r, n->attrs, n->nattrs, n->loc, &def, &m)))
+        tb_mid_material m;
+        if ((st = tb__rendering(r, n->attrs, n->nattrs, n->loc, &tb__mid_default_material, &m)))
             return st;
         m.name = n->name;
         tb_mid_material *kept = tb_arena_alloc(&r->keep, sizeof *kept);

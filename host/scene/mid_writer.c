@@ -1,9 +1,13 @@
 /* MID writer: the canonical form of docs/mid.md, section 12. */
 #include "host/scene/mid_writer.h"
 
+#include <locale.h>
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "host/scene/mid_internal.h"
 
 /* The output stream and the first problem met (writing goes on, the status
  * is reported at the end). */
@@ -553,7 +557,20 @@ tb_status tb_mid_write_header(FILE *fp)
     return ferror(fp) ? tb_error(TB_ERR_IO, "MID writer: write error") : TB_OK;
 }
 
+static tb_status tb__write_item(FILE *fp, const tb_mid_item *item);
+
 tb_status tb_mid_write_item(FILE *fp, const tb_mid_item *item)
+{
+    /* Numbers are written (and checked with strtod) in the "C" locale: a
+     * MID file always has '.' as the decimal point. */
+    locale_t c = tb__mid_c_locale(), old = c ? uselocale(c) : (locale_t)0;
+    tb_status st = tb__write_item(fp, item);
+    if (c)
+        uselocale(old);
+    return st;
+}
+
+static tb_status tb__write_item(FILE *fp, const tb_mid_item *item)
 {
     tb__w w = {fp, TB_OK};
     switch (item->type) {

@@ -9,6 +9,7 @@
  * writer's order, a transform is the operations composed in order. */
 #include "tb_test.h"
 
+#include <locale.h>
 #include <string.h>
 
 #include "host/scene/mid_reader.h"
@@ -685,11 +686,52 @@ static void test_writer_refusals(void **state)
     free(buf);
 }
 
+/* A program running in a locale with a decimal comma still reads and writes
+ * '.' (the file format does not depend on the reader's locale). The locale
+ * is generated with localedef, and the test first checks that it is active. */
+static void test_comma_decimal_locale(void **state)
+{
+    (void)state;
+    char dir[512], cmd[1200];
+    snprintf(dir, sizeof dir, "%s/mid_locale", tb_test_tmpdir());
+    snprintf(cmd, sizeof cmd, "mkdir -p '%s' && localedef -i de_DE -f UTF-8 '%s/de_DE.UTF-8'", dir, dir);
+    assert_int_equal(system(cmd), 0);
+    setenv("LOCPATH", dir, 1);
+    assert_non_null(setlocale(LC_NUMERIC, "de_DE.UTF-8"));
+    char probe[16];
+    snprintf(probe, sizeof probe, "%.1f", 0.5);
+    assert_string_equal(probe, "0,5"); /* the comma locale is in effect */
+
+    /* 34 significant digits take the strtod path of the reader. */
+    const char *text = "mid 1\nsphere { transform = [scale(0.5) translate([1.25 -2.5e-3 0.1000000000000000055511151231257827])] }\n";
+    FILE *fp = fmemopen((void *)text, strlen(text), "rb");
+    tb_mid_reader *r;
+    assert_int_equal(tb_mid_reader_open_stream(&r, fp, "l.mid", NULL), TB_OK);
+    tb_mid_item it;
+    assert_int_equal(tb_mid_reader_next(r, &it), TB_OK);
+    const tb_mid_op *ops = it.object->ops;
+    assert_true(ops[0].v[0] == 0.5 && ops[1].v[0] == 1.25 && ops[1].v[1] == -0.0025 && ops[1].v[2] == 0.1);
+    char *out = NULL;
+    size_t len;
+    FILE *w = open_memstream(&out, &len);
+    assert_int_equal(tb_mid_write_item(w, &it), TB_OK);
+    fclose(w);
+    assert_non_null(strstr(out, "transform = [scale(0.5) translate([1.25 -0.0025 0.1])]"));
+    free(out);
+    tb_mid_reader_close(r);
+    fclose(fp);
+    snprintf(probe, sizeof probe, "%.1f", 0.5);
+    assert_string_equal(probe, "0,5"); /* the program's locale is left as it was */
+    setlocale(LC_NUMERIC, "C");
+    unsetenv("LOCPATH");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_roundtrip_random_scenes),
         cmocka_unit_test(test_writer_refusals),
+        cmocka_unit_test(test_comma_decimal_locale),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
