@@ -21,6 +21,7 @@
 #include "host/object/intersect_internal.h"
 #include "util/container/array.h"
 #include "util/math/float.h"
+#include "util/mesh/fed.h"
 #include "util/mesh/predicates.h"
 #include "util/mesh/triangulate.h"
 
@@ -267,34 +268,55 @@ tb_status tb__mesh_build(tb_object *o)
         return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
     memcpy(m->vertices, g->vertices, sizeof(tb_vec3) * (size_t)g->nvertices);
 
-    /* Triangulate: triangles as they are, larger polygons by ear clipping. */
+    /* Triangulate: triangles as they are, larger polygons (and FED faces
+     * with holes) by ear clipping. */
+    const tb_fed *fed = o->fed;
     tb_array tris, faces, tmp;
     tb_array_init(&tris, sizeof(uint32_t) * 3);
     tb_array_init(&faces, sizeof(uint32_t));
     tb_array_init(&tmp, sizeof(tb_tri));
-    uint32_t *idx = NULL;
-    size_t idx_cap = 0;
+    uint32_t *idx = NULL, *rings = NULL;
+    size_t idx_cap = 0, rings_cap = 0;
     tb_status st = TB_OK;
     for (int f = 0; f < g->nfaces && !st; f++) {
-        int s = g->face_start[f];
-        uint32_t nv = (uint32_t)(g->face_start[f + 1] - s);
-        if (nv > idx_cap) {
-            uint32_t *ni = realloc(idx, sizeof *idx * nv);
-            if (!ni) {
+        uint32_t nv, nrings = 1;
+        if (fed) {
+            uint32_t l0 = fed->face_loops[f], l1 = fed->face_loops[f + 1];
+            nrings = l1 - l0;
+            nv = fed->loop_corners[l1] - fed->loop_corners[l0];
+        } else {
+            nv = (uint32_t)(g->face_start[f + 1] - g->face_start[f]);
+        }
+        if (nv > idx_cap || nrings > rings_cap) {
+            uint32_t *ni = realloc(idx, sizeof *idx * (nv > idx_cap ? nv : idx_cap));
+            if (ni)
+                idx = ni;
+            uint32_t *nr = realloc(rings, sizeof *rings * (nrings > rings_cap ? nrings : rings_cap));
+            if (nr)
+                rings = nr;
+            if (!ni || !nr) {
                 st = tb_error(TB_ERR_NOMEM, "polygons: out of memory");
                 break;
             }
-            idx = ni;
-            idx_cap = nv;
+            idx_cap = nv > idx_cap ? nv : idx_cap;
+            rings_cap = nrings > rings_cap ? nrings : rings_cap;
         }
-        for (uint32_t i = 0; i < nv; i++)
-            idx[i] = (uint32_t)g->indices[s + (int)i];
+        if (fed) {
+            uint32_t l0 = fed->face_loops[f];
+            memcpy(idx, &fed->corner_vert[fed->loop_corners[l0]], sizeof *idx * nv);
+            for (uint32_t i = 0; i < nrings; i++)
+                rings[i] = tb_fed_loop_size(fed, l0 + i);
+        } else {
+            for (uint32_t i = 0; i < nv; i++)
+                idx[i] = (uint32_t)g->indices[g->face_start[f] + (int)i];
+            rings[0] = nv;
+        }
         tb_array_clear(&tmp);
-        if (nv == 3) {
+        if (nv == 3 && nrings == 1) {
             tb_tri t = {{idx[0], idx[1], idx[2]}};
             st = tb_array_push(&tmp, &t);
         } else {
-            st = tb_triangulate_3d(m->vertices, idx, &nv, 1, &tmp, NULL);
+            st = tb_triangulate_3d(m->vertices, idx, rings, nrings, &tmp, NULL);
             if (st)
                 tb_error_context(st, "polygons: face %d", f);
         }
@@ -306,6 +328,7 @@ tb_status tb__mesh_build(tb_object *o)
         }
     }
     free(idx);
+    free(rings);
     tb_array_free(&tmp);
     if (st) {
         tb_array_free(&tris);
@@ -313,7 +336,7 @@ tb_status tb__mesh_build(tb_object *o)
         return st;
     }
     m->ntris = (uint32_t)tris.len;
-    m->closed = tb__polygons_closed(g);
+    m->closed = fed ? tb_fed_is_closed(fed) : tb__polygons_closed(g);
 
     /* BVH. */
     size_t nt = tris.len;

@@ -9,6 +9,7 @@
 #include "host/object/intersect_internal.h"
 #include "util/math/float.h"
 #include "util/math/mat.h"
+#include "util/mesh/fed.h"
 #include "util/mesh/predicates.h"
 
 /* Largest regular prism tested edge by edge; above it the sector test is used. */
@@ -109,13 +110,56 @@ uint32_t tb__face_count(tb_prim_kind kind, const tb_mid_geometry *g)
 
 /* ------------------------------------------------------------------ geometry */
 
+/* Polygons from a FED file: load it, and give param and bounds the inline
+ * form (vertices, outer loops as polygons). */
+static tb_status tb__load_fed(tb_object *o, const tb_geom_polygons *src)
+{
+    tb_geom_polygons *g = &o->geom.polygons;
+    const char *path = src->mesh.path ? src->mesh.path : src->mesh.text;
+    o->mesh_file.text = tb__strdup(src->mesh.text);
+    o->mesh_file.path = tb__strdup(src->mesh.path);
+    if (!o->mesh_file.text || (src->mesh.path && !o->mesh_file.path))
+        return tb_error(TB_ERR_NOMEM, "out of memory");
+    tb_fed *fed = NULL;
+    tb_status st = tb_fed_read_file(path, &fed);
+    if (st)
+        return tb_error_context(st, "polygons: mesh file(\"%s\")", src->mesh.text);
+    o->fed = fed;
+    if (fed->nfaces == 0)
+        return tb_error(TB_ERR_ARG, "polygons: mesh file(\"%s\") has no faces", src->mesh.text);
+    size_t nidx = 0;
+    for (uint32_t f = 0; f < fed->nfaces; f++)
+        nidx += tb_fed_loop_size(fed, tb_fed_face_outer(fed, f));
+    if (nidx > (size_t)INT32_MAX)
+        return tb_error(TB_ERR_ARG, "polygons: mesh file(\"%s\") is too large", src->mesh.text);
+    bool ok = true;
+    g->nvertices = (int)fed->nverts;
+    g->nfaces = (int)fed->nfaces;
+    g->vertices = tb__dup(fed->positions, fed->nverts, sizeof(tb_vec3), &ok);
+    g->normals = tb__dup(fed->normals, fed->nverts, sizeof(tb_vec3), &ok);
+    g->uvs = tb__dup(fed->uvs, fed->nverts, sizeof(tb_vec2), &ok);
+    int *start = malloc(sizeof(int) * ((size_t)fed->nfaces + 1)), *idx = malloc(sizeof(int) * (nidx ? nidx : 1));
+    g->face_start = start;
+    g->indices = idx;
+    if (!ok || !start || !idx)
+        return tb_error(TB_ERR_NOMEM, "polygons: out of memory for mesh file(\"%s\")", src->mesh.text);
+    int k = 0;
+    for (uint32_t f = 0; f < fed->nfaces; f++) {
+        uint32_t l = tb_fed_face_outer(fed, f), n = tb_fed_loop_size(fed, l);
+        start[f] = k;
+        for (uint32_t i = 0; i < n; i++)
+            idx[k++] = (int)tb_fed_loop_vertex(fed, l, i);
+    }
+    start[fed->nfaces] = k;
+    return tb__mesh_build(o);
+}
+
 static tb_status tb__copy_polygons(tb_object *o, const tb_geom_polygons *src)
 {
     tb_geom_polygons *g = &o->geom.polygons;
     memset(g, 0, sizeof *g);
     if (src->mesh.text)
-        return tb_error(TB_ERR_UNSUPPORTED, "polygons from a FED mesh file (%s): loading FED meshes is not available yet",
-                        src->mesh.text);
+        return tb__load_fed(o, src);
     if (src->nvertices < 0 || src->nfaces < 0 || (src->nvertices > 0 && !src->vertices) ||
         (src->nfaces > 0 && (!src->face_start || !src->indices)))
         return tb_error(TB_ERR_ARG, "polygons: inconsistent vertex or face arrays");
@@ -405,8 +449,9 @@ static void tb__object_clear(tb_object *o)
         free((void *)g->uvs);
         free((void *)g->face_start);
         free((void *)g->indices);
-        free((void *)g->mesh.text);
-        free((void *)g->mesh.path);
+        free((void *)o->mesh_file.text);
+        free((void *)o->mesh_file.path);
+        tb_fed_free(o->fed);
     } else if (o->kind == TB_PRIM_PRISM) {
         free((void *)o->geom.prism.profile);
     }

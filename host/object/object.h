@@ -56,8 +56,13 @@ struct tb_object {
     int material;            /* opaque material index from the build callback (-1 without one) */
     char *name;              /* copy of the MID name, or NULL */
     tb_transform to_world;   /* object space to world (double, with inverse): the full product for children too */
-    tb_mid_geometry geom;    /* deep copy of the parameters; pointers owned by the object */
+    tb_mid_geometry geom;    /* deep copy of the parameters; pointers owned by the object. Polygons from a FED
+                                file are given here in inline form (the file's vertices, and each face's outer
+                                loop as a polygon; mesh.text NULL), so param and bounds work on them; the holes
+                                are in `fed` */
     tb_object_mesh *mesh;    /* polygons: the triangulated mesh; NULL for other kinds */
+    struct tb_fed *fed;      /* polygons from a FED file: the loaded mesh (util/mesh/fed.h); NULL otherwise */
+    tb_mid_ref mesh_file;    /* polygons from a FED file: the reference as written and resolved (owned copies) */
     int nchildren;
     tb_object *children;     /* CSG nodes: the children, in MID order */
     const tb_object *parent; /* the CSG node holding this one, NULL at the top */
@@ -87,9 +92,9 @@ typedef tb_status (*tb_object_material_fn)(void *user, const tb_mid_material *m,
  * outside their MID ranges, polygons with out-of-range indices or fewer than
  * three vertices, CSG nodes with too few children, and CSG children that are
  * not closed solids (open cylinders, cones, pyramids, prisms, conics without
- * caps, polygon meshes whose edges do not pair up). A polygons primitive that
- * refers to a FED mesh file gives TB_ERR_UNSUPPORTED until util/mesh can
- * load one. *out is NULL on failure. */
+ * caps, polygon meshes whose edges do not pair up). A polygons primitive
+ * referring to a FED mesh file loads it (resolved path; the reader's errors,
+ * TB_ERR_IO or TB_ERR_FORMAT, with the file named). *out is NULL on failure. */
 tb_status tb_object_from_mid(const tb_mid_object *m, uint32_t index, tb_object_material_fn material,
                              void *user, tb_object **out);
 

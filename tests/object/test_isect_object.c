@@ -7,6 +7,7 @@
 #include "host/object/intersect.h"
 #include "host/object/param.h"
 #include "util/math/float.h"
+#include "util/mesh/fed.h"
 
 static tb_ray ti_ray(double ox, double oy, double oz, double dx, double dy, double dz)
 {
@@ -390,12 +391,81 @@ static void test_rejections(void **state)
     tb_object_free(o);
 }
 
+
+/* Polygons from FED files: a closed cube (usable in CSG) and an open square
+ * face with a square hole (rays through the hole pass). */
+static void test_fed_mesh(void **state)
+{
+    (void)state;
+    static const tb_vec3 cv[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                                  {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+    static const uint32_t quads[24] = {0, 3, 2, 1, 4, 5, 6, 7, 0, 1, 5, 4, 2, 3, 7, 6, 1, 2, 6, 5, 0, 4, 7, 3};
+    static const uint32_t four[6] = {4, 4, 4, 4, 4, 4};
+    tb_fed_desc d = {0};
+    d.nverts = 8, d.positions = cv, d.nfaces = 6, d.nloops = 6, d.loop_sizes = four, d.corners = quads;
+    tb_fed *fed = NULL;
+    assert_int_equal(tb_fed_build(&d, &fed, NULL), TB_OK);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/isect_cube.fed", tb_test_tmpdir());
+    assert_int_equal(tb_fed_write_file(path, fed, TB_FED_FORMAT_TEXT), TB_OK);
+    tb_fed_free(fed);
+
+    tb_mid_geometry g = tb_mid_geometry_default(TB_PRIM_POLYGONS);
+    g.polygons.mesh.text = "isect_cube.fed";
+    g.polygons.mesh.path = path;
+    tb_mid_object m = ti_prim(TB_PRIM_POLYGONS, g, tb_transform_identity());
+    tb_object *o = ti_build(&m, 0);
+    assert_true(o->closed);
+    assert_non_null(o->fed);
+    assert_null(o->geom.polygons.mesh.text); /* inline form for param and bounds */
+    assert_string_equal(o->mesh_file.text, "isect_cube.fed");
+    assert_int_equal(o->geom.polygons.nfaces, 6);
+    ti_expect(o, ti_ray(-5, 0.5, 0.25, 1, 0, 0), 4.0, 5, -1, 0, 0);
+    ti_expect(o, ti_ray(0.5, 0.25, 5, 0, 0, -1), 4.0, 1, 0, 0, 1);
+    tb_object_free(o);
+    tb_transform half;
+    assert_int_equal(tb_transform_scale((tb_dvec3){0.5, 0.5, 0.5}, &half), TB_OK);
+    tb_mid_object kids[2] = {m, ti_prim(TB_PRIM_SPHERE, tb_mid_geometry_default(TB_PRIM_SPHERE), half)};
+    tb_mid_object diff = ti_csg(TB_PRIM_DIFFERENCE, kids, 2, tb_transform_identity());
+    o = ti_build(&diff, 0);
+    ti_expect(o, ti_ray(0, 0, 0, 1, 0, 0), 0.5, 6, -1, 0, 0); /* the sphere's wall, flipped */
+    tb_object_free(o);
+
+    /* A square [-1,1]^2 at z = 0 with the hole [-0.5,0.5]^2 (turning the other way). */
+    static const tb_vec3 hv[8] = {{-1, -1, 0},     {1, -1, 0},     {1, 1, 0},     {-1, 1, 0},
+                                  {-0.5f, -0.5f, 0}, {-0.5f, 0.5f, 0}, {0.5f, 0.5f, 0}, {0.5f, -0.5f, 0}};
+    static const uint32_t hc[8] = {0, 1, 2, 3, 4, 5, 6, 7}, hl[2] = {4, 4}, hn[1] = {2};
+    d = (tb_fed_desc){0};
+    d.nverts = 8, d.positions = hv, d.nfaces = 1, d.face_nloops = hn, d.nloops = 2, d.loop_sizes = hl, d.corners = hc;
+    assert_int_equal(tb_fed_build(&d, &fed, NULL), TB_OK);
+    snprintf(path, sizeof path, "%s/isect_hole.fed", tb_test_tmpdir());
+    assert_int_equal(tb_fed_write_file(path, fed, TB_FED_FORMAT_AUTO), TB_OK);
+    tb_fed_free(fed);
+    g.polygons.mesh.text = "isect_hole.fed";
+    m = ti_prim(TB_PRIM_POLYGONS, g, tb_transform_identity());
+    o = ti_build(&m, 0);
+    assert_false(o->closed);
+    ti_expect_miss(o, ti_ray(0.1, 0.2, 3, 0, 0, -1));
+    ti_expect(o, ti_ray(0.75, 0.2, 3, 0, 0, -1), 3.0, 0, 0, 0, 1);
+    tb_object_free(o);
+
+    /* A missing file: the reader's error, with the file named. */
+    g.polygons.mesh.text = "nowhere.fed";
+    g.polygons.mesh.path = "/nonexistent/nowhere.fed";
+    m = ti_prim(TB_PRIM_POLYGONS, g, tb_transform_identity());
+    o = NULL;
+    assert_int_not_equal(tb_object_from_mid(&m, 0, NULL, NULL, &o), TB_OK);
+    assert_null(o);
+    assert_non_null(strstr(tb_last_error(), "nowhere.fed"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hits_by_hand),  cmocka_unit_test(test_transformed),
         cmocka_unit_test(test_tmin_tmax),     cmocka_unit_test(test_deep_copy),
         cmocka_unit_test(test_csg_numbering), cmocka_unit_test(test_rejections),
+        cmocka_unit_test(test_fed_mesh),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
