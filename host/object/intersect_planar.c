@@ -152,18 +152,25 @@ static void tb__prism_side(const tb_object *o, int k, const double *pk, const do
     (void)k;
 }
 
-/* Side k of the large regular prism (vertices computed on the fly). */
-static bool tb__clip_regular_side(const tb_object *o, const tb__line *l, int k, tb__end *a, tb__end *b)
+/* Sides k0 - 2 .. k0 + 2 of the large regular prism. Side k lies on the
+ * line through vertices k and k + 1, at distance cos(pi/n) from the axis
+ * with outward normal at the mid angle 2 pi (k + 1/2) / n; the five normals
+ * come from one sine and cosine by rotation (error a few ulps). */
+static bool tb__clip_regular_sides(const tb_object *o, const tb__line *l, int k0, tb__end *a, tb__end *b)
 {
     int n = o->geom.prism.sides;
-    k = ((k % n) + n) % n;
-    double p[2], q[2];
-    tb__prism_vertex(n, k, &p[0], &p[1]);
-    tb__prism_vertex(n, (k + 1) % n, &q[0], &q[1]);
-    tb_dvec3 nn;
-    double c;
-    tb__prism_side(o, k, p, q, &nn, &c);
-    return tb__clip(l, nn, c, TB_FACE_PRISM_SIDE0 + (uint32_t)k, a, b);
+    double step = TB_2PI / n, c = cos(TB_PI / n), cd = cos(step), sd = sin(step);
+    int k = ((k0 - 2) % n + n) % n;
+    double ang = step * (k + 0.5), nx = cos(ang), ny = sin(ang);
+    for (int j = 0; j < 5; j++) {
+        if (!tb__clip(l, (tb_dvec3){nx, ny, 0.0}, c, TB_FACE_PRISM_SIDE0 + (uint32_t)k, a, b))
+            return false;
+        double rx = nx * cd - ny * sd, ry = ny * cd + nx * sd;
+        nx = rx;
+        ny = ry;
+        k = k + 1 == n ? 0 : k + 1;
+    }
+    return true;
 }
 
 /* Sector (0 .. n-1) of the direction (x, y) for the regular n-gon. */
@@ -188,11 +195,7 @@ static bool tb__clip_regular(const tb_object *o, const tb__line *l, tb__end *a, 
     int n = o->geom.prism.sides;
     double A = l->d.x * l->d.x + l->d.y * l->d.y;
     if (A == 0.0) { /* parallel to the axis: is the point inside the polygon? */
-        int k = tb__sector(n, l->p0.x, l->p0.y);
-        for (int j = -2; j <= 2; j++)
-            if (!tb__clip_regular_side(o, l, k + j, a, b))
-                return false;
-        return true;
+        return tb__clip_regular_sides(o, l, tb__sector(n, l->p0.x, l->p0.y), a, b);
     }
     /* Circle crossings of the 2D line p0 + s d (p0 is nearest the axis... in 3D;
      * recompute the 2D nearest point for accuracy). */
@@ -204,10 +207,7 @@ static bool tb__clip_regular(const tb_object *o, const tb__line *l, tb__end *a, 
     double h = sqrt(h2 / A);
     int kin = tb__sector(n, qx - h * l->d.x, qy - h * l->d.y);
     int kout = tb__sector(n, qx + h * l->d.x, qy + h * l->d.y);
-    for (int j = -2; j <= 2; j++)
-        if (!tb__clip_regular_side(o, l, kin + j, a, b) || !tb__clip_regular_side(o, l, kout + j, a, b))
-            return false;
-    return true;
+    return tb__clip_regular_sides(o, l, kin, a, b) && tb__clip_regular_sides(o, l, kout, a, b);
 }
 
 /* Side of vertex (px, py) relative to the 2D line q + s d: true if left or on. */
