@@ -392,6 +392,7 @@ tb_status tb__mesh_build(tb_object *o)
 /* The ray prepared for the watertight test and the box test. */
 typedef struct tb__wray {
     double o[3], d[3], inv[3];
+    int nearp[3], farp[3]; /* per axis: index into a node's lo[]/hi[] pair of the near and far plane */
     int kx, ky, kz;
     double sx, sy, sz;
 } tb__wray;
@@ -404,8 +405,12 @@ static void tb__wray_init(tb__wray *w, const tb__oray *r)
     w->d[0] = r->d.x;
     w->d[1] = r->d.y;
     w->d[2] = r->d.z;
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < 3; i++) {
         w->inv[i] = 1.0 / w->d[i];
+        bool neg = signbit(w->inv[i]);
+        w->nearp[i] = i + (neg ? 3 : 0);
+        w->farp[i] = i + (neg ? 0 : 3);
+    }
     int kz = 0;
     if (fabs(w->d[1]) > fabs(w->d[kz]))
         kz = 1;
@@ -434,19 +439,26 @@ static void tb__wray_init(tb__wray *w, const tb__oray *r)
  * relative 2^-48 at both ends (Ize 2013, in double). */
 static bool tb__box(const tb_object_bvh_node *nd, const tb__wray *w, double tmin, double tmax)
 {
-    double t0 = -INFINITY, t1 = INFINITY;
-    for (int i = 0; i < 3; i++) {
-        double nearp = signbit(w->inv[i]) ? nd->hi[i] : nd->lo[i];
-        double farp = signbit(w->inv[i]) ? nd->lo[i] : nd->hi[i];
-        double a = (nearp - w->o[i]) * w->inv[i], b = (farp - w->o[i]) * w->inv[i];
-        if (a > t0)
-            t0 = a;
-        if (b < t1)
-            t1 = b;
-    }
-    if (isfinite(t0))
+    const float *b = nd->b; /* plane j (0 lo, 1 hi) of axis i is b[i + 3 j] */
+    double t0 = (b[w->nearp[0]] - w->o[0]) * w->inv[0], t1 = (b[w->farp[0]] - w->o[0]) * w->inv[0];
+    double a1 = (b[w->nearp[1]] - w->o[1]) * w->inv[1], b1 = (b[w->farp[1]] - w->o[1]) * w->inv[1];
+    double a2 = (b[w->nearp[2]] - w->o[2]) * w->inv[2], b2 = (b[w->farp[2]] - w->o[2]) * w->inv[2];
+    /* Written so that a NaN (0 * inf) never wins a comparison. */
+    if (!(t0 >= -INFINITY))
+        t0 = -INFINITY;
+    if (!(t1 <= INFINITY))
+        t1 = INFINITY;
+    if (a1 > t0)
+        t0 = a1;
+    if (a2 > t0)
+        t0 = a2;
+    if (b1 < t1)
+        t1 = b1;
+    if (b2 < t1)
+        t1 = b2;
+    if (t0 > -INFINITY && t0 < INFINITY)
         t0 -= fabs(t0) * 0x1p-48;
-    if (isfinite(t1))
+    if (t1 > -INFINITY && t1 < INFINITY)
         t1 += fabs(t1) * 0x1p-48;
     return t0 <= t1 && t0 <= tmax && t1 >= tmin;
 }
@@ -534,11 +546,15 @@ static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, dou
     int sp = 0;
     stack[sp++] = 0;
     bool found = false;
-    double bmin = tb_next_float_down((float)tmin);
+    double bmin = tb_next_float_down((float)tmin), tlast = *tmax, bmax = tb_next_float_up((float)tlast);
     while (sp > 0) {
         const tb_object_bvh_node *nd = &m->nodes[stack[--sp]];
         /* Hits are accepted on their float t, so the boxes are tested one float wider. */
-        if (!tb__box(nd, &w, bmin, tb_next_float_up((float)*tmax)))
+        if (*tmax != tlast) {
+            tlast = *tmax;
+            bmax = tb_next_float_up((float)tlast);
+        }
+        if (!tb__box(nd, &w, bmin, bmax))
             continue;
         if (nd->count == 0) {
             uint32_t left = (uint32_t)(nd - m->nodes) + 1, right = nd->index;

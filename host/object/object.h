@@ -27,11 +27,18 @@
  * nodes have their left child right after them and the right child at
  * `index`; leaves hold triangles index .. index + count - 1. */
 typedef struct tb_object_bvh_node {
-    float lo[3], hi[3]; /* box of the node's triangles, widened outward by one float */
+    union {
+        struct {
+            float lo[3], hi[3]; /* box of the node's triangles, widened outward by one float */
+        };
+        float b[6]; /* the same: lo x y z, hi x y z */
+    };
     uint32_t index;     /* inner: right child; leaf: first triangle */
     uint16_t count;     /* triangles in a leaf; 0 for an inner node */
     uint16_t axis;      /* inner: split axis (0 x, 1 y, 2 z), for front-to-back traversal */
 } tb_object_bvh_node;
+
+_Static_assert(sizeof(tb_object_bvh_node) == 32, "BVH nodes are 32 bytes");
 
 /* The triangulated form of a polygons primitive, built once for intersection:
  * every polygon is split into triangles (util/mesh/triangulate.h) that
