@@ -18,6 +18,8 @@ int tb_cmd_check(int argc, char **argv);
 int tb_cmd_compare(int argc, char **argv);
 /* `testbed convert IN OUT`: image format conversion (cmd_convert.c). */
 int tb_cmd_convert(int argc, char **argv);
+/* `testbed devices`: the Vulkan devices and the backend choice (cmd_devices.c). */
+int tb_cmd_devices(int argc, char **argv);
 /* `testbed generate KIND`: a procedural MID scene (cmd_generate.c). */
 int tb_cmd_generate(int argc, char **argv);
 /* `testbed help [CMD]`. */

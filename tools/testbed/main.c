@@ -11,6 +11,7 @@ static const tb_command tb__commands[] = {
     {"check", "validate a MID scene and summarise it", tb_cmd_check},
     {"compare", "error metrics (MSE, PSNR, SSIM, ...) of an image against a reference", tb_cmd_compare},
     {"convert", "convert an image between RLE, PNG, PFM and OpenEXR", tb_cmd_convert},
+    {"devices", "list the Vulkan devices and which one --backend auto/vulkan uses", tb_cmd_devices},
     {"generate", "write a procedural MID scene (grid, csg, mesh) for scaling tests", tb_cmd_generate},
     {"help", "list the subcommands, or show one's help", tb_cmd_help},
     {"version", "print the version and git revision", tb_cmd_version},
