@@ -1,0 +1,128 @@
+/* Internals shared by accel.c, bvh.c and grid.c: the structure itself, the
+ * tie rule and the traversal tolerance (docs/accel.md). Not installed. */
+#ifndef TB_HOST_RENDER_ACCEL_INTERNAL_H
+#define TB_HOST_RENDER_ACCEL_INTERNAL_H
+
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "host/render/accel.h"
+
+/* Relative tolerance in t by which traversal widens [tmin, tmax] when it
+ * decides which boxes (BVH nodes, grid voxels) it may skip: a reference is
+ * tested whenever the ray meets its box at some t within a relative 2^-16 of
+ * [tmin, best t so far]. So a callback whose reported t is off by less than
+ * that from a point inside the reference's box is still found, by every kind
+ * (docs/accel.md, "Robustness"). Hits themselves are filtered with the exact
+ * [tmin, tmax]. */
+#define TB__ACCEL_T_TOL 0x1p-16
+
+/* Most BVH levels split by SAH; deeper nodes are split at the median, so the
+ * depth stays below TB__BVH_SAH_MAX_DEPTH + 32 and a fixed stack suffices. */
+#define TB__BVH_SAH_MAX_DEPTH 64
+#define TB__BVH_STACK 128
+
+/* The uniform grid (grid.c). Voxel (x, y, z) is cell x + res[0] (y + res[1] z)
+ * and covers lo + (x, y, z) * cell .. lo + (x + 1, y + 1, z + 1) * cell. */
+typedef struct tb__grid {
+    double lo[3];          /* grid corner (the references' box, padded) */
+    double hi[3];          /* opposite corner */
+    double cell[3];        /* voxel size per axis */
+    double inv_cell[3];    /* 1 / cell */
+    int res[3];            /* voxels per axis, >= 1 */
+    uint32_t *cell_start;  /* ncells + 1 offsets into cell_refs */
+    uint32_t *cell_refs;   /* per voxel, positions in tb_accel.prims, ascending */
+    size_t nrefs;          /* entries of cell_refs */
+} tb__grid;
+
+struct tb_accel {
+    tb_accel_kind kind;
+    tb_accel_callbacks cb;
+    size_t n;              /* references stored */
+    tb_accel_prim *prims;  /* stored references: BVH leaf order, else input order (empty boxes dropped) */
+    uint32_t *index;       /* input index of each stored reference (the tie rule's last key) */
+    tb_aabb bounds;        /* union of the stored boxes */
+    tb_accel_stats stats;  /* filled at build */
+    tb_bvh_node *nodes;    /* BVH: depth-first nodes */
+    size_t nnodes;
+    tb__grid grid;         /* grid */
+};
+
+/* t moved outward by the relative tolerance (never NaN; +-inf stay). */
+static inline float tb__accel_widen_lo(float t)
+{
+    return t > 0.0f ? t * (float)(1.0 - TB__ACCEL_T_TOL) : t * (float)(1.0 + TB__ACCEL_T_TOL);
+}
+static inline float tb__accel_widen_hi(float t)
+{
+    return t > 0.0f ? t * (float)(1.0 + TB__ACCEL_T_TOL) : t * (float)(1.0 - TB__ACCEL_T_TOL);
+}
+
+/* The tie rule: true if hit a (from stored reference with input index ia)
+ * comes before hit b (input index ib): smaller t, then smaller object index,
+ * then smaller face ID, then smaller input index. A total order on distinct
+ * references, so the closest hit does not depend on the order in which a
+ * structure meets them. */
+static inline bool tb__accel_before(const tb_hit *a, uint32_t ia, const tb_hit *b, uint32_t ib)
+{
+    if (a->t != b->t)
+        return a->t < b->t;
+    if (a->object != b->object)
+        return a->object < b->object;
+    if (a->face != b->face)
+        return a->face < b->face;
+    return ia < ib;
+}
+
+/* The running closest hit of one query. */
+typedef struct tb__accel_best {
+    tb_ray ray;      /* the query ray with tmax = best t so far (what callbacks see) */
+    tb_hit hit;      /* valid when found */
+    uint32_t index;  /* input index of hit's reference */
+    bool found;
+} tb__accel_best;
+
+/* Tests stored reference k against the running best; true if it improved it. */
+static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best *b)
+{
+    tb_hit h;
+    if (!acc->cb.intersect(acc->cb.ctx, &acc->prims[k], acc->index[k], &b->ray, &h))
+        return false;
+    /* The callback's range check is not trusted: hits outside [tmin, tmax] (or NaN) never pass. */
+    if (!(h.t >= b->ray.tmin && h.t <= b->ray.tmax))
+        return false;
+    if (b->found && !tb__accel_before(&h, acc->index[k], &b->hit, b->index))
+        return false;
+    b->hit = h;
+    b->index = acc->index[k];
+    b->found = true;
+    b->ray.tmax = h.t;
+    return true;
+}
+
+/* True if stored reference k is hit within the ray's [tmin, tmax]. */
+static inline bool tb__accel_test_any(const tb_accel *acc, size_t k, const tb_ray *ray)
+{
+    if (acc->cb.occluded)
+        return acc->cb.occluded(acc->cb.ctx, &acc->prims[k], acc->index[k], ray);
+    tb_hit h;
+    if (!acc->cb.intersect(acc->cb.ctx, &acc->prims[k], acc->index[k], ray, &h))
+        return false;
+    return h.t >= ray->tmin && h.t <= ray->tmax;
+}
+
+/* Per kind: build over acc->prims / acc->index (input order, acc->n > 0),
+ * filling the kind's part of acc->stats; then closest hit and any hit for
+ * valid rays. */
+tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt);
+bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best);
+bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray);
+void tb__bvh_free(tb_accel *acc);
+
+tb_status tb__grid_build(tb_accel *acc, const tb_accel_options *opt);
+bool tb__grid_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best);
+bool tb__grid_occluded(const tb_accel *acc, const tb_ray *ray);
+void tb__grid_free(tb_accel *acc);
+
+#endif

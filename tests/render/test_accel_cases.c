@@ -1,0 +1,556 @@
+/* Hard cases of the acceleration structures, each a named test with an
+ * answer known in advance: empty scene, one primitive, everything in one
+ * point, 10^5 identical boxes, invalid rays, exact tmin/tmax, a callback that
+ * ignores the range, build errors, the grid resolution rule. */
+#include "tb_test.h"
+
+#include <string.h>
+
+#include "host/render/accel.h"
+#include "test_accel_prims.h"
+#include "util/base/error.h"
+#include "util/stats/stats.h"
+
+static const tb_accel_kind kinds[] = {TB_ACCEL_BVH, TB_ACCEL_GRID, TB_ACCEL_LIST};
+#define NKINDS 3
+
+static tb_accel *build(tb_accel_kind k, tp_scene *s, const tb_accel_options *opt)
+{
+    tb_accel_callbacks cb = {tp_cb_intersect, tp_cb_occluded, s};
+    tb_accel *acc = NULL;
+    if (tb_accel_build(k, s->refs, s->n, &cb, opt, &acc))
+        fail_msg("build %s: %s", tb_accel_kind_name(k), tb_last_error());
+    return acc;
+}
+
+static tb_ray ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin, float tmax)
+{
+    return tb_ray_make((tb_vec3){ox, oy, oz}, (tb_vec3){dx, dy, dz}, tmin, tmax);
+}
+
+/* The hit of `r` on `acc`; fails unless found with the expected t and object. */
+static void expect_hit(const tb_accel *acc, const tb_ray *r, float t, uint32_t object, uint32_t face)
+{
+    tb_hit h;
+    if (!tb_accel_intersect(acc, r, &h))
+        fail_msg("%s: expected a hit at t = %g, got a miss", tb_accel_kind_name(tb_accel_get_kind(acc)), (double)t);
+    if (h.t != t || h.object != object || h.face != face)
+        fail_msg("%s: expected t %a object %u face %u, got t %a object %u face %u",
+                 tb_accel_kind_name(tb_accel_get_kind(acc)), (double)t, object, face, (double)h.t, h.object, h.face);
+    assert_true(tb_accel_occluded(acc, r));
+}
+
+static void expect_miss(const tb_accel *acc, const tb_ray *r)
+{
+    tb_hit h, before;
+    memset(&h, 0x5a, sizeof h);
+    before = h;
+    if (tb_accel_intersect(acc, r, &h))
+        fail_msg("%s: expected a miss, got t %a object %u", tb_accel_kind_name(tb_accel_get_kind(acc)), (double)h.t,
+                 h.object);
+    assert_memory_equal(&h, &before, sizeof h); /* untouched on a miss */
+    assert_false(tb_accel_occluded(acc, r));
+}
+
+static void test_empty_scene(void **state)
+{
+    (void)state;
+    tp_scene none = {0};
+    /* Only empty boxes (lo > hi): dropped, so also an empty structure. */
+    tp_scene empties = {0};
+    for (int i = 0; i < 3; i++) {
+        tp_add_sphere(&empties, 0, 0, 0, 1, (uint32_t)i, 0);
+        empties.refs[i].bounds = tb_aabb_empty();
+    }
+    tp_scene *scenes[2] = {&none, &empties};
+    for (int sc = 0; sc < 2; sc++) {
+        for (int k = 0; k < NKINDS; k++) {
+            tb_accel *acc = build(kinds[k], scenes[sc], NULL);
+            tb_accel_stats st;
+            tb_accel_get_stats(acc, &st);
+            assert_int_equal(st.nprims, 0);
+            assert_int_equal(st.bvh_nodes, 0);
+            assert_true(tb_aabb_is_empty(&st.bounds));
+            tb_ray r = ray(0, 0, -5, 0, 0, 1, 0, INFINITY);
+            expect_miss(acc, &r);
+            size_t nn = 7;
+            assert_null(tb_accel_bvh_nodes(acc, &nn));
+            assert_int_equal(nn, 0);
+            tb_accel_free(acc);
+        }
+    }
+    tp_free(&empties);
+}
+
+static void test_one_primitive(void **state)
+{
+    (void)state;
+    tp_scene s = {0};
+    tp_add_sphere(&s, 1, 2, 3, 0.5f, 7, 3);
+    for (int k = 0; k < NKINDS; k++) {
+        tb_accel *acc = build(kinds[k], &s, NULL);
+        /* Along +z through the centre: the sphere spans z = 2.5 .. 3.5. */
+        tb_ray r = ray(1, 2, -10, 0, 0, 1, 0, INFINITY);
+        expect_hit(acc, &r, 12.5f, 7, 3);
+        /* From the centre: leaves through the surface at t = 0.5. */
+        r = ray(1, 2, 3, 0, 0, 1, 0, INFINITY);
+        expect_hit(acc, &r, 0.5f, 7, 3);
+        /* From the centre backwards with tmin < 0: the entry at -0.5. */
+        r = ray(1, 2, 3, 0, 0, 1, -1.0f, INFINITY);
+        expect_hit(acc, &r, -0.5f, 7, 3);
+        /* Passing beside it, and pointing away from it. */
+        r = ray(1, 2.6f, -10, 0, 0, 1, 0, INFINITY);
+        expect_miss(acc, &r);
+        r = ray(1, 2, -10, 0, 0, -1, 0, INFINITY);
+        expect_miss(acc, &r);
+        /* Along an axis with -0 components, hitting the +x pole. */
+        r = ray(10, 2, 3, -1, -0.0f, -0.0f, 0, INFINITY);
+        expect_hit(acc, &r, 8.5f, 7, 3);
+        tb_accel_stats st;
+        tb_accel_get_stats(acc, &st);
+        assert_int_equal(st.nprims, 1);
+        if (kinds[k] == TB_ACCEL_BVH) {
+            assert_int_equal(st.bvh_nodes, 1);
+            assert_int_equal(st.bvh_depth, 0);
+            /* One leaf with one reference: SAH cost = C_prim * 1 * area/area = 1. */
+            assert_true(st.bvh_sah_cost == 1.0);
+        }
+        if (kinds[k] == TB_ACCEL_GRID) {
+            /* 3 * cbrt(1) voxels along each axis of the (cubic) box. */
+            assert_int_equal(st.grid_res[0], 3);
+            assert_int_equal(st.grid_res[1], 3);
+            assert_int_equal(st.grid_res[2], 3);
+            assert_int_equal(st.grid_refs, 27);
+        }
+        tb_accel_free(acc);
+    }
+    tp_free(&s);
+}
+
+/* All references share one centroid (zero-extent centroid bounds): 1000
+ * concentric spheres, and 1000 triangles collapsed to that very point. */
+static void test_all_in_one_point(void **state)
+{
+    (void)state;
+    tp_scene s = {0};
+    /* Centred on the origin, so each box is symmetric and its centroid exactly 0. */
+    for (int i = 0; i < 1000; i++)
+        tp_add_sphere(&s, 0, 0, 0, (float)(i + 1) / 1000.0f, (uint32_t)(999 - i), 0);
+    for (int i = 0; i < 1000; i++) {
+        float v[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+        tp_add_triangle(&s, (const float(*)[3])v, 5000 + (uint32_t)i, 0);
+    }
+    for (int k = 0; k < NKINDS; k++) {
+        tb_accel *acc = build(kinds[k], &s, NULL);
+        /* From outside: the biggest sphere (r = 1, object 0) at distance 10 - 1. */
+        tb_ray r = ray(0, 0, -10, 0, 0, 1, 0, INFINITY);
+        expect_hit(acc, &r, 9.0f, 0, 0);
+        /* From the centre: the smallest sphere (r = 0.001, object 999). */
+        r = ray(0, 0, 0, 1, 0, 0, 0, INFINITY);
+        expect_hit(acc, &r, 0.001f, 999, 0);
+        tb_accel_stats st;
+        tb_accel_get_stats(acc, &st);
+        if (kinds[k] == TB_ACCEL_BVH) {
+            /* No SAH plane exists: median splits, so a balanced tree of 2000
+             * references in leaves of <= 8: depth ceil(log2(2000 / 8)) = 8. */
+            assert_true(st.bvh_depth <= 8);
+            assert_true(st.bvh_max_leaf_prims <= 8);
+        }
+        tb_accel_free(acc);
+    }
+    tp_free(&s);
+}
+
+/* 10^5 references with the same box (the same sphere under 10^5 object
+ * numbers, the lowest one in the middle of the array): every structure must
+ * still build in bounded memory and depth and return object 0. */
+static void test_identical_boxes_1e5(void **state)
+{
+    (void)state;
+    const uint32_t n = 100000;
+    tp_scene s = {0};
+    for (uint32_t i = 0; i < n; i++)
+        tp_add_sphere(&s, 3, 3, 3, 1, (i + n / 2) % n, 0);
+    for (int k = 0; k < NKINDS; k++) {
+        tb_accel *acc = build(kinds[k], &s, NULL);
+        tb_accel_stats st;
+        tb_accel_get_stats(acc, &st);
+        assert_int_equal(st.nprims, n);
+        if (kinds[k] == TB_ACCEL_BVH) {
+            /* ceil(log2(10^5 / 8)) = 14 with median splits. */
+            assert_true(st.bvh_depth <= 14);
+        }
+        if (kinds[k] == TB_ACCEL_GRID) {
+            /* The pair budget forces a coarse grid instead of 10^5 x res^3 pairs. */
+            assert_true(st.grid_refs <= 32 * (size_t)n + 8 * st.grid_cells);
+        }
+        tb_ray r = ray(3, 3, -7, 0, 0, 1, 0, INFINITY);
+        expect_hit(acc, &r, 9.0f, 0, 0);
+        r = ray(3, 3, 3, 0, 1, 0, 0, INFINITY);
+        expect_hit(acc, &r, 1.0f, 0, 0);
+        r = ray(5, 5, -7, 0, 0, 1, 0, INFINITY);
+        expect_miss(acc, &r);
+        tb_accel_free(acc);
+    }
+    tp_free(&s);
+}
+
+static int64_t invalid_count(void)
+{
+    tb_stat_total t;
+    if (tb_stats_get("Accel/invalid rays", TB_STAT_KIND_COUNTER, &t) != TB_OK)
+        return -1;
+    return t.v[0];
+}
+
+/* Sets float number f of the ray record (ox oy oz tmin dx dy dz tmax). */
+static void set_field(tb_ray *r, int f, float v)
+{
+    switch (f) {
+    case 0: r->o.x = v; break;
+    case 1: r->o.y = v; break;
+    case 2: r->o.z = v; break;
+    case 3: r->tmin = v; break;
+    case 4: r->d.x = v; break;
+    case 5: r->d.y = v; break;
+    case 6: r->d.z = v; break;
+    default: r->tmax = v; break;
+    }
+}
+
+/* Rays with NaN or infinite components, a zero direction or tmin > tmax
+ * are never hit and are counted. */
+static void test_invalid_rays(void **state)
+{
+    (void)state;
+    tp_scene s = {0};
+    tp_add_sphere(&s, 0, 0, 0, 1, 0, 0);
+    const tb_ray good = ray(0, 0, -5, 0, 0, 1, 0, INFINITY);
+    tb_ray bad[32];
+    int nb = 0;
+    for (int f = 0; f < 8; f++) {
+        /* NaN in each of the eight floats. */
+        tb_ray r = good;
+        set_field(&r, f, NAN);
+        bad[nb++] = r;
+    }
+    for (int f = 0; f < 3; f++) {
+        tb_ray r = good;
+        set_field(&r, f, INFINITY); /* origin */
+        bad[nb++] = r;
+        r = good;
+        set_field(&r, 4 + f, -INFINITY); /* direction */
+        bad[nb++] = r;
+    }
+    bad[nb++] = ray(0, 0, -5, 0, 0, 0, 0, INFINITY);            /* zero direction */
+    bad[nb++] = ray(0, 0, -5, -0.0f, 0, -0.0f, 0, INFINITY);    /* negative zeros */
+    bad[nb++] = ray(0, 0, -5, 0, 0, 1, 5, 4);                   /* tmin > tmax */
+    bad[nb++] = ray(0, 0, -5, 0, 0, 1, -INFINITY, INFINITY);    /* infinite tmin */
+    bad[nb++] = ray(0, 0, -5, 0, 0, 1, INFINITY, INFINITY);
+    for (int k = 0; k < NKINDS; k++) {
+        tb_accel *acc = build(kinds[k], &s, NULL);
+        expect_hit(acc, &good, 4.0f, 0, 0);
+        int64_t before = invalid_count();
+        for (int i = 0; i < nb; i++) {
+            assert_false(tb_ray_is_valid(&bad[i]));
+            expect_miss(acc, &bad[i]);
+        }
+        /* expect_miss makes two queries per ray. */
+        assert_int_equal(invalid_count() - before, 2 * nb);
+        tb_accel_free(acc);
+    }
+    tp_free(&s);
+}
+
+/* tmin and tmax are inclusive and exact: the unit sphere seen from x = -5
+ * has roots exactly 4 and 6; a triangle (object 3) in the plane x = -1 ties
+ * with the sphere's entry (object 5) at t = 4, and the lower object wins. */
+static void test_tmin_tmax_exact(void **state)
+{
+    (void)state;
+    tp_scene s = {0};
+    tp_add_sphere(&s, 0, 0, 0, 1, 5, 0);
+    float tri[3][3] = {{-1, -1, -1}, {-1, 2, -1}, {-1, -1, 2}};
+    tp_add_triangle(&s, (const float(*)[3])tri, 3, 9);
+    const float four = 4.0f, six = 6.0f;
+    const float below4 = tb_next_float_down(four), above4 = tb_next_float_up(four);
+    const float below6 = tb_next_float_down(six), above6 = tb_next_float_up(six);
+    for (int k = 0; k < NKINDS; k++) {
+        tb_accel *acc = build(kinds[k], &s, NULL);
+        tb_ray r = ray(-5, 0, 0, 1, 0, 0, 0, INFINITY);
+        expect_hit(acc, &r, four, 3, 9);
+        r.tmax = four;
+        expect_hit(acc, &r, four, 3, 9);
+        r.tmax = below4;
+        expect_miss(acc, &r);
+        r.tmin = four;
+        r.tmax = four;
+        expect_hit(acc, &r, four, 3, 9);
+        r.tmin = above4;
+        r.tmax = INFINITY;
+        expect_hit(acc, &r, six, 5, 0);
+        r.tmax = six;
+        expect_hit(acc, &r, six, 5, 0);
+        r.tmax = below6;
+        expect_miss(acc, &r);
+        r.tmin = above6;
+        r.tmax = INFINITY;
+        expect_miss(acc, &r);
+        r.tmin = -10.0f;
+        r.tmax = 100.0f;
+        expect_hit(acc, &r, four, 3, 9);
+        tb_accel_free(acc);
+    }
+    tp_free(&s);
+}
+
+/* A callback that ignores the range and reports t = 4 for every ray (or NaN):
+ * the structures themselves must keep hits outside [tmin, tmax] out. */
+static bool liar(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *r, tb_hit *hit)
+{
+    (void)prim;
+    (void)index;
+    (void)r;
+    *hit = (tb_hit){.t = *(const float *)ctx, .object = 1};
+    return true;
+}
+
+static void test_callback_range_not_trusted(void **state)
+{
+    (void)state;
+    tp_scene s = {0};
+    tp_add_sphere(&s, 0, 0, 0, 10, 1, 0);
+    float t = 4.0f;
+    tb_accel_callbacks cb = {liar, NULL, &t};
+    for (int k = 0; k < NKINDS; k++) {
+        tb_accel *acc;
+        assert_int_equal(tb_accel_build(kinds[k], s.refs, s.n, &cb, NULL, &acc), TB_OK);
+        t = 4.0f;
+        tb_ray r = ray(-20, 0, 0, 1, 0, 0, 0, 3.0f);
+        expect_miss(acc, &r);
+        r = ray(-20, 0, 0, 1, 0, 0, 5.0f, 30.0f);
+        expect_miss(acc, &r);
+        r = ray(-20, 0, 0, 1, 0, 0, 0, 30.0f);
+        expect_hit(acc, &r, 4.0f, 1, 0);
+        t = NAN;
+        expect_miss(acc, &r);
+        tb_accel_free(acc);
+    }
+    tp_free(&s);
+}
+
+/* Box primitives whose surface is the box itself: the hit is the ray's
+ * entry into the box, reported `shrink` (relative) too early. */
+typedef struct boxprim {
+    tb_aabb box;
+    uint32_t object;
+    double shrink;
+} boxprim;
+
+static bool box_intersect(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *r, tb_hit *hit)
+{
+    (void)prim;
+    const boxprim *b = &((const boxprim *)ctx)[index];
+    double o[3] = {r->o.x, r->o.y, r->o.z}, d[3] = {r->d.x, r->d.y, r->d.z};
+    double lo[3] = {b->box.lo.x, b->box.lo.y, b->box.lo.z}, hi[3] = {b->box.hi.x, b->box.hi.y, b->box.hi.z};
+    double t0 = -INFINITY, t1 = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (d[a] == 0.0) {
+            if (o[a] < lo[a] || o[a] > hi[a])
+                return false;
+            continue;
+        }
+        double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
+        t0 = fmax(t0, fmin(ta, tb));
+        t1 = fmin(t1, fmax(ta, tb));
+    }
+    if (!(t0 <= t1 && t0 > 0.0))
+        return false;
+    float t = (float)(t0 * (1.0 - b->shrink));
+    if (!(t >= r->tmin && t <= r->tmax))
+        return false;
+    *hit = (tb_hit){.t = t, .object = b->object};
+    return true;
+}
+
+/* The traversal tolerance (docs/accel.md, "Robustness"): a callback may
+ * report t up to 2^-16 (relative) before the ray reaches its box. Box A
+ * (object 0) reports its entry 2^-17 early, which puts it before the hit on
+ * the thin box B (object 1) just in front of it, so A is the answer; but A's
+ * box only starts after B's hit, and in the grid in the next voxel. A BVH
+ * that prunes A's node with the unwidened best t, or a grid walk that stops
+ * at B's voxel, returns B. */
+static void test_t_tolerance(void **state)
+{
+    (void)state;
+    boxprim bp[4] = {
+        {{{-4.01f, -4.01f, -4.01f}, {-3.99f, -3.99f, -3.99f}}, 100, 0.0}, /* pin the grid box */
+        {{{3.99f, 3.99f, 3.99f}, {4.01f, 4.01f, 4.01f}}, 101, 0.0},
+        {{{0, -0.5f, -0.5f}, {1, 0.5f, 0.5f}}, 0, 0x1p-17},              /* A, placed below */
+        {{{0, -0.5f, -0.5f}, {0, 0.5f, 0.5f}}, 1, 0.0},                  /* B, placed below */
+    };
+    tb_accel_callbacks cb = {box_intersect, NULL, bp};
+    tb_accel_prim refs[4];
+    for (int i = 0; i < 4; i++)
+        refs[i] = (tb_accel_prim){bp[i].box, bp[i].object, 0};
+    /* A voxel plane along x: the grid depends only on the frame and N, so
+     * read it from a first build. */
+    tb_accel *acc;
+    assert_int_equal(tb_accel_build(TB_ACCEL_GRID, refs, 4, &cb, NULL, &acc), TB_OK);
+    tb_accel_stats st;
+    tb_accel_get_stats(acc, &st);
+    tb_accel_free(acc);
+    const int res = st.grid_res[0];
+    assert_true(res >= 2);
+    int k = res / 2;
+    float b = st.grid_bounds.lo.x + (st.grid_bounds.hi.x - st.grid_bounds.lo.x) * (float)k / (float)st.grid_res[0];
+    bp[2].box.lo.x = b + 1e-4f;
+    bp[2].box.hi.x = b + 1.0f;
+    bp[3].box.lo.x = b - 2e-4f;
+    bp[3].box.hi.x = b - 1e-4f;
+    for (int i = 2; i < 4; i++)
+        refs[i].bounds = bp[i].box;
+    tb_ray r = ray(-100, 0.1f, -0.2f, 1, 0, 0, 0, INFINITY);
+    tb_hit ha, hb;
+    assert_true(box_intersect(bp, &refs[2], 2, &r, &ha));
+    assert_true(box_intersect(bp, &refs[3], 3, &r, &hb));
+    assert_true(ha.t < hb.t);                       /* A is the answer, */
+    assert_true(hb.t < 100.0f + bp[2].box.lo.x);    /* though its box starts after B's hit */
+    for (int kk = 0; kk < NKINDS; kk++) {
+        assert_int_equal(tb_accel_build(kinds[kk], refs, 4, &cb, NULL, &acc), TB_OK);
+        expect_hit(acc, &r, ha.t, 0, 0);
+        tb_accel_get_stats(acc, &st);
+        if (kinds[kk] == TB_ACCEL_GRID) /* the same grid as the first build */
+            assert_int_equal(st.grid_res[0], res);
+        tb_accel_free(acc);
+    }
+}
+
+static void test_build_errors(void **state)
+{
+    (void)state;
+    tp_scene s = {0};
+    tp_add_sphere(&s, 0, 0, 0, 1, 0, 0);
+    tp_add_sphere(&s, 1, 0, 0, 1, 1, 0);
+    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s};
+    tb_accel *acc = (tb_accel *)&s; /* must be reset to NULL on failure */
+
+    s.refs[1].bounds.hi.y = NAN;
+    assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &cb, NULL, &acc), TB_ERR_ARG);
+    assert_null(acc);
+    assert_non_null(strstr(tb_last_error(), "reference 1"));
+    s.refs[1].bounds.hi.y = INFINITY;
+    assert_int_equal(tb_accel_build(TB_ACCEL_GRID, s.refs, s.n, &cb, NULL, &acc), TB_ERR_ARG);
+    assert_non_null(strstr(tb_last_error(), "infinite"));
+    s.refs[1].bounds = tp_bounds(&s.prims[1]);
+
+    assert_int_equal(tb_accel_build((tb_accel_kind)7, s.refs, s.n, &cb, NULL, &acc), TB_ERR_ARG);
+    assert_non_null(strstr(tb_last_error(), "kind"));
+    tb_accel_callbacks nocb = {NULL, NULL, NULL};
+    assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &nocb, NULL, &acc), TB_ERR_ARG);
+    assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, NULL, NULL, &acc), TB_ERR_ARG);
+    assert_int_equal(tb_accel_build(TB_ACCEL_BVH, NULL, 2, &cb, NULL, &acc), TB_ERR_ARG);
+    assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &cb, NULL, NULL), TB_ERR_ARG);
+
+    const tb_accel_options bad[] = {
+        {.bvh_bins = 1},        {.bvh_bins = 257},          {.bvh_max_leaf = 256},
+        {.bvh_max_leaf = -1},   {.bvh_cost_node = -1.0f},   {.bvh_cost_prim = NAN},
+        {.grid_density = -2.0}, {.grid_density = INFINITY}, {.grid_max_res = 1025},
+        {.threads = -1},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        acc = (tb_accel *)&s;
+        assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &cb, &bad[i], &acc), TB_ERR_ARG);
+        assert_null(acc);
+        assert_true(strlen(tb_last_error()) > 0);
+    }
+    /* The extremes of every range are accepted. */
+    tb_accel_options edge = {.bvh_bins = 2, .bvh_max_leaf = 1, .grid_max_res = 1, .grid_density = 0.5};
+    for (int k = 0; k < NKINDS; k++) {
+        assert_int_equal(tb_accel_build(kinds[k], s.refs, s.n, &cb, &edge, &acc), TB_OK);
+        tb_ray r = ray(-5, 0, 0, 1, 0, 0, 0, INFINITY);
+        expect_hit(acc, &r, 4.0f, 0, 0);
+        tb_accel_free(acc);
+    }
+    tb_accel_free(NULL);
+    tp_free(&s);
+}
+
+static void test_kind_names(void **state)
+{
+    (void)state;
+    for (int k = 0; k < NKINDS; k++) {
+        tb_accel_kind back;
+        assert_int_equal(tb_accel_kind_from_name(tb_accel_kind_name(kinds[k]), &back), TB_OK);
+        assert_int_equal(back, kinds[k]);
+    }
+    assert_string_equal(tb_accel_kind_name(TB_ACCEL_BVH), "bvh");
+    assert_string_equal(tb_accel_kind_name(TB_ACCEL_GRID), "grid");
+    assert_null(tb_accel_kind_name((tb_accel_kind)3));
+    tb_accel_kind k;
+    assert_int_equal(tb_accel_kind_from_name("kd-tree", &k), TB_ERR_ARG);
+    assert_non_null(strstr(tb_last_error(), "kd-tree"));
+    assert_int_equal(tb_accel_kind_from_name(NULL, &k), TB_ERR_ARG);
+}
+
+/* The resolution rule: round(density * cbrt(N) * width / longest width)
+ * voxels per axis, at least 1, at most grid_max_res. */
+static void test_grid_resolution(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("grid_resolution", 21);
+    tb_rng r;
+    tb_rng_seed(&r, seed, 1);
+    /* 1000 small spheres in a box 4 x 2 x 0 (flat in z), corners pinned. */
+    tp_scene s = {0};
+    for (int i = 0; i < 1000; i++) {
+        float x = i < 4 ? (float)(i & 1) * 4.0f : tp_uniform(&r, 0, 4);
+        float y = i < 4 ? (float)(i >> 1) * 2.0f : tp_uniform(&r, 0, 2);
+        float v[3][3] = {{x, y, 0}, {x + 0.0f, y, 0}, {x, y, 0}};
+        tp_add_triangle(&s, (const float(*)[3])v, (uint32_t)i, 0);
+    }
+    struct {
+        tb_accel_options opt;
+        int res[3];
+    } cases[] = {
+        {{0}, {30, 15, 1}},                                   /* 3 * cbrt(1000) = 30 */
+        {{.grid_density = 6.0}, {60, 30, 1}},
+        {{.grid_density = 6.0, .grid_max_res = 40}, {40, 30, 1}},
+        {{.grid_density = 0.1}, {1, 1, 1}},                   /* round(0.5) of y and z: at least 1 */
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        tb_accel *acc = build(TB_ACCEL_GRID, &s, &cases[c].opt);
+        tb_accel_stats st;
+        tb_accel_get_stats(acc, &st);
+        for (int a = 0; a < 3; a++)
+            if (st.grid_res[a] != cases[c].res[a])
+                fail_msg("case %zu axis %d: resolution %d, expected %d", c, a, st.grid_res[a], cases[c].res[a]);
+        assert_int_equal(st.grid_cells, (size_t)cases[c].res[0] * cases[c].res[1] * cases[c].res[2]);
+        /* The grid box holds the references' box. */
+        assert_true(tb_aabb_contains_box(&st.grid_bounds, &st.bounds));
+        assert_true(st.grid_nonempty > 0 && st.grid_nonempty <= st.grid_cells);
+        assert_true(st.grid_refs >= st.nprims);
+        assert_true(st.memory_bytes > st.grid_refs * 4);
+        assert_true(st.build_seconds >= 0.0);
+        tb_accel_free(acc);
+    }
+    tp_free(&s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_empty_scene),
+        cmocka_unit_test(test_one_primitive),
+        cmocka_unit_test(test_all_in_one_point),
+        cmocka_unit_test(test_identical_boxes_1e5),
+        cmocka_unit_test(test_invalid_rays),
+        cmocka_unit_test(test_tmin_tmax_exact),
+        cmocka_unit_test(test_callback_range_not_trusted),
+        cmocka_unit_test(test_t_tolerance),
+        cmocka_unit_test(test_build_errors),
+        cmocka_unit_test(test_kind_names),
+        cmocka_unit_test(test_grid_resolution),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
