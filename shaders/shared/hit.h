@@ -1,6 +1,9 @@
 /* The hit record the intersection kernels write: 32 bytes, only what
  * traversal needs (the full surface record is built afterwards from it).
- * See shared/types.h for the layout rules. */
+ * Byte for byte the CPU's tb_hit (host/object/hit.h) and the record of HITS
+ * files; tests/gpu/test_gpu_kernels.c asserts the two layouts agree (this
+ * header, at the shader level, does not include the object level). See
+ * shared/types.h for the layout rules. */
 #ifndef TB_SHADERS_SHARED_HIT_H
 #define TB_SHADERS_SHARED_HIT_H
 
@@ -21,7 +24,7 @@ struct tb_gpu_hit {
     TB_GPU_UINT face;   /* face of the object's primitive (host/object/param.h numbering) (offset 8) */
     float u;            /* surface parameters of the face (offsets 12, 16) */
     float v;
-    float ng[3];        /* geometric normal, not normalised (offsets 20, 24, 28) */
+    float ng[3];        /* unit geometric normal out of the solid (offsets 20, 24, 28) */
 };
 
 #ifndef TB_GPU_GLSL

@@ -11,6 +11,7 @@
 
 #include <float.h>
 
+#include "host/object/hit.h"
 #include "host/object/intersect.h"
 #include "host/object/object.h"
 #include "host/scene/mid.h"
@@ -23,6 +24,14 @@
 #include "util/roots/roots.h"
 
 #define U 0x1p-24 /* unit roundoff of float */
+
+/* The GPU hit record is the CPU's (host/object/hit.h), byte for byte, so hit
+ * buffers and HITS files are interchangeable. */
+_Static_assert(sizeof(tb_gpu_hit) == sizeof(tb_hit) && offsetof(tb_gpu_hit, object) == offsetof(tb_hit, object) &&
+                   offsetof(tb_gpu_hit, face) == offsetof(tb_hit, face) &&
+                   offsetof(tb_gpu_hit, u) == offsetof(tb_hit, u) && offsetof(tb_gpu_hit, v) == offsetof(tb_hit, v) &&
+                   offsetof(tb_gpu_hit, ng) == offsetof(tb_hit, ng),
+               "tb_gpu_hit has the layout of host/object's tb_hit");
 
 static tb_gpu_instance *g_inst;
 static tb_gpu_device *g_dev;
