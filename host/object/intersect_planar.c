@@ -130,8 +130,8 @@ void tb__xings_pyramid(const tb_object *o, const tb__oray *r, tb__xbuf *out)
 
 void tb__prism_vertex(int n, int k, double *x, double *y)
 {
-    /* Reduce the angle exactly first: k/n of a full turn, by octant, so the
-     * vertices of n = 4, 8, ... are exact and symmetric ones agree. */
+    /* Quarter turns exactly (so the vertices on the axes of n = 4, 8, ...
+     * are exact), the rest from the angle 2 pi k / n. */
     double a = TB_2PI * ((double)k / (double)n);
     *x = cos(a);
     *y = sin(a);
@@ -144,12 +144,11 @@ void tb__prism_vertex(int n, int k, double *x, double *y)
 }
 
 /* Outward normal (x, y, 0) and plane constant of side k (edge P_k -> P_k+1). */
-static void tb__prism_side(const tb_object *o, int k, const double *pk, const double *pk1, tb_dvec3 *n, double *c)
+static void tb__prism_side(const tb_object *o, const double *pk, const double *pk1, tb_dvec3 *n, double *c)
 {
     double ex = pk1[0] - pk[0], ey = pk1[1] - pk[1];
     *n = (tb_dvec3){o->profile_orient * ey, -o->profile_orient * ex, 0.0};
     *c = n->x * pk[0] + n->y * pk[1];
-    (void)k;
 }
 
 /* Sides k0 - 2 .. k0 + 2 of the large regular prism. Side k lies on the
@@ -197,8 +196,8 @@ static bool tb__clip_regular(const tb_object *o, const tb__line *l, tb__end *a, 
     if (A == 0.0) { /* parallel to the axis: is the point inside the polygon? */
         return tb__clip_regular_sides(o, l, tb__sector(n, l->p0.x, l->p0.y), a, b);
     }
-    /* Circle crossings of the 2D line p0 + s d (p0 is nearest the axis... in 3D;
-     * recompute the 2D nearest point for accuracy). */
+    /* Circle crossings of the 2D line, from its point nearest the axis
+     * (p0 is the 3D line's point nearest the origin, not the same point). */
     double s2 = -(l->p0.x * l->d.x + l->p0.y * l->d.y) / A;
     double qx = l->p0.x + s2 * l->d.x, qy = l->p0.y + s2 * l->d.y;
     double h2 = 1.0 - (qx * qx + qy * qy);
@@ -286,7 +285,7 @@ static void tb__xings_profile(const tb_object *o, const tb__line *l, tb__xbuf *o
             int k = cr[i + j].edge;
             tb_dvec3 nn;
             double c;
-            tb__prism_side(o, k, &P[2 * k], &P[2 * ((k + 1) % n)], &nn, &c);
+            tb__prism_side(o, &P[2 * k], &P[2 * ((k + 1) % n)], &nn, &c);
             tb__end e = {cr[i + j].s, TB_FACE_PRISM_SIDE0 + (uint32_t)k, nn};
             if (j == 0)
                 a = e;
@@ -324,7 +323,7 @@ void tb__xings_prism(const tb_object *o, const tb__oray *r, tb__xbuf *out)
         for (int k = 0; k < n; k++) {
             tb_dvec3 nn;
             double c;
-            tb__prism_side(o, k, &o->profile[2 * k], &o->profile[2 * ((k + 1) % n)], &nn, &c);
+            tb__prism_side(o, &o->profile[2 * k], &o->profile[2 * ((k + 1) % n)], &nn, &c);
             if (!tb__clip(&l, nn, c, TB_FACE_PRISM_SIDE0 + (uint32_t)k, &a, &b))
                 return;
         }
