@@ -626,7 +626,8 @@ static tb_status tb__parse(tb_ies *ies, tb__lex *lx)
     }
     if ((st = tb__angles(lx, ies->nv, "vertical", 0.0, 180.0, &ies->v_angles)))
         return st;
-    long h_line = lx->line;
+    tb__skip(lx);
+    long h_line = lx->line; /* where the horizontal angles start */
     if ((st = tb__angles(lx, ies->nh, "horizontal", 0.0, 360.0, &ies->h_angles)))
         return st;
     double h0 = ies->h_angles[0], h1 = ies->h_angles[ies->nh - 1];
@@ -650,6 +651,7 @@ static tb_status tb__parse(tb_ies *ies, tb__lex *lx)
     if (!ies->candela)
         return tb_error(TB_ERR_NOMEM, "%s: out of memory for %zu candela values", lx->name, nc);
     char label[96];
+    long last_line = lx->line;
     for (int j = 0; j < ies->nh; j++)
         for (int i = 0; i < ies->nv; i++) {
             snprintf(label, sizeof label, "candela value %d of %zu (horizontal angle %g, vertical angle %g)",
@@ -663,6 +665,7 @@ static tb_status tb__parse(tb_ies *ies, tb__lex *lx)
             if (!isfinite(c))
                 return tb__err(lx, line, TB_ERR_FORMAT, "candela value %.17g times the multiplier overflows", v);
             ies->candela[(size_t)j * ies->nv + i] = c;
+            last_line = line;
             if (c > ies->max_candela)
                 ies->max_candela = c;
         }
@@ -678,7 +681,7 @@ static tb_status tb__parse(tb_ies *ies, tb__lex *lx)
         return tb__err(lx, lx->line, TB_ERR_FORMAT, "unexpected '%s' after the %zu candela values", shown, nc);
     }
     if (!(ies->max_candela > 0.0))
-        return tb__err(lx, lx->line, TB_ERR_FORMAT, "every candela value is 0");
+        return tb__err(lx, last_line, TB_ERR_FORMAT, "every candela value is 0");
     return tb__build_sampling(ies, lx->name);
 }
 
