@@ -220,9 +220,43 @@ static void dielectric_power(const tb_bsdf *b, tb_vec3 w, double *R, double *T)
     *T = tst_integrate_sphere(integrand, &c, t, M_PI, 24, 24, 8);
 }
 
+/* The same R and T by Monte Carlo with the model's sampler from w: by
+ * reciprocity f(x, w) = f(w, x) for reflection and f(x, w) = f(w, x) n_x^2 /
+ * n_w^2 for transmission (n_x: index on x's side), so R and T are the means of
+ * the sample weights, the transmitted ones scaled by n_x^2 / n_w^2. */
+static void dielectric_power_mc(const tb_bsdf *b, tb_vec3 w, int n, uint64_t seed, double *R, double *T,
+                                double *sR, double *sT)
+{
+    tb_rng rng;
+    tb_rng_seed(&rng, seed, 5);
+    double r = 0, r2 = 0, t = 0, t2 = 0;
+    double nw = w.z > 0.0f ? 1.0 : b->eta;
+    for (int k = 0; k < n; k++) {
+        tb_bsdf_sampled smp;
+        float uc = tb_rng_float(&rng), u1 = tb_rng_float(&rng), u2 = tb_rng_float(&rng);
+        if (!tb_bsdf_sample(b, w, uc, u1, u2, &smp))
+            continue;
+        double v = smp.weight.v[0];
+        if (smp.transmitted) {
+            double nx = smp.wi.z > 0.0f ? 1.0 : b->eta;
+            v *= (nx * nx) / (nw * nw);
+            t += v;
+            t2 += v * v;
+        } else {
+            r += v;
+            r2 += v * v;
+        }
+    }
+    *R = r / n;
+    *T = t / n;
+    *sR = sqrt(fmax(0.0, r2 / n - *R * *R) / n);
+    *sT = sqrt(fmax(0.0, t2 / n - *T * *T) / n);
+}
+
 static void test_dielectric_furnace(void **state)
 {
     (void)state;
+    uint64_t seed = tb_test_seed("dielectric furnace", 24);
     tb_channels one = tb_channels_splat(1, 1.0f);
     const double alphas[] = {0.02, 0.1, 0.4, 1.0};
     for (int k = 0; k < 4; k++) {
@@ -232,15 +266,26 @@ static void test_dielectric_furnace(void **state)
                 tb_vec3 w = dir_at(angles[a]);
                 if (side)
                     w.z = -w.z;
-                double R, T;
+                double R, T, Rm, Tm, sR, sT;
                 dielectric_power(&b, w, &R, &T);
-                printf("[ furnace  ] dielectric alpha %.2f theta %2.0f %s: R = %.5f T = %.5f\n",
-                       alphas[k], angles[a], side ? "inside " : "outside", R, T);
-                assert_true(R + T <= 1.0 + 1e-4);
-                assert_true(R >= 0.0 && T >= 0.0);
+                dielectric_power_mc(&b, w, scaled(40000), seed + 10 * k + 2 * a + side, &Rm, &Tm, &sR, &sT);
+                printf("[ furnace  ] dielectric alpha %.2f theta %2.0f %s: R = %.5f T = %.5f (Monte Carlo %.5f %.5f)\n",
+                       alphas[k], angles[a], side ? "inside " : "outside", R, T, Rm, Tm);
+                /* Energy: the unbiased estimate never exceeds 1 (up to its noise). */
+                assert_true(Rm >= 0.0 && Tm >= 0.0);
+                assert_true(Rm + Tm <= 1.0 + 5.0 * (sR + sT));
+                /* Quadrature and Monte Carlo agree, except light arriving from
+                 * inside at grazing angles on rough glass: there the BTDF jumps
+                 * where the generalised half vector reaches the tangent plane (D
+                 * is not small there for large alpha) and the quadrature does
+                 * not converge (its T is 3-16 % low at alpha 0.4-1, 70-85 degrees). */
+                if (!(side && alphas[k] >= 0.4 && angles[a] >= 70.0)) {
+                    tb_assert_near(R, Rm, 5.0 * sR + 2e-3);
+                    tb_assert_near(T, Tm, 5.0 * sT + 2e-3);
+                    assert_true(R + T <= 1.0 + 1e-4);
+                }
                 /* Nearly smooth, away from the critical angle (41.8 degrees inside). */
                 if (alphas[k] <= 0.02 && angles[a] <= (side ? 20.0 : 45.0)) {
-                    /* Nearly smooth: the Fresnel split of a flat interface. */
                     double F = tb_fresnel_dielectric(w.z, 1.5);
                     tb_assert_near(R, F, 2e-3);
                     tb_assert_near(T, 1.0 - F, 5e-3);
