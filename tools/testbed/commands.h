@@ -26,6 +26,8 @@ int tb_cmd_devices(int argc, char **argv);
 int tb_cmd_generate(int argc, char **argv);
 /* `testbed help [CMD]`. */
 int tb_cmd_help(int argc, char **argv);
+/* `testbed import MODEL -o OUT.mid`: a model to MID + FED through Assimp (cmd_import.c). */
+int tb_cmd_import(int argc, char **argv);
 /* `testbed version`. */
 int tb_cmd_version(int argc, char **argv);
 

@@ -14,6 +14,7 @@ static const tb_command tb__commands[] = {
     {"devices", "list the Vulkan devices and which one --backend auto/vulkan uses", tb_cmd_devices},
     {"generate", "write a procedural MID scene (grid, csg, mesh) for scaling tests", tb_cmd_generate},
     {"help", "list the subcommands, or show one's help", tb_cmd_help},
+    {"import", "convert a model (OBJ, PLY, STL, glTF, ... via Assimp) to MID + FED files", tb_cmd_import},
     {"version", "print the version and git revision", tb_cmd_version},
 };
 
