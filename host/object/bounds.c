@@ -220,13 +220,27 @@ static bool tb__affine(const tb_transform *t)
 
 /* The double world box: coordinate i ranges over t_i +- h(+-L_i). Under a
  * transform (tw != NULL) the few roundings of h and the sum are covered by a
- * relative pad of 2^-48 (16 double ulps), far below float resolution; the
- * object box (tw == NULL) takes h as computed, so that exact extents (1 for
- * the cube, R + r for the torus when representable) stay exact floats. */
+ * relative pad of 2^-48 (16 double ulps), and the float rounding of object
+ * points by another (see below); the object box (tw == NULL) takes h as
+ * computed, so that exact extents (1 for the cube, R + r for the torus when
+ * representable) stay exact floats (and rounding an object point to the
+ * nearest float never leaves a float box that holds the exact point). */
 static tb_status tb__world_box(tb_prim_kind kind, const tb_mid_geometry *g, const tb_transform *tw,
                                tb_dvec3 *lo, tb_dvec3 *hi)
 {
-    double l[3], h[3];
+    double l[3], h[3], fround = 0.0;
+    if (tw) {
+        /* Points of the object rounded to float in object space (tessellation
+         * vertices, float hit points) may stand half a float ulp outside the
+         * exact surface; the world box holds them too: pad each axis by that
+         * rounding (2^-24 of the largest object coordinate) through the row. */
+        tb_dvec3 olo, ohi;
+        tb_status st = tb__world_box(kind, g, NULL, &olo, &ohi);
+        if (st)
+            return st;
+        if (olo.x <= ohi.x)
+            fround = 0x1p-24 * fmax(tb_dvec3_max_comp(tb_dvec3_abs(olo)), tb_dvec3_max_comp(tb_dvec3_abs(ohi)));
+    }
     for (int i = 0; i < 3; i++) {
         tb_dvec3 row = tw ? tb__v3(tw->m.m[i][0], tw->m.m[i][1], tw->m.m[i][2])
                           : tb__v3(i == 0, i == 1, i == 2);
@@ -241,7 +255,7 @@ static tb_status tb__world_box(tb_prim_kind kind, const tb_mid_geometry *g, cons
             *lo = tb__v3(INFINITY, INFINITY, INFINITY), *hi = tb__v3(-INFINITY, -INFINITY, -INFINITY);
             return TB_OK;
         }
-        double pad = tw ? 0x1p-48 * (fabs(t) + fabs(hp) + fabs(hm)) : 0.0;
+        double pad = tw ? 0x1p-48 * (fabs(t) + fabs(hp) + fabs(hm)) + fround * (fabs(row.x) + fabs(row.y) + fabs(row.z)) : 0.0;
         h[i] = t + hp + pad;
         l[i] = t - hm - pad;
     }

@@ -75,7 +75,12 @@ double tb_param_conic_r2(const tb_geom_conic *c, double z)
         err = err * z + (pe + te);
         s = t;
     }
-    return s + err;
+    double q = s + err;
+    /* The reader's rule (docs/mid.md, 6.3): within 1e-12 of the size of the
+     * terms r^2 is 0, so coefficients meant to touch the axis (a pole, an
+     * apex) do, instead of leaving a waist of radius ~1e-6 from their rounding. */
+    double terms = fabs(c->c[0]) + fabs(c->c[1] * z) + fabs(c->c[2] * z * z);
+    return fabs(q) <= 1e-12 * terms ? 0.0 : q;
 }
 
 static double tb__conic_q(const tb_geom_conic *c, double z) { return tb_param_conic_r2(c, z); }

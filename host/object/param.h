@@ -129,7 +129,9 @@ bool tb_param_prism_ccw(const tb_geom_prism *g);
 /* r^2 = c0 + c1 z + c2 z^2 of a conic at height z, by compensated Horner
  * evaluation (error-free products and sums): accurate to a few ulps of the
  * result even where the terms cancel (near a pole or a narrow waist), where
- * plain evaluation would leave r off by sqrt of the rounding. */
+ * plain evaluation would leave r off by sqrt of the rounding. A value within
+ * 1e-12 of |c0| + |c1 z| + |c2 z^2| is returned as 0 (the MID reader's rule,
+ * docs/mid.md 6.3): a pole or apex the coefficients meant stays a point. */
 double tb_param_conic_r2(const tb_geom_conic *c, double z);
 
 /* Number of face IDs of the primitive: valid IDs are 0 .. count - 1 (some may

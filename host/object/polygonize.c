@@ -20,6 +20,7 @@
 #include "util/container/array.h"
 #include "util/container/hash_table.h"
 #include "util/math/float.h"
+#include "util/mesh/polygon.h"
 #include "util/mesh/triangulate.h"
 #include "util/stats/stats.h"
 
@@ -56,6 +57,7 @@ typedef struct tb__res {
     double edge;  /* longest edge, object units; 0: none */
     double angle; /* largest facet-normal angle, radians; 0: none */
     int maxseg;   /* segments per direction */
+    double floor; /* steps with chords this short count as resolved (1e-5 of the object's size) */
 } tb__res;
 
 /* Segments for a straight run of length L. */
@@ -76,6 +78,53 @@ static int tb__seg_arc(const tb__res *r, double rho, double th, int nmin)
     if (r->edge > 0.0 && rho > 0.0 && r->edge < 2.0 * rho)
         n = fmax(n, ceil(th / (2.0 * asin(r->edge / (2.0 * rho))) - 1e-9));
     return n > r->maxseg ? r->maxseg : (int)n;
+}
+
+/* Largest angle between the normals of adjacent bands of a surface of
+ * revolution whose profile is (rho[i], z[i]), i = 0..n (cyclic: the last
+ * band also meets the first), cut into sectors of angle dphi. A band's facet
+ * (a trapezoid, or a triangle at a pole) has its normal in the sector's
+ * middle meridian plane, perpendicular to (cos(dphi/2) (rho1 - rho0), z1 - z0):
+ * the profile chord with its radial part shortened, so adjacent bands can
+ * differ slightly more than their chords do. */
+static double tb__band_turn(const double *rho, const double *z, int n, double dphi, bool cyclic)
+{
+    double ch = cos(0.5 * dphi), worst = 0.0;
+    /* bands i = 0..n-1 run from point i to point i + 1 (point n is point 0 when cyclic) */
+    for (int i = 0; i + 1 < n + (cyclic ? 1 : 0); i++) {
+        int a = i, b = i + 1, c = i + 2;
+        if (cyclic)
+            b %= n, c %= n;
+        double x1 = ch * (rho[b] - rho[a]), z1 = z[b] - z[a], x2 = ch * (rho[c] - rho[b]), z2 = z[c] - z[b];
+        worst = fmax(worst, atan2(fabs(x1 * z2 - z1 * x2), x1 * x2 + z1 * z2));
+    }
+    return worst;
+}
+
+/* Segments for a full (cyclic) or half circle profile of radius r about
+ * (R, 0) (R = 0: the sphere's meridian), raised from n until adjacent bands
+ * meet within the angle tolerance (see tb__band_turn). */
+static int tb__profile_circle_segments(const tb__res *r, double R, double rad, double th, int n, double dphi)
+{
+    if (!(r->angle > 0.0))
+        return n;
+    for (; n < r->maxseg; n++) {
+        double *rho = malloc(sizeof(double) * (size_t)(n + 1) * 2);
+        if (!rho)
+            return n;
+        double *z = rho + n + 1;
+        for (int i = 0; i <= n; i++) {
+            double t = th * i / n;
+            /* sphere (th = pi): from the south pole up; torus (th = 2 pi): from the outer equator */
+            rho[i] = th < 4.0 ? sin(t) * rad : R + rad * cos(t);
+            z[i] = th < 4.0 ? -cos(t) * rad : rad * sin(t);
+        }
+        double turn = tb__band_turn(rho, z, n, dphi, th >= 4.0);
+        free(rho);
+        if (turn <= r->angle)
+            break;
+    }
+    return n;
 }
 
 /* ------------------------------------------------------------- the builder */
@@ -275,8 +324,9 @@ static tb_status tb__nomem(void) { return tb_error(TB_ERR_NOMEM, "polygonize: ou
 static void tb__sphere(tb__mb *m, const tb__res *r)
 {
     tb__bp us, vs;
-    if (!tb__bp_uniform(&us, 0, 1, tb__seg_arc(r, 1.0, TB_2PI, 3)) ||
-        !tb__bp_uniform(&vs, 0, 1, tb__seg_arc(r, 1.0, TB_PI, 2))) {
+    int nu = tb__seg_arc(r, 1.0, TB_2PI, 3);
+    int nv = tb__profile_circle_segments(r, 0.0, 1.0, TB_PI, tb__seg_arc(r, 1.0, TB_PI, 2), TB_2PI / nu);
+    if (!tb__bp_uniform(&us, 0, 1, nu) || !tb__bp_uniform(&vs, 0, 1, nv)) {
         m->st = tb__nomem();
     } else {
         tb__mb_grid_uv(m, TB_FACE_SPHERE, us.x, us.n, vs.x, vs.n);
@@ -307,8 +357,9 @@ static void tb__torus(tb__mb *m, const tb__res *r)
 {
     const tb_geom_torus *t = &m->g->torus;
     tb__bp us, vs;
-    if (!tb__bp_uniform(&us, 0, 1, tb__seg_arc(r, t->major + t->minor, TB_2PI, 3)) ||
-        !tb__bp_uniform(&vs, 0, 1, tb__seg_arc(r, t->minor, TB_2PI, 3))) {
+    int nu = tb__seg_arc(r, t->major + t->minor, TB_2PI, 3);
+    int nv = tb__profile_circle_segments(r, t->major, t->minor, TB_2PI, tb__seg_arc(r, t->minor, TB_2PI, 3), TB_2PI / nu);
+    if (!tb__bp_uniform(&us, 0, 1, nu) || !tb__bp_uniform(&vs, 0, 1, nv)) {
         m->st = tb__nomem();
     } else {
         tb__mb_grid_uv(m, TB_FACE_TORUS, us.x, us.n, vs.x, vs.n);
@@ -338,33 +389,251 @@ static void tb__pyramid(tb__mb *m, const tb__res *r, double t, bool bottom, bool
 
 /* ---------------------------------------------------------------- prism */
 
-/* A polygon face given as one loop of points on a flat face: triangulated
- * (util/mesh), every point kept. `xy` are plane coordinates of the points. */
-static void tb__flat_loop(tb__mb *m, int face, const tb_dvec3 *pts, const double *xy, uint32_t n)
+/* ------------------------------------------------- flat-region refinement */
+
+/* Triangles of a flat region, refined by longest-edge bisection (Rivara's
+ * LEPP: a triangle's longest edge is split together with the neighbour's when
+ * it is the neighbour's longest too, else the neighbour is split first), so
+ * the mesh stays conforming. Edges no longer than the limit are never split,
+ * so a boundary already sampled at the limit keeps its points. */
+typedef struct tb__tris {
+    tb_array pts;     /* tb_dvec3 points */
+    tb_array parents; /* uint32_t[2] per point: the edge a midpoint split, or UINT32_MAX */
+    tb_array tris;    /* uint32_t[3], counter-clockwise */
+    tb_array alive;   /* bool per triangle */
+    tb_htab edges;    /* edge key -> 1 + triangle, 1 + second triangle << 32 */
+} tb__tris;
+
+static uint64_t tb__ekey(uint32_t a, uint32_t b) { return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a; }
+
+static double tb__len2(const tb__tris *t, uint32_t a, uint32_t b)
 {
-    tb_array tris;
-    tb_array_init(&tris, sizeof(tb_tri));
-    tb_status st = tb_triangulate_2d(xy, &n, 1, &tris, NULL);
-    if (st) {
-        m->st = st;
-        tb_array_free(&tris);
-        return;
+    const tb_dvec3 *p = (const tb_dvec3 *)t->pts.data;
+    return tb_dvec3_length2(tb_dvec3_sub(p[a], p[b]));
+}
+
+/* Index 0..2 of triangle k's longest edge (from corner i to i + 1); ties go
+ * to the larger edge key, so both triangles of an edge agree. */
+static int tb__longest(const tb__tris *t, uint32_t k, double *len2)
+{
+    const uint32_t *v = &TB_ARRAY_AT(&t->tris, uint32_t, 3 * k);
+    int best = 0;
+    double bl = -1.0;
+    uint64_t bk = 0;
+    for (int i = 0; i < 3; i++) {
+        double l = tb__len2(t, v[i], v[(i + 1) % 3]);
+        uint64_t key = tb__ekey(v[i], v[(i + 1) % 3]);
+        if (l > bl || (l == bl && key > bk))
+            bl = l, best = i, bk = key;
     }
-    uint32_t *ids = malloc(sizeof(uint32_t) * n);
-    if (!ids) {
+    *len2 = bl;
+    return best;
+}
+
+/* Registers (or, with add false, removes) triangle k under its three edges. */
+static tb_status tb__tris_link(tb__tris *t, uint32_t k, bool add)
+{
+    const uint32_t *v = &TB_ARRAY_AT(&t->tris, uint32_t, 3 * k);
+    for (int i = 0; i < 3; i++) {
+        uint64_t key = tb__ekey(v[i], v[(i + 1) % 3]), val = 0;
+        tb_htab_get(&t->edges, key, &val);
+        uint64_t lo = val & 0xffffffffu, hi = val >> 32, me = (uint64_t)k + 1;
+        if (add) {
+            if (lo == 0)
+                lo = me;
+            else
+                hi = me;
+        } else {
+            if (lo == me)
+                lo = hi, hi = 0;
+            else if (hi == me)
+                hi = 0;
+        }
+        tb_status st = tb_htab_put(&t->edges, key, lo | hi << 32);
+        if (st)
+            return st;
+    }
+    return TB_OK;
+}
+
+/* The other triangle on edge (a, b) than k, or UINT32_MAX. */
+static uint32_t tb__neighbour(const tb__tris *t, uint32_t k, uint32_t a, uint32_t b)
+{
+    uint64_t val = 0;
+    tb_htab_get(&t->edges, tb__ekey(a, b), &val);
+    uint64_t lo = val & 0xffffffffu, hi = val >> 32;
+    if (lo && lo - 1 != k)
+        return (uint32_t)(lo - 1);
+    if (hi && hi - 1 != k)
+        return (uint32_t)(hi - 1);
+    return UINT32_MAX;
+}
+
+static tb_status tb__tris_add(tb__tris *t, uint32_t a, uint32_t b, uint32_t c)
+{
+    uint32_t v[3] = {a, b, c};
+    bool on = true;
+    tb_status st = tb_array_push_n(&t->tris, v, 3);
+    if (!st)
+        st = tb_array_push(&t->alive, &on);
+    if (!st)
+        st = tb__tris_link(t, (uint32_t)t->alive.len - 1, true);
+    return st;
+}
+
+/* Splits triangle k at point m on its edge i (corner i to i + 1). */
+static tb_status tb__tris_split(tb__tris *t, uint32_t k, int i, uint32_t m)
+{
+    uint32_t v[3];
+    memcpy(v, &TB_ARRAY_AT(&t->tris, uint32_t, 3 * k), sizeof v);
+    tb_status st = tb__tris_link(t, k, false);
+    TB_ARRAY_AT(&t->alive, bool, k) = false;
+    uint32_t a = v[i], b = v[(i + 1) % 3], c = v[(i + 2) % 3];
+    if (!st)
+        st = tb__tris_add(t, a, m, c);
+    if (!st)
+        st = tb__tris_add(t, m, b, c);
+    return st;
+}
+
+/* Refines until no edge is longer than `edge`. */
+static tb_status tb__tris_refine(tb__tris *t, double edge)
+{
+    double e2 = edge * edge;
+    tb_status st = TB_OK;
+    for (size_t k = 0; k < t->alive.len && !st; k++) {
+        for (int guard = 0; guard < 1000000 && !st && TB_ARRAY_AT(&t->alive, bool, k); guard++) {
+            double l2;
+            if (tb__longest(t, (uint32_t)k, &l2), l2 <= e2)
+                break;
+            /* walk the longest-edge propagation path to a terminal edge */
+            uint32_t cur = (uint32_t)k;
+            for (int hop = 0; hop < 100000; hop++) {
+                int i = tb__longest(t, cur, &l2);
+                const uint32_t *v = &TB_ARRAY_AT(&t->tris, uint32_t, 3 * cur);
+                uint32_t a = v[i], b = v[(i + 1) % 3];
+                uint32_t nb = tb__neighbour(t, cur, a, b);
+                int j = -1;
+                if (nb != UINT32_MAX) {
+                    double l2n;
+                    j = tb__longest(t, nb, &l2n);
+                    const uint32_t *w = &TB_ARRAY_AT(&t->tris, uint32_t, 3 * nb);
+                    if (tb__ekey(w[j], w[(j + 1) % 3]) != tb__ekey(a, b)) {
+                        cur = nb; /* the neighbour has a longer edge: split that first */
+                        continue;
+                    }
+                }
+                /* terminal edge (a, b): one new midpoint for both triangles */
+                const tb_dvec3 *p = (const tb_dvec3 *)t->pts.data;
+                tb_dvec3 mid = tb_dvec3_scale(tb_dvec3_add(p[a], p[b]), 0.5);
+                uint32_t par[2] = {a, b}, m = (uint32_t)t->pts.len;
+                st = tb_array_push(&t->pts, &mid);
+                if (!st)
+                    st = tb_array_push(&t->parents, par);
+                if (!st)
+                    st = tb__tris_split(t, cur, i, m);
+                if (!st && nb != UINT32_MAX)
+                    st = tb__tris_split(t, nb, j, m);
+                break;
+            }
+        }
+    }
+    return st;
+}
+
+static void tb__tris_init(tb__tris *t)
+{
+    tb_array_init(&t->pts, sizeof(tb_dvec3));
+    tb_array_init(&t->parents, sizeof(uint32_t) * 2);
+    tb_array_init(&t->tris, sizeof(uint32_t));
+    tb_array_init(&t->alive, sizeof(bool));
+    tb_htab_init(&t->edges, TB_HTAB_U64);
+}
+
+static void tb__tris_free(tb__tris *t)
+{
+    tb_array_free(&t->pts), tb_array_free(&t->parents), tb_array_free(&t->tris), tb_array_free(&t->alive);
+    tb_htab_free(&t->edges);
+}
+
+/* Removes zero-area triangles: ear clipping may cut an "ear" (a, b, c) whose
+ * middle corner c lies on the segment a-b (boundary samples along a straight
+ * edge are collinear). The triangle across a-b is split at c instead, which
+ * covers the same area without the sliver. */
+static tb_status tb__tris_fix_flat(tb__tris *t)
+{
+    tb_status st = TB_OK;
+    for (size_t k = 0; k < t->alive.len && !st; k++) {
+        if (!TB_ARRAY_AT(&t->alive, bool, k))
+            continue;
+        const uint32_t *v = &TB_ARRAY_AT(&t->tris, uint32_t, 3 * k);
+        const tb_dvec3 *p = (const tb_dvec3 *)t->pts.data;
+        double l2;
+        int i = tb__longest(t, (uint32_t)k, &l2);
+        uint32_t a = v[i], b = v[(i + 1) % 3], c = v[(i + 2) % 3];
+        double area2 = tb_dvec3_length(tb_dvec3_cross(tb_dvec3_sub(p[b], p[a]), tb_dvec3_sub(p[c], p[a])));
+        if (area2 > 1e-12 * l2)
+            continue;
+        uint32_t nb = tb__neighbour(t, (uint32_t)k, a, b);
+        if (nb == UINT32_MAX)
+            continue;
+        const uint32_t *w = &TB_ARRAY_AT(&t->tris, uint32_t, 3 * nb);
+        int j = 0;
+        while (j < 3 && tb__ekey(w[j], w[(j + 1) % 3]) != tb__ekey(a, b))
+            j++;
+        st = tb__tris_link(t, (uint32_t)k, false);
+        TB_ARRAY_AT(&t->alive, bool, k) = false;
+        if (!st)
+            st = tb__tris_split(t, nb, j, c);
+    }
+    return st;
+}
+
+/* Triangulates the loop pts[0..n) (plane coordinates xy, counter-clockwise
+ * or not) with util/mesh, every point kept, and refines to the edge limit. */
+static tb_status tb__tris_of_loop(tb__tris *t, const tb_dvec3 *pts, const double *xy, uint32_t n, double edge)
+{
+    tb_array tri;
+    tb_array_init(&tri, sizeof(tb_tri));
+    tb_status st = tb_triangulate_2d(xy, &n, 1, &tri, NULL);
+    uint32_t none[2] = {UINT32_MAX, UINT32_MAX};
+    for (uint32_t i = 0; i < n && !st; i++) {
+        st = tb_array_push(&t->pts, &pts[i]);
+        if (!st)
+            st = tb_array_push(&t->parents, none);
+    }
+    for (size_t k = 0; k < tri.len && !st; k++) {
+        const tb_tri *q = &TB_ARRAY_AT(&tri, tb_tri, k);
+        st = tb__tris_add(t, q->v[0], q->v[1], q->v[2]);
+    }
+    tb_array_free(&tri);
+    if (!st)
+        st = tb__tris_fix_flat(t);
+    if (!st && edge > 0.0)
+        st = tb__tris_refine(t, edge);
+    return st;
+}
+
+/* A flat face's polygon: triangulated, refined, every vertex from param. */
+static void tb__flat_loop(tb__mb *m, const tb__res *r, int face, const tb_dvec3 *pts, const double *xy, uint32_t n)
+{
+    tb__tris t;
+    tb__tris_init(&t);
+    m->st = tb__tris_of_loop(&t, pts, xy, n, r->edge);
+    uint32_t *ids = m->st ? NULL : malloc(sizeof(uint32_t) * (t.pts.len ? t.pts.len : 1));
+    if (!m->st && !ids)
         m->st = tb__nomem();
-        tb_array_free(&tris);
-        return;
-    }
-    for (uint32_t i = 0; i < n; i++)
-        ids[i] = tb__mb_pt(m, face, pts[i]);
-    for (size_t k = 0; k < tris.len && !m->st; k++) {
-        const tb_tri *t = &TB_ARRAY_AT(&tris, tb_tri, k);
-        uint32_t c[3] = {ids[t->v[0]], ids[t->v[1]], ids[t->v[2]]};
+    for (size_t i = 0; i < t.pts.len && !m->st; i++)
+        ids[i] = tb__mb_pt(m, face, TB_ARRAY_AT(&t.pts, tb_dvec3, i));
+    for (size_t k = 0; k < t.alive.len && !m->st; k++) {
+        if (!TB_ARRAY_AT(&t.alive, bool, k))
+            continue;
+        const uint32_t *v = &TB_ARRAY_AT(&t.tris, uint32_t, 3 * k);
+        uint32_t c[3] = {ids[v[0]], ids[v[1]], ids[v[2]]};
         tb__mb_poly_oriented(m, face, c, 3);
     }
     free(ids);
-    tb_array_free(&tris);
+    tb__tris_free(&t);
 }
 
 static void tb__prism(tb__mb *m, const tb__res *r)
@@ -428,7 +697,7 @@ static void tb__prism(tb__mb *m, const tb__res *r)
             for (int f = TB_FACE_PRISM_BOTTOM; f <= TB_FACE_PRISM_TOP; f++) {
                 for (uint32_t i = 0; i < nr; i++)
                     pts[i] = tb__v(xy[2 * i], xy[2 * i + 1], f == TB_FACE_PRISM_TOP ? 1.0 : -1.0);
-                tb__flat_loop(m, f, pts, xy, nr);
+                tb__flat_loop(m, r, f, pts, xy, nr);
             }
         }
         free(pts);
@@ -457,6 +726,9 @@ static tb_dvec3 tb__conic_pt(const tb_geom_conic *c, double z) { return tb__v(tb
  * range (no inflection), so the turning is |tau(zb) - tau(za)|. */
 static bool tb__conic_step_ok(const tb_geom_conic *c, const tb__res *r, double za, double zb)
 {
+    tb_dvec3 pa = tb__conic_pt(c, za), pb = tb__conic_pt(c, zb);
+    if (hypot(pb.x - pa.x, pb.z - pa.z) <= r->floor)
+        return true; /* a tight waist or tip below what float vertices resolve */
     if (r->angle > 0.0 && fabs(tb__conic_tau(c, zb, -1) - tb__conic_tau(c, za, 1)) > r->angle)
         return false;
     if (r->edge > 0.0) {
@@ -471,7 +743,9 @@ static bool tb__conic_step_ok(const tb_geom_conic *c, const tb__res *r, double z
  * longest steps within the limits. */
 static bool tb__conic_run(const tb_geom_conic *c, const tb__res *r, double za, double zb, tb_array *zs)
 {
-    double z = za;
+    /* Steps below 1e-7 of the range resolve nothing float vertices can show
+     * (a pole rounded to a tiny waist would otherwise take thousands). */
+    double z = za, minstep = 1e-7 * (c->z1 - c->z0);
     while (z < zb) {
         double lo = z, hi = zb;
         if ((int)zs->len < r->maxseg && !tb__conic_step_ok(c, r, z, hi)) {
@@ -482,8 +756,7 @@ static bool tb__conic_run(const tb_geom_conic *c, const tb__res *r, double za, d
                 else
                     hi = mid;
             }
-            if (lo > z)
-                hi = lo; /* else a step too small to satisfy: take the tiny one */
+            hi = fmin(fmax(lo, z + minstep), zb);
         }
         z = hi;
         if (tb_array_push(zs, &z))
@@ -495,8 +768,9 @@ static bool tb__conic_run(const tb_geom_conic *c, const tb__res *r, double za, d
 /* Heights along the profile: greedy runs (split at an interior apex, where
  * two cones meet at a crease), then steps split until the chords on either
  * side of each smooth sample differ by at most the angle tolerance. */
-static bool tb__conic_profile(const tb_geom_conic *c, const tb__res *r, tb_array *zs)
+static bool tb__conic_profile(const tb_geom_conic *c, const tb__res *r, double dphi, tb_array *zs)
 {
+    double ch = cos(0.5 * dphi); /* see tb__band_turn */
     double z0 = c->z0, z1 = c->z1, pinch = NAN;
     if (c->c[2] > 0.0) {
         double zv = -c->c[1] / (2.0 * c->c[2]);
@@ -517,9 +791,8 @@ static bool tb__conic_profile(const tb_geom_conic *c, const tb__res *r, tb_array
             if (Z[i] == pinch)
                 continue;
             tb_dvec3 a = tb__conic_pt(c, Z[i - 1]), b = tb__conic_pt(c, Z[i]), d = tb__conic_pt(c, Z[i + 1]);
-            double diff = fabs(atan2(d.z - b.z, d.x - b.x) - atan2(b.z - a.z, b.x - a.x));
-            if (diff > TB_PI)
-                diff = TB_2PI - diff;
+            double x1 = ch * (b.x - a.x), z1 = b.z - a.z, x2 = ch * (d.x - b.x), z2 = d.z - b.z;
+            double diff = atan2(fabs(x1 * z2 - z1 * x2), x1 * x2 + z1 * z2);
             if (diff <= r->angle)
                 continue;
             /* split the step that turns more, at its middle */
@@ -554,7 +827,8 @@ static void tb__conic(tb__mb *m, const tb__res *r)
     tb__bp us;
     tb_array zs;
     tb_array_init(&zs, sizeof(double));
-    if (!tb__bp_uniform(&us, 0, 1, tb__seg_arc(r, tb_safe_sqrt(q), TB_2PI, 3)) || !tb__conic_profile(c, r, &zs)) {
+    int nu = tb__seg_arc(r, tb_safe_sqrt(q), TB_2PI, 3);
+    if (!tb__bp_uniform(&us, 0, 1, nu) || !tb__conic_profile(c, r, TB_2PI / nu, &zs)) {
         m->st = tb__nomem();
     } else {
         double *Z = (double *)zs.data;
@@ -666,24 +940,31 @@ done:
 
 /* ---------------------------------------------------------------- polygons */
 
+/* Attributes carried by a polygon's tessellation points. */
+typedef struct tb__attr {
+    double u, v;
+    tb_dvec3 n;
+} tb__attr;
+
 static void tb__polygons(tb__mb *m, const tb__res *r)
 {
     const tb_geom_polygons *g = &m->g->polygons;
-    tb_array pts, xy;
-    tb_array_init(&pts, sizeof(uint32_t));
+    tb_array pts, xy, at;
+    tb_array_init(&pts, sizeof(tb_dvec3));
     tb_array_init(&xy, sizeof(double) * 2);
+    tb_array_init(&at, sizeof(tb__attr));
     for (int f = 0; f < g->nfaces && !m->st; f++) {
         int b = g->face_start[f], nv = g->face_start[f + 1] - b;
         tb_dvec3 nrm;
         if ((m->st = tb_param_eval(m->kind, m->g, f, 0.5, 0.5, NULL, &nrm, NULL, NULL)))
             break;
         tb_dvec3 e1, e2;
-        tb_dvec3_basis(nrm, &e1, &e2);
-        tb_array_clear(&pts), tb_array_clear(&xy);
+        tb_dvec3_basis(nrm, &e1, &e2); /* e1 x e2 = nrm: counter-clockwise in (e1, e2) is the front */
+        tb_array_clear(&pts), tb_array_clear(&xy), tb_array_clear(&at);
+        /* The boundary, each edge sampled at the edge limit from its lower
+         * vertex index, so that polygons sharing an edge compute the same points. */
         for (int i = 0; i < nv && !m->st; i++) {
             int ia = g->indices[b + i], ib = g->indices[b + (i + 1) % nv];
-            /* Sample shared edges from the lower vertex index, so that both
-             * polygons using an edge compute the same points. */
             int lo = ia < ib ? ia : ib, hi = ia < ib ? ib : ia;
             tb_dvec3 pl = tb_vec3_to_d(g->vertices[lo]), ph = tb_vec3_to_d(g->vertices[hi]);
             int ns = tb__seg_line(r, tb_dvec3_length(tb_dvec3_sub(ph, pl)));
@@ -691,50 +972,62 @@ static void tb__polygons(tb__mb *m, const tb__res *r)
                 int k = ia < ib ? s : ns - s; /* sample k of ns from lo */
                 double t = (double)k / ns;
                 tb_dvec3 p = k == 0 ? pl : k == ns ? ph : tb_dvec3_lerp(pl, ph, t);
-                /* attributes: the vertex's own at corners, else interpolated along the edge */
+                /* the vertex's own attributes at corners, interpolated along the edge between */
+                tb__attr a = {0, 0, nrm};
                 int f2;
-                double u, v;
-                tb_dvec3 n = nrm;
-                if ((m->st = tb_param_from_point(m->kind, m->g, p, f, &f2, &u, &v)))
+                if ((m->st = tb_param_from_point(m->kind, m->g, p, f, &f2, &a.u, &a.v)))
                     break;
-                if (g->uvs && (k == 0 || k == ns)) {
-                    tb_vec2 uv = g->uvs[k == 0 ? lo : hi];
-                    u = uv.x, v = uv.y;
-                } else if (g->uvs) {
-                    tb_vec2 a = g->uvs[lo], c = g->uvs[hi];
-                    u = a.x + (c.x - a.x) * t, v = a.y + (c.y - a.y) * t;
+                if (g->uvs) {
+                    tb_vec2 ua = g->uvs[lo], uc = g->uvs[hi];
+                    a.u = k == 0 ? ua.x : k == ns ? uc.x : ua.x + (uc.x - ua.x) * t;
+                    a.v = k == 0 ? ua.y : k == ns ? uc.y : ua.y + (uc.y - ua.y) * t;
                 }
                 if (g->normals) {
-                    tb_dvec3 na = tb_vec3_to_d(g->normals[lo]), nc = tb_vec3_to_d(g->normals[hi]);
-                    tb_dvec3 w = tb_dvec3_lerp(na, nc, t);
+                    tb_dvec3 w = tb_dvec3_lerp(tb_vec3_to_d(g->normals[lo]), tb_vec3_to_d(g->normals[hi]), t);
                     if (tb_dvec3_length(w) > 0.0)
-                        n = tb_dvec3_normalize(w);
+                        a.n = tb_dvec3_normalize(w);
                 }
-                uint32_t id = tb__mb_raw(m, f, p, n, u, v);
                 double q[2] = {tb_dvec3_dot(p, e1), tb_dvec3_dot(p, e2)};
-                if (!m->st)
-                    m->st = tb_array_push(&pts, &id);
+                m->st = tb_array_push(&pts, &p);
                 if (!m->st)
                     m->st = tb_array_push(&xy, q);
+                if (!m->st)
+                    m->st = tb_array_push(&at, &a);
             }
         }
         if (m->st)
             break;
-        uint32_t n = (uint32_t)pts.len;
-        tb_array tris;
-        tb_array_init(&tris, sizeof(tb_tri));
-        /* e1 x e2 = nrm, so loops turning counter-clockwise in (e1, e2) face the front */
-        m->st = tb_triangulate_2d((const double *)xy.data, &n, 1, &tris, NULL);
-        for (size_t k = 0; k < tris.len && !m->st; k++) {
-            const tb_tri *t = &TB_ARRAY_AT(&tris, tb_tri, k);
-            const uint32_t *ids = (const uint32_t *)pts.data;
-            uint32_t c[3] = {ids[t->v[0]], ids[t->v[1]], ids[t->v[2]]};
+        tb__tris t;
+        tb__tris_init(&t);
+        m->st = tb__tris_of_loop(&t, (const tb_dvec3 *)pts.data, (const double *)xy.data, (uint32_t)pts.len, r->edge);
+        /* points made by refinement: the mean of the edge they split */
+        for (size_t i = at.len; i < t.pts.len && !m->st; i++) {
+            const uint32_t *par = &TB_ARRAY_AT(&t.parents, uint32_t, 2 * i);
+            tb__attr a0 = TB_ARRAY_AT(&at, tb__attr, par[0]), a1 = TB_ARRAY_AT(&at, tb__attr, par[1]);
+            tb__attr a = {0.5 * (a0.u + a1.u), 0.5 * (a0.v + a1.v), tb_dvec3_add(a0.n, a1.n)};
+            a.n = tb_dvec3_length(a.n) > 0.0 ? tb_dvec3_normalize(a.n) : nrm;
+            m->st = tb_array_push(&at, &a);
+        }
+        uint32_t *ids = m->st ? NULL : malloc(sizeof(uint32_t) * (t.pts.len ? t.pts.len : 1));
+        if (!m->st && !ids)
+            m->st = tb__nomem();
+        for (size_t i = 0; i < t.pts.len && !m->st; i++) {
+            const tb__attr *a = &TB_ARRAY_AT(&at, tb__attr, i);
+            ids[i] = tb__mb_raw(m, f, TB_ARRAY_AT(&t.pts, tb_dvec3, i), a->n, a->u, a->v);
+        }
+        for (size_t k = 0; k < t.alive.len && !m->st; k++) {
+            if (!TB_ARRAY_AT(&t.alive, bool, k))
+                continue;
+            const uint32_t *v = &TB_ARRAY_AT(&t.tris, uint32_t, 3 * k);
+            uint32_t c[3] = {ids[v[0]], ids[v[1]], ids[v[2]]};
             tb__mb_loop(m, f, c, 3, false);
         }
-        tb_array_free(&tris);
+        free(ids);
+        tb__tris_free(&t);
     }
     tb_array_free(&pts);
     tb_array_free(&xy);
+    tb_array_free(&at);
 }
 
 /* ---------------------------------------------------------------- welding */
@@ -745,51 +1038,82 @@ static uint64_t tb__cell_key(int64_t ix, int64_t iy, int64_t iz)
     return tb_hash_u64(tb_hash_u64(tb_hash_u64((uint64_t)ix) ^ (uint64_t)iy) ^ (uint64_t)iz);
 }
 
-/* Welds pre-weld vertices closer than eps (in every coordinate): weld[i] is
- * the welded index of pv i, rep[w] the first pv of welded vertex w. */
+static uint32_t tb__uf_find(uint32_t *par, uint32_t i)
+{
+    while (par[i] != i)
+        par[i] = par[par[i]], i = par[i];
+    return i;
+}
+
+/* Welds pre-weld vertices into clusters of points chained by distances of at
+ * most eps (in every coordinate; union-find, so a ring too small to resolve
+ * collapses whole, like a pole): weld[i] is the welded index of pv i, rep[w]
+ * the first pv of welded vertex w, whose position it takes. */
 static tb_status tb__weld(const tb__mb *m, double eps, uint32_t *weld, tb_array *rep)
 {
     const tb__pvert *pv = (const tb__pvert *)m->pv.data;
     size_t n = m->pv.len;
     double cell = 2.0 * eps;
+    uint32_t *par = malloc(sizeof(uint32_t) * (n ? n : 1)), *next = malloc(sizeof(uint32_t) * (n ? n : 1));
     tb_htab h;
     tb_htab_init(&h, TB_HTAB_U64);
-    tb_array next; /* per welded vertex: the next one in its cell's list, UINT32_MAX at the end */
-    tb_array_init(&next, sizeof(uint32_t));
-    tb_status st = tb_htab_reserve(&h, n / 2 + 16);
+    tb_status st = par && next ? tb_htab_reserve(&h, n / 2 + 16) : tb__nomem();
     for (size_t i = 0; i < n && !st; i++) {
         tb_dvec3 p = pv[i].p;
         int64_t ix = (int64_t)floor(p.x / cell), iy = (int64_t)floor(p.y / cell), iz = (int64_t)floor(p.z / cell);
-        uint32_t found = UINT32_MAX;
-        for (int d = 0; d < 27 && found == UINT32_MAX; d++) {
+        par[i] = (uint32_t)i;
+        bool same = false; /* an earlier pv at exactly this point stands for it in the cell lists */
+        for (int d = 0; d < 27; d++) {
             uint64_t head;
             if (!tb_htab_get(&h, tb__cell_key(ix + d % 3 - 1, iy + d / 3 % 3 - 1, iz + d / 9 - 1), &head))
                 continue;
-            for (uint32_t w = (uint32_t)head; w != UINT32_MAX; w = TB_ARRAY_AT(&next, uint32_t, w)) {
-                tb_dvec3 q = pv[TB_ARRAY_AT(rep, uint32_t, w)].p;
+            for (uint32_t j = (uint32_t)head; j != UINT32_MAX; j = next[j]) {
+                tb_dvec3 q = pv[j].p;
                 if (fabs(q.x - p.x) <= eps && fabs(q.y - p.y) <= eps && fabs(q.z - p.z) <= eps) {
-                    found = w;
-                    break;
+                    uint32_t a = tb__uf_find(par, (uint32_t)i), b = tb__uf_find(par, j);
+                    if (a != b)
+                        par[a > b ? a : b] = a < b ? a : b; /* the root is the cluster's first pv */
+                    same |= q.x == p.x && q.y == p.y && q.z == p.z;
                 }
             }
         }
-        if (found == UINT32_MAX) {
-            found = (uint32_t)rep->len;
-            uint32_t pi = (uint32_t)i, head = UINT32_MAX;
+        if (!same) {
             uint64_t key = tb__cell_key(ix, iy, iz), old;
-            if (tb_htab_get(&h, key, &old))
-                head = (uint32_t)old;
-            st = tb_array_push(rep, &pi);
-            if (!st)
-                st = tb_array_push(&next, &head);
-            if (!st)
-                st = tb_htab_put(&h, key, found);
+            next[i] = tb_htab_get(&h, key, &old) ? (uint32_t)old : UINT32_MAX;
+            st = tb_htab_put(&h, key, i);
         }
-        weld[i] = found;
     }
+    for (size_t i = 0; i < n && !st; i++) {
+        uint32_t r = tb__uf_find(par, (uint32_t)i);
+        if (r == i) {
+            weld[i] = (uint32_t)rep->len;
+            uint32_t pi = (uint32_t)i;
+            st = tb_array_push(rep, &pi);
+        } else {
+            weld[i] = weld[r]; /* r < i: done */
+        }
+    }
+    free(par);
+    free(next);
     tb_htab_free(&h);
-    tb_array_free(&next);
     return st;
+}
+
+/* True if a welded loop repeats a vertex or has (nearly) no area: FED
+ * rejects loops of area below TB_FED_DEGENERATE_REL times their size squared;
+ * drop those within 4 times that. */
+static bool tb__loop_degenerate(const tb__pvert *pv, const uint32_t *weld, const tb_array *rep, const uint32_t *c,
+                                uint32_t k)
+{
+    tb_vec3 q[64];
+    for (uint32_t a = 0; a < k; a++) {
+        for (uint32_t b = a + 1; b < k; b++)
+            if (weld[c[a]] == weld[c[b]])
+                return true;
+        q[a] = tb_dvec3_to_f(pv[TB_ARRAY_AT(rep, uint32_t, weld[c[a]])].p);
+    }
+    double area = 0.5 * tb_dvec3_length(tb_polygon_newell(q, NULL, k)), size = tb_polygon_size(q, NULL, k);
+    return !(area > 4.0 * TB_FED_DEGENERATE_REL * size * size);
 }
 
 /* Orders pre-weld vertices for choosing a welded vertex's (u, v): lowest face,
@@ -890,10 +1214,31 @@ static tb_status tb__finish(tb__mb *m, bool split, double size, tb_fed **out)
         while (k > 1 && weld[buf[k - 1]] == weld[buf[0]])
             k--;
         c0 += n;
-        if (k >= 3) {
-            st = tb_array_push(&loops, &k);
-            for (uint32_t c = 0; c < k && !st; c++) {
-                uint32_t i = buf[c], w = weld[i], r0 = TB_ARRAY_AT(&rep, uint32_t, w), id = UINT32_MAX;
+        /* A loop that still repeats a vertex (two corners welded across it) or
+         * has no area left is dropped; a quad whose float corners are not
+         * planar becomes two triangles (util/mesh's diagonal choice). */
+        uint32_t pieces[2][4], npieces = 0, psize = k;
+        if (k >= 3 && k <= 64 && !tb__loop_degenerate(pv, weld, &rep, buf, k)) {
+            tb_vec3 q[4];
+            for (uint32_t c = 0; c < k && k == 4; c++)
+                q[c] = tb_dvec3_to_f(pv[TB_ARRAY_AT(&rep, uint32_t, weld[buf[c]])].p);
+            if (k == 4 && !tb_polygon_is_planar(q, NULL, 4, 0.0)) {
+                uint32_t tri[6];
+                tb_quad_split_corners(tb_quad_split_diagonal(q[0], q[1], q[2], q[3]), tri);
+                for (int t = 0; t < 6; t++)
+                    pieces[t / 3][t % 3] = buf[tri[t]];
+                npieces = 2, psize = 3;
+            } else {
+                memcpy(pieces[0], buf, sizeof(uint32_t) * (k < 4 ? k : 4));
+                npieces = 1;
+            }
+        }
+        for (uint32_t pc = 0; pc < npieces && !st; pc++) {
+            const uint32_t *piece = k <= 4 ? pieces[pc] : buf;
+            uint32_t kk = psize;
+            st = tb_array_push(&loops, &kk);
+            for (uint32_t c = 0; c < kk && !st; c++) {
+                uint32_t i = piece[c], w = weld[i], r0 = TB_ARRAY_AT(&rep, uint32_t, w), id = UINT32_MAX;
                 uint64_t key = 0;
                 const tb__pvert *src;
                 if (split) {
@@ -988,7 +1333,7 @@ tb_status tb_polygonize(tb_prim_kind kind, const tb_mid_geometry *geom, const tb
         return tb_error(TB_ERR_ARG, "polygonize: limits must be finite and >= 0 (max_edge %g, max_angle %g)",
                         o.max_edge, o.max_angle);
     tb__count(kind);
-    tb__res r = {o.max_edge, o.max_angle, o.max_segments ? o.max_segments : TB_POLY_DEFAULT_SEGMENTS};
+    tb__res r = {o.max_edge, o.max_angle, o.max_segments ? o.max_segments : TB_POLY_DEFAULT_SEGMENTS, 0.0};
     if (r.maxseg > TB_POLY_MAX_SEGMENTS)
         r.maxseg = TB_POLY_MAX_SEGMENTS;
     if (r.edge > 0.0 && o.to_world)
@@ -999,6 +1344,7 @@ tb_status tb_polygonize(tb_prim_kind kind, const tb_mid_geometry *geom, const tb
     if ((st = tb_bounds_object(kind, geom, &box)))
         return st;
     double size = tb_aabb_is_empty(&box) ? 1.0 : tb_dvec3_length(tb_dvec3_sub(tb_vec3_to_d(box.hi), tb_vec3_to_d(box.lo)));
+    r.floor = 1e-5 * size;
 
     tb__mb m;
     tb__mb_init(&m, kind, geom);
