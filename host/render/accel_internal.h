@@ -8,6 +8,7 @@
 #include <stdint.h>
 
 #include "host/render/accel.h"
+#include "util/math/float.h"
 
 /* Relative tolerance in t by which traversal widens [tmin, tmax] when it
  * decides which boxes (BVH nodes, grid voxels) it may skip: a reference is
@@ -57,6 +58,43 @@ static inline float tb__accel_widen_lo(float t)
 static inline float tb__accel_widen_hi(float t)
 {
     return t > 0.0f ? t * (float)(1.0 + TB__ACCEL_T_TOL) : t * (float)(1.0 - TB__ACCEL_T_TOL);
+}
+
+/* The robust slab test of util/math (tb_aabb_slab: same per-axis values,
+ * bit for bit, so the same conservative guarantee), written for a traversal
+ * loop: the near/far plane choice is made once per ray (neg_* from the sign
+ * bit of inv_d), the outward widening by 2 gamma(3) multiplies by a factor
+ * picked with copysign instead of branching on the sign of t (branches that
+ * mispredict when rays start among the boxes), and box `b` must not be empty
+ * (BVH nodes never are). A NaN product (origin on a plane, direction 0)
+ * leaves the interval unchanged, as there. True if [tmin, tmax] meets b. */
+static inline __attribute__((always_inline)) bool tb__accel_slab(const tb_aabb *b, tb_vec3 o, tb_vec3 inv,
+                                                                 const bool neg[3], float tmin,
+                                  float tmax)
+{
+    const float k = 2.0f * tb_gamma(3);
+    float nx = neg[0] ? b->hi.x : b->lo.x, fx = neg[0] ? b->lo.x : b->hi.x;
+    float ny = neg[1] ? b->hi.y : b->lo.y, fy = neg[1] ? b->lo.y : b->hi.y;
+    float nz = neg[2] ? b->hi.z : b->lo.z, fz = neg[2] ? b->lo.z : b->hi.z;
+    float tnx = (nx - o.x) * inv.x, tfx = (fx - o.x) * inv.x;
+    float tny = (ny - o.y) * inv.y, tfy = (fy - o.y) * inv.y;
+    float tnz = (nz - o.z) * inv.z, tfz = (fz - o.z) * inv.z;
+    /* t > 0: near * (1 - k), far * (1 + k); otherwise the other way round
+     * (for +-0 both give +-0, as in util/math). */
+    tnx *= 1.0f - copysignf(k, tnx);
+    tny *= 1.0f - copysignf(k, tny);
+    tnz *= 1.0f - copysignf(k, tnz);
+    tfx *= 1.0f + copysignf(k, tfx);
+    tfy *= 1.0f + copysignf(k, tfy);
+    tfz *= 1.0f + copysignf(k, tfz);
+    /* `x > t ? x : t` keeps t when x is NaN. */
+    tmin = tnx > tmin ? tnx : tmin;
+    tmin = tny > tmin ? tny : tmin;
+    tmin = tnz > tmin ? tnz : tmin;
+    tmax = tfx < tmax ? tfx : tmax;
+    tmax = tfy < tmax ? tfy : tmax;
+    tmax = tfz < tmax ? tfz : tmax;
+    return tmin <= tmax;
 }
 
 /* The tie rule: true if hit a (from stored reference with input index ia)

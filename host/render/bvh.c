@@ -1,7 +1,8 @@
 /* Bounding volume hierarchy over primitive references (docs/accel.md, "BVH"):
  * binned SAH build (Wald 2007, "On fast construction of SAH-based bounding
  * volume hierarchies"), subtrees built as OpenMP tasks, flattened depth-first
- * into 32-byte nodes; traversal near child first with the robust slab test. */
+ * into 32-byte nodes; traversal near child first with the robust slab test
+ * (tb__accel_slab, the util/math test in a branch-free form). */
 #include <omp.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -435,7 +436,7 @@ bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *b
     for (;;) {
         const tb_bvh_node *nd = &nodes[node];
         visited++;
-        if (tb_aabb_slab(&nd->bounds, ray->o, inv, lo_t, hi_t, NULL, NULL)) {
+        if (tb__accel_slab(&nd->bounds, ray->o, inv, neg, lo_t, hi_t)) {
             if (nd->count == 0) {
                 /* Near child first: the first child holds the lower centroids along the axis. */
                 if (neg[nd->axis]) {
@@ -478,7 +479,7 @@ bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
     for (;;) {
         const tb_bvh_node *nd = &nodes[node];
         visited++;
-        if (tb_aabb_slab(&nd->bounds, ray->o, inv, lo_t, hi_t, NULL, NULL)) {
+        if (tb__accel_slab(&nd->bounds, ray->o, inv, neg, lo_t, hi_t)) {
             if (nd->count == 0) {
                 if (neg[nd->axis]) {
                     stack[sp++] = node + 1;

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "host/render/accel.h"
+#include "host/render/accel_internal.h"
 #include "test_accel_prims.h"
 #include "util/base/error.h"
 #include "util/stats/stats.h"
@@ -426,6 +427,51 @@ static void test_t_tolerance(void **state)
     }
 }
 
+/* The BVH's branch-free slab test answers exactly as util/math's
+ * tb_aabb_slab on random boxes and rays, with signed zero directions,
+ * origins on the box planes, flat boxes and random ranges. */
+static void test_slab_matches_util(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("slab", 22);
+    tb_rng r;
+    tb_rng_seed(&r, seed, 3);
+    const float vals[] = {-2, -1, -0.5f, 0, 0.5f, 1, 2};
+    long agree_hit = 0;
+    for (long i = 0; i < 400000; i++) {
+        float lo[3], hi[3], o[3], d[3];
+        for (int a = 0; a < 3; a++) {
+            lo[a] = vals[tb_rng_below(&r, 7)];
+            hi[a] = tb_rng_below(&r, 4) == 0 ? lo[a] : lo[a] + tp_uniform(&r, 0, 2);
+            o[a] = tb_rng_below(&r, 3) == 0 ? (tb_rng_below(&r, 2) ? lo[a] : hi[a]) : tp_uniform(&r, -3, 3);
+            unsigned m = tb_rng_below(&r, 6);
+            d[a] = m == 0 ? 0.0f : m == 1 ? -0.0f : tp_uniform(&r, -1, 1);
+        }
+        if (tb_rng_below(&r, 2)) /* aimed at a point of the box (zero components stay zero) */
+            for (int a = 0; a < 3; a++)
+                if (d[a] != 0.0f)
+                    d[a] = lo[a] + (hi[a] - lo[a]) * tb_rng_float(&r) - o[a];
+        if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f)
+            d[0] = 1.0f;
+        tb_aabb b = {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+        tb_vec3 ov = {o[0], o[1], o[2]};
+        tb_vec3 inv = {1.0f / d[0], 1.0f / d[1], 1.0f / d[2]};
+        bool neg[3] = {signbit(inv.x) != 0, signbit(inv.y) != 0, signbit(inv.z) != 0};
+        float tmin = tb_rng_below(&r, 2) ? 0.0f : tp_uniform(&r, -3, 3);
+        float tmax = tb_rng_below(&r, 2) ? INFINITY : tmin + tp_uniform(&r, 0, 3);
+        bool want = tb_aabb_slab(&b, ov, inv, tmin, tmax, NULL, NULL);
+        bool got = tb__accel_slab(&b, ov, inv, neg, tmin, tmax);
+        if (want != got)
+            fail_msg("case %ld: box (%a %a %a)..(%a %a %a) o %a %a %a d %a %a %a [%a, %a]: util %d, accel %d", i,
+                     (double)lo[0], (double)lo[1], (double)lo[2], (double)hi[0], (double)hi[1], (double)hi[2],
+                     (double)o[0], (double)o[1], (double)o[2], (double)d[0], (double)d[1], (double)d[2],
+                     (double)tmin, (double)tmax, want, got);
+        agree_hit += want;
+    }
+    assert_true(agree_hit > 40000); /* both answers occur often */
+    assert_true(agree_hit < 360000);
+}
+
 static void test_build_errors(void **state)
 {
     (void)state;
@@ -548,6 +594,7 @@ int main(void)
         cmocka_unit_test(test_tmin_tmax_exact),
         cmocka_unit_test(test_callback_range_not_trusted),
         cmocka_unit_test(test_t_tolerance),
+        cmocka_unit_test(test_slab_matches_util),
         cmocka_unit_test(test_build_errors),
         cmocka_unit_test(test_kind_names),
         cmocka_unit_test(test_grid_resolution),

@@ -229,6 +229,49 @@ static void test_voxel_planes(void **state)
     tp_free(&s);
 }
 
+/* Grazing rays: tangent to spheres (at exactly the radius from the centre,
+ * and one float either side), and along the faces and edges of the boxes
+ * of spheres lying on a lattice, so that hits sit on box boundaries. */
+static void test_grazing(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("grazing", 19);
+    tb_rng r;
+    tb_rng_seed(&r, seed, 9);
+    tp_scene s = {0};
+    for (int x = 0; x < 6; x++)
+        for (int y = 0; y < 6; y++)
+            for (int z = 0; z < 6; z++)
+                if (tb_rng_below(&r, 3) == 0)
+                    tp_add_sphere(&s, (float)x, (float)y, (float)z, tb_rng_below(&r, 2) ? 0.5f : 0.25f,
+                                  (uint32_t)(x + 6 * y + 36 * z), 0);
+    tb_accel *acc[NKINDS];
+    build_all(&s, acc, NULL);
+    long n = 4000 / divisor(), hits = 0;
+    for (long i = 0; i < n; i++) {
+        /* Offsets of 0.5 or 0.25 from a lattice line: tangent to spheres of that radius. */
+        float off[2];
+        for (int k = 0; k < 2; k++) {
+            off[k] = (float)tb_rng_below(&r, 6) + (tb_rng_below(&r, 2) ? 0.5f : 0.25f) * (tb_rng_below(&r, 2) ? 1 : -1);
+            if (tb_rng_below(&r, 4) == 0)
+                off[k] = tb_rng_below(&r, 2) ? tb_next_float_up(off[k]) : tb_next_float_down(off[k]);
+            if (tb_rng_below(&r, 4) == 0)
+                off[k] = (float)tb_rng_below(&r, 6); /* through the centres */
+        }
+        int ax = (int)tb_rng_below(&r, 3);
+        float o[3], d[3] = {0, 0, 0};
+        o[ax] = tb_rng_below(&r, 2) ? -3.0f : 9.0f;
+        d[ax] = o[ax] < 0 ? 1.0f : -1.0f;
+        o[(ax + 1) % 3] = off[0];
+        o[(ax + 2) % 3] = off[1];
+        tb_ray ray = tb_ray_make((tb_vec3){o[0], o[1], o[2]}, (tb_vec3){d[0], d[1], d[2]}, 0.0f, INFINITY);
+        hits += check_ray(&s, acc, &ray, i);
+    }
+    assert_true(hits > n / 10);
+    free_all(acc);
+    tp_free(&s);
+}
+
 /* Checks the flattened BVH: depth-first layout, every reference in exactly
  * one leaf, boxes nested, leaf sizes within the limit, and the reported SAH
  * cost and depth recomputed from the nodes. */
@@ -501,6 +544,7 @@ int main(void)
         cmocka_unit_test(test_scales),
         cmocka_unit_test(test_ties),
         cmocka_unit_test(test_voxel_planes),
+        cmocka_unit_test(test_grazing),
         cmocka_unit_test(test_bvh_structure),
         cmocka_unit_test(test_bvh_deterministic),
         cmocka_unit_test(test_counters),

@@ -201,6 +201,18 @@ static double tb__trace(const tb_accel *acc, const tb_ray *rays, size_t n, bool 
     return tb__clock(CLOCK_MONOTONIC) - w0;
 }
 
+/* The current total of counter `name` (0 if it does not exist). */
+static int64_t tb__counter(const char *name)
+{
+    tb_stat_total t;
+    return tb_stats_get(name, TB_STAT_KIND_COUNTER, &t) == TB_OK ? t.v[0] : 0;
+}
+
+/* Traversal steps (BVH nodes or grid voxels) and callback calls of each kind. */
+static const char *const tb__step_counter[3] = {"BVH/nodes visited", "Grid/voxels visited", NULL};
+static const char *const tb__test_counter[3] = {"BVH/primitives tested", "Grid/primitives tested",
+                                                "List/primitives tested"};
+
 /* A comma-separated list of whole numbers in [1, max]; returns the count or 0. */
 static int tb__parse_list(const char *s, long max, long *out, int cap)
 {
@@ -221,7 +233,8 @@ static int tb__parse_list(const char *s, long max, long *out, int cap)
 
 /* One scene: build the three structures, time every ray set, compare the
  * answers. Returns the number of differing answers, or -1 on failure. */
-static long tb__bench_scene(tb__bscene *s, long nrays, const long *threads, int nthreads, uint64_t seed)
+static long tb__bench_scene(tb__bscene *s, long nrays, const long *threads, int nthreads, uint64_t seed,
+                            const bool use[3])
 {
     tb_accel_callbacks cb = {tb__btri_intersect, tb__btri_occluded, s};
     tb_accel *acc[3] = {NULL, NULL, NULL};
@@ -264,21 +277,28 @@ static long tb__bench_scene(tb__bscene *s, long nrays, const long *threads, int 
             bad = -1;
         }
         for (int k = 0; k < 3 && ok; k++) {
-            for (int ti = 0; ti < nthreads; ti++) {
+            for (int ti = 0; ti < nthreads && use[k]; ti++) {
                 double cpu;
+                int64_t steps0 = tb__step_counter[k] ? tb__counter(tb__step_counter[k]) : 0;
+                int64_t tests0 = tb__counter(tb__test_counter[k]);
                 double sec = tb__trace(acc[k], rays, traced[k], set == TB__RAYS_SHADOW, (int)threads[ti], hits[k],
                                        found[k], &cpu);
+                double steps = (double)((tb__step_counter[k] ? tb__counter(tb__step_counter[k]) : 0) - steps0);
+                double tests = (double)(tb__counter(tb__test_counter[k]) - tests0);
                 size_t nh = 0;
                 for (size_t i = 0; i < traced[k]; i++)
                     nh += found[k][i];
-                printf("%-7s %8zu %-8s %-5s %7ld %9.3f %11.3f %7.1f\n", s->name, s->n, tb__rayset_names[set],
-                       tb_accel_kind_name((tb_accel_kind)k), threads[ti], (double)traced[k] / sec * 1e-6,
-                       (double)traced[k] / cpu * 1e-6, 100.0 * (double)nh / (double)traced[k]);
+                double nr = (double)traced[k];
+                printf("%-7s %8zu %-8s %-5s %7ld %9.3f %11.3f %7.1f %8.1f %8.1f\n", s->name, s->n,
+                       tb__rayset_names[set], tb_accel_kind_name((tb_accel_kind)k), threads[ti], nr / sec * 1e-6,
+                       nr / cpu * 1e-6, 100.0 * (double)nh / nr, steps / nr, tests / nr);
                 fflush(stdout);
             }
         }
         /* Validation: the grid and the list answer as the BVH does. */
-        for (int k = 1; k < 3 && ok; k++) {
+        for (int k = 1; k < 3 && ok && use[0]; k++) {
+            if (!use[k])
+                continue;
             for (size_t i = 0; i < traced[k]; i++) {
                 bool diff = found[k][i] != found[0][i];
                 if (!diff && found[0][i] && set != TB__RAYS_SHADOW)
@@ -307,6 +327,7 @@ int tb_cmd_bench_accel(int argc, char **argv)
 {
     long sizes[8] = {1000, 100000}, threads[4] = {1, 2}, nrays = 200000, seedv = 1;
     int nsizes = 2, nthreads = 2;
+    bool use[3] = {true, true, true};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (strcmp(a, "--tris") == 0 && v) {
@@ -335,6 +356,19 @@ int tb_cmd_bench_accel(int argc, char **argv)
                 return TB_EXIT_USAGE;
             }
             i++;
+        } else if (strcmp(a, "--accel") == 0 && v) {
+            use[0] = use[1] = use[2] = false;
+            char buf[64];
+            snprintf(buf, sizeof buf, "%s", v);
+            for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+                tb_accel_kind k;
+                if (tb_accel_kind_from_name(tok, &k)) {
+                    fprintf(stderr, "testbed bench accel: %s\n", tb_last_error());
+                    return TB_EXIT_USAGE;
+                }
+                use[k] = true;
+            }
+            i++;
         } else if (strcmp(a, "--no-stats") == 0) {
             tb_stats_set_enabled(0);
         } else {
@@ -343,10 +377,11 @@ int tb_cmd_bench_accel(int argc, char **argv)
         }
     }
     printf("testbed bench accel: %ld rays per set; Mrays/s is wall-clock throughput, Mrays/CPU-s per second of\n"
-           "process CPU time (equal to Mrays/s on an idle machine with one thread)\n\n",
+           "process CPU time (equal to Mrays/s on an idle machine with one thread); steps are BVH nodes or\n"
+           "grid voxels visited, tests are callback calls (0 with --no-stats)\n\n",
            nrays);
-    printf("%-7s %8s %-8s %-5s %7s %9s %11s %7s\n", "scene", "tris", "rays", "accel", "threads", "Mrays/s",
-           "Mrays/CPU-s", "hits %");
+    printf("%-7s %8s %-8s %-5s %7s %9s %11s %7s %8s %8s\n", "scene", "tris", "rays", "accel", "threads", "Mrays/s",
+           "Mrays/CPU-s", "hits %", "steps/ray", "tests/ray");
     long bad = 0;
     for (int si = 0; si < nsizes && bad >= 0; si++) {
         for (int sc = 0; sc < 2 && bad >= 0; sc++) {
@@ -356,7 +391,7 @@ int tb_cmd_bench_accel(int argc, char **argv)
             bool ok = sc == 0 ? tb__make_soup(&s, (size_t)sizes[si], &r) : tb__make_sphere(&s, (size_t)sizes[si]);
             long b = -1;
             if (ok)
-                b = tb__bench_scene(&s, nrays, threads, nthreads, (uint64_t)seedv);
+                b = tb__bench_scene(&s, nrays, threads, nthreads, (uint64_t)seedv, use);
             else
                 fprintf(stderr, "testbed bench accel: out of memory for %ld triangles\n", sizes[si]);
             bad = b < 0 ? -1 : bad + b;
