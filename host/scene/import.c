@@ -466,13 +466,12 @@ static tb_status tb__material(tb__imp *im, unsigned idx, const char **name)
 
 /* -------------------------------------------------------------- transforms */
 
+/* Exactly the identity (-0 counts as 0: it changes nothing either). */
 static bool tb__is_identity(const struct aiMatrix4x4 *m)
 {
-    static const struct aiMatrix4x4 id = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-    return memcmp(m, &id, sizeof id) == 0 ||
-           (m->a1 == 1 && m->a2 == 0 && m->a3 == 0 && m->a4 == 0 && m->b1 == 0 && m->b2 == 1 && m->b3 == 0 &&
-            m->b4 == 0 && m->c1 == 0 && m->c2 == 0 && m->c3 == 1 && m->c4 == 0 && m->d1 == 0 && m->d2 == 0 &&
-            m->d3 == 0 && m->d4 == 1);
+    return m->a1 == 1 && m->a2 == 0 && m->a3 == 0 && m->a4 == 0 && m->b1 == 0 && m->b2 == 1 && m->b3 == 0 &&
+           m->b4 == 0 && m->c1 == 0 && m->c2 == 0 && m->c3 == 1 && m->c4 == 0 && m->d1 == 0 && m->d2 == 0 &&
+           m->d3 == 0 && m->d4 == 1;
 }
 
 /* The MID matrix operation of an Assimp matrix (both row-major, column vectors). */
