@@ -72,6 +72,10 @@ static double tb__uni(tb__gen *g, double lo, double hi) { return lo + (hi - lo) 
 /* x rounded to 3 decimals: short numbers in the file, as a modeler would write. */
 static double tb__q3(double x) { return round(x * 1000.0) / 1000.0; }
 
+/* x rounded to 4 decimals, as a float: mesh data as an exporter writes it
+ * (and 5-6 digit numbers that the writer prints on its first try). */
+static float tb__q4f(double x) { return (float)(round(x * 10000.0) / 10000.0); }
+
 /* A quantised uniform number in [lo, hi]. */
 static double tb__uq(tb__gen *g, double lo, double hi) { return tb__q3(tb__uni(g, lo, hi)); }
 
@@ -486,15 +490,17 @@ static int tb__ico_index(const int edge[12][12], int f, int face, int i, int j)
     return 12 + 30 * (f - 1) + face * (f - 1) * (f - 2) / 2 + before + (j - 1);
 }
 
+/* (x, y, z) normalised, each component rounded to 4 decimals. */
 static tb_vec3 tb__unit(double x, double y, double z)
 {
     double n = sqrt(x * x + y * y + z * z);
-    return (tb_vec3){(float)(x / n), (float)(y / n), (float)(z / n)};
+    return (tb_vec3){tb__q4f(x / n), tb__q4f(y / n), tb__q4f(z / n)};
 }
 
 /* A geodesic sphere: the icosahedron with every face split into f^2
  * triangles, vertices pushed onto the unit sphere (shared, so the mesh is
- * closed); normals are the vertex directions. */
+ * closed; coordinates rounded to 4 decimals); normals are the vertex
+ * directions. */
 static tb_status tb__geodesic(tb__gen *g, tb_geom_polygons *p, int f)
 {
     int nv = 10 * f * f + 2, nf = 20 * f * f;
@@ -598,9 +604,9 @@ static tb_status tb__height_field(tb__gen *g, tb_geom_polygons *p, int m)
                 dy += amp[k] * fy[k] * cos(arg);
             }
             int i = r * row + c;
-            v[i] = (tb_vec3){(float)x, (float)y, (float)z};
+            v[i] = (tb_vec3){tb__q4f(x), tb__q4f(y), tb__q4f(z)};
             nrm[i] = tb__unit(-dx, -dy, 1.0);
-            uv[i] = (tb_vec2){(float)c / (float)m, (float)r / (float)m};
+            uv[i] = (tb_vec2){tb__q4f((double)c / m), tb__q4f((double)r / m)};
         }
     int n = 0;
     for (int r = 0; r < m; r++)

@@ -297,11 +297,9 @@ EMISSION_COMMENT = """# Emission. The data give the light's relative spectral ra
 # 3280 pi = 10304 W/m^2; over the 130 mm x 105 mm light that is 140.7 W).
 """
 
-SPECTRUM_COMMENT = """# Spectra are linear between samples. The data stop at 400 and 700 nm; the
-# usual convention (and util/color's) is zero outside, while MID 1 holds the
-# end values beyond the last samples (docs/mid.md, 7.1). Renderers that sample
-# 400-700 nm (util/color's default bands) see no difference; the RGB variant
-# integrates over 400-700 nm only.
+SPECTRUM_COMMENT = """# Spectra are linear between samples and zero outside them (docs/mid.md, 7.1,
+# and the usual convention for this data): the measured reflectances and the
+# light cover 400-700 nm only.
 """
 
 
