@@ -1038,6 +1038,15 @@ static uint64_t tb__cell_key(int64_t ix, int64_t iy, int64_t iz)
     return tb_hash_u64(tb_hash_u64(tb_hash_u64((uint64_t)ix) ^ (uint64_t)iy) ^ (uint64_t)iz);
 }
 
+/* Hash key of an exact position (-0 taken as +0). */
+static uint64_t tb__exact_key(tb_dvec3 p)
+{
+    double c[3] = {p.x + 0.0, p.y + 0.0, p.z + 0.0};
+    uint64_t b[3];
+    memcpy(b, c, sizeof b);
+    return tb_hash_u64(tb_hash_u64(tb_hash_u64(b[0]) ^ b[1]) ^ b[2]);
+}
+
 static uint32_t tb__uf_find(uint32_t *par, uint32_t i)
 {
     while (par[i] != i)
@@ -1058,14 +1067,30 @@ static tb_status tb__weld(const tb__mb *m, double eps, uint32_t *weld, tb_array 
     tb_htab h;
     tb_htab_init(&h, TB_HTAB_U64);
     tb_status st = par && next ? tb_htab_reserve(&h, n / 2 + 16) : tb__nomem();
+    tb_htab exact; /* exact position -> first pv there: most corners repeat a grid point */
+    tb_htab_init(&exact, TB_HTAB_U64);
+    if (!st)
+        st = tb_htab_reserve(&exact, n / 3 + 16);
     for (size_t i = 0; i < n && !st; i++) {
         tb_dvec3 p = pv[i].p;
-        int64_t ix = (int64_t)floor(p.x / cell), iy = (int64_t)floor(p.y / cell), iz = (int64_t)floor(p.z / cell);
         par[i] = (uint32_t)i;
+        uint64_t ek = tb__exact_key(p), first;
+        if (tb_htab_get(&exact, ek, &first) && pv[first].p.x == p.x && pv[first].p.y == p.y && pv[first].p.z == p.z) {
+            /* Everything within eps of p was met by that pv, or will meet it. */
+            uint32_t a = tb__uf_find(par, (uint32_t)i), b = tb__uf_find(par, (uint32_t)first);
+            par[a > b ? a : b] = a < b ? a : b;
+            continue;
+        }
+        st = tb_htab_put(&exact, ek, i);
+        /* Cells are 2 eps wide, so the eps box about p meets 2 per axis: this
+         * one and the neighbour on the side p is nearer to. */
+        double fx = p.x / cell, fy = p.y / cell, fz = p.z / cell;
+        int64_t ix = (int64_t)floor(fx), iy = (int64_t)floor(fy), iz = (int64_t)floor(fz);
+        int sx = fx - (double)ix < 0.5 ? -1 : 1, sy = fy - (double)iy < 0.5 ? -1 : 1, sz = fz - (double)iz < 0.5 ? -1 : 1;
         bool same = false; /* an earlier pv at exactly this point stands for it in the cell lists */
-        for (int d = 0; d < 27; d++) {
+        for (int d = 0; d < 8 && !st; d++) {
             uint64_t head;
-            if (!tb_htab_get(&h, tb__cell_key(ix + d % 3 - 1, iy + d / 3 % 3 - 1, iz + d / 9 - 1), &head))
+            if (!tb_htab_get(&h, tb__cell_key(ix + (d & 1 ? sx : 0), iy + (d & 2 ? sy : 0), iz + (d & 4 ? sz : 0)), &head))
                 continue;
             for (uint32_t j = (uint32_t)head; j != UINT32_MAX; j = next[j]) {
                 tb_dvec3 q = pv[j].p;
@@ -1096,6 +1121,7 @@ static tb_status tb__weld(const tb__mb *m, double eps, uint32_t *weld, tb_array 
     free(par);
     free(next);
     tb_htab_free(&h);
+    tb_htab_free(&exact);
     return st;
 }
 

@@ -45,6 +45,11 @@ static void tb__bench_usage(FILE *out)
             "               bvh,grid,list chooses the structures; --no-stats turns counters off.\n"
             "  -h, --help   show this help\n"
             "\n"
+            "usage: testbed bench tessellate [--angle A] [--edge E] [--seconds S] [--split]\n"
+            "\n"
+            "  tessellate   tb_polygonize of every kind: mesh size, meshes/s and Mtriangles/s\n"
+            "               (details: testbed bench tessellate --help)\n"
+            "\n"
             "Exit status: 0 done, 1 an object could not be built, 2 usage error.\n");
 }
 
@@ -284,6 +289,7 @@ static const struct {
 } tb__benches[] = {
     {"intersect", tb__bench_intersect_cmd},
     {"accel", tb_cmd_bench_accel}, /* cmd_bench_accel.c */
+    {"tessellate", tb_cmd_bench_tessellate}, /* cmd_bench_tessellate.c */
 };
 
 int tb_cmd_bench(int argc, char **argv)

@@ -14,6 +14,8 @@ typedef struct tb_command {
 int tb_cmd_bench(int argc, char **argv);
 /* `testbed bench accel`: BVH / grid / list rays per second (cmd_bench_accel.c; argv[0] is "accel"). */
 int tb_cmd_bench_accel(int argc, char **argv);
+/* `testbed bench tessellate`: tessellation rate per kind (cmd_bench_tessellate.c; argv[0] is "tessellate"). */
+int tb_cmd_bench_tessellate(int argc, char **argv);
 /* `testbed check SCENE.mid`: validate and summarise a MID scene (cmd_check.c). */
 int tb_cmd_check(int argc, char **argv);
 /* `testbed compare A B`: error metrics against a reference image (cmd_compare.c). */
