@@ -1,0 +1,845 @@
+/* Scene assembly (docs/rendering.md): the streaming MID reader's items become
+ * persistent objects, a deduplicated material table, lights, emissive
+ * objects, the camera, world bounds and an acceleration structure.
+ *
+ * Colours are converted only once the whole file is read: whether the scene
+ * is spectral depends on every material and light, and the reader hands
+ * them out one at a time. Until then the material table and the lights keep
+ * copies of their MID colours. */
+#include "host/render/scene.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "host/object/intersect.h"
+#include "host/render/ies.h"
+#include "host/render/scene_internal.h"
+#include "host/scene/mid_reader.h"
+#include "util/container/hash_table.h"
+#include "util/stats/stats.h"
+
+/* ------------------------------------------------------------------ statistics */
+
+TB_STAT_COUNTER(tb__n_sphere, "Scene/sphere objects");
+TB_STAT_COUNTER(tb__n_cube, "Scene/cube objects");
+TB_STAT_COUNTER(tb__n_cylinder, "Scene/cylinder objects");
+TB_STAT_COUNTER(tb__n_cone, "Scene/cone objects");
+TB_STAT_COUNTER(tb__n_pyramid, "Scene/pyramid objects");
+TB_STAT_COUNTER(tb__n_prism, "Scene/prism objects");
+TB_STAT_COUNTER(tb__n_torus, "Scene/torus objects");
+TB_STAT_COUNTER(tb__n_polygons, "Scene/polygons objects");
+TB_STAT_COUNTER(tb__n_conic, "Scene/conic objects");
+TB_STAT_COUNTER(tb__n_square_arch, "Scene/square_arch objects");
+TB_STAT_COUNTER(tb__n_round_arch, "Scene/round_arch objects");
+TB_STAT_COUNTER(tb__n_union, "Scene/union objects");
+TB_STAT_COUNTER(tb__n_intersection, "Scene/intersection objects");
+TB_STAT_COUNTER(tb__n_difference, "Scene/difference objects");
+TB_STAT_COUNTER(tb__n_tris, "Scene/triangle references");
+TB_STAT_COUNTER(tb__n_materials, "Scene/materials");
+TB_STAT_COUNTER(tb__n_lights, "Scene/lights");
+TB_STAT_COUNTER(tb__n_emissive, "Scene/emissive objects");
+TB_STAT_TIMER(tb__t_load, "Scene/load");
+TB_STAT_TIMER(tb__t_accel, "Scene/accel build");
+
+static tb_stat *const tb__kind_counters[TB_PRIM_COUNT] = {
+    &tb__n_sphere, &tb__n_cube, &tb__n_cylinder, &tb__n_cone, &tb__n_pyramid,
+    &tb__n_prism, &tb__n_torus, &tb__n_polygons, &tb__n_conic, &tb__n_square_arch,
+    &tb__n_round_arch, &tb__n_union, &tb__n_intersection, &tb__n_difference,
+};
+
+/* ------------------------------------------------------------------ storage */
+
+/* A material as the file gave it, kept until the colours can be converted. */
+typedef struct tb__mat_src {
+    tb_mid_color color[4]; /* diffuse, specular, transmission, emission; sample arrays and paths owned */
+    float exponent, ior;
+    char *texture[4];      /* resolved paths (owned) or NULL: diffuse, specular, transmission, emission */
+    char *name;            /* base material name (owned) or NULL */
+    tb_mid_loc loc;        /* where the block or definition is */
+    bool emits;
+    unsigned char *key;    /* the bytes that decide equality (owned) */
+    size_t keylen;
+    int next;              /* next entry with the same hash, or -1 */
+} tb__mat_src;
+
+/* A light as the file gave it (transform and colour; names owned). */
+typedef struct tb__light_src {
+    tb_mid_light l;        /* copy: pointers cleared except intensity samples and name (owned) */
+    int ies;               /* index into priv->ies, or -1 */
+} tb__light_src;
+
+struct tb__scene_priv {
+    tb__mat_src *mats;     /* every material a node used, before compaction */
+    int nmats, capmats;
+    tb_htab mat_hash;      /* key hash -> first entry with that hash */
+    tb__light_src *lights;
+    int caplights;
+    tb_ies **ies;          /* loaded IES files, one per distinct path */
+    char **ies_paths;
+    int nies, capies;
+    size_t capobjects;
+    int capemissive;
+    const char *errname;   /* file name for messages */
+};
+
+static char *tb__strdup(const char *s)
+{
+    if (!s)
+        return NULL;
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d)
+        memcpy(d, s, n);
+    return d;
+}
+
+/* Grows *p (elements of `size` bytes) to hold at least `need`. */
+static bool tb__grow(void **p, int *cap, int need, size_t size)
+{
+    if (need <= *cap)
+        return true;
+    int nc = *cap ? *cap * 2 : 16;
+    while (nc < need)
+        nc *= 2;
+    void *q = realloc(*p, (size_t)nc * size);
+    if (!q)
+        return false;
+    *p = q;
+    *cap = nc;
+    return true;
+}
+
+/* A "FILE:LINE:COL: error: what: <the last message>" error. */
+static tb_status tb__located(tb_status st, const tb_scene *s, tb_mid_loc loc, const char *what)
+{
+    char msg[1024];
+    snprintf(msg, sizeof msg, "%s", tb_last_error());
+    return tb_error(st, "%s:%ld:%ld: error: %s: %s", s->priv->errname, loc.line, loc.col, what, msg);
+}
+
+/* ------------------------------------------------------------------ material keys */
+
+typedef struct tb__bytes {
+    unsigned char *p;
+    size_t n, cap;
+    bool oom;
+} tb__bytes;
+
+static void tb__put(tb__bytes *b, const void *v, size_t n)
+{
+    if (b->oom)
+        return;
+    if (b->n + n > b->cap) {
+        size_t nc = b->cap ? b->cap * 2 : 256;
+        while (nc < b->n + n)
+            nc *= 2;
+        unsigned char *q = realloc(b->p, nc);
+        if (!q) {
+            b->oom = true;
+            return;
+        }
+        b->p = q;
+        b->cap = nc;
+    }
+    memcpy(b->p + b->n, v, n);
+    b->n += n;
+}
+
+static void tb__put_str(tb__bytes *b, const char *s)
+{
+    uint32_t n = s ? (uint32_t)strlen(s) + 1 : 0; /* 0: none; else the length with the terminator */
+    tb__put(b, &n, sizeof n);
+    if (s)
+        tb__put(b, s, n);
+}
+
+static void tb__put_color(tb__bytes *b, const tb_mid_color *c)
+{
+    int32_t type = (int32_t)c->type;
+    tb__put(b, &type, sizeof type);
+    if (c->type == TB_MID_COLOR_RGB) {
+        tb__put(b, c->rgb, sizeof c->rgb);
+    } else if (c->type == TB_MID_COLOR_SPECTRUM) {
+        int32_t n = c->nsamples;
+        tb__put(b, &n, sizeof n);
+        tb__put(b, c->nm, sizeof(float) * (size_t)n);
+        tb__put(b, c->values, sizeof(float) * (size_t)n);
+    } else {
+        tb__put_str(b, c->file.path);
+    }
+}
+
+/* The material's meaning as bytes: colours, exponent, ior, texture paths
+ * (not its name or where it was written). */
+static void tb__material_key(tb__bytes *b, const tb_mid_material *m)
+{
+    tb__put_color(b, &m->diffuse);
+    tb__put_color(b, &m->specular);
+    tb__put_color(b, &m->transmission);
+    tb__put_color(b, &m->emission);
+    tb__put(b, &m->exponent, sizeof m->exponent);
+    tb__put(b, &m->ior, sizeof m->ior);
+    tb__put_str(b, m->diffuse_texture.path);
+    tb__put_str(b, m->specular_texture.path);
+    tb__put_str(b, m->transmission_texture.path);
+    tb__put_str(b, m->emission_texture.path);
+}
+
+/* Deep copy of a colour; false when out of memory. */
+static bool tb__copy_color(tb_mid_color *dst, const tb_mid_color *src)
+{
+    *dst = *src;
+    dst->nm = dst->values = NULL;
+    dst->file.text = dst->file.path = NULL;
+    if (src->type == TB_MID_COLOR_SPECTRUM) {
+        size_t n = (size_t)src->nsamples;
+        float *nm = malloc(sizeof *nm * n), *v = malloc(sizeof *v * n);
+        if (!nm || !v) {
+            free(nm);
+            free(v);
+            return false;
+        }
+        memcpy(nm, src->nm, sizeof *nm * n);
+        memcpy(v, src->values, sizeof *v * n);
+        dst->nm = nm;
+        dst->values = v;
+    } else if (src->type == TB_MID_COLOR_SPECTRUM_FILE) {
+        dst->file.text = tb__strdup(src->file.text);
+        dst->file.path = tb__strdup(src->file.path);
+        if (!dst->file.text || !dst->file.path)
+            return false;
+    }
+    return true;
+}
+
+static void tb__free_color(tb_mid_color *c)
+{
+    free((void *)c->nm);
+    free((void *)c->values);
+    free((void *)c->file.text);
+    free((void *)c->file.path);
+    c->nm = c->values = NULL;
+    c->file.text = c->file.path = NULL;
+}
+
+/* The build callback of tb_object_from_mid: the index of an equal material
+ * in the table, or of a new entry. */
+static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *index)
+{
+    tb_scene *s = user;
+    tb__scene_priv *p = s->priv;
+    tb__bytes key = {0};
+    tb__material_key(&key, m);
+    if (key.oom) {
+        free(key.p);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
+    }
+    uint64_t h = tb_hash_bytes(key.p, key.n), first;
+    if (tb_htab_get(&p->mat_hash, h, &first)) {
+        for (int i = (int)first; i >= 0; i = p->mats[i].next) {
+            if (p->mats[i].keylen == key.n && memcmp(p->mats[i].key, key.p, key.n) == 0) {
+                free(key.p);
+                *index = i;
+                return TB_OK;
+            }
+        }
+    }
+    if (!tb__grow((void **)&p->mats, &p->capmats, p->nmats + 1, sizeof *p->mats)) {
+        free(key.p);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
+    }
+    int i = p->nmats;
+    tb__mat_src *e = &p->mats[i];
+    memset(e, 0, sizeof *e);
+    e->key = key.p;
+    e->keylen = key.n;
+    const tb_mid_color *cols[4] = {&m->diffuse, &m->specular, &m->transmission, &m->emission};
+    const tb_mid_ref *tex[4] = {&m->diffuse_texture, &m->specular_texture, &m->transmission_texture,
+                                &m->emission_texture};
+    bool ok = true;
+    for (int k = 0; k < 4; k++) {
+        ok = tb__copy_color(&e->color[k], cols[k]) && ok;
+        if (tex[k]->path)
+            ok = (e->texture[k] = tb__strdup(tex[k]->path)) != NULL && ok;
+    }
+    if (m->base)
+        ok = (e->name = tb__strdup(m->base)) != NULL && ok;
+    e->exponent = m->exponent;
+    e->ior = m->ior;
+    e->loc = m->loc;
+    e->emits = tb_mid_material_emits(m);
+    e->next = -1;
+    p->nmats++; /* counted even on failure, so tb_scene_free releases what was copied */
+    if (!ok)
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
+    if (tb_htab_get(&p->mat_hash, h, &first)) {
+        e->next = (int)first; /* new entries go first in their chain */
+    }
+    if (tb_htab_put(&p->mat_hash, h, (uint64_t)i))
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
+    *index = i;
+    return TB_OK;
+}
+
+static void tb__free_mat_src(tb__mat_src *e)
+{
+    for (int k = 0; k < 4; k++) {
+        tb__free_color(&e->color[k]);
+        free(e->texture[k]);
+    }
+    free(e->name);
+    free(e->key);
+}
+
+/* ------------------------------------------------------------------ objects */
+
+/* The first leaf in pre-order whose material emits, or NULL. */
+static const tb_object *tb__emitting_leaf(const tb_scene *s, const tb_object *o)
+{
+    if (tb_prim_is_csg(o->kind)) {
+        for (int i = 0; i < o->nchildren; i++) {
+            const tb_object *l = tb__emitting_leaf(s, &o->children[i]);
+            if (l)
+                return l;
+        }
+        return NULL;
+    }
+    return o->material >= 0 && s->priv->mats[o->material].emits ? o : NULL;
+}
+
+static tb_status tb__add_object(tb_scene *s, const tb_mid_object *m)
+{
+    tb__scene_priv *p = s->priv;
+    if (s->nobjects == UINT32_MAX - 1)
+        return tb_error(TB_ERR_ARG, "%s: more than 2^32 - 2 objects", p->errname);
+    if (s->nobjects == p->capobjects) {
+        size_t nc = p->capobjects ? 2 * p->capobjects : 64;
+        tb_object **q = realloc(s->objects, nc * sizeof *q);
+        if (!q)
+            return tb_error(TB_ERR_NOMEM, "scene: out of memory for %u objects", s->nobjects);
+        s->objects = q;
+        p->capobjects = nc;
+    }
+    tb_object *o;
+    char what[256];
+    snprintf(what, sizeof what, "%s%s%s%s", tb_prim_kind_name(m->kind), m->name ? " '" : "",
+             m->name ? m->name : "", m->name ? "'" : "");
+    tb_status st = tb_object_from_mid(m, s->nobjects, tb__material_cb, s, &o);
+    if (st)
+        return tb__located(st, s, m->loc, what);
+    s->objects[s->nobjects++] = o;
+    s->stats.objects_by_kind[o->kind]++;
+    tb_stat_add(tb__kind_counters[o->kind], 1);
+    if (o->kind == TB_PRIM_POLYGONS && o->mesh)
+        s->stats.triangles += o->mesh->ntris;
+
+    const tb_object *leaf = tb__emitting_leaf(s, o);
+    if (leaf) {
+        if (!tb__grow((void **)&s->emissive, &p->capemissive, s->nemissive + 1, sizeof *s->emissive))
+            return tb_error(TB_ERR_NOMEM, "scene: out of memory for emissive objects");
+        tb_scene_emissive *e = &s->emissive[s->nemissive];
+        *e = (tb_scene_emissive){o->index, leaf->material, NAN, 0, 0};
+        if (!tb_prim_is_csg(o->kind) && (st = tb__scene_leaf_area(o, &e->area)))
+            return tb__located(st, s, m->loc, what);
+        s->nemissive++;
+    }
+    return TB_OK;
+}
+
+/* ------------------------------------------------------------------ lights */
+
+static tb_status tb__add_light(tb_scene *s, const tb_mid_light *m)
+{
+    tb__scene_priv *p = s->priv;
+    if (!tb__grow((void **)&p->lights, &p->caplights, s->nlights + 1, sizeof *p->lights))
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for lights");
+    tb__light_src *e = &p->lights[s->nlights];
+    e->l = *m;
+    e->l.nops = 0;
+    e->l.ops = NULL;
+    e->l.extra = (tb_mid_attrs){NULL, 0};
+    e->l.nrefs = 0;
+    e->l.refs = NULL;
+    e->l.ies = (tb_mid_ref){NULL, NULL};
+    e->l.name = NULL;
+    e->ies = -1;
+    bool ok = tb__copy_color(&e->l.intensity, &m->intensity);
+    if (m->name)
+        ok = (e->l.name = tb__strdup(m->name)) != NULL && ok;
+    s->nlights++; /* counted even on failure, so tb_scene_free releases the copies */
+    if (!ok)
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for lights");
+    if (m->ies.path) {
+        int k = 0;
+        while (k < p->nies && strcmp(p->ies_paths[k], m->ies.path) != 0)
+            k++;
+        if (k == p->nies) {
+            if (!tb__grow((void **)&p->ies, &p->capies, p->nies + 1, sizeof *p->ies)) {
+                return tb_error(TB_ERR_NOMEM, "scene: out of memory for IES files");
+            }
+            char **q = realloc(p->ies_paths, sizeof *q * (size_t)p->capies);
+            if (!q)
+                return tb_error(TB_ERR_NOMEM, "scene: out of memory for IES files");
+            p->ies_paths = q;
+            tb_ies *ies;
+            tb_status st = tb_ies_read(m->ies.path, &ies);
+            if (st)
+                return tb__located(st, s, m->loc, tb_light_kind_name(m->kind));
+            p->ies[k] = ies;
+            p->ies_paths[k] = tb__strdup(m->ies.path);
+            p->nies++;
+            if (!p->ies_paths[k])
+                return tb_error(TB_ERR_NOMEM, "scene: out of memory for IES files");
+        }
+        e->ies = k;
+    }
+    return TB_OK;
+}
+
+/* ------------------------------------------------------------------ finishing */
+
+/* Material indices of every node through `remap` (-1 stays -1). */
+static void tb__remap_materials(tb_object *o, const int *remap)
+{
+    if (o->material >= 0)
+        o->material = remap[o->material];
+    for (int i = 0; i < o->nchildren; i++)
+        tb__remap_materials(&o->children[i], remap);
+}
+
+static void tb__mark_used(const tb_object *o, bool *used)
+{
+    if (tb_prim_is_csg(o->kind)) {
+        for (int i = 0; i < o->nchildren; i++)
+            tb__mark_used(&o->children[i], used);
+    } else if (o->material >= 0) {
+        used[o->material] = true;
+    }
+}
+
+static bool tb__is_spectral(const tb_mid_color *c) { return c->type != TB_MID_COLOR_RGB; }
+
+/* Drops the materials no primitive uses (a CSG node's own material is only
+ * inherited), decides the colour representation, converts every colour. */
+static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
+{
+    tb__scene_priv *p = s->priv;
+    bool *used = calloc((size_t)p->nmats + 1, sizeof *used);
+    int *remap = malloc(sizeof *remap * ((size_t)p->nmats + 1));
+    if (!used || !remap) {
+        free(used);
+        free(remap);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for the material table");
+    }
+    for (uint32_t i = 0; i < s->nobjects; i++)
+        tb__mark_used(s->objects[i], used);
+    int n = 0;
+    for (int i = 0; i < p->nmats; i++)
+        remap[i] = used[i] ? n++ : -1;
+    for (uint32_t i = 0; i < s->nobjects; i++)
+        tb__remap_materials(s->objects[i], remap);
+    for (int i = 0; i < s->nemissive; i++)
+        s->emissive[i].material = remap[s->emissive[i].material];
+
+    bool spectral = false;
+    for (int i = 0; i < p->nmats; i++)
+        for (int k = 0; k < 4 && used[i]; k++)
+            spectral = spectral || tb__is_spectral(&p->mats[i].color[k]);
+    for (int i = 0; i < s->nlights; i++)
+        spectral = spectral || tb__is_spectral(&p->lights[i].l.intensity);
+    if (opt->color == TB_SCENE_COLOR_RGB)
+        spectral = false;
+    else if (opt->color == TB_SCENE_COLOR_SPECTRAL)
+        spectral = true;
+    s->spectral = spectral;
+    tb_status st = TB_OK;
+    if (spectral) {
+        if (opt->bands)
+            s->bands = *opt->bands;
+        else
+            st = tb_bands_init_default(&s->bands);
+        if (!st && (s->bands.n < 2 || s->bands.n > TB_CHANNELS_MAX))
+            st = tb_error(TB_ERR_UNSUPPORTED, "scene: %d render bands (a colour holds 2..%d)", s->bands.n,
+                          TB_CHANNELS_MAX);
+        s->nchannels = s->bands.n;
+    } else {
+        s->nchannels = 3;
+    }
+    const tb_bands *bands = spectral ? &s->bands : NULL;
+
+    s->materials = n ? calloc((size_t)n, sizeof *s->materials) : NULL;
+    if (!st && n && !s->materials)
+        st = tb_error(TB_ERR_NOMEM, "scene: out of memory for the material table");
+    for (int i = 0; i < p->nmats && !st; i++) {
+        if (!used[i])
+            continue;
+        const tb__mat_src *e = &p->mats[i];
+        tb_material *m = &s->materials[remap[i]];
+        tb_channels *out[4] = {&m->diffuse, &m->specular, &m->transmission, &m->emission};
+        for (int k = 0; k < 4 && !st; k++) {
+            st = tb_channels_from_mid_color(&e->color[k], bands, k == 3 ? TB_COLOR_EMISSION : TB_COLOR_REFLECTANCE,
+                                            out[k]);
+            if (st) {
+                static const char *const names[4] = {"diffuse", "specular", "transmission", "emission"};
+                char what[160];
+                snprintf(what, sizeof what, "material%s%s%s, %s", e->name ? " '" : "", e->name ? e->name : "",
+                         e->name ? "'" : "", names[k]);
+                st = tb__located(st, s, e->loc, what);
+            }
+        }
+        m->exponent = e->exponent;
+        m->ior = e->ior;
+        m->emits = e->emits;
+        m->name = e->name;
+        m->diffuse_texture = e->texture[0];
+        m->specular_texture = e->texture[1];
+        m->transmission_texture = e->texture[2];
+        m->emission_texture = e->texture[3];
+    }
+    s->nmaterials = n;
+    tb_stat_add(&tb__n_materials, n);
+    free(used);
+    free(remap);
+    return st;
+}
+
+static tb_status tb__finish_lights(tb_scene *s)
+{
+    tb__scene_priv *p = s->priv;
+    if (s->nlights == 0)
+        return TB_OK;
+    s->lights = calloc((size_t)s->nlights, sizeof *s->lights);
+    if (!s->lights)
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for lights");
+    for (int i = 0; i < s->nlights; i++) {
+        const tb__light_src *e = &p->lights[i];
+        tb_status st = tb_light_from_mid(&e->l, s->spectral ? &s->bands : NULL, e->ies >= 0 ? p->ies[e->ies] : NULL,
+                                         &s->lights[i]);
+        if (st)
+            return tb__located(st, s, e->l.loc, tb_light_kind_name(e->l.kind));
+    }
+    tb_stat_add(&tb__n_lights, s->nlights);
+    return TB_OK;
+}
+
+static tb_status tb__finish_emitters(tb_scene *s)
+{
+    size_t total = 0;
+    for (int i = 0; i < s->nemissive; i++) {
+        const tb_object *o = s->objects[s->emissive[i].object];
+        if (!tb_prim_is_csg(o->kind))
+            total += (size_t)tb__scene_leaf_emitters(o, tb_channels_splat(s->nchannels, 0.0f), NULL);
+    }
+    if (total > (size_t)INT32_MAX)
+        return tb_error(TB_ERR_UNSUPPORTED, "scene: more than 2^31 - 1 emitters");
+    if (total) {
+        s->emitters = malloc(sizeof *s->emitters * total);
+        if (!s->emitters)
+            return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu emitters", total);
+    }
+    int n = 0;
+    for (int i = 0; i < s->nemissive; i++) {
+        tb_scene_emissive *e = &s->emissive[i];
+        const tb_object *o = s->objects[e->object];
+        e->first_emitter = n;
+        e->nemitters = 0;
+        if (tb_prim_is_csg(o->kind))
+            continue;
+        tb_channels L = tb_radiance_from_exitance(s->materials[e->material].emission);
+        e->nemitters = tb__scene_leaf_emitters(o, L, s->emitters + n);
+        n += e->nemitters;
+    }
+    s->nemitters = n;
+    tb_stat_add(&tb__n_emissive, s->nemissive);
+    return TB_OK;
+}
+
+/* The acceleration references: one per triangle of a polygons object, one
+ * per other object; and the world bounds. */
+static tb_status tb__make_prims(tb_scene *s)
+{
+    size_t n = 0;
+    for (uint32_t i = 0; i < s->nobjects; i++) {
+        const tb_object *o = s->objects[i];
+        n += o->kind == TB_PRIM_POLYGONS && o->mesh ? o->mesh->ntris : 1;
+    }
+    s->prims = n ? malloc(sizeof *s->prims * n) : NULL;
+    if (n && !s->prims)
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", n);
+    s->bounds = tb_aabb_empty();
+    size_t k = 0;
+    for (uint32_t i = 0; i < s->nobjects; i++) {
+        const tb_object *o = s->objects[i];
+        tb_status st;
+        if (o->kind == TB_PRIM_POLYGONS && o->mesh) {
+            for (uint32_t t = 0; t < o->mesh->ntris; t++) {
+                tb_accel_prim *r = &s->prims[k++];
+                r->object = i;
+                r->sub = t;
+                if ((st = tb__scene_tri_bounds(o, t, &r->bounds)))
+                    return st;
+                s->bounds = tb_aabb_union(s->bounds, r->bounds);
+            }
+        } else {
+            tb_accel_prim *r = &s->prims[k++];
+            r->object = i;
+            r->sub = TB_SCENE_WHOLE_OBJECT;
+            if ((st = tb__scene_object_bounds(o, &r->bounds)))
+                return st;
+            s->bounds = tb_aabb_union(s->bounds, r->bounds);
+        }
+    }
+    s->nprims = n;
+    s->stats.nprims = n;
+    tb_stat_add(&tb__n_tris, (int64_t)s->stats.triangles);
+    return TB_OK;
+}
+
+/* ------------------------------------------------------------------ accel callbacks */
+
+static bool tb__cb_intersect(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray, tb_hit *hit)
+{
+    (void)index;
+    const tb_scene *s = ctx;
+    const tb_object *o = s->objects[prim->object];
+    if (prim->sub == TB_SCENE_WHOLE_OBJECT)
+        return tb_object_intersect(o, ray, hit);
+    return tb__scene_tri_intersect(o, prim->sub, ray, hit);
+}
+
+static bool tb__cb_occluded(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray)
+{
+    (void)index;
+    const tb_scene *s = ctx;
+    const tb_object *o = s->objects[prim->object];
+    if (prim->sub == TB_SCENE_WHOLE_OBJECT)
+        return tb_object_occluded(o, ray);
+    return tb__scene_tri_occluded(o, prim->sub, ray);
+}
+
+tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel_options *opt)
+{
+    if (!s)
+        return tb_error(TB_ERR_ARG, "scene: NULL argument");
+    tb_accel_callbacks cb = {tb__cb_intersect, tb__cb_occluded, s};
+    tb_accel *acc;
+    int64_t t0 = tb_stats_now_ns();
+    tb_timer_token tt = tb_timer_start(&tb__t_accel);
+    tb_status st = tb_accel_build(kind, s->prims, s->nprims, &cb, opt, &acc);
+    tb_timer_stop(tt);
+    if (st)
+        return tb_error_context(st, "scene");
+    tb_accel_free(s->accel);
+    s->accel = acc;
+    s->stats.accel_seconds = (double)(tb_stats_now_ns() - t0) * 1e-9;
+    return TB_OK;
+}
+
+/* ------------------------------------------------------------------ loading */
+
+static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_options *opt, tb_scene **out)
+{
+    static const tb_scene_options defaults;
+    if (!opt)
+        opt = &defaults;
+    int64_t t0 = tb_stats_now_ns();
+    tb_timer_token tt = tb_timer_start(&tb__t_load);
+    tb_scene *s = calloc(1, sizeof *s);
+    tb__scene_priv *p = s ? calloc(1, sizeof *p) : NULL;
+    if (!s || !p) {
+        free(s);
+        free(p);
+        tb_timer_stop(tt);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory");
+    }
+    s->priv = p;
+    tb_htab_init(&p->mat_hash, TB_HTAB_U64);
+    s->name = tb__strdup(name);
+    p->errname = s->name ? s->name : "";
+    tb_status st = s->name ? TB_OK : tb_error(TB_ERR_NOMEM, "scene: out of memory");
+    tb_mid_item it;
+    while (!st && !(st = tb_mid_reader_next(r, &it)) && it.type != TB_MID_ITEM_END) {
+        if (it.type == TB_MID_ITEM_OBJECT)
+            st = tb__add_object(s, it.object);
+        else if (it.type == TB_MID_ITEM_LIGHT)
+            st = tb__add_light(s, it.light);
+        /* Named materials matter only through the objects that use them;
+         * the camera is read at the end. */
+    }
+    if (!st) {
+        const tb_mid_camera *cam = tb_mid_reader_camera(r);
+        s->has_camera = cam != NULL;
+        s->mid_camera = cam ? *cam : tb_mid_camera_default();
+        s->mid_camera.name = NULL;
+        s->mid_camera.extra = (tb_mid_attrs){NULL, 0};
+        s->mid_camera.nrefs = 0;
+        s->mid_camera.refs = NULL;
+        st = tb_camera_from_mid(&s->mid_camera, 0, 0, &s->camera);
+        if (st && cam)
+            st = tb__located(st, s, cam->loc, "camera");
+    }
+    if (!st)
+        st = tb__finish_materials(s, opt);
+    if (!st)
+        st = tb__finish_lights(s);
+    if (!st)
+        st = tb__finish_emitters(s);
+    if (!st)
+        st = tb__make_prims(s);
+    /* The copies were needed only for the conversion. */
+    tb_htab_free(&p->mat_hash);
+    s->stats.load_seconds = (double)(tb_stats_now_ns() - t0) * 1e-9;
+    tb_timer_stop(tt);
+    if (!st && !opt->no_accel) {
+        tb_accel_options ao = opt->accel_opts;
+        if (ao.threads == 0)
+            ao.threads = opt->threads;
+        st = tb_scene_rebuild_accel(s, opt->accel, &ao);
+    }
+    if (st) {
+        tb_scene_free(s);
+        return st;
+    }
+    *out = s;
+    return TB_OK;
+}
+
+tb_status tb_scene_load(const char *path, const tb_scene_options *opt, tb_scene **out)
+{
+    if (!out)
+        return tb_error(TB_ERR_ARG, "scene: NULL argument");
+    *out = NULL;
+    if (!path)
+        return tb_error(TB_ERR_ARG, "scene: NULL path");
+    tb_mid_reader *r;
+    tb_status st = tb_mid_reader_open(&r, path);
+    if (st)
+        return st;
+    st = tb__load(r, strcmp(path, "-") == 0 ? "<stdin>" : path, opt, out);
+    tb_mid_reader_close(r);
+    return st;
+}
+
+tb_status tb_scene_load_stream(FILE *fp, const char *name, const char *base_dir, const tb_scene_options *opt,
+                               tb_scene **out)
+{
+    if (!out)
+        return tb_error(TB_ERR_ARG, "scene: NULL argument");
+    *out = NULL;
+    if (!fp)
+        return tb_error(TB_ERR_ARG, "scene: NULL stream");
+    if (!name)
+        name = "<stream>";
+    tb_mid_reader *r;
+    tb_status st = tb_mid_reader_open_stream(&r, fp, name, base_dir);
+    if (st)
+        return st;
+    st = tb__load(r, name, opt, out);
+    tb_mid_reader_close(r);
+    return st;
+}
+
+void tb_scene_free(tb_scene *s)
+{
+    if (!s)
+        return;
+    tb_accel_free(s->accel);
+    for (uint32_t i = 0; i < s->nobjects; i++)
+        tb_object_free(s->objects[i]);
+    free(s->objects);
+    free(s->materials);
+    free(s->lights);
+    free(s->emissive);
+    free(s->emitters);
+    free(s->prims);
+    tb__scene_priv *p = s->priv;
+    if (p) {
+        for (int i = 0; i < p->nmats; i++)
+            tb__free_mat_src(&p->mats[i]);
+        free(p->mats);
+        tb_htab_free(&p->mat_hash);
+        for (int i = 0; i < s->nlights; i++) {
+            tb__free_color(&p->lights[i].l.intensity);
+            free((void *)p->lights[i].l.name);
+        }
+        free(p->lights);
+        for (int i = 0; i < p->nies; i++) {
+            tb_ies_free(p->ies[i]);
+            free(p->ies_paths[i]);
+        }
+        free(p->ies);
+        free(p->ies_paths);
+        free(p);
+    }
+    free(s->name);
+    free(s);
+}
+
+/* ------------------------------------------------------------------ queries */
+
+bool tb_scene_intersect(const tb_scene *s, const tb_ray *ray, tb_hit *hit)
+{
+    return s && s->accel && tb_accel_intersect(s->accel, ray, hit);
+}
+
+bool tb_scene_occluded(const tb_scene *s, const tb_ray *ray)
+{
+    return s && s->accel && tb_accel_occluded(s->accel, ray);
+}
+
+const tb_object *tb_scene_hit_leaf(const tb_scene *s, const tb_hit *hit, uint32_t *local)
+{
+    if (!s || !hit || hit->object >= s->nobjects)
+        return NULL;
+    const tb_object *o = s->objects[hit->object];
+    if (tb_prim_is_csg(o->kind))
+        return tb_object_leaf_for_face(o, hit->face, local);
+    if (local)
+        *local = hit->face;
+    return o;
+}
+
+const tb_material *tb_scene_hit_material(const tb_scene *s, const tb_hit *hit)
+{
+    const tb_object *leaf = tb_scene_hit_leaf(s, hit, NULL);
+    if (!leaf || leaf->material < 0 || leaf->material >= s->nmaterials)
+        return NULL;
+    return &s->materials[leaf->material];
+}
+
+void tb_scene_print_summary(const tb_scene *s, FILE *out)
+{
+    if (!s || !out)
+        return;
+    fprintf(out, "scene %s: %u objects (", s->name, s->nobjects);
+    bool first = true;
+    for (int k = 0; k < TB_PRIM_COUNT; k++) {
+        if (!s->stats.objects_by_kind[k])
+            continue;
+        fprintf(out, "%s%u %s", first ? "" : ", ", s->stats.objects_by_kind[k], tb_prim_kind_name((tb_prim_kind)k));
+        first = false;
+    }
+    fprintf(out, "), %llu triangles, %d materials, %s colours (%d channels), %d lights, %d emissive objects "
+                 "(%d emitters)\n",
+            (unsigned long long)s->stats.triangles, s->nmaterials, s->spectral ? "spectral" : "RGB", s->nchannels,
+            s->nlights, s->nemissive, s->nemitters);
+    fprintf(out, "camera: %s%dx%d, fov %.6g x %.6g degrees%s\n", s->has_camera ? "" : "(default) ", s->camera.width,
+            s->camera.height, s->camera.fov_x, s->camera.fov_y, s->camera.lens_radius > 0.0 ? ", thin lens" : "");
+    if (!tb_aabb_is_empty(&s->bounds))
+        fprintf(out, "bounds: [%g %g %g] - [%g %g %g]\n", s->bounds.lo.x, s->bounds.lo.y, s->bounds.lo.z,
+                s->bounds.hi.x, s->bounds.hi.y, s->bounds.hi.z);
+    if (s->accel) {
+        tb_accel_stats as;
+        tb_accel_get_stats(s->accel, &as);
+        fprintf(out, "accel: %s over %zu references, built in %.3f ms", tb_accel_kind_name(as.kind), as.nprims,
+                as.build_seconds * 1e3);
+        if (as.kind == TB_ACCEL_BVH)
+            fprintf(out, " (%zu nodes, depth %d, SAH cost %.2f)", as.bvh_nodes, as.bvh_depth, as.bvh_sah_cost);
+        else if (as.kind == TB_ACCEL_GRID)
+            fprintf(out, " (%dx%dx%d voxels, %zu pairs)", as.grid_res[0], as.grid_res[1], as.grid_res[2],
+                    as.grid_refs);
+        fprintf(out, "\n");
+    }
+    fprintf(out, "load: %.3f ms\n", s->stats.load_seconds * 1e3);
+}

@@ -1,0 +1,174 @@
+/* Scene assembly: a MID file read with the streaming reader, one object at a
+ * time, into everything a renderer needs (docs/rendering.md):
+ *
+ *   - the persistent objects (host/object), index = order of appearance of
+ *     the top-level objects in the file, from 0;
+ *   - a deduplicated material table, colours converted to the render
+ *     representation (host/render/channels.h): spectral render bands if any
+ *     material or light of the scene is spectral, linear RGB otherwise;
+ *   - the point, spot and directional lights, and the emissive objects (area
+ *     lights) with their areas and, where the shape allows, ready emitters;
+ *   - the camera, the world bounds, and an acceleration structure
+ *     (host/render/accel.h) in which every triangle of a polygons object is a
+ *     reference of its own and every other object (analytic or CSG) one.
+ *
+ *     tb_scene *s;
+ *     if (tb_scene_load("scenes/cornell-box.mid", NULL, &s)) die(tb_last_error());
+ *     tb_ray r = tb_camera_ray(&s->camera, x + 0.5, y + 0.5, 0.5f, 0.5f);
+ *     tb_hit h;
+ *     if (tb_scene_intersect(s, &r, &h)) {
+ *         const tb_material *m = tb_scene_hit_material(s, &h);
+ *         ...
+ *     }
+ *     tb_scene_free(s);
+ *
+ * The struct is public for reading; treat it as read-only once loaded. Any
+ * number of threads may query a loaded scene at once. */
+#ifndef TB_HOST_RENDER_SCENE_H
+#define TB_HOST_RENDER_SCENE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "host/object/hit.h"
+#include "host/object/object.h"
+#include "host/render/accel.h"
+#include "host/render/camera.h"
+#include "host/render/channels.h"
+#include "host/render/lights.h"
+#include "host/scene/mid.h"
+#include "util/base/error.h"
+#include "util/color/bands.h"
+#include "util/math/aabb.h"
+#include "util/math/ray.h"
+
+/* `sub` of an acceleration reference that stands for a whole object (an
+ * analytic primitive or a CSG tree); polygons objects give one reference per
+ * triangle, whose `sub` is the triangle's index in obj->mesh. */
+#define TB_SCENE_WHOLE_OBJECT UINT32_MAX
+
+/* How colours are represented. */
+typedef enum tb_scene_color {
+    TB_SCENE_COLOR_AUTO = 0, /* spectral if any material or light colour is a spectrum, else RGB */
+    TB_SCENE_COLOR_RGB,      /* linear RGB; spectra are converted through XYZ (channels.h) */
+    TB_SCENE_COLOR_SPECTRAL, /* render bands; RGB colours upsampled by Smits' method */
+} tb_scene_color;
+
+/* Load options; a zeroed struct (or NULL) means every default. */
+typedef struct tb_scene_options {
+    tb_accel_kind accel;          /* structure to build: TB_ACCEL_BVH (the default), _GRID or _LIST */
+    tb_accel_options accel_opts;  /* its options (zeroed: defaults); threads 0 takes `threads` below */
+    int threads;                  /* threads for building (0: OpenMP's default) */
+    tb_scene_color color;         /* colour representation (default: as the scene needs) */
+    const tb_bands *bands;        /* bands of a spectral scene (NULL: util/color's default 400-700 nm at 10 nm) */
+    bool no_accel;                /* build no acceleration structure (tb_scene_intersect then misses) */
+} tb_scene_options;
+
+/* One entry of the material table: a MID material (docs/mid.md, section 7)
+ * with its colours in the scene's representation. */
+typedef struct tb_material {
+    tb_channels diffuse;      /* Lambertian reflectance */
+    tb_channels specular;     /* Phong/Blinn specular reflectance */
+    tb_channels transmission; /* specular transmittance */
+    tb_channels emission;     /* radiant exitance M of a diffuse emitter (radiance M / pi): W/m^2 per
+                                 channel in RGB, W/m^2/nm per band in a spectral scene */
+    float exponent;           /* Phong/Blinn exponent */
+    float ior;                /* index of refraction of the inside */
+    bool emits;               /* the emission is not zero */
+    const char *name;         /* the named MID material the first block using it started from, or NULL */
+    const char *diffuse_texture;      /* resolved path of the image, or NULL (loaded by the texture module) */
+    const char *specular_texture;     /* likewise */
+    const char *transmission_texture; /* likewise */
+    const char *emission_texture;     /* likewise */
+} tb_material;
+
+/* An emissive object: a top-level object one of whose surfaces emits. */
+typedef struct tb_scene_emissive {
+    uint32_t object;     /* top-level object index */
+    int material;        /* material of the (first, in pre-order) emitting leaf */
+    double area;         /* world-space area of its emitting surface, scene units^2; NaN when
+                            not computed (CSG objects: docs/rendering.md, "Emissive objects") */
+    int first_emitter;   /* its emitters are emitters[first_emitter .. first_emitter + nemitters) */
+    int nemitters;       /* 0 when the shape has no exact emitter form (curved surfaces, CSG) */
+} tb_scene_emissive;
+
+/* Figures about the load (also reported through util/stats, "Scene/..."). */
+typedef struct tb_scene_stats {
+    uint32_t objects_by_kind[TB_PRIM_COUNT]; /* top-level objects of each kind */
+    uint64_t triangles;      /* triangles of the polygons objects (one reference each) */
+    size_t nprims;           /* acceleration references */
+    double load_seconds;     /* wall time of reading and building the objects, lights and materials */
+    double accel_seconds;    /* wall time of the acceleration structure build */
+} tb_scene_stats;
+
+typedef struct tb__scene_priv tb__scene_priv;
+
+/* A loaded scene (read-only). */
+typedef struct tb_scene {
+    char *name;                 /* the file's name as given (or the stream name) */
+    uint32_t nobjects;
+    tb_object **objects;        /* objects[i] is top-level object i (MID order) */
+    int nmaterials;
+    tb_material *materials;     /* the deduplicated table; tb_object.material indexes it */
+    bool spectral;              /* colours are band values (else linear RGB) */
+    int nchannels;              /* channels of every colour: 3, or bands.n */
+    tb_bands bands;             /* the render bands (meaningful when spectral) */
+    int nlights;
+    tb_light *lights;           /* point, spot and directional lights, in file order */
+    int nemissive;
+    tb_scene_emissive *emissive;/* emissive objects, in object order */
+    int nemitters;
+    tb_emitter *emitters;       /* area-light emitters of the emissive objects (host/render/lights.h) */
+    bool has_camera;            /* the file has a camera (else `camera` is MID's default camera) */
+    tb_mid_camera mid_camera;   /* the camera as the file gave it (no names, attributes or references) */
+    tb_camera camera;           /* ready to make rays, at the file's resolution */
+    tb_aabb bounds;             /* world box of every object */
+    tb_accel *accel;            /* NULL with no_accel */
+    size_t nprims;
+    tb_accel_prim *prims;       /* the acceleration references in build order */
+    tb_scene_stats stats;
+    tb__scene_priv *priv;       /* owned storage (strings, IES tables) */
+} tb_scene;
+
+/* Loads the MID file at `path` ("-": standard input). Errors: the reader's
+ * "FILE:LINE:COL: error: ..." (TB_ERR_FORMAT, TB_ERR_IO), and the same form
+ * for objects the object level refuses, colours that cannot be converted
+ * (a spectrum file: TB_ERR_UNSUPPORTED) and unreadable IES files, located at
+ * the object, material or light. *out is NULL on failure. */
+tb_status tb_scene_load(const char *path, const tb_scene_options *opt, tb_scene **out);
+
+/* Loads MID text from `fp` (not closed); `name` is used in messages and file
+ * references resolve against `base_dir` (NULL: the current directory). */
+tb_status tb_scene_load_stream(FILE *fp, const char *name, const char *base_dir, const tb_scene_options *opt,
+                               tb_scene **out);
+
+/* Replaces the acceleration structure by a new one of `kind` (opt NULL:
+ * defaults). On failure the scene keeps its old structure. */
+tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel_options *opt);
+
+/* Frees the scene; NULL is allowed. */
+void tb_scene_free(tb_scene *s);
+
+/* Closest hit with ray->tmin <= t <= ray->tmax (host/object/hit.h: object
+ * index, face ID, (u, v), unit outward geometric normal); false on a miss
+ * (*hit untouched) and for invalid rays. BVH and grid answer bit for bit
+ * alike (docs/accel.md, "Tie rule"). */
+bool tb_scene_intersect(const tb_scene *s, const tb_ray *ray, tb_hit *hit);
+
+/* True if anything is hit with ray->tmin <= t <= ray->tmax. */
+bool tb_scene_occluded(const tb_scene *s, const tb_ray *ray);
+
+/* The primitive (CSG leaf, or the object itself) a hit is on, and the face
+ * ID within it (*local, may be NULL); NULL for a hit not from this scene. */
+const tb_object *tb_scene_hit_leaf(const tb_scene *s, const tb_hit *hit, uint32_t *local);
+
+/* The material of the surface a hit is on; NULL for a hit not from this scene. */
+const tb_material *tb_scene_hit_material(const tb_scene *s, const tb_hit *hit);
+
+/* Prints a short summary (objects by kind, triangles, materials, colours,
+ * lights, emitters, camera, bounds, acceleration structure, times). */
+void tb_scene_print_summary(const tb_scene *s, FILE *out);
+
+#endif

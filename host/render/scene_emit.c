@@ -1,0 +1,154 @@
+/* Emissive objects: the world-space area of an emitting primitive and its
+ * exact emitters for area-light sampling (docs/rendering.md, "Emissive
+ * objects"). */
+#include <math.h>
+#include <stdlib.h>
+
+#include "host/object/polygonize.h"
+#include "host/render/scene_internal.h"
+#include "util/math/transform.h"
+#include "util/mesh/fed.h"
+
+/* Angular tolerances of the two tessellations whose areas are extrapolated:
+ * 4 and 2 degrees (90 and 180 segments per full turn, exactly doubling). */
+#define TB__AREA_ANGLE_COARSE (4.0 * 3.14159265358979323846 / 180.0)
+#define TB__AREA_ANGLE_FINE (2.0 * 3.14159265358979323846 / 180.0)
+
+/* Determinant of the transform's linear part. */
+static double tb__det3(const tb_transform *t)
+{
+    const double(*m)[4] = t->m.m;
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
+/* Area of polygons object `o` in world space: its triangles transformed. */
+static double tb__mesh_area(const tb_object *o)
+{
+    const tb_object_mesh *m = o->mesh;
+    double sum = 0.0;
+    for (uint32_t i = 0; m && i < m->ntris; i++) {
+        const uint32_t *tv = &m->tris[3 * (size_t)i];
+        tb_dvec3 p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = tb_transform_dpoint(&o->to_world, tb_vec3_to_d(m->vertices[tv[k]]));
+        sum += 0.5 * tb_dvec3_length(tb_dvec3_cross(tb_dvec3_sub(p[1], p[0]), tb_dvec3_sub(p[2], p[0])));
+    }
+    return sum;
+}
+
+/* World area of the tessellation of `leaf` at angular tolerance `angle`: each
+ * face's object-space area scaled by Nanson's formula |det L| |L^-T n| (exact
+ * for flat faces under any affine map). */
+static tb_status tb__tess_area(const tb_object *leaf, double angle, double *area)
+{
+    tb_poly_options po = {0};
+    po.max_angle = angle;
+    po.max_segments = TB_POLY_MAX_SEGMENTS;
+    tb_fed *fed;
+    tb_status st = tb_polygonize(leaf->kind, &leaf->geom, &po, &fed);
+    if (st)
+        return st;
+    double det = fabs(tb__det3(&leaf->to_world)), sum = 0.0;
+    for (uint32_t f = 0; f < fed->nfaces; f++) {
+        tb_dvec3 n = tb_fed_face_normal(fed, f);
+        double len = tb_dvec3_length(n);
+        if (!(len > 0.0))
+            continue;
+        tb_dvec3 nw = tb_transform_dnormal(&leaf->to_world, tb_dvec3_scale(n, 1.0 / len));
+        sum += tb_fed_face_area(fed, f) * det * tb_dvec3_length(nw);
+    }
+    tb_fed_free(fed);
+    *area = sum;
+    return TB_OK;
+}
+
+/* True for kinds whose every face is flat (their tessellation is exact). */
+static bool tb__all_flat(tb_prim_kind k)
+{
+    return k == TB_PRIM_CUBE || k == TB_PRIM_PYRAMID || k == TB_PRIM_PRISM || k == TB_PRIM_SQUARE_ARCH;
+}
+
+tb_status tb__scene_leaf_area(const tb_object *leaf, double *area)
+{
+    if (tb_prim_is_csg(leaf->kind))
+        return tb_error(TB_ERR_UNSUPPORTED, "scene: no area for a CSG node");
+    if (leaf->kind == TB_PRIM_POLYGONS) {
+        *area = tb__mesh_area(leaf);
+        return TB_OK;
+    }
+    double fine;
+    tb_status st = tb__tess_area(leaf, TB__AREA_ANGLE_FINE, &fine);
+    if (st)
+        return st;
+    if (tb__all_flat(leaf->kind)) {
+        *area = fine;
+        return TB_OK;
+    }
+    /* The inscribed tessellation's area error is c h^2 + O(h^4) for facet
+     * size h; halving h and extrapolating removes the h^2 term. */
+    double coarse;
+    st = tb__tess_area(leaf, TB__AREA_ANGLE_COARSE, &coarse);
+    if (st)
+        return st;
+    *area = (4.0 * fine - coarse) / 3.0;
+    return TB_OK;
+}
+
+/* True if the linear part of t is a rotation (or mirror) times a uniform
+ * scale; *s is that scale. */
+static bool tb__similarity(const tb_transform *t, double *s)
+{
+    const double(*m)[4] = t->m.m;
+    tb_dvec3 c[3];
+    for (int j = 0; j < 3; j++)
+        c[j] = (tb_dvec3){m[0][j], m[1][j], m[2][j]};
+    double s2 = tb_dvec3_length2(c[0]), tol = 1e-9 * s2;
+    for (int i = 0; i < 3; i++) {
+        if (!(fabs(tb_dvec3_length2(c[i]) - s2) <= tol))
+            return false;
+        for (int j = i + 1; j < 3; j++)
+            if (!(fabs(tb_dvec3_dot(c[i], c[j])) <= tol))
+                return false;
+    }
+    *s = sqrt(s2);
+    return true;
+}
+
+int tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out)
+{
+    if (leaf->kind == TB_PRIM_SPHERE) {
+        double s;
+        if (!tb__similarity(&leaf->to_world, &s))
+            return 0;
+        if (out) {
+            tb_dvec3 c = tb_transform_dpoint(&leaf->to_world, (tb_dvec3){0.0, 0.0, 0.0});
+            *out = tb_emitter_sphere(tb_dvec3_to_f(c), (float)s, L);
+            out->object = leaf->index;
+            out->face = leaf->face_base;
+        }
+        return 1;
+    }
+    if (leaf->kind != TB_PRIM_POLYGONS || !leaf->mesh)
+        return 0;
+    const tb_object_mesh *m = leaf->mesh;
+    /* A mirroring transform reverses the winding in world space; the front
+     * side must stay the object's front side. */
+    bool swap = tb_transform_swaps_handedness(&leaf->to_world);
+    int n = 0;
+    for (uint32_t i = 0; i < m->ntris; i++) {
+        const uint32_t *tv = &m->tris[3 * (size_t)i];
+        tb_vec3 p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = tb_dvec3_to_f(tb_transform_dpoint(&leaf->to_world, tb_vec3_to_d(m->vertices[tv[k]])));
+        tb_emitter e = swap ? tb_emitter_triangle(p[0], p[2], p[1], L) : tb_emitter_triangle(p[0], p[1], p[2], L);
+        if (!(tb_emitter_area(&e) > 0.0))
+            continue; /* a sliver that vanished in float: nothing to sample */
+        e.object = leaf->index;
+        e.face = leaf->face_base + m->tri_face[i];
+        if (out)
+            out[n] = e;
+        n++;
+    }
+    return n;
+}

@@ -1,0 +1,44 @@
+/* Internals shared by scene.c, scene_mesh.c and scene_emit.c. Not installed. */
+#ifndef TB_HOST_RENDER_SCENE_INTERNAL_H
+#define TB_HOST_RENDER_SCENE_INTERNAL_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "host/object/hit.h"
+#include "host/object/object.h"
+#include "host/render/channels.h"
+#include "host/render/lights.h"
+#include "util/base/error.h"
+#include "util/math/aabb.h"
+#include "util/math/ray.h"
+
+/* Closest hit of triangle `tri` (index into o->mesh) of the top-level
+ * polygons object `o` with the world ray, t in [ray->tmin, ray->tmax] on the
+ * float t: the same record tb_object_intersect gives when that triangle is
+ * the object's closest (face ID, (u, v) from host/object/param.h, unit world
+ * normal out of the front side). */
+bool tb__scene_tri_intersect(const tb_object *o, uint32_t tri, const tb_ray *ray, tb_hit *hit);
+
+/* True if triangle `tri` of `o` is hit with t in [ray->tmin, ray->tmax]. */
+bool tb__scene_tri_occluded(const tb_object *o, uint32_t tri, const tb_ray *ray);
+
+/* World box of triangle `tri` of polygons object `o` (exact, rounded outward). */
+tb_status tb__scene_tri_bounds(const tb_object *o, uint32_t tri, tb_aabb *out);
+
+/* World box of an object: the primitive's exact box, a polygons object's
+ * vertices, or the CSG combination of the children's boxes. */
+tb_status tb__scene_object_bounds(const tb_object *o, tb_aabb *out);
+
+/* World-space surface area of primitive `leaf` (not a CSG node): exact for
+ * polygons and for primitives with only flat faces, otherwise from two
+ * tessellations and Richardson extrapolation (docs/rendering.md). */
+tb_status tb__scene_leaf_area(const tb_object *leaf, double *area);
+
+/* The exact emitters of primitive `leaf` with radiance L: one triangle per
+ * triangle of a polygons object, one sphere for a sphere under a similarity
+ * transform, none otherwise. Writes them to out (when not NULL) and returns
+ * how many there are. */
+int tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out);
+
+#endif
