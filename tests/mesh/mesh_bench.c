@@ -87,7 +87,7 @@ int main(int argc, char **argv)
     printf("  read binary         %7.3f s  (%.0f MB/s, including edges and adjacency)\n", t_rb, bsize / 1e6 / t_rb);
     printf("  write text          %7.3f s  (%.1f MB)\n", t_wt, tsize / 1e6);
     printf("  read text           %7.3f s  (%.0f MB/s)\n", t_rt, tsize / 1e6 / t_rt);
-    remove(bpath);
+    if (!getenv("MESH_BENCH_KEEP")) remove(bpath);
     remove(tpath);
     tb_fed_free(m), tb_fed_free(b), tb_fed_free(t);
     free(pos), free(sizes), free(corners);

@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "util/container/hash_table.h"
 #include "util/math/float.h"
 #include "util/mesh/fed_internal.h"
 #include "util/mesh/polygon.h"
@@ -224,33 +223,62 @@ static tb_status tb__derive(tb_fed *m)
                 m->corner_loop[c] = l;
         }
 
-    /* Edges: one per unordered vertex pair, numbered in order of first use. */
-    tb_htab h;
-    tb_htab_init(&h, TB_HTAB_U64);
-    tb_status st = tb_htab_reserve(&h, nc / 2 + 16);
-    if (st) {
-        tb_htab_free(&h);
-        return st;
+    /* Edges: one per unordered vertex pair, numbered in order of first use.
+     * The corners are bucketed by their pair's lower vertex (a counting
+     * sort), so finding a pair's first corner is a scan of a few entries in
+     * one place; that is about twice as fast as a hash table keyed on the
+     * pair (docs/fed.md, "Performance"). A bucket lists its corners in
+     * corner order, so the first entry with the same upper vertex is the
+     * pair's first use. */
+    typedef struct {
+        uint32_t hi, corner;
+    } tb__use;
+    uint32_t *bstart = calloc((size_t)m->nverts + 1, sizeof(uint32_t));
+    tb__use *uses = tb__alloc_n(nc, sizeof(tb__use));
+    if (!bstart || !uses) {
+        free(bstart);
+        free(uses);
+        return tb_error(TB_ERR_NOMEM, "FED: out of memory for %u corners", nc);
     }
-    uint32_t ne = 0;
-    for (uint32_t l = 0; l < m->nloops && !st; l++) {
+    for (uint32_t l = 0; l < m->nloops; l++) {
+        uint32_t c0 = m->loop_corners[l], c1 = m->loop_corners[l + 1];
+        for (uint32_t c = c0; c < c1; c++) {
+            uint32_t a = m->corner_vert[c], b = m->corner_vert[c + 1 < c1 ? c + 1 : c0];
+            bstart[(a < b ? a : b) + 1]++;
+        }
+    }
+    for (uint32_t v = 0; v < m->nverts; v++)
+        bstart[v + 1] += bstart[v];
+    for (uint32_t l = 0; l < m->nloops; l++) {
         uint32_t c0 = m->loop_corners[l], c1 = m->loop_corners[l + 1];
         for (uint32_t c = c0; c < c1; c++) {
             uint32_t a = m->corner_vert[c], b = m->corner_vert[c + 1 < c1 ? c + 1 : c0];
             uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
-            uint64_t key = (uint64_t)lo << 32 | hi, e;
-            if (!tb_htab_get(&h, key, &e)) {
-                e = ne++;
-                m->edges[e] = (tb_fed_edge){{lo, hi}};
-                if ((st = tb_htab_put(&h, key, e)))
-                    break;
-            }
-            m->corner_edge[c] = (uint32_t)e;
+            uses[bstart[lo]++] = (tb__use){hi, c};
         }
     }
-    tb_htab_free(&h);
-    if (st)
-        return st;
+    for (uint32_t v = m->nverts; v > 0; v--) /* the fill advanced each start to the next one's */
+        bstart[v] = bstart[v - 1];
+    bstart[0] = 0;
+    uint32_t ne = 0;
+    for (uint32_t l = 0; l < m->nloops; l++) {
+        uint32_t c0 = m->loop_corners[l], c1 = m->loop_corners[l + 1];
+        for (uint32_t c = c0; c < c1; c++) {
+            uint32_t a = m->corner_vert[c], b = m->corner_vert[c + 1 < c1 ? c + 1 : c0];
+            uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+            const tb__use *u = uses + bstart[lo];
+            while (u->hi != hi)
+                u++; /* stops at the pair's first corner, at c itself at the latest */
+            if (u->corner == c) {
+                m->edges[ne] = (tb_fed_edge){{lo, hi}};
+                m->corner_edge[c] = ne++;
+            } else {
+                m->corner_edge[c] = m->corner_edge[u->corner];
+            }
+        }
+    }
+    free(bstart);
+    free(uses);
     m->nedges = ne;
     tb_fed_edge *shrunk = realloc(m->edges, (ne ? ne : 1) * sizeof(tb_fed_edge));
     if (shrunk)
