@@ -66,6 +66,7 @@ typedef struct tb__imp {
     char **tex_ref;             /* file("...") text of each texture written */
     size_t ntex, ctex;
     size_t nmat;                /* entries of mat_state and mat_name */
+    tb__import_reround rr;      /* text formats: the file's coordinates */
     uint32_t nfiles;            /* FED files written */
 } tb__imp;
 
@@ -615,7 +616,7 @@ static tb_status tb__mesh(tb__imp *im, unsigned idx, const char *label, int64_t 
     const struct aiMesh *m = im->scene->mMeshes[idx];
     tb_fed *fed;
     tb__import_mesh_report rep;
-    tb_status st = tb__import_mesh_fed(m, im->join, &fed, &rep);
+    tb_status st = tb__import_mesh_fed(m, im->join, &im->rr, &fed, &rep);
     if (st)
         return tb_error_context(st, "%s: mesh '%s'", im->model, label);
     uint64_t skipped = (uint64_t)rep.points_lines + rep.degenerate + rep.nonfinite;
@@ -742,6 +743,37 @@ static const char *tb__scene_format(const struct aiScene *s)
     return "";
 }
 
+/* Which text format `model` is, for re-rounding its coordinates; -1 for
+ * binary files and other formats. */
+static int tb__text_kind(const char *model, const char *format)
+{
+    if (strcmp(format, TB__FORMAT_OBJ) == 0)
+        return TB__TEXT_OBJ;
+    bool ply = strcmp(format, "Stanford Polygon Library (PLY) Importer") == 0;
+    bool stl = strcmp(format, "Stereolithography (STL) Importer") == 0;
+    if (!ply && !stl)
+        return -1;
+    FILE *f = fopen(model, "rb");
+    if (!f)
+        return -1;
+    char head[256] = {0};
+    size_t n = fread(head, 1, sizeof head - 1, f);
+    int kind = -1;
+    if (ply && n > 4 && strstr(head, "format ascii"))
+        kind = TB__TEXT_PLY;
+    else if (stl && n >= 84 && strncmp(head, "solid", 5) == 0) {
+        /* Binary STL files may start with "solid" too; their size gives them away. */
+        uint32_t count;
+        memcpy(&count, head + 80, 4);
+        struct stat sb;
+        if (fstat(fileno(f), &sb) == 0 && (uint64_t)sb.st_size != 84 + 50 * (uint64_t)count)
+            kind = TB__TEXT_STL;
+    } else if (stl && n >= 5 && n < 84 && strncmp(head, "solid", 5) == 0)
+        kind = TB__TEXT_STL;
+    fclose(f);
+    return kind;
+}
+
 /* Moves the finished data folder and MID file into place; an existing data
  * folder is replaced (moved aside first, removed last). */
 static tb_status tb__commit(tb__imp *im)
@@ -821,6 +853,7 @@ static tb_status tb__run(tb__imp *im, const char *out_mid)
         return tb_error(TB_ERR_FORMAT, "%s: Assimp cannot read it: %s", im->model, why && *why ? why : "no reason given");
     }
     const struct aiScene *s = im->scene;
+    tb_status st;
     if (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE)
         return tb_error(TB_ERR_FORMAT, "%s: Assimp read only part of it (incomplete scene)", im->model);
     if (!s->mRootNode)
@@ -832,6 +865,9 @@ static tb_status tb__run(tb__imp *im, const char *out_mid)
     memcpy(im->stats->format, format, flen);
     im->stats->format[flen] = '\0';
     im->gltf = strcmp(im->stats->format, TB__FORMAT_GLTF2) == 0;
+    int text = tb__text_kind(im->model, im->stats->format);
+    if (text >= 0 && (st = tb__import_reround_load(im->model, (tb__import_text_kind)text, &im->rr)))
+        return st;
     im->join = im->opts->join == TB_IMPORT_JOIN_ALWAYS ||
                (im->opts->join == TB_IMPORT_JOIN_AUTO && strcmp(im->stats->format, TB__FORMAT_OBJ) == 0);
 
@@ -858,7 +894,7 @@ static tb_status tb__run(tb__imp *im, const char *out_mid)
     mode_t mask = umask(0);
     umask(mask);
     chmod(im->tmp_dir, 0777 & ~mask);
-    tb_status st = tb_outfile_open(&im->of, out_mid);
+    st = tb_outfile_open(&im->of, out_mid);
     if (st)
         return st;
     im->of_open = true;
@@ -876,6 +912,12 @@ static tb_status tb__run(tb__imp *im, const char *out_mid)
     free(ops);
     if (st)
         return st;
+    im->stats->rerounded = im->rr.changed;
+    im->stats->undecided = im->rr.undecided;
+    if (im->rr.undecided)
+        tb__warn(im, "%llu coordinates Assimp read are no number of the file's vertex lines and cannot be matched "
+                     "to exactly one: kept as Assimp read them",
+                 (unsigned long long)im->rr.undecided);
     uint32_t unplaced = 0;
     for (size_t i = 0; i < s->mNumMeshes; i++)
         unplaced += im->mesh_file[i] == -1;
@@ -921,5 +963,6 @@ tb_status tb_import(const char *model, const char *out_mid, const tb_import_opts
     tb_htab_free(&im.mat_names);
     tb_htab_free(&im.tex_src);
     tb_htab_free(&im.tex_files);
+    tb__import_reround_free(&im.rr);
     return st;
 }

@@ -4,8 +4,10 @@
  * One call reads the model and writes OUT.mid plus a folder OUT.data/ beside
  * it holding one FED file per source mesh (and copies of the textures the
  * materials use); the MID file references them with relative file("...")
- * paths. Vertex positions are copied bit for bit from what Assimp read; node
- * transforms become MID transforms. The output appears whole or not at all:
+ * paths. Vertex positions are copied bit for bit from what Assimp read (for
+ * OBJ, ASCII PLY and ASCII STL, corrected to the correctly rounded value of
+ * the file's text where Assimp's parser was one ulp off); node transforms
+ * become MID transforms. The output appears whole or not at all:
  * everything is written under temporary names and renamed at the end, and on
  * any failure whatever was written is removed. */
 #ifndef TB_HOST_SCENE_IMPORT_H
@@ -43,6 +45,8 @@ typedef struct tb_import_stats {
     uint64_t vertices;       /* FED vertices, summed over the files */
     uint64_t faces;          /* FED faces, summed over the files */
     uint64_t skipped_faces;  /* source faces not written: points, lines, degenerate polygons */
+    uint64_t rerounded;      /* text formats: coordinates Assimp misrounded, set to the file's value */
+    uint64_t undecided;      /* text formats: coordinates not found in the file, kept as Assimp read them */
     uint32_t materials;      /* named MID materials */
     uint32_t textures;       /* texture files copied or extracted */
     uint32_t lights;         /* MID lights */

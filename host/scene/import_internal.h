@@ -28,15 +28,45 @@ typedef struct tb__import_mesh_report {
     bool uvs_dropped;       /* the mesh had (u,v), some not finite: none written */
 } tb__import_mesh_report;
 
+/* Text formats whose coordinates can be re-rounded from the file's text. */
+typedef enum tb__import_text_kind {
+    TB__TEXT_OBJ = 0, /* "v x y z" lines */
+    TB__TEXT_PLY,     /* ASCII PLY: the vertex element's x, y, z columns */
+    TB__TEXT_STL,     /* ASCII STL: "vertex x y z" lines */
+} tb__import_text_kind;
+
+/* The file's vertex coordinates, correctly rounded (import_text.c). */
+typedef struct tb__import_reround {
+    float *vals;        /* sorted distinct coordinates (strtof of the file's text) */
+    size_t n;
+    bool active;        /* vals is usable */
+    uint64_t changed;   /* coordinates moved one ulp onto a number of the file */
+    uint64_t undecided; /* coordinates not in the file with both or neither neighbour in it: kept */
+} tb__import_reround;
+
+/* Reads the coordinates of the text model `path`. A file that cannot be
+ * opened or parsed leaves `r` inactive (TB_OK); TB_ERR_NOMEM. */
+tb_status tb__import_reround_load(const char *path, tb__import_text_kind kind, tb__import_reround *r);
+
+/* The coordinate of the file that Assimp's value `a` stands for: a itself
+ * if it is one, else its only neighbour (one ulp away) that is; a when
+ * undecided or r is NULL or inactive. Counts in r. */
+float tb__import_reround_value(tb__import_reround *r, float a);
+
+/* Frees the coordinates (r stays valid and inactive). */
+void tb__import_reround_free(tb__import_reround *r);
+
 /* Builds the FED mesh of `m`: positions copied bit for bit, normals and the
  * first (u,v) channel when present and finite, one loop per face with 3 or
  * more corners, consecutive corners at the same position merged, faces FED
  * rejects as degenerate dropped (all counted in *rep). With `join`, vertices
- * equal bit for bit in every written attribute become one. Vertices no
+ * equal bit for bit in every written attribute become one. With `rr`, each
+ * coordinate is first passed through tb__import_reround_value. Vertices no
  * written face uses are left out; the others keep their relative order.
  * *out is NULL (and TB_OK returned) when no face is left. TB_ERR_FORMAT for
  * an index out of range, TB_ERR_UNSUPPORTED beyond FED's counts, TB_ERR_NOMEM. */
-tb_status tb__import_mesh_fed(const struct aiMesh *m, bool join, tb_fed **out, tb__import_mesh_report *rep);
+tb_status tb__import_mesh_fed(const struct aiMesh *m, bool join, tb__import_reround *rr, tb_fed **out,
+                              tb__import_mesh_report *rep);
 
 /* Warning sink of the mappings: `fmt` formatted, sent to the user's callback. */
 typedef struct tb__import_warner {

@@ -1,7 +1,8 @@
 /* Importer: one Assimp mesh to one FED mesh (docs/import.md, "Meshes").
  *
  * Positions are never computed, only copied, so they stay bit for bit what
- * Assimp read. Faces are filtered with the same rules tb_fed_build applies
+ * Assimp read (or, for text formats, the file's numbers correctly rounded:
+ * import_text.c). Faces are filtered with the same rules tb_fed_build applies
  * (polygon.h's Newell area and size), so a model with a few degenerate
  * triangles loses those faces instead of failing as a whole. */
 #include "host/scene/import_internal.h"
@@ -35,7 +36,8 @@ static bool tb__finite3(const struct aiVector3D *v) { return isfinite(v->x) && i
 
 static bool tb__same_pos(const tb_vec3 *p, uint32_t a, uint32_t b) { return tb_vec3_equal(p[a], p[b]); }
 
-tb_status tb__import_mesh_fed(const struct aiMesh *m, bool join, tb_fed **out, tb__import_mesh_report *rep)
+tb_status tb__import_mesh_fed(const struct aiMesh *m, bool join, tb__import_reround *rr, tb_fed **out,
+                              tb__import_mesh_report *rep)
 {
     *out = NULL;
     *rep = (tb__import_mesh_report){.first_dropped = UINT32_MAX};
@@ -75,7 +77,8 @@ tb_status tb__import_mesh_fed(const struct aiMesh *m, bool join, tb_fed **out, t
         goto done;
     }
     for (uint32_t i = 0; i < nv; i++)
-        pos[i] = (tb_vec3){m->mVertices[i].x, m->mVertices[i].y, m->mVertices[i].z};
+        pos[i] = (tb_vec3){tb__import_reround_value(rr, m->mVertices[i].x), tb__import_reround_value(rr, m->mVertices[i].y),
+                           tb__import_reround_value(rr, m->mVertices[i].z)};
 
     /* Representatives: the lowest index of each group of equal records. */
     for (uint32_t i = 0; i < nv; i++)

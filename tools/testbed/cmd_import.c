@@ -18,7 +18,9 @@ static void tb__import_usage(FILE *out)
             "Assimp reads is tried) and writes OUT.mid with one polygons object per mesh and\n"
             "node, in the model's node order, plus the folder OUT.data/ beside it (replaced if\n"
             "it exists) with one FED file per mesh and copies of the textures. Vertex positions\n"
-            "are written bit for bit as Assimp read them; node transforms become MID transforms;\n"
+            "are written bit for bit as Assimp read them (for OBJ, ASCII PLY and ASCII STL, where\n"
+            "Assimp's parser rounds a number one ulp off, as the file's text reads correctly\n"
+            "rounded); node transforms become MID transforms;\n"
             "MTL and glTF materials, glTF cameras and KHR_lights_punctual lights are mapped as\n"
             "docs/import.md describes. Output appears whole or not at all.\n"
             "\n"
@@ -108,6 +110,9 @@ int tb_cmd_import(int argc, char **argv)
                model, s.format[0] ? s.format : "unknown format", s.objects, s.fed_files, data ? data : "?",
                (unsigned long long)s.vertices, (unsigned long long)s.faces, s.materials, s.textures, s.lights,
                s.cameras ? "1" : "no", (unsigned long long)s.skipped_faces, s.warnings);
+        if (s.rerounded || s.undecided)
+            printf("  %llu coordinates corrected to the file's text (Assimp's parser rounds some one ulp off), "
+                   "%llu undecided\n", (unsigned long long)s.rerounded, (unsigned long long)s.undecided);
         free(data);
     }
     return TB_EXIT_OK;
