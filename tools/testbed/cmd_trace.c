@@ -1,0 +1,339 @@
+/* `testbed trace SCENE.mid --rays RAYS --hits HITS`: a ray server for scripts
+ * and for comparisons with other tools (docs/trace.md). Reads N rays of 32
+ * bytes, writes N hits of 32 bytes, all little-endian:
+ *
+ *   RAYS record: float32 ox oy oz tmin dx dy dz tmax
+ *   HITS record: float32 t, uint32 object, uint32 face, float32 u v, float32 nx ny nz
+ *
+ * The closest hit of every ray through the scene's acceleration structure
+ * (host/render/scene.h), rays spread over OpenMP threads; each ray is
+ * independent, so the HITS file is the same for any thread count. Only the
+ * traversal is timed for the stats JSON (not reading, loading or building). */
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "commands.h"
+#include "host/render/scene.h"
+#include "util/base/outfile.h"
+#include "util/stats/provenance.h"
+#include "util/stats/stats.h"
+
+TB_STAT_COUNTER(tb__n_trace_rays, "Trace/rays");
+TB_STAT_COUNTER(tb__n_trace_hits, "Trace/hits");
+TB_STAT_COUNTER(tb__n_trace_invalid, "Trace/invalid rays");
+
+/* Bytes per RAYS and HITS record. */
+#define TB__RECORD 32
+
+/* Rays read, traced and written per round (32 MiB of rays, 32 MiB of hits). */
+#define TB__CHUNK ((size_t)1 << 20)
+
+/* The object and face of a miss. */
+#define TB__MISS UINT32_MAX
+
+static void tb__usage(FILE *out)
+{
+    fprintf(out,
+            "usage: testbed trace SCENE.mid --rays RAYS --hits HITS [--backend cpu|vulkan|auto]\n"
+            "                     [--accel bvh|grid|list] [--threads N] [--stats FILE.json] [--verbose]\n"
+            "\n"
+            "Traces every ray of the file RAYS through the scene and writes its closest hit to HITS\n"
+            "(docs/trace.md). All numbers are little-endian.\n"
+            "\n"
+            "  RAYS  N records of 32 bytes: float32 ox oy oz tmin dx dy dz tmax. The ray is o + t d\n"
+            "        for tmin <= t <= tmax; d need not be unit length (t is in units of |d|);\n"
+            "        tmax may be +inf. The file size must be a multiple of 32.\n"
+            "  HITS  N records of 32 bytes, in ray order: float32 t, uint32 object (0-based index of\n"
+            "        the top-level object in MID file order), uint32 face ID, float32 u, float32 v,\n"
+            "        float32 nx ny nz (unit geometric normal, world space, pointing out of the solid or\n"
+            "        to the front side of a polygon; never flipped toward the ray).\n"
+            "        A miss is t = +inf, object = face = 0xFFFFFFFF, u = v = 0, normal (0, 0, 0).\n"
+            "        Invalid rays (a NaN or infinite origin or direction, a zero direction, a NaN or\n"
+            "        infinite tmin, a NaN tmax, tmin > tmax) are written as misses and counted.\n"
+            "        HITS is written whole or not at all.\n"
+            "\n"
+            "options:\n"
+            "  --rays RAYS        input rays (required)\n"
+            "  --hits HITS        output hits (required)\n"
+            "  --backend B        cpu (the reference path), vulkan or auto (default: auto).\n"
+            "                     vulkan is not yet implemented (the Vulkan intersect kernel comes with\n"
+            "                     issue 6): it fails with exit status 1. auto uses cpu for now.\n"
+            "  --accel A          bvh (default), grid, or list (every reference tested: slow, for checks);\n"
+            "                     every structure gives byte-identical hits\n"
+            "  --threads N        OpenMP threads for the build and the traversal (default: OpenMP's)\n"
+            "  --stats FILE.json  write the run's statistics: \"rays\", \"seconds\" and \"rays_per_second\"\n"
+            "                     of the traversal alone (not reading, loading or building), \"hits\",\n"
+            "                     \"invalid_rays\", the provenance and the counters (util/stats)\n"
+            "  --verbose          print a summary of the scene on stderr\n"
+            "\n"
+            "Exit status: 0 on success, 1 for bad input (scene, ray file) or a failed write, 2 for a bad\n"
+            "command line.\n");
+}
+
+/* Little-endian 32-bit words to native and back (a no-op on little-endian hosts). */
+static void tb__le32_words(void *p, size_t nwords)
+{
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+    uint32_t *w = p;
+    for (size_t i = 0; i < nwords; i++)
+        w[i] = __builtin_bswap32(w[i]);
+#else
+    (void)p;
+    (void)nwords;
+#endif
+}
+
+static int tb__fail(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "testbed trace: error: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\n");
+    return TB_EXIT_FAIL;
+}
+
+/* Parses a whole number in [lo, hi]; false if `s` is not one. */
+static bool tb__parse_int(const char *s, long lo, long hi, long *out)
+{
+    if (!s || !*s)
+        return false;
+    errno = 0;
+    char *end;
+    long v = strtol(s, &end, 10);
+    if (errno || *end || v < lo || v > hi)
+        return false;
+    *out = v;
+    return true;
+}
+
+/* Traces rays[0..n) into hits[0..n); returns the traversal's wall seconds
+ * and adds the hits and invalid rays found. */
+static double tb__trace_chunk(const tb_scene *s, const tb_ray *rays, tb_hit *hits, size_t n, int threads,
+                              uint64_t *nhits, uint64_t *ninvalid)
+{
+    uint64_t h = 0, bad = 0;
+    /* Start the thread team outside the timed region (the first parallel
+     * region creates the threads, a few milliseconds). */
+#pragma omp parallel num_threads(threads)
+    {
+        (void)0;
+    }
+    int64_t t0 = tb_stats_now_ns();
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1024) reduction(+ : h, bad)
+    for (size_t i = 0; i < n; i++) {
+        tb_hit hit = {INFINITY, TB__MISS, TB__MISS, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
+        if (!tb_ray_is_valid(&rays[i]))
+            bad++;
+        else if (tb_scene_intersect(s, &rays[i], &hit))
+            h++;
+        hits[i] = hit;
+    }
+    double sec = (double)(tb_stats_now_ns() - t0) * 1e-9;
+    *nhits += h;
+    *ninvalid += bad;
+    return sec;
+}
+
+int tb_cmd_trace(int argc, char **argv)
+{
+    if (tb_wants_help(argc, argv)) {
+        tb__usage(stdout);
+        return TB_EXIT_OK;
+    }
+    const char *scene_path = NULL, *rays_path = NULL, *hits_path = NULL, *stats_path = NULL;
+    const char *backend = "auto", *accel_name = "bvh";
+    long threads = 0;
+    bool verbose = false;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        bool takes = strcmp(a, "--rays") == 0 || strcmp(a, "--hits") == 0 || strcmp(a, "--backend") == 0 ||
+                     strcmp(a, "--accel") == 0 || strcmp(a, "--threads") == 0 || strcmp(a, "--stats") == 0;
+        if (takes && !v) {
+            fprintf(stderr, "testbed trace: error: %s needs a value (see testbed trace --help)\n", a);
+            return TB_EXIT_USAGE;
+        }
+        if (strcmp(a, "--rays") == 0) {
+            rays_path = v;
+        } else if (strcmp(a, "--hits") == 0) {
+            hits_path = v;
+        } else if (strcmp(a, "--stats") == 0) {
+            stats_path = v;
+        } else if (strcmp(a, "--backend") == 0) {
+            backend = v;
+        } else if (strcmp(a, "--accel") == 0) {
+            accel_name = v;
+        } else if (strcmp(a, "--threads") == 0) {
+            if (!tb__parse_int(v, 1, 1024, &threads)) {
+                fprintf(stderr, "testbed trace: error: --threads needs a number 1 .. 1024, not '%s'\n", v);
+                return TB_EXIT_USAGE;
+            }
+        } else if (strcmp(a, "--verbose") == 0 || strcmp(a, "-v") == 0) {
+            verbose = true;
+            continue;
+        } else if (a[0] == '-' && a[1] != '\0') {
+            fprintf(stderr, "testbed trace: error: unknown option '%s' (see testbed trace --help)\n", a);
+            return TB_EXIT_USAGE;
+        } else if (scene_path) {
+            fprintf(stderr, "testbed trace: error: one scene at a time ('%s' and '%s')\n", scene_path, a);
+            return TB_EXIT_USAGE;
+        } else {
+            scene_path = a;
+            continue;
+        }
+        i++;
+    }
+    if (!scene_path || !rays_path || !hits_path) {
+        fprintf(stderr, "testbed trace: error: needs SCENE.mid, --rays RAYS and --hits HITS (see testbed trace --help)\n");
+        return TB_EXIT_USAGE;
+    }
+    tb_accel_kind kind;
+    if (tb_accel_kind_from_name(accel_name, &kind)) {
+        fprintf(stderr, "testbed trace: error: --accel: %s\n", tb_last_error());
+        return TB_EXIT_USAGE;
+    }
+    if (strcmp(backend, "vulkan") == 0)
+        return tb__fail("--backend vulkan: %s", "not yet implemented: the Vulkan intersect kernel (issue 6)");
+    if (strcmp(backend, "cpu") != 0 && strcmp(backend, "auto") != 0) {
+        fprintf(stderr, "testbed trace: error: --backend must be cpu, vulkan or auto, not '%s'\n", backend);
+        return TB_EXIT_USAGE;
+    }
+    if (threads > 0)
+        omp_set_num_threads((int)threads);
+
+    /* The ray file first: a malformed one fails before any work. */
+    FILE *rf = fopen(rays_path, "rb");
+    if (!rf) {
+        fprintf(stderr, "testbed trace: error: cannot open rays file '%s': %s\n", rays_path, strerror(errno));
+        return TB_EXIT_FAIL;
+    }
+    struct stat stt;
+    if (fstat(fileno(rf), &stt) != 0 || !S_ISREG(stt.st_mode)) {
+        fclose(rf);
+        return tb__fail("rays file '%s' is not a regular file", rays_path);
+    }
+    uint64_t size = (uint64_t)stt.st_size;
+    if (size % TB__RECORD != 0) {
+        fclose(rf);
+        fprintf(stderr,
+                "testbed trace: error: rays file '%s' is %llu bytes, not a multiple of the 32-byte record "
+                "(8 float32: ox oy oz tmin dx dy dz tmax)\n",
+                rays_path, (unsigned long long)size);
+        return TB_EXIT_FAIL;
+    }
+    uint64_t nrays = size / TB__RECORD;
+
+    tb_scene_options so = {0};
+    so.accel = kind;
+    so.threads = (int)threads;
+    tb_scene *scene;
+    if (tb_scene_load(scene_path, &so, &scene)) {
+        fclose(rf);
+        fprintf(stderr, "%s\n", tb_last_error());
+        return TB_EXIT_FAIL;
+    }
+    if (verbose)
+        tb_scene_print_summary(scene, stderr);
+
+    size_t cap = nrays < TB__CHUNK ? (size_t)nrays : TB__CHUNK;
+    tb_ray *rays = malloc(sizeof *rays * (cap ? cap : 1));
+    tb_hit *hits = malloc(sizeof *hits * (cap ? cap : 1));
+    tb_outfile of = {0};
+    int rc = TB_EXIT_OK;
+    if (!rays || !hits) {
+        rc = tb__fail("out of memory for %s rays", "2^20");
+        goto done;
+    }
+    if (tb_outfile_open(&of, hits_path)) {
+        rc = tb__fail("%s", tb_last_error());
+        goto done;
+    }
+    uint64_t done_rays = 0, nhits = 0, ninvalid = 0;
+    double seconds = 0.0;
+    while (done_rays < nrays) {
+        size_t n = nrays - done_rays < cap ? (size_t)(nrays - done_rays) : cap;
+        if (fread(rays, TB__RECORD, n, rf) != n) {
+            rc = tb__fail("rays file '%s' ended early (was it changed while being read?)", rays_path);
+            break;
+        }
+        tb__le32_words(rays, n * 8);
+        seconds += tb__trace_chunk(scene, rays, hits, n, (int)(threads > 0 ? threads : omp_get_max_threads()), &nhits,
+                                   &ninvalid);
+        tb__le32_words(hits, n * 8);
+        if (fwrite(hits, TB__RECORD, n, of.fp) != n) {
+            rc = tb__fail("cannot write hits file '%s'", hits_path);
+            break;
+        }
+        done_rays += n;
+    }
+    if (rc != TB_EXIT_OK)
+        goto done;
+    tb_stat_add(&tb__n_trace_rays, (int64_t)nrays);
+    tb_stat_add(&tb__n_trace_hits, (int64_t)nhits);
+    tb_stat_add(&tb__n_trace_invalid, (int64_t)ninvalid);
+    double rps = nrays == 0 ? 0.0 : (seconds > 0.0 ? (double)nrays / seconds : NAN);
+    int nthreads = threads > 0 ? (int)threads : omp_get_max_threads();
+    /* The stats before the hits: a run whose report cannot be written leaves
+     * no HITS file either. */
+    if (stats_path) {
+        tb_provenance prov;
+        /* The command line as typed: "testbed" and the subcommand's arguments. */
+        char **full = malloc(sizeof *full * ((size_t)argc + 2));
+        tb_status st = full ? TB_OK : tb_error(TB_ERR_NOMEM, "out of memory");
+        if (!st) {
+            full[0] = "testbed";
+            memcpy(full + 1, argv, sizeof *full * (size_t)argc);
+            full[argc + 1] = NULL;
+            st = tb_provenance_init(&prov, argc + 1, full);
+            free(full);
+        }
+        if (!st) {
+            char opts[256];
+            snprintf(opts, sizeof opts, "backend=cpu accel=%s threads=%d", tb_accel_kind_name(kind), nthreads);
+            if (strcmp(scene_path, "-") != 0)
+                st = tb_provenance_hash_file(&prov, scene_path);
+            if (!st)
+                st = tb_provenance_set_options(&prov, opts);
+            if (!st)
+                st = tb_stats_set_value("rays", (double)nrays);
+            if (!st)
+                st = tb_stats_set_value("seconds", seconds);
+            if (!st)
+                st = tb_stats_set_value("rays_per_second", rps);
+            if (!st)
+                st = tb_stats_set_value("hits", (double)nhits);
+            if (!st)
+                st = tb_stats_set_value("invalid_rays", (double)ninvalid);
+            if (!st)
+                st = tb_stats_set_string("backend", "cpu");
+            if (!st)
+                st = tb_stats_set_string("accel", tb_accel_kind_name(kind));
+            if (!st)
+                st = tb_stats_write_json_file(stats_path, &prov);
+            tb_provenance_free(&prov);
+        }
+        if (st) {
+            rc = tb__fail("stats: %s", tb_last_error());
+            goto done;
+        }
+    }
+    if (tb_outfile_commit(&of)) {
+        rc = tb__fail("%s", tb_last_error());
+        goto done;
+    }
+    printf("testbed trace: %llu rays, %llu hits, %llu invalid; traversal %.6f s, %.3f Mrays/s (cpu, %s, %d threads)\n",
+           (unsigned long long)nrays, (unsigned long long)nhits, (unsigned long long)ninvalid, seconds, rps * 1e-6,
+           tb_accel_kind_name(kind), nthreads);
+done:
+    if (of.fp)
+        tb_outfile_abort(&of);
+    free(rays);
+    free(hits);
+    fclose(rf);
+    tb_scene_free(scene);
+    return rc;
+}
