@@ -11,6 +11,10 @@
 
 /* Largest number of vertical or horizontal angles accepted. */
 #define TB__IES_MAX_ANGLES 100000
+/* Largest candela value (times the multiplier) accepted. */
+#define TB__IES_MAX_CANDELA 1e30
+/* Most cells of the sampling grid. */
+#define TB__IES_MAX_CELLS ((size_t)1 << 22)
 /* Largest file tb_ies_read reads. */
 #define TB__IES_MAX_FILE (64L << 20)
 /* Largest step (degrees) of the sampling grid in gamma and in C. */
@@ -474,8 +478,9 @@ static tb_status tb__build_sampling(tb_ies *ies, const char *name)
         return tb_error(TB_ERR_NOMEM, "%s: out of memory", name);
     int rows = ies->sv - 1, cols = ies->sh - 1;
     size_t cells = (size_t)rows * (size_t)cols;
-    if (cells > (size_t)1 << 26)
-        return tb_error(TB_ERR_UNSUPPORTED, "%s: the table is too large to sample (%zu cells)", name, cells);
+    if (cells > TB__IES_MAX_CELLS)
+        return tb_error(TB_ERR_UNSUPPORTED, "%s: error: the table is too large to sample (%zu grid cells, at most %zu)",
+                        name, cells, TB__IES_MAX_CELLS);
     ies->s_mean = malloc(sizeof(double) * cells);
     double *w = malloc(sizeof(double) * cells);
     if (!ies->s_mean || !w) {
@@ -662,8 +667,11 @@ static tb_status tb__parse(tb_ies *ies, tb__lex *lx)
                 return tb__err(lx, line, TB_ERR_FORMAT, "negative candela value %.17g (horizontal %g, vertical %g)",
                                v, ies->h_angles[j], ies->v_angles[i]);
             double c = v * ies->multiplier;
-            if (!isfinite(c))
-                return tb__err(lx, line, TB_ERR_FORMAT, "candela value %.17g times the multiplier overflows", v);
+            /* Far beyond any luminaire (~1e6 cd), and low enough that sums
+             * over the table (flux, sampling weights) stay finite. */
+            if (!(c <= TB__IES_MAX_CANDELA))
+                return tb__err(lx, line, TB_ERR_FORMAT, "candela value %.17g times the multiplier exceeds %g", v,
+                               TB__IES_MAX_CANDELA);
             ies->candela[(size_t)j * ies->nv + i] = c;
             last_line = line;
             if (c > ies->max_candela)

@@ -163,8 +163,23 @@ static void test_errors(void **state)
     expect_error(mk(T, "1 100 1 2 1 1 2 0 0 0\n1 1 0\n0 90\n0\n0 0\n"), TB_ERR_FORMAT,
                  "t.ies:8: error: every candela value is 0");
     expect_error(mk(T, "1 100 1e300 2 1 1 2 0 0 0\n1 1 0\n0 90\n0\n1e10 0\n"), TB_ERR_FORMAT,
-                 "t.ies:8: error: candela value 10000000000 times the multiplier overflows");
+                 "t.ies:8: error: candela value 10000000000 times the multiplier exceeds 1e+30");
     expect_error(mk("IESNA:LM-63-2002\n[BROKEN line", "x"), TB_ERR_FORMAT, "t.ies:4: error: keyword line without ']'");
+    /* A table whose sampling grid would be too large: 2 vertical angles (0,
+     * 180: 180 one-degree rows) x 23303 horizontal angles over 0..360. */
+    {
+        int nh = 23303;
+        size_t cap = 64 + (size_t)nh * 40;
+        char *big = malloc(cap);
+        size_t n = (size_t)snprintf(big, cap, "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 2 %d 1 2 0 0 0\n1 1 0\n0 180\n", nh);
+        for (int j = 0; j < nh; j++)
+            n += (size_t)snprintf(big + n, cap - n, "%.10g\n", j == nh - 1 ? 360.0 : 360.0 * j / (nh - 1));
+        for (int j = 0; j < nh; j++)
+            n += (size_t)snprintf(big + n, cap - n, "1 1\n");
+        expect_error(big, TB_ERR_UNSUPPORTED,
+                     "t.ies: error: the table is too large to sample (4194360 grid cells, at most 4194304)");
+        free(big);
+    }
     /* Unreadable file. */
     tb_ies *ies = (tb_ies *)1;
     assert_int_equal(tb_ies_read("/nonexistent/lamp.ies", &ies), TB_ERR_IO);

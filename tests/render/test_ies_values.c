@@ -240,18 +240,19 @@ static void test_flux(void **state)
     tb_assert_near(flux, l->lamps * l->lumens_per_lamp, 1e-3 * want);
     tb_ies_free(l);
 
-    /* Other symmetries: tb_ies_flux against Gauss-Legendre over 1 x 1 degree
-     * cells of the interpolated table (smooth inside each cell but for the
-     * table's kinks, which lie on cell edges: all table angles are integers). */
+    /* Other symmetries: tb_ies_flux against 2 x 2-point Gauss-Legendre over 1 x 1 degree
+     * cells of the interpolated table (exact in C, where it is linear; error
+     * ~1e-11 in gamma; the table's kinks lie on cell edges: all table angles
+     * are integers). */
     for (int f = 1; f < NFILES; f++) {
         tb_ies *ies = load(FILES[f]);
-        double x[4], w[4], s = 0.0;
-        tst_gauss_legendre(4, x, w);
+        double x[2], w[2], s = 0.0;
+        tst_gauss_legendre(2, x, w);
         for (int a = 0; a < 180; a++)
             for (int b = 0; b < 360; b++)
-                for (int i = 0; i < 4; i++) {
+                for (int i = 0; i < 2; i++) {
                     double g = a + 0.5 * (x[i] + 1.0);
-                    for (int j = 0; j < 4; j++) {
+                    for (int j = 0; j < 2; j++) {
                         double c = b + 0.5 * (x[j] + 1.0);
                         s += w[i] * w[j] * tb_ies_candela(ies, g, c) * sin(g * M_PI / 180.0);
                     }
