@@ -274,9 +274,15 @@ int tb_pixel_sampler_round(tb_pixel_sampler *s, float *xy)
     return n;
 }
 
+/* The stream of sample `index` of the pixel with key `key`. */
+static void tb__sample_rng(uint64_t key, uint32_t index, tb_rng *out)
+{
+    tb_rng_seed(out, tb_hash_u64(key ^ (uint64_t)index), 1);
+}
+
 void tb_aa_sample_rng(const tb_aa_options *o, int px, int py, uint32_t index, tb_rng *out)
 {
-    tb_rng_seed(out, tb_hash_u64(tb__pixel_key(o, px, py) ^ (uint64_t)index), 1);
+    tb__sample_rng(tb__pixel_key(o, px, py), index, out);
 }
 
 void tb_aa_luminance_weights(int channels, float *w)
@@ -355,9 +361,10 @@ typedef struct tb__aa_worker {
 /* Evaluates the samples k0 .. k1-1 of pixel (px, py) at positions xy. */
 static void tb__eval(tb__aa_worker *w, int px, int py, const float *xy, int k0, int k1, float *out)
 {
+    uint64_t key = tb__pixel_key(w->aa, px, py);
     for (int j = k0; j < k1; j++) {
         tb_rng srng;
-        tb_aa_sample_rng(w->aa, px, py, (uint32_t)j, &srng);
+        tb__sample_rng(key, (uint32_t)j, &srng);
         w->desc->sample(w->desc->ctx, (double)px + (double)xy[2 * j], (double)py + (double)xy[2 * j + 1],
                         &srng, out + (size_t)(j - k0) * (size_t)w->channels);
     }

@@ -400,12 +400,26 @@ static void test_cache(void **state)
     assert_int_equal(tb_texture_cache_get(c, dir, "ramp.exr", NULL, &m5), TB_OK);
     assert_int_equal((int)tb_texture_cache_count(c), 3);
     assert_memory_equal(m5->levels[0].texels, img->pixels, sizeof(float) * 8 * 4 * 3);
+    /* PFM (float, exact) and Utah RLE (8-bit, as its reader decodes it) */
+    char pfm[1200], rle[1200];
+    snprintf(pfm, sizeof pfm, "%s/ramp.pfm", dir);
+    snprintf(rle, sizeof rle, "%s/ramp.rle", dir);
+    assert_int_equal(tb_image_write(pfm, img, NULL), TB_OK);
+    assert_int_equal(tb_image_write(rle, img, NULL), TB_OK);
+    assert_int_equal(tb_texture_cache_get(c, NULL, pfm, NULL, &m5), TB_OK);
+    assert_memory_equal(m5->levels[0].texels, img->pixels, sizeof(float) * 8 * 4 * 3);
+    assert_int_equal(tb_texture_cache_get(c, NULL, rle, NULL, &m5), TB_OK);
+    assert_int_equal(tb_image_read(rle, NULL, &back), TB_OK);
+    assert_int_equal(back->channels, 3);
+    assert_memory_equal(m5->levels[0].texels, back->pixels, sizeof(float) * 8 * 4 * 3);
+    tb_image_free(back);
+    assert_int_equal((int)tb_texture_cache_count(c), 5);
     /* errors */
     assert_int_equal(tb_texture_cache_get(c, dir, "missing.png", NULL, &m5), TB_ERR_NOT_FOUND);
     assert_null(m5);
     assert_non_null(strstr(tb_last_error(), "missing.png"));
     assert_int_equal(tb_texture_cache_get(c, NULL, five, NULL, &m5), TB_ERR_UNSUPPORTED);
-    assert_int_equal((int)tb_texture_cache_count(c), 3);
+    assert_int_equal((int)tb_texture_cache_count(c), 5);
     tb_texture_cache_free(c);
     tb_image_free(img);
     tb_image_free(five_img);
