@@ -289,7 +289,7 @@ static long tb__bench_scene(tb__bscene *s, long nrays, const long *threads, int 
                 for (size_t i = 0; i < traced[k]; i++)
                     nh += found[k][i];
                 double nr = (double)traced[k];
-                printf("%-7s %8zu %-8s %-5s %7ld %9.3f %11.3f %7.1f %8.1f %8.1f\n", s->name, s->n,
+                printf("%-7s %8zu %-8s %-5s %7ld %9.4g %11.4g %7.1f %8.1f %8.1f\n", s->name, s->n,
                        tb__rayset_names[set], tb_accel_kind_name((tb_accel_kind)k), threads[ti], nr / sec * 1e-6,
                        nr / cpu * 1e-6, 100.0 * (double)nh / nr, steps / nr, tests / nr);
                 fflush(stdout);
@@ -386,7 +386,8 @@ int tb_cmd_bench_accel(int argc, char **argv)
     for (int si = 0; si < nsizes && bad >= 0; si++) {
         for (int sc = 0; sc < 2 && bad >= 0; sc++) {
             tb_rng r;
-            tb_rng_seed(&r, (uint64_t)seedv, (uint64_t)si);
+            /* The scene depends on its size, not on its place in the list. */
+            tb_rng_seed(&r, (uint64_t)seedv, (uint64_t)sizes[si]);
             tb__bscene s = {0};
             bool ok = sc == 0 ? tb__make_soup(&s, (size_t)sizes[si], &r) : tb__make_sphere(&s, (size_t)sizes[si]);
             long b = -1;
