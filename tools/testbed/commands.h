@@ -32,6 +32,8 @@ int tb_cmd_help(int argc, char **argv);
 int tb_cmd_import(int argc, char **argv);
 /* `testbed trace SCENE --rays RAYS --hits HITS`: closest hits of a ray file (cmd_trace.c). */
 int tb_cmd_trace(int argc, char **argv);
+/* `testbed validate SCENE`: Vulkan kernels vs the CPU path (cmd_validate.c). */
+int tb_cmd_validate(int argc, char **argv);
 /* `testbed version`. */
 int tb_cmd_version(int argc, char **argv);
 

@@ -1,0 +1,339 @@
+/* The Vulkan intersect kernel over a scene, with per-object routing of the
+ * kinds the kernel does not implement to the CPU path (intersect.h,
+ * docs/gpu.md "Intersect kernel"). */
+#include "host/gpu/intersect.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "host/object/intersect.h"
+#include "host/object/param.h"
+#include "shaders/shared/bvh.h"
+#include "shaders/shared/hit.h"
+#include "shaders/shared/ray.h"
+#include "util/math/mat.h"
+#include "util/math/transform.h"
+#include "util/stats/stats.h"
+
+TB_STAT_COUNTER(tb__n_gpu_rays, "GPU intersect/rays");
+TB_STAT_COUNTER(tb__n_gpu_routed_tests, "GPU intersect/rays tested on the CPU for routed objects");
+
+/* A NULL from a host/gpu constructor has set the message; its status is TB_ERR_DEVICE or TB_ERR_ARG. */
+/* Rays per dispatch (8 MiB of rays and of hits). */
+#define TB__GPU_CHUNK ((size_t)1 << 18)
+
+struct tb_gpu_scene {
+    tb_gpu_device *dev;
+    const tb_scene *scene;
+    bool *on_gpu;            /* per object */
+    tb_gpu_scene_info info;
+    tb_accel *cpu_accel;     /* BVH over the routed objects' references (NULL if none) */
+    tb_gpu_buffer *nodes, *tris, *rays, *hits;
+    uint32_t nnodes, ntris;
+};
+
+/* The build needs a callback; the GPU BVH is only read, never traversed here. */
+static bool tb__never(void *ctx, const tb_accel_prim *p, uint32_t i, const tb_ray *r, tb_hit *h)
+{
+    (void)ctx, (void)p, (void)i, (void)r, (void)h;
+    return false;
+}
+
+static bool tb__cpu_isect(void *ctx, const tb_accel_prim *p, uint32_t i, const tb_ray *r, tb_hit *h)
+{
+    (void)i;
+    const tb_scene *s = ctx;
+    return tb_object_intersect(s->objects[p->object], r, h);
+}
+
+static bool tb__cpu_occl(void *ctx, const tb_accel_prim *p, uint32_t i, const tb_ray *r)
+{
+    (void)i;
+    const tb_scene *s = ctx;
+    return tb_object_occluded(s->objects[p->object], r);
+}
+
+/* The CPU path's normal of triangle `tri` (host/render/scene_mesh.c). */
+static tb_vec3 tb__tri_normal(const tb_object *o, tb_vec3 v0, tb_vec3 v1, tb_vec3 v2)
+{
+    tb_dvec3 e1 = {(double)v1.x - v0.x, (double)v1.y - v0.y, (double)v1.z - v0.z};
+    tb_dvec3 e2 = {(double)v2.x - v0.x, (double)v2.y - v0.y, (double)v2.z - v0.z};
+    tb_dvec3 n = tb_dvec3_cross(e1, e2);
+    if (n.x == 0.0 && n.y == 0.0 && n.z == 0.0)
+        n.z = 1.0;
+    tb_dvec3 nw = tb_transform_dnormal(&o->to_world, n);
+    double len = tb_dvec3_length(nw);
+    tb_vec3 ng = {0.0f, 0.0f, 1.0f};
+    if (len > 0.0 && isfinite(len)) {
+        double sc = (o->flip ? -1.0 : 1.0) / len;
+        ng = (tb_vec3){(float)(nw.x * sc), (float)(nw.y * sc), (float)(nw.z * sc)};
+    }
+    return ng;
+}
+
+static tb_vec3 tb__world(const tb_object *o, tb_vec3 v)
+{
+    tb_dvec3 p = tb_mat4_mul_point(&o->to_world.m, (tb_dvec3){v.x, v.y, v.z});
+    return (tb_vec3){(float)p.x, (float)p.y, (float)p.z};
+}
+
+/* Builds the GPU arrays: a BVH over the triangle references and the triangles in leaf order. */
+static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const uint32_t *scene_ref, size_t n)
+{
+    const tb_scene *s = g->scene;
+    tb_accel *acc = NULL;
+    tb_accel_callbacks cb = {tb__never, NULL, NULL};
+    tb_status st = tb_accel_build(TB_ACCEL_BVH, refs, n, &cb, NULL, &acc);
+    if (st)
+        return st;
+    size_t nn = 0, nr = 0;
+    const tb_bvh_node *nodes = tb_accel_bvh_nodes(acc, &nn);
+    const uint32_t *order = tb_accel_bvh_refs(acc, &nr);
+    tb_gpu_bvh_node *gn = calloc(nn ? nn : 1, sizeof *gn);
+    tb_gpu_tri *gt = calloc(nr ? nr : 1, sizeof *gt);
+    if (!gn || !gt) {
+        free(gn), free(gt), tb_accel_free(acc);
+        return tb_error(TB_ERR_NOMEM, "out of memory for the GPU scene");
+    }
+    for (size_t i = 0; i < nn; ++i) {
+        const tb_bvh_node *c = &nodes[i];
+        gn[i].lo = c->bounds.lo;
+        gn[i].hi = c->bounds.hi;
+        gn[i].offset = c->offset;
+        gn[i].count = (uint32_t)c->count | (c->count == 0 ? (uint32_t)c->axis << 16 : 0u);
+    }
+    for (size_t k = 0; k < nr; ++k) {
+        const tb_accel_prim *p = &refs[order[k]];
+        const tb_object *o = s->objects[p->object];
+        const tb_object_mesh *m = o->mesh;
+        const uint32_t *tv = &m->tris[3 * (size_t)p->sub];
+        tb_vec3 a = m->vertices[tv[0]], b = m->vertices[tv[1]], c = m->vertices[tv[2]];
+        gt[k].v0 = tb__world(o, a);
+        gt[k].v1 = tb__world(o, b);
+        gt[k].v2 = tb__world(o, c);
+        gt[k].object = o->index;
+        gt[k].face = o->face_base + m->tri_face[p->sub];
+        gt[k].ref = scene_ref[order[k]];
+        gt[k].ng = tb__tri_normal(o, a, b, c);
+        gt[k].pad0 = 0;
+    }
+    g->nnodes = (uint32_t)nn;
+    g->ntris = (uint32_t)nr;
+    g->info.gpu_nodes = nn;
+    g->info.gpu_bytes = nn * sizeof *gn + nr * sizeof *gt;
+    g->nodes = tb_gpu_buffer_create(g->dev, (nn ? nn : 1) * sizeof *gn);
+    g->tris = tb_gpu_buffer_create(g->dev, (nr ? nr : 1) * sizeof *gt);
+    st = (!g->nodes || !g->tris) ? TB_ERR_DEVICE : TB_OK;
+    if (!st && nn)
+        st = tb_gpu_buffer_upload(g->nodes, 0, gn, nn * sizeof *gn);
+    if (!st && nr)
+        st = tb_gpu_buffer_upload(g->tris, 0, gt, nr * sizeof *gt);
+    free(gn), free(gt), tb_accel_free(acc);
+    return st;
+}
+
+tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
+{
+    if (!dev || !scene) {
+        tb_error(TB_ERR_ARG, "tb_gpu_scene_create: NULL device or scene");
+        return NULL;
+    }
+    tb_gpu_scene *g = calloc(1, sizeof *g);
+    bool *has_tri = calloc(scene->nobjects ? scene->nobjects : 1, sizeof *has_tri);
+    tb_accel_prim *gref = malloc((scene->nprims ? scene->nprims : 1) * sizeof *gref);
+    tb_accel_prim *cref = malloc((scene->nprims ? scene->nprims : 1) * sizeof *cref);
+    uint32_t *gidx = malloc((scene->nprims ? scene->nprims : 1) * sizeof *gidx);
+    if (!g || !has_tri || !gref || !cref || !gidx) {
+        free(g), free(has_tri), free(gref), free(cref), free(gidx);
+        tb_error(TB_ERR_NOMEM, "out of memory for the GPU scene");
+        return NULL;
+    }
+    g->dev = dev;
+    g->scene = scene;
+    g->on_gpu = has_tri;
+    size_t ng = 0, nc = 0;
+    for (size_t i = 0; i < scene->nprims; ++i) {
+        const tb_accel_prim *p = &scene->prims[i];
+        const tb_object *o = scene->objects[p->object];
+        if (p->sub != TB_SCENE_WHOLE_OBJECT && o->kind == TB_PRIM_POLYGONS && o->mesh) {
+            gidx[ng] = (uint32_t)i;
+            gref[ng++] = *p;
+            has_tri[p->object] = true;
+        } else {
+            cref[nc++] = *p;
+        }
+    }
+    for (uint32_t i = 0; i < scene->nobjects; ++i) {
+        if (has_tri[i])
+            g->info.gpu_objects++;
+        else
+            g->info.cpu_objects++;
+    }
+    g->info.gpu_triangles = ng;
+    tb_status st = tb__build_gpu(g, gref, gidx, ng);
+    if (!st && nc) {
+        tb_accel_callbacks cb = {tb__cpu_isect, tb__cpu_occl, (void *)scene};
+        st = tb_accel_build(TB_ACCEL_BVH, cref, nc, &cb, NULL, &g->cpu_accel);
+    }
+    if (!st) {
+        g->rays = tb_gpu_buffer_create(dev, TB__GPU_CHUNK * sizeof(tb_gpu_ray));
+        g->hits = g->rays ? tb_gpu_buffer_create(dev, TB__GPU_CHUNK * sizeof(tb_gpu_hit)) : NULL;
+        if (!g->hits)
+            st = TB_ERR_DEVICE;
+    }
+    free(gref), free(cref), free(gidx);
+    if (st) {
+        tb_gpu_scene_destroy(g);
+        return NULL;
+    }
+    return g;
+}
+
+void tb_gpu_scene_destroy(tb_gpu_scene *g)
+{
+    if (!g)
+        return;
+    tb_gpu_buffer_destroy(g->nodes);
+    tb_gpu_buffer_destroy(g->tris);
+    tb_gpu_buffer_destroy(g->rays);
+    tb_gpu_buffer_destroy(g->hits);
+    tb_accel_free(g->cpu_accel);
+    free(g->on_gpu);
+    free(g);
+}
+
+void tb_gpu_scene_get_info(const tb_gpu_scene *g, tb_gpu_scene_info *out) { *out = g->info; }
+
+bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object)
+{
+    return object < g->scene->nobjects && g->on_gpu[object];
+}
+
+/* Runs the kernel over rays[0..n) (any_hit 0 or 1) into hits. */
+static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t any_hit, tb_hit *hits,
+                         double *kernel_seconds)
+{
+    if (g->ntris == 0) {
+        for (size_t i = 0; i < n; ++i)
+            hits[i] = (tb_hit){INFINITY, TB_GPU_NO_HIT, TB_GPU_NO_HIT, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
+        return TB_OK;
+    }
+    tb_gpu_spec_constant spec[2] = {{1, 1u}, {2, 128u}};
+    tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("intersect"),
+                                                                        .buffers = 4,
+                                                                        .push_size = 16,
+                                                                        .spec = spec,
+                                                                        .spec_count = 2});
+    if (!k)
+        return TB_ERR_DEVICE;
+    for (size_t at = 0; at < n; at += TB__GPU_CHUNK) {
+        size_t m = n - at < TB__GPU_CHUNK ? n - at : TB__GPU_CHUNK;
+        tb_status st = tb_gpu_buffer_upload(g->rays, 0, rays + at, m * sizeof(tb_ray));
+        if (st)
+            return st;
+        uint32_t push[4] = {(uint32_t)m, any_hit, g->nnodes, 0};
+        tb_gpu_dispatch d = {k, {g->rays, g->nodes, g->tris, g->hits}, push, m, 0.0};
+        if ((st = tb_gpu_run(g->dev, &d, 1)))
+            return st;
+        *kernel_seconds += d.seconds;
+        if ((st = tb_gpu_buffer_download(g->hits, 0, hits + at, m * sizeof(tb_hit))))
+            return st;
+    }
+    tb_stat_add(&tb__n_gpu_rays, (int64_t)n);
+    return TB_OK;
+}
+
+_Static_assert(sizeof(tb_hit) == sizeof(tb_gpu_hit), "GPU hits download into tb_hit");
+
+/* True if a precedes b in the tie rule (t, object, face); references of
+ * routed and GPU objects never share an object, so the reference key is not needed. */
+static bool tb__precedes(const tb_hit *a, const tb_hit *b)
+{
+    if (a->t != b->t)
+        return a->t < b->t;
+    if (a->object != b->object)
+        return a->object < b->object;
+    return a->face < b->face;
+}
+
+tb_status tb_gpu_intersect(tb_gpu_scene *g, const tb_ray *rays, size_t n, tb_hit *hits,
+                           tb_gpu_intersect_timing *timing)
+{
+    int64_t t0 = tb_stats_now_ns();
+    double ks = 0.0;
+    tb_status st = tb__run(g, rays, n, 0u, hits, &ks);
+    if (st)
+        return st;
+    int64_t t1 = tb_stats_now_ns();
+    const tb_scene *s = g->scene;
+    int64_t routed = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : routed)
+    for (size_t i = 0; i < n; ++i) {
+        tb_hit *h = &hits[i];
+        bool gpu_hit = h->object != TB_GPU_NO_HIT;
+        if (g->cpu_accel && tb_ray_is_valid(&rays[i])) {
+            tb_ray r = rays[i];
+            if (gpu_hit)
+                r.tmax = h->t;
+            tb_hit c;
+            ++routed;
+            if (tb_accel_intersect(g->cpu_accel, &r, &c) && (!gpu_hit || tb__precedes(&c, h))) {
+                *h = c;
+                continue;
+            }
+        }
+        if (gpu_hit) {
+            /* (u, v) of the winning triangle, as the CPU path computes them from the point. */
+            const tb_object *o = s->objects[h->object];
+            tb_dvec3 ro = tb_mat4_mul_point(&o->to_world.inv, (tb_dvec3){rays[i].o.x, rays[i].o.y, rays[i].o.z});
+            tb_dvec3 rd = tb_mat4_mul_vec(&o->to_world.inv, (tb_dvec3){rays[i].d.x, rays[i].d.y, rays[i].d.z});
+            double t = h->t;
+            tb_dvec3 p = {ro.x + t * rd.x, ro.y + t * rd.y, ro.z + t * rd.z};
+            int face = (int)(h->face - o->face_base), pf = face;
+            double u = 0.0, v = 0.0;
+            if (tb_param_from_point(o->kind, &o->geom, p, face, &pf, &u, &v) != TB_OK)
+                u = v = 0.0;
+            h->u = (float)u;
+            h->v = (float)v;
+        }
+    }
+    tb_stat_add(&tb__n_gpu_routed_tests, routed);
+    if (timing) {
+        timing->kernel_seconds = ks;
+        timing->gpu_seconds = (double)(t1 - t0) * 1e-9;
+        timing->cpu_seconds = (double)(tb_stats_now_ns() - t1) * 1e-9;
+    }
+    return TB_OK;
+}
+
+tb_status tb_gpu_occluded(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint8_t *occluded,
+                          tb_gpu_intersect_timing *timing)
+{
+    tb_hit *hits = malloc((n ? n : 1) * sizeof *hits);
+    if (!hits)
+        return tb_error(TB_ERR_NOMEM, "out of memory for %zu hits", n);
+    int64_t t0 = tb_stats_now_ns();
+    double ks = 0.0;
+    tb_status st = tb__run(g, rays, n, 1u, hits, &ks);
+    if (st) {
+        free(hits);
+        return st;
+    }
+    int64_t t1 = tb_stats_now_ns();
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < n; ++i) {
+        bool o = hits[i].object != TB_GPU_NO_HIT;
+        if (!o && g->cpu_accel)
+            o = tb_accel_occluded(g->cpu_accel, &rays[i]);
+        occluded[i] = o ? 1 : 0;
+    }
+    free(hits);
+    if (timing) {
+        timing->kernel_seconds = ks;
+        timing->gpu_seconds = (double)(t1 - t0) * 1e-9;
+        timing->cpu_seconds = (double)(tb_stats_now_ns() - t1) * 1e-9;
+    }
+    return TB_OK;
+}

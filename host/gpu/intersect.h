@@ -1,0 +1,73 @@
+/* The Vulkan intersect kernel over a loaded scene (docs/gpu.md, "Intersect
+ * kernel"): the scene's triangles uploaded in world space with a BVH in the
+ * GPU layout (shaders/shared/bvh.h), closest-hit and any-hit queries for
+ * arrays of rays, giving the records the CPU path gives (tb_scene_intersect).
+ *
+ * Kinds on the GPU: triangles of polygons objects. Every other object
+ * (analytic primitives, CSG) is **routed to the CPU path per object**: after
+ * the kernel, the host tests those objects (through a CPU BVH over them
+ * alone) with tmax = the GPU hit's t and keeps the better hit by the tie rule
+ * (docs/accel.md). tb_gpu_scene_object_on_gpu says where each object runs.
+ *
+ *     tb_gpu_scene *g = tb_gpu_scene_create(dev, scene);
+ *     tb_gpu_intersect(g, rays, n, hits, NULL);
+ *     tb_gpu_scene_destroy(g);
+ *
+ * Used from one thread at a time (it uses the device's command buffer). */
+#ifndef TB_HOST_GPU_INTERSECT_H
+#define TB_HOST_GPU_INTERSECT_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "host/gpu/gpu.h"
+#include "host/object/hit.h"
+#include "host/render/scene.h"
+#include "util/math/ray.h"
+
+/* A scene uploaded to a device (opaque). */
+typedef struct tb_gpu_scene tb_gpu_scene;
+
+/* Where the work of a scene runs. */
+typedef struct tb_gpu_scene_info {
+    uint32_t gpu_objects;   /* objects intersected by the kernel (polygons objects) */
+    uint64_t gpu_triangles; /* their triangles */
+    uint32_t cpu_objects;   /* objects routed to the CPU path (every other kind, CSG) */
+    size_t gpu_nodes;       /* BVH nodes uploaded */
+    size_t gpu_bytes;       /* bytes of nodes and triangles uploaded */
+} tb_gpu_scene_info;
+
+/* Timings of the last tb_gpu_intersect / tb_gpu_occluded call. */
+typedef struct tb_gpu_intersect_timing {
+    double kernel_seconds; /* device time of the kernel dispatches (timestamps; NaN without) */
+    double gpu_seconds;    /* host wall time of upload + dispatch + download */
+    double cpu_seconds;    /* host wall time of the routed CPU tests and merge (and u, v of triangle hits) */
+} tb_gpu_intersect_timing;
+
+/* Uploads the scene's geometry to `dev` (the scene must have been loaded with
+ * an acceleration structure, and outlive the result). NULL with a status on
+ * failure (TB_ERR_DEVICE from the device, TB_ERR_NOMEM). */
+tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene);
+
+/* Frees the device buffers and the host data; NULL is ignored. */
+void tb_gpu_scene_destroy(tb_gpu_scene *g);
+
+/* What runs where. */
+void tb_gpu_scene_get_info(const tb_gpu_scene *g, tb_gpu_scene_info *out);
+
+/* True if object `object` is intersected on the GPU, false if on the CPU. */
+bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object);
+
+/* Closest hit of each of rays[0..n): hits[i] is the record tb_scene_intersect
+ * gives (within the float tolerance of docs/accuracy.md), or a miss:
+ * t = +inf, object = face = UINT32_MAX, u = v = 0, ng = 0. Invalid rays are
+ * misses. `timing` may be NULL. */
+tb_status tb_gpu_intersect(tb_gpu_scene *g, const tb_ray *rays, size_t n, tb_hit *hits,
+                           tb_gpu_intersect_timing *timing);
+
+/* Any hit: occluded[i] = 1 if something is hit with tmin <= t <= tmax, else 0. */
+tb_status tb_gpu_occluded(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint8_t *occluded,
+                          tb_gpu_intersect_timing *timing);
+
+#endif

@@ -1,0 +1,186 @@
+// Closest hit (or any hit) of each ray with the scene's GPU-resident
+// geometry: a BVH converted from the CPU BVH (shared/bvh.h) over world-space
+// triangles. One invocation per ray, fixed-size traversal stack. Objects of
+// kinds this kernel does not implement are not in its BVH: host/gpu/intersect.c
+// tests them on the CPU afterwards with tmax = this kernel's t and merges by
+// the tie rule (docs/gpu.md, "Intersect kernel").
+//
+// Triangles: Woop, Benthin and Wald's watertight test (JCGT 2013), the CPU's
+// method (host/render/scene_mesh.c), in float in world space. Ties in t are
+// broken as on the CPU (docs/accel.md, "Tie rule"): lower object, then face,
+// then reference index. Hit records are tb_gpu_hit (shared/hit.h); (u, v) are
+// left 0 and filled by the host for the winning triangle.
+#version 450
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/bvh.h"
+#include "shared/hit.h"
+#include "shared/ray.h"
+#include "lib/aabb.glsl"
+
+layout(local_size_x_id = 0) in;
+// Primitive kinds present in the scene: a kind the scene lacks is compiled out.
+layout(constant_id = 1) const bool TB_HAS_TRIANGLES = true;
+// Traversal stack entries; the CPU BVH's depth is below 96 (docs/accel.md).
+layout(constant_id = 2) const int TB_STACK = 128;
+
+layout(std430, binding = 0) readonly buffer Rays { tb_gpu_ray rays[]; };
+layout(std430, binding = 1) readonly buffer Nodes { tb_gpu_bvh_node nodes[]; };
+layout(std430, binding = 2) readonly buffer Tris { tb_gpu_tri tris[]; };
+layout(std430, binding = 3) writeonly buffer Hits { tb_gpu_hit hits[]; };
+
+layout(push_constant) uniform Push {
+    uint n;        // rays
+    uint any_hit;  // 1: occlusion (stop at the first hit found), 0: closest hit
+    uint nnodes;   // 0: empty scene
+    uint pad;
+} pc;
+
+// Traversal slack of the CPU BVH (TB__ACCEL_T_TOL = 2^-16): boxes are pruned
+// with [tmin, best t] widened by this relative amount on each side.
+const float TB_T_TOL = 1.52587890625e-5;
+
+// The ray prepared for the watertight test.
+struct tb_wray {
+    vec3 o;
+    int kx, ky, kz;
+    float sx, sy, sz;
+};
+
+tb_wray tb_wray_init(vec3 o, vec3 d)
+{
+    tb_wray w;
+    w.o = o;
+    vec3 a = abs(d);
+    int kz = a.x > a.y ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (d[kz] < 0.0) {
+        int t = kx;
+        kx = ky;
+        ky = t;
+    }
+    w.kx = kx;
+    w.ky = ky;
+    w.kz = kz;
+    w.sx = d[kx] / d[kz];
+    w.sy = d[ky] / d[kz];
+    w.sz = 1.0 / d[kz];
+    return w;
+}
+
+// The watertight test in float; t on a hit.
+bool tb_tri_hit(tb_wray w, vec3 v0, vec3 v1, vec3 v2, out float t)
+{
+    t = 0.0;
+    precise vec3 A = v0 - w.o, B = v1 - w.o, C = v2 - w.o;
+    precise float ax = A[w.kx] - w.sx * A[w.kz], ay = A[w.ky] - w.sy * A[w.kz];
+    precise float bx = B[w.kx] - w.sx * B[w.kz], by = B[w.ky] - w.sy * B[w.kz];
+    precise float cx = C[w.kx] - w.sx * C[w.kz], cy = C[w.ky] - w.sy * C[w.kz];
+    precise float U = cx * by - cy * bx;
+    precise float V = ax * cy - ay * cx;
+    precise float W = bx * ay - by * ax;
+    if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0))
+        return false;
+    precise float det = U + V + W;
+    if (det == 0.0)
+        return false;
+    precise float T = U * (w.sz * A[w.kz]) + V * (w.sz * B[w.kz]) + W * (w.sz * C[w.kz]);
+    t = T / det;
+    return tb_isfinite(t);
+}
+
+// True if (t, object, face, ref) precedes the best so far (the CPU tie rule).
+bool tb_better(float t, uint object, uint face, uint ref, bool have, float bt, uint bo, uint bf, uint br)
+{
+    if (!have || t != bt)
+        return !have || t < bt;
+    if (object != bo)
+        return object < bo;
+    if (face != bf)
+        return face < bf;
+    return ref < br;
+}
+
+void main()
+{
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.n)
+        return;
+    tb_gpu_ray r = rays[i];
+    bool have = false;
+    float bt = r.tmax;
+    uint bo = TB_GPU_NO_HIT, bf = 0u, br = 0u, btri = 0u;
+    bool valid = tb_isfinite(r.o.x) && tb_isfinite(r.o.y) && tb_isfinite(r.o.z) && tb_isfinite(r.d.x) &&
+                 tb_isfinite(r.d.y) && tb_isfinite(r.d.z) && tb_isfinite(r.tmin) &&
+                 !(r.d.x == 0.0 && r.d.y == 0.0 && r.d.z == 0.0) && r.tmin <= r.tmax;
+    if (TB_HAS_TRIANGLES && valid && pc.nnodes > 0u) {
+        vec3 inv = tb_ray_inv_dir(r.d);
+        tb_wray w = tb_wray_init(r.o, r.d);
+        float lo_t = r.tmin - abs(r.tmin) * TB_T_TOL;
+        uint stack[TB_STACK];
+        int sp = 0;
+        uint node = 0u;
+        for (;;) {
+            tb_gpu_bvh_node nd = nodes[node];
+            float hi_t = bt + abs(bt) * TB_T_TOL;
+            float t0, t1;
+            bool enter = tb_aabb_slab(nd.lo, nd.hi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+            if (enter) {
+                uint count = nd.count & 0xffffu;
+                if (count == 0u) {
+                    // Inner: nearer child first (by the split axis and the ray's sign).
+                    uint axis = nd.count >> 16;
+                    uint first = node + 1u, second = nd.offset;
+                    if (r.d[axis] < 0.0) {
+                        uint s = first;
+                        first = second;
+                        second = s;
+                    }
+                    if (sp < TB_STACK)
+                        stack[sp++] = second;
+                    node = first;
+                    continue;
+                }
+                for (uint k = nd.offset; k < nd.offset + count; ++k) {
+                    tb_gpu_tri tri = tris[k];
+                    float t;
+                    if (!tb_tri_hit(w, tri.v0, tri.v1, tri.v2, t) || t < r.tmin || t > r.tmax)
+                        continue;
+                    if (tb_better(t, tri.object, tri.face, tri.ref, have, bt, bo, bf, br)) {
+                        have = true;
+                        bt = t;
+                        bo = tri.object;
+                        bf = tri.face;
+                        br = tri.ref;
+                        btri = k;
+                    }
+                    if (pc.any_hit != 0u)
+                        break;
+                }
+                if (have && pc.any_hit != 0u)
+                    break;
+            }
+            if (sp == 0)
+                break;
+            node = stack[--sp];
+        }
+    }
+    tb_gpu_hit h;
+    h.t = have ? bt : tb_inf();
+    h.object = have ? bo : TB_GPU_NO_HIT;
+    h.face = have ? bf : TB_GPU_NO_HIT;
+    h.u = 0.0;
+    h.v = 0.0;
+    if (have) {
+        vec3 ng = tris[btri].ng;
+        h.ng[0] = ng.x;
+        h.ng[1] = ng.y;
+        h.ng[2] = ng.z;
+    } else {
+        h.ng[0] = 0.0;
+        h.ng[1] = 0.0;
+        h.ng[2] = 0.0;
+    }
+    hits[i] = h;
+}

@@ -1,0 +1,286 @@
+/* `testbed validate SCENE.mid [--kernel intersect|all] [--rays N] [--seed S]
+ * [--device N] [--bench]`: the same rays through the CPU path and the Vulkan
+ * path, agreement figures against the tolerances of docs/accuracy.md, exit 1
+ * beyond them (docs/gpu.md, "testbed validate"). */
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "host/gpu/intersect.h"
+#include "host/render/scene.h"
+#include "util/math/rng.h"
+#include "util/stats/stats.h"
+
+/* Tolerances (docs/accuracy.md, "Intersect kernel"). */
+#define TB__TOL_HITMISS 1e-4  /* fraction of rays whose hit/miss may differ */
+#define TB__TOL_OBJFACE 1e-3  /* fraction of rays hit by both whose object or face may differ */
+#define TB__TOL_DT 1e-4       /* max relative |dt| where object and face agree */
+#define TB__TOL_ANGLE 1e-3    /* max normal angle (radians) where object and face agree */
+#define TB__TOL_OCCLUDED 1e-4 /* fraction of shadow rays whose answer may differ */
+
+static void tb__usage(FILE *out)
+{
+    fprintf(out,
+            "usage: testbed validate SCENE.mid [--kernel intersect|all] [--rays N] [--seed S]\n"
+            "                        [--device N] [--bench]\n"
+            "\n"
+            "Runs the same rays through the CPU path and the Vulkan kernels and prints, per kernel,\n"
+            "the agreement against the tolerances of docs/accuracy.md; exit status 1 beyond them.\n"
+            "Rays: half camera primary rays through random film points, half random rays aimed\n"
+            "through the scene bounds; shadow rays are the same rays cut at a random tmax.\n"
+            "Objects of kinds the kernel does not implement are tested on the CPU (routed); the\n"
+            "report lists which objects ran where. TB_VK_VALIDATION=1 enables the validation layer.\n"
+            "\n"
+            "  --kernel K   intersect or all (the same today: shade and formfactor do not exist yet)\n"
+            "  --rays N     rays (default 100000)\n"
+            "  --seed S     random seed (default 1)\n"
+            "  --device N   Vulkan device (default: the best, lavapipe included)\n"
+            "  --bench      also time both paths on the same rays (Mrays/s, excluding pipeline creation)\n");
+}
+
+static bool tb__parse_long(const char *s, long lo, long hi, long *out)
+{
+    if (!s || !*s)
+        return false;
+    errno = 0;
+    char *end;
+    long v = strtol(s, &end, 10);
+    if (errno || *end || v < lo || v > hi)
+        return false;
+    *out = v;
+    return true;
+}
+
+/* Random rays: camera rays and rays through the bounds. */
+static void tb__make_rays(const tb_scene *s, uint64_t seed, tb_ray *rays, size_t n)
+{
+    tb_rng rng;
+    tb_rng_seed(&rng, seed, 7);
+    tb_aabb b = s->bounds;
+    double c[3] = {0.5 * ((double)b.lo.x + b.hi.x), 0.5 * ((double)b.lo.y + b.hi.y), 0.5 * ((double)b.lo.z + b.hi.z)};
+    double e[3] = {(double)b.hi.x - b.lo.x, (double)b.hi.y - b.lo.y, (double)b.hi.z - b.lo.z};
+    double diag = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    if (!(diag > 0.0) || !isfinite(diag))
+        diag = 1.0;
+    for (size_t i = 0; i < n; ++i) {
+        if (i % 2 == 0) {
+            double x = tb_rng_double(&rng) * s->camera.width, y = tb_rng_double(&rng) * s->camera.height;
+            rays[i] = tb_camera_ray(&s->camera, x, y, 0.5f, 0.5f);
+            continue;
+        }
+        /* Origin on a sphere of radius diag around the centre, aimed at a point of the box. */
+        double z = 2.0 * tb_rng_double(&rng) - 1.0, phi = 6.283185307179586 * tb_rng_double(&rng);
+        double r = sqrt(1.0 - z * z);
+        double o[3] = {c[0] + diag * r * cos(phi), c[1] + diag * r * sin(phi), c[2] + diag * z};
+        double p[3];
+        for (int k = 0; k < 3; ++k)
+            p[k] = c[k] + (tb_rng_double(&rng) - 0.5) * e[k];
+        rays[i] = (tb_ray){{(float)o[0], (float)o[1], (float)o[2]},
+                           0.0f,
+                           {(float)(p[0] - o[0]), (float)(p[1] - o[1]), (float)(p[2] - o[2])},
+                           INFINITY};
+    }
+}
+
+static double tb__angle(tb_vec3 a, tb_vec3 b)
+{
+    double d = (double)a.x * b.x + (double)a.y * b.y + (double)a.z * b.z;
+    double cx = (double)a.y * b.z - (double)a.z * b.y, cy = (double)a.z * b.x - (double)a.x * b.z,
+           cz = (double)a.x * b.y - (double)a.y * b.x;
+    return atan2(sqrt(cx * cx + cy * cy + cz * cz), d);
+}
+
+static void tb__cpu_trace(const tb_scene *s, const tb_ray *rays, size_t n, tb_hit *hits)
+{
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < n; ++i) {
+        tb_hit h = {INFINITY, UINT32_MAX, UINT32_MAX, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
+        tb_scene_intersect(s, &rays[i], &h);
+        hits[i] = h;
+    }
+}
+
+static const char *tb__verdict(bool ok) { return ok ? "ok" : "BEYOND TOLERANCE"; }
+
+int tb_cmd_validate(int argc, char **argv)
+{
+    const char *scene_path = NULL, *kernel = "intersect";
+    long nrays = 100000, seed = 1, device = -1;
+    bool bench = false;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+            tb__usage(stdout);
+            return TB_EXIT_OK;
+        }
+        bool takes = !strcmp(a, "--kernel") || !strcmp(a, "--rays") || !strcmp(a, "--seed") || !strcmp(a, "--device");
+        if (takes && i + 1 >= argc) {
+            fprintf(stderr, "testbed validate: error: %s needs a value\n", a);
+            return TB_EXIT_USAGE;
+        }
+        if (!strcmp(a, "--kernel")) {
+            kernel = argv[++i];
+            if (strcmp(kernel, "intersect") && strcmp(kernel, "all")) {
+                fprintf(stderr, "testbed validate: error: --kernel must be intersect or all, not '%s' (shade and formfactor are not implemented yet)\n", kernel);
+                return TB_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--rays")) {
+            if (!tb__parse_long(argv[++i], 1, 1L << 30, &nrays)) {
+                fprintf(stderr, "testbed validate: error: --rays must be a whole number in 1..2^30\n");
+                return TB_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--seed")) {
+            if (!tb__parse_long(argv[++i], 0, LONG_MAX, &seed)) {
+                fprintf(stderr, "testbed validate: error: --seed must be a whole number >= 0\n");
+                return TB_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--device")) {
+            if (!tb__parse_long(argv[++i], 0, 1000, &device)) {
+                fprintf(stderr, "testbed validate: error: --device must be a device index\n");
+                return TB_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--bench")) {
+            bench = true;
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "testbed validate: error: unknown option '%s'\n", a);
+            tb__usage(stderr);
+            return TB_EXIT_USAGE;
+        } else if (!scene_path) {
+            scene_path = a;
+        } else {
+            fprintf(stderr, "testbed validate: error: more than one scene\n");
+            return TB_EXIT_USAGE;
+        }
+    }
+    if (!scene_path) {
+        tb__usage(stderr);
+        return TB_EXIT_USAGE;
+    }
+    tb_scene *s = NULL;
+    if (tb_scene_load(scene_path, NULL, &s)) {
+        fprintf(stderr, "testbed validate: error: %s\n", tb_last_error());
+        return TB_EXIT_FAIL;
+    }
+    tb_gpu_session sess;
+    if (tb_gpu_backend_choose(TB_GPU_MODE_VULKAN, (int)device, false, &sess)) {
+        fprintf(stderr, "testbed validate: error: %s\n", tb_last_error());
+        tb_scene_free(s);
+        return TB_EXIT_FAIL;
+    }
+    int rc = TB_EXIT_FAIL;
+    size_t n = (size_t)nrays;
+    tb_ray *rays = malloc(n * sizeof *rays), *shadow = malloc(n * sizeof *shadow);
+    tb_hit *ch = malloc(n * sizeof *ch), *gh = malloc(n * sizeof *gh);
+    uint8_t *co = malloc(n), *go = malloc(n);
+    tb_gpu_scene *g = NULL;
+    if (!rays || !shadow || !ch || !gh || !co || !go) {
+        fprintf(stderr, "testbed validate: error: out of memory for %zu rays\n", n);
+        goto done;
+    }
+    g = tb_gpu_scene_create(sess.device, s);
+    if (!g) {
+        fprintf(stderr, "testbed validate: error: %s\n", tb_last_error());
+        goto done;
+    }
+    const tb_gpu_device_info *di = tb_gpu_device_info_of(sess.device);
+    printf("device: %d (%s)%s\n", sess.device_index, di->name,
+           tb_gpu_validation_enabled(sess.instance) ? ", validation layer on" : "");
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    printf("scene: %s: %u objects, %llu triangles\n", scene_path, s->nobjects, (unsigned long long)info.gpu_triangles);
+    printf("routing: %u objects on the GPU (triangles), %u routed to the CPU path\n", info.gpu_objects,
+           info.cpu_objects);
+    for (uint32_t i = 0; i < s->nobjects; ++i)
+        printf("  object %u (%s): %s\n", i, tb_prim_kind_name(s->objects[i]->kind),
+               tb_gpu_scene_object_on_gpu(g, i) ? "gpu" : "cpu (routed)");
+
+    tb__make_rays(s, (uint64_t)seed, rays, n);
+    tb_rng rng;
+    tb_rng_seed(&rng, (uint64_t)seed, 8);
+    for (size_t i = 0; i < n; ++i) {
+        shadow[i] = rays[i];
+        shadow[i].tmax = (float)(tb_rng_double(&rng) * 2.0 * (double)tb_vec3_length(
+                                     (tb_vec3){s->bounds.hi.x - s->bounds.lo.x, s->bounds.hi.y - s->bounds.lo.y,
+                                               s->bounds.hi.z - s->bounds.lo.z}) /
+                                 (double)tb_vec3_length(rays[i].d));
+    }
+    tb__cpu_trace(s, rays, n, ch);
+#pragma omp parallel for schedule(dynamic, 256)
+    for (size_t i = 0; i < n; ++i)
+        co[i] = tb_scene_occluded(s, &shadow[i]) ? 1 : 0;
+    tb_gpu_intersect_timing tm;
+    if (tb_gpu_intersect(g, rays, n, gh, &tm) || tb_gpu_occluded(g, shadow, n, go, NULL)) {
+        fprintf(stderr, "testbed validate: error: %s\n", tb_last_error());
+        goto done;
+    }
+    size_t hitmiss = 0, both = 0, objface = 0, occl = 0;
+    double max_dt = 0.0, max_angle = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        bool c = ch[i].object != UINT32_MAX, v = gh[i].object != UINT32_MAX;
+        occl += co[i] != go[i];
+        if (c != v) {
+            ++hitmiss;
+            continue;
+        }
+        if (!c)
+            continue;
+        ++both;
+        if (ch[i].object != gh[i].object || ch[i].face != gh[i].face) {
+            ++objface;
+            continue;
+        }
+        double dt = fabs((double)gh[i].t - ch[i].t) / fmax(fabs((double)ch[i].t), 1e-30);
+        max_dt = fmax(max_dt, dt);
+        max_angle = fmax(max_angle, tb__angle(ch[i].ng, gh[i].ng));
+    }
+    double f_hm = (double)hitmiss / (double)n, f_of = both ? (double)objface / (double)both : 0.0;
+    double f_oc = (double)occl / (double)n;
+    bool ok_hm = f_hm <= TB__TOL_HITMISS, ok_of = f_of <= TB__TOL_OBJFACE, ok_dt = max_dt <= TB__TOL_DT,
+         ok_an = max_angle <= TB__TOL_ANGLE, ok_oc = f_oc <= TB__TOL_OCCLUDED;
+    printf("kernel intersect: %zu rays (seed %ld), %zu hit on both paths\n", n, seed, both);
+    printf("  hit/miss agreement     %9.5f %%  (%zu differ; tolerance: at most %g of rays)  %s\n",
+           100.0 * (1.0 - f_hm), hitmiss, TB__TOL_HITMISS, tb__verdict(ok_hm));
+    printf("  object/face agreement  %9.5f %%  (%zu differ; tolerance: at most %g of common hits)  %s\n",
+           100.0 * (1.0 - f_of), objface, TB__TOL_OBJFACE, tb__verdict(ok_of));
+    printf("  max relative |dt|      %9.3g    (tolerance %g)  %s\n", max_dt, TB__TOL_DT, tb__verdict(ok_dt));
+    printf("  max normal angle       %9.3g rad (tolerance %g)  %s\n", max_angle, TB__TOL_ANGLE, tb__verdict(ok_an));
+    printf("  occlusion agreement    %9.5f %%  (%zu differ; tolerance: at most %g of rays)  %s\n",
+           100.0 * (1.0 - f_oc), occl, TB__TOL_OCCLUDED, tb__verdict(ok_oc));
+    bool ok = ok_hm && ok_of && ok_dt && ok_an && ok_oc;
+    if (tb_gpu_validation_enabled(sess.instance)) {
+        int ve = tb_gpu_validation_errors(sess.instance), vw = tb_gpu_validation_warnings(sess.instance);
+        printf("  validation layer       %d errors, %d warnings  %s\n", ve, vw, tb__verdict(ve + vw == 0));
+        ok = ok && ve + vw == 0;
+    }
+    if (bench) {
+        /* Both paths once more on the same rays; the pipeline exists already (created above). */
+        int64_t t0 = tb_stats_now_ns();
+        tb__cpu_trace(s, rays, n, ch);
+        double cpu_s = (double)(tb_stats_now_ns() - t0) * 1e-9;
+        t0 = tb_stats_now_ns();
+        if (tb_gpu_intersect(g, rays, n, gh, &tm)) {
+            fprintf(stderr, "testbed validate: error: %s\n", tb_last_error());
+            goto done;
+        }
+        double gpu_s = (double)(tb_stats_now_ns() - t0) * 1e-9;
+        printf("bench: %zu rays, %d threads\n", n, omp_get_max_threads());
+        printf("  cpu path     %8.3f Mrays/s  (%.3f s)\n", (double)n / cpu_s * 1e-6, cpu_s);
+        printf("  vulkan path  %8.3f Mrays/s  (%.3f s: kernel %.3f s device time, upload/dispatch/download %.3f s, "
+               "routed CPU objects and (u, v) %.3f s)\n",
+               (double)n / gpu_s * 1e-6, gpu_s, tm.kernel_seconds, tm.gpu_seconds, tm.cpu_seconds);
+        printf("  ratio vulkan/cpu  %.3f\n", cpu_s / gpu_s);
+    }
+    rc = ok ? TB_EXIT_OK : TB_EXIT_FAIL;
+done:
+    tb_gpu_scene_destroy(g);
+    tb_gpu_session_close(&sess);
+    tb_scene_free(s);
+    free(rays), free(shadow), free(ch), free(gh), free(co), free(go);
+    return rc;
+}
