@@ -50,6 +50,12 @@ static void tb__count(tb_prim_kind kind)
 
 static tb_dvec3 tb__v(double x, double y, double z) { return (tb_dvec3){x, y, z}; }
 
+/* Vertices closer than this times the object's size (its box diagonal) are
+ * welded: about 3 float ulps, so welded positions never round to one float,
+ * and below the spacing of any layout within TB_POLY_MAX_SEGMENTS (the
+ * tightest, a sphere's pole ring at 4096 x 4096, is 3.4e-7 of its size). */
+#define TB__WELD_REL 2e-7
+
 /* ------------------------------------------------------------ resolution */
 
 /* The resolved options, in object space. */
@@ -58,6 +64,7 @@ typedef struct tb__res {
     double angle; /* largest facet-normal angle, radians; 0: none */
     int maxseg;   /* segments per direction */
     double floor; /* steps with chords this short count as resolved (1e-5 of the object's size) */
+    double weld;  /* distance within which vertices are welded (2e-7 of the object's size) */
 } tb__res;
 
 /* Segments for a straight run of length L. */
@@ -222,15 +229,6 @@ static void tb__mb_poly_oriented(tb__mb *m, int face, const uint32_t *c, int n)
     tb__mb_loop(m, face, c, n, a < 0.0);
 }
 
-/* A quad (or triangle, n = 3) given by (u, v) corners. */
-static void tb__mb_poly_uv(tb__mb *m, int face, const double (*uv)[2], int n)
-{
-    uint32_t c[4];
-    for (int i = 0; i < n; i++)
-        c[i] = tb__mb_uv(m, face, uv[i][0], uv[i][1]);
-    tb__mb_poly_oriented(m, face, c, n);
-}
-
 /* A polygon given by points on a flat face (n <= 4). */
 static void tb__mb_poly_pts(tb__mb *m, int face, const tb_dvec3 *p, int n)
 {
@@ -243,25 +241,46 @@ static void tb__mb_poly_pts(tb__mb *m, int face, const tb_dvec3 *p, int n)
 /* The quads of the (u, v) grid us[0..nu] x vs[0..nv]. */
 static void tb__mb_grid_uv(tb__mb *m, int face, const double *us, int nu, const double *vs, int nv)
 {
+    /* one vertex per grid point (welding would merge repeats, but each costs memory) */
+    uint32_t *id = malloc(sizeof(uint32_t) * (size_t)(nu + 1) * (size_t)(nv + 1));
+    if (!id) {
+        if (!m->st)
+            m->st = tb_error(TB_ERR_NOMEM, "polygonize: out of memory");
+        return;
+    }
+    for (int j = 0; j <= nv; j++)
+        for (int i = 0; i <= nu; i++)
+            id[j * (nu + 1) + i] = tb__mb_uv(m, face, us[i], vs[j]);
     for (int j = 0; j < nv; j++)
         for (int i = 0; i < nu; i++) {
-            double q[4][2] = {{us[i], vs[j]}, {us[i + 1], vs[j]}, {us[i + 1], vs[j + 1]}, {us[i], vs[j + 1]}};
-            tb__mb_poly_uv(m, face, q, 4);
+            uint32_t c[4] = {id[j * (nu + 1) + i], id[j * (nu + 1) + i + 1], id[(j + 1) * (nu + 1) + i + 1],
+                             id[(j + 1) * (nu + 1) + i]};
+            tb__mb_poly_oriented(m, face, c, 4);
         }
+    free(id);
 }
 
 /* The quads of the planar grid o + a[i] ea + b[j] eb on a flat face. */
 static void tb__mb_grid_plane(tb__mb *m, int face, tb_dvec3 o, tb_dvec3 ea, const double *a, int na, tb_dvec3 eb,
                               const double *b, int nb)
 {
+    uint32_t *id = malloc(sizeof(uint32_t) * (size_t)(na + 1) * (size_t)(nb + 1));
+    if (!id) {
+        if (!m->st)
+            m->st = tb_error(TB_ERR_NOMEM, "polygonize: out of memory");
+        return;
+    }
+    for (int j = 0; j <= nb; j++)
+        for (int i = 0; i <= na; i++)
+            id[j * (na + 1) + i] =
+                tb__mb_pt(m, face, tb_dvec3_add(o, tb_dvec3_add(tb_dvec3_scale(ea, a[i]), tb_dvec3_scale(eb, b[j]))));
     for (int j = 0; j < nb; j++)
         for (int i = 0; i < na; i++) {
-            tb_dvec3 q[4];
-            double ai[4] = {a[i], a[i + 1], a[i + 1], a[i]}, bj[4] = {b[j], b[j], b[j + 1], b[j + 1]};
-            for (int k = 0; k < 4; k++)
-                q[k] = tb_dvec3_add(o, tb_dvec3_add(tb_dvec3_scale(ea, ai[k]), tb_dvec3_scale(eb, bj[k])));
-            tb__mb_poly_pts(m, face, q, 4);
+            uint32_t c[4] = {id[j * (na + 1) + i], id[j * (na + 1) + i + 1], id[(j + 1) * (na + 1) + i + 1],
+                             id[(j + 1) * (na + 1) + i]};
+            tb__mb_poly_oriented(m, face, c, 4);
         }
+    free(id);
 }
 
 /* ------------------------------------------------------------ breakpoints */
@@ -310,8 +329,15 @@ static void tb__bp_free(tb__bp *b)
 /* A disc cap with n_u spokes (shared with the side) and rings every edge length. */
 static void tb__disc(tb__mb *m, const tb__res *r, int face, double R, const tb__bp *us)
 {
+    /* Rings at R j / n; the innermost one's spoke spacing 2 pi R / (n n_u) is
+     * kept above 8 times the weld distance, or it would merge into the centre
+     * unevenly (only at extreme resolutions, whose edges then exceed the limit). */
+    int n = tb__seg_line(r, R);
+    double nmax = TB_2PI * R / (us->n * 8.0 * r->weld);
+    if (r->weld > 0.0 && n > nmax)
+        n = nmax >= 1.0 ? (int)nmax : 1;
     tb__bp vs;
-    if (!tb__bp_uniform(&vs, 0.0, 1.0, tb__seg_line(r, R))) {
+    if (!tb__bp_uniform(&vs, 0.0, 1.0, n)) {
         m->st = tb_error(TB_ERR_NOMEM, "polygonize: out of memory");
         return;
     }
@@ -1184,7 +1210,7 @@ static tb_status tb__finish(tb__mb *m, bool split, double size, tb_fed **out)
     tb_status st = weld && final ? TB_OK : tb__nomem();
     /* About float resolution of the object's size: far below any sample
      * spacing the segment caps allow, far above double rounding. */
-    double eps = 2e-7 * size;
+    double eps = TB__WELD_REL * size;
     if (!st)
         st = tb__weld(m, eps, weld, &rep);
     size_t nw = rep.len;
@@ -1359,7 +1385,7 @@ tb_status tb_polygonize(tb_prim_kind kind, const tb_mid_geometry *geom, const tb
         return tb_error(TB_ERR_ARG, "polygonize: limits must be finite and >= 0 (max_edge %g, max_angle %g)",
                         o.max_edge, o.max_angle);
     tb__count(kind);
-    tb__res r = {o.max_edge, o.max_angle, o.max_segments ? o.max_segments : TB_POLY_DEFAULT_SEGMENTS, 0.0};
+    tb__res r = {o.max_edge, o.max_angle, o.max_segments ? o.max_segments : TB_POLY_DEFAULT_SEGMENTS, 0.0, 0.0};
     if (r.maxseg > TB_POLY_MAX_SEGMENTS)
         r.maxseg = TB_POLY_MAX_SEGMENTS;
     if (r.edge > 0.0 && o.to_world)
@@ -1371,6 +1397,7 @@ tb_status tb_polygonize(tb_prim_kind kind, const tb_mid_geometry *geom, const tb
         return st;
     double size = tb_aabb_is_empty(&box) ? 1.0 : tb_dvec3_length(tb_dvec3_sub(tb_vec3_to_d(box.hi), tb_vec3_to_d(box.lo)));
     r.floor = 1e-5 * size;
+    r.weld = TB__WELD_REL * size;
 
     tb__mb m;
     tb__mb_init(&m, kind, geom);

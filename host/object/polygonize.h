@@ -24,7 +24,7 @@
 /* Default and largest number of segments along one parametric direction of
  * one face. */
 #define TB_POLY_DEFAULT_SEGMENTS 4096
-#define TB_POLY_MAX_SEGMENTS 16384
+#define TB_POLY_MAX_SEGMENTS 4096
 
 /* What resolution to tessellate at (zero fields mean "default"). */
 typedef struct tb_poly_options {
