@@ -30,6 +30,8 @@ int tb_cmd_generate(int argc, char **argv);
 int tb_cmd_help(int argc, char **argv);
 /* `testbed import MODEL -o OUT.mid`: a model to MID + FED through Assimp (cmd_import.c). */
 int tb_cmd_import(int argc, char **argv);
+/* `testbed render SCENE -o OUT`: the Whitted ray tracer (cmd_render.c). */
+int tb_cmd_render(int argc, char **argv);
 /* `testbed trace SCENE --rays RAYS --hits HITS`: closest hits of a ray file (cmd_trace.c). */
 int tb_cmd_trace(int argc, char **argv);
 /* `testbed validate SCENE`: Vulkan kernels vs the CPU path (cmd_validate.c). */

@@ -1,0 +1,203 @@
+/* The Whitted ray tracer (raytrace.h, docs/raytrace.md). */
+#include "host/render/raytrace.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "host/object/hit.h"
+#include "host/object/intersect.h"
+#include "host/render/sampling.h"
+#include "host/render/shading.h"
+#include "util/math/float.h"
+#include "util/stats/stats.h"
+
+TB_STAT_COUNTER(tb__rt_camera_rays, "Raytrace/camera rays");
+TB_STAT_COUNTER(tb__rt_secondary_rays, "Raytrace/reflected and refracted rays");
+TB_STAT_COUNTER(tb__rt_shadow_rays, "Raytrace/shadow rays");
+
+/* The most light samples a shading point takes (a stack array holds them). */
+#define TB__RT_MAX_LIGHT_SAMPLES 1024
+
+tb_status tb_rt_init(tb_raytracer *rt, const tb_scene *scene, const tb_rt_options *opt)
+{
+    memset(rt, 0, sizeof *rt);
+    if (!scene || !scene->accel)
+        return tb_error(TB_ERR_ARG, "raytrace: the scene has no acceleration structure");
+    tb_rt_options o = opt ? *opt : (tb_rt_options){0};
+    if (o.light_samples < 0 || o.light_samples > TB__RT_MAX_LIGHT_SAMPLES)
+        return tb_error(TB_ERR_ARG, "raytrace: light samples must be in 0..%d", TB__RT_MAX_LIGHT_SAMPLES);
+    rt->scene = scene;
+    rt->max_depth = o.max_depth == 0 ? TB_RT_DEFAULT_MAX_DEPTH : (o.max_depth < 0 ? 0 : o.max_depth);
+    rt->light_samples = o.light_samples == 0 ? TB_RT_DEFAULT_LIGHT_SAMPLES : o.light_samples;
+    tb_stratified_dims(rt->light_samples, &rt->lsx, &rt->lsy);
+    if (scene->nemitters > 0) {
+        tb_status st = tb_area_light_init(&rt->area, scene->emitters, scene->nemitters);
+        if (st)
+            return st;
+        rt->has_area = true;
+    }
+    return TB_OK;
+}
+
+void tb_rt_release(tb_raytracer *rt)
+{
+    if (!rt)
+        return;
+    if (rt->has_area)
+        tb_area_light_release(&rt->area);
+    rt->has_area = false;
+}
+
+/* True if the shadow segment of light sample `s` from the surface point p
+ * (error bound perr, geometric normal ng) is blocked. */
+static bool tb__shadowed(const tb_scene *s, tb_vec3 p, tb_vec3 perr, tb_vec3 ng, const tb_light_sample *ls)
+{
+    tb_ray r;
+    r.o = tb_spawn_ray_origin(p, perr, ng, ls->wi);
+    r.tmin = 0.0f;
+    if (isinf(ls->dist)) {
+        r.d = ls->wi;
+        r.tmax = INFINITY;
+    } else {
+        r.d = tb_vec3_sub(ls->point, r.o);
+        r.tmax = 1.0f - TB_SHADOW_EPSILON;
+    }
+    TB_STAT_INC(tb__rt_shadow_rays);
+    return tb_scene_occluded(s, &r);
+}
+
+/* A ray leaving the surface point p in unit direction w. */
+static tb_ray tb__spawn(tb_vec3 p, tb_vec3 perr, tb_vec3 ng, tb_vec3 w)
+{
+    tb_ray r;
+    r.o = tb_spawn_ray_origin(p, perr, ng, w);
+    r.d = w;
+    r.tmin = 0.0f;
+    r.tmax = INFINITY;
+    return r;
+}
+
+static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng, int depth)
+{
+    const tb_scene *s = rt->scene;
+    const int nch = s->nchannels;
+    tb_channels L = tb_channels_splat(nch, 0.0f);
+    tb_hit hit;
+    if (!tb_scene_intersect(s, ray, &hit))
+        return L;
+    const tb_material *m = tb_scene_hit_material(s, &hit);
+    if (!m)
+        return L;
+    tb_vec3 p, perr;
+    if (!tb_object_hit_point(s->objects[hit.object], ray, &hit, &p, &perr)) {
+        /* Fallback (should not happen): the float point with a generous bound. */
+        p = tb_vec3_add(ray->o, tb_vec3_scale(ray->d, hit.t));
+        tb_vec3 a = tb_vec3_abs(p);
+        perr = tb_vec3_scale(tb_vec3_add(a, tb_vec3_splat(1.0f)), 1e-5f);
+    }
+    tb_vec3 d = tb_vec3_normalize(ray->d);
+    tb_vec3 wo = tb_vec3_neg(d);
+    tb_vec3 ng = hit.ng;
+    bool front = tb_vec3_dot(d, ng) < 0.0f;
+    tb_vec3 n = front ? ng : tb_vec3_neg(ng); /* the normal on the viewer's side */
+
+    /* Emitters are one-sided: M / pi on the front side only. */
+    if (m->emits && front)
+        L = tb_channels_add(L, tb_radiance_from_exitance(m->emission));
+
+    bool has_diffuse = !tb_channels_is_black(m->diffuse);
+    bool has_specular = !tb_channels_is_black(m->specular);
+    bool has_transmission = !tb_channels_is_black(m->transmission);
+
+    /* Point, spot and directional lights: Lambert + normalised Phong highlight. */
+    if ((has_diffuse || has_specular) && s->nlights > 0) {
+        double knorm = tb_bsdf_lobe_norm(TB_BSDF_PHONG_NORMALIZED, m->exponent);
+        tb_vec3 wr = tb_reflect(wo, n);
+        for (int i = 0; i < s->nlights; i++) {
+            tb_light_sample ls;
+            if (!tb_light_sample_li(&s->lights[i], p, &ls))
+                continue;
+            float cosi = tb_vec3_dot(n, ls.wi);
+            if (cosi <= 0.0f || tb_channels_is_black(ls.L))
+                continue;
+            if (tb__shadowed(s, p, perr, ng, &ls))
+                continue;
+            tb_channels f = tb_channels_scale(m->diffuse, (float)(1.0 / TB_PI));
+            if (has_specular) {
+                double ca = tb_vec3_dot(wr, ls.wi);
+                if (ca > 0.0)
+                    f = tb_channels_add_scaled(f, m->specular, (float)(knorm * pow(ca, m->exponent)));
+            }
+            L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(f, ls.L), cosi));
+        }
+    }
+
+    /* Area lights: stratified samples over all emitters (soft shadows). The
+     * specular part of area lights arrives through the mirror ray instead. */
+    if (has_diffuse && rt->has_area) {
+        float u[2 * TB__RT_MAX_LIGHT_SAMPLES];
+        tb_stratified_2d(rng, rt->lsx, rt->lsy, u);
+        tb_channels E = tb_channels_splat(nch, 0.0f);
+        for (int k = 0; k < rt->light_samples; k++) {
+            tb_light_sample ls;
+            if (!tb_area_light_sample(&rt->area, p, u[2 * k], u[2 * k + 1], &ls) || ls.pdf <= 0.0)
+                continue;
+            float cosi = tb_vec3_dot(n, ls.wi);
+            if (cosi <= 0.0f)
+                continue;
+            if (tb__shadowed(s, p, perr, ng, &ls))
+                continue;
+            E = tb_channels_add_scaled(E, ls.L, (float)(cosi / ls.pdf));
+        }
+        L = tb_channels_add(L, tb_channels_mul(m->diffuse,
+                                               tb_channels_scale(E, (float)(1.0 / (TB_PI * rt->light_samples)))));
+    }
+
+    if (depth >= rt->max_depth)
+        return L;
+    if (has_transmission) {
+        /* Smooth dielectric: Fresnel-weighted mirror ray, and the refracted ray
+         * tinted by the transmission colour (R = 1 under total internal reflection). */
+        tb_frame fr = tb_frame_from_normal(ng);
+        tb_specular_split sp;
+        tb_specular_dielectric(tb_frame_to_local(&fr, wo), m->ior, &sp);
+        if (sp.R > 0.0) {
+            tb_ray r = tb__spawn(p, perr, ng, tb_frame_to_world(&fr, sp.wr));
+            TB_STAT_INC(tb__rt_secondary_rays);
+            L = tb_channels_add_scaled(L, tb__trace(rt, &r, rng, depth + 1), (float)sp.R);
+        }
+        if (sp.refracts && sp.T > 0.0) {
+            tb_ray r = tb__spawn(p, perr, ng, tb_vec3_normalize(tb_frame_to_world(&fr, sp.wt)));
+            TB_STAT_INC(tb__rt_secondary_rays);
+            tb_channels Lt = tb__trace(rt, &r, rng, depth + 1);
+            L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(m->transmission, Lt), (float)sp.T));
+        }
+    } else if (has_specular) {
+        /* Perfect mirror weighted by the specular colour (Whitted's k_s S). */
+        tb_ray r = tb__spawn(p, perr, ng, tb_vec3_normalize(tb_reflect(wo, n)));
+        TB_STAT_INC(tb__rt_secondary_rays);
+        L = tb_channels_add(L, tb_channels_mul(m->specular, tb__trace(rt, &r, rng, depth + 1)));
+    }
+    return L;
+}
+
+tb_channels tb_rt_radiance(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng)
+{
+    return tb__trace(rt, ray, rng, 0);
+}
+
+void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
+{
+    const tb_raytracer *rt = ctx;
+    const tb_camera *cam = &rt->scene->camera;
+    float lu = 0.5f, lv = 0.5f;
+    if (cam->lens_radius > 0.0) {
+        lu = tb_rng_float(rng);
+        lv = tb_rng_float(rng);
+    }
+    tb_ray r = tb_camera_ray(cam, x, y, lu, lv);
+    TB_STAT_INC(tb__rt_camera_rays);
+    tb_channels L = tb_rt_radiance(rt, &r, rng);
+    for (int i = 0; i < rt->scene->nchannels; i++)
+        out[i] = L.v[i];
+}

@@ -1,0 +1,66 @@
+/* The Whitted ray tracer (docs/raytrace.md): closest hits through the
+ * scene's acceleration structure, direct lighting from point, spot and
+ * directional lights (shadow rays) and from area lights (every emissive
+ * object with an exact emitter form, stratified samples: soft shadows),
+ * Lambert + normalised Phong from the MID material, perfect mirror
+ * reflection weighted by the specular colour, and refraction with exact
+ * Fresnel reflectance and total internal reflection for materials with a
+ * transmission colour. No indirect diffuse light.
+ *
+ *     tb_raytracer rt;
+ *     if (tb_rt_init(&rt, scene, NULL)) die(tb_last_error());
+ *     tb_channels L = tb_rt_radiance(&rt, &ray, &rng);
+ *     tb_rt_release(&rt);
+ *
+ * Values are in the scene's colour representation (linear RGB or spectral
+ * render bands: scene->nchannels). */
+#ifndef TB_HOST_RENDER_RAYTRACE_H
+#define TB_HOST_RENDER_RAYTRACE_H
+
+#include <stdbool.h>
+
+#include "host/render/channels.h"
+#include "host/render/lights.h"
+#include "host/render/scene.h"
+#include "util/base/error.h"
+#include "util/math/ray.h"
+#include "util/math/rng.h"
+
+/* Default Whitted recursion depth (camera ray = depth 0). */
+#define TB_RT_DEFAULT_MAX_DEPTH 5
+/* Default area-light samples per shading point. */
+#define TB_RT_DEFAULT_LIGHT_SAMPLES 4
+
+/* Ray tracer options; a zeroed struct (or NULL) means the defaults. */
+typedef struct tb_rt_options {
+    int max_depth;     /* deepest reflected/refracted ray (0: TB_RT_DEFAULT_MAX_DEPTH; < 0: camera rays only) */
+    int light_samples; /* area-light samples per shading point, stratified (0: the default) */
+} tb_rt_options;
+
+/* A ray tracer over a loaded scene (read-only after init, shareable by threads). */
+typedef struct tb_raytracer {
+    const tb_scene *scene;  /* not owned */
+    int max_depth;          /* in effect */
+    int light_samples;      /* in effect */
+    int lsx, lsy;           /* strata of the light samples (lsx * lsy = light_samples) */
+    bool has_area;          /* area light below is set up */
+    tb_area_light area;     /* every exact emitter of the scene as one light */
+} tb_raytracer;
+
+/* Prepares a tracer for `scene` (which must stay alive). TB_ERR_ARG for bad
+ * options or a scene without an acceleration structure. */
+tb_status tb_rt_init(tb_raytracer *rt, const tb_scene *scene, const tb_rt_options *opt);
+
+/* Frees what tb_rt_init allocated (harmless on a zeroed struct). */
+void tb_rt_release(tb_raytracer *rt);
+
+/* Radiance arriving along -ray->d at ray->o (scene channels); `rng` gives
+ * the light-sample jitter. Black on a miss. */
+tb_channels tb_rt_radiance(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng);
+
+/* A tb_aa_sample_fn (host/render/antialias.h): ctx is a tb_raytracer; the
+ * camera ray of film point (x, y) (pinhole, or the lens point from rng),
+ * radiance written to out[0 .. scene->nchannels). */
+void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out);
+
+#endif

@@ -1,0 +1,201 @@
+#!/usr/bin/env python3
+"""testbed render (the Whitted ray tracer) against analytic answers.
+
+1. Furnace: a closed cube of inward-facing polygons that emit M (RGB) with
+   zero reflectance, camera inside: every pixel is M / pi.
+2. Mirror: a mirror of specular colour ks fills the view and reflects an
+   emitter facing it: every pixel is ks * M / pi (emitters seen through a
+   mirror are not lit by light sampling: the material has no diffuse part).
+3. Glass slab at normal incidence (ior 1.5, transmission 1, R = 0.04), an
+   emitter behind it, a 0.2-degree field of view: with max depth 2 only the
+   straight path reaches the emitter, L = (1 - R)^2 M / pi; with max depth 64
+   every internal round trip is traced, L = (1 - R)^2 / (1 - R^2) M / pi.
+4. Direct lighting: a point light of intensity I at height h above a grey
+   Lambertian floor, the camera looking straight down through a 0.2-degree
+   field of view: L = rho / pi * I / h^2 at the centre.
+5. Cornell box (1 spp, 1 light sample): no NaN or Inf, the red wall on the
+   left (mean red of the left third above that of the right third), byte-
+   identical PFM files for --threads 1 and 2, and for --accel bvh and grid;
+   provenance attributes in an EXR.
+"""
+import math
+import os
+import struct
+import subprocess
+import sys
+
+TESTBED = os.environ["TESTBED"]
+SRC = os.environ["TB_SOURCE_DIR"]
+TMP = os.environ.get("TB_TEST_TMPDIR", "/tmp")
+os.makedirs(TMP, exist_ok=True)
+failures = 0
+
+
+def check(cond, what):
+    global failures
+    if cond:
+        print("ok:", what)
+    else:
+        print("FAIL:", what)
+        failures += 1
+
+
+def run(args, expect=0):
+    p = subprocess.run([TESTBED, "render"] + args, capture_output=True, text=True,
+                       env=dict(os.environ, TB_NO_PROGRESS="1"))
+    if p.returncode != expect:
+        print(p.stdout, p.stderr)
+        raise SystemExit("testbed render %s: exit %d" % (" ".join(args), p.returncode))
+    return p
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        data = f.read()
+    parts = []
+    pos = 0
+    while len(parts) < 4:  # PF, w, h, scale separated by whitespace
+        while data[pos:pos + 1].isspace():
+            pos += 1
+        end = pos
+        while not data[end:end + 1].isspace():
+            end += 1
+        parts.append(data[pos:end].decode())
+        pos = end
+    pos += 1
+    assert parts[0] == "PF", parts
+    w, h, scale = int(parts[1]), int(parts[2]), float(parts[3])
+    fmt = ("<" if scale < 0 else ">") + "%df" % (w * h * 3)
+    vals = struct.unpack_from(fmt, data, pos)
+    rows = [vals[(h - 1 - y) * w * 3:(h - y) * w * 3] for y in range(h)]  # bottom-up file, top row first
+    return w, h, rows
+
+
+def write(name, text):
+    path = os.path.join(TMP, name)
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def quad(name, verts, material):
+    v = " ".join("[%g %g %g]" % p for p in verts)
+    return 'polygons "%s" {\n geometry = { vertices = [%s] faces = [[0 1 2 3]] }\n rendering = { %s }\n}\n' % (
+        name, v, material)
+
+
+def max_rel_err(rows, expect):
+    worst = 0.0
+    for row in rows:
+        for i, x in enumerate(row):
+            e = expect[i % 3]
+            worst = max(worst, abs(x - e) / e)
+    return worst
+
+
+# ------------------------------------------------------------- 1. furnace
+M = (2.0, 3.0, 5.0)
+mat = "diffuse = 0 emission = [%g %g %g]" % M
+s = 1.0
+cube = ""
+# Each face as listed turns counter-clockwise seen from outside the cube.
+faces = {
+    "bottom": [(-s, -s, -s), (s, -s, -s), (s, -s, s), (-s, -s, s)],
+    "top": [(-s, s, -s), (-s, s, s), (s, s, s), (s, s, -s)],
+    "left": [(-s, -s, -s), (-s, -s, s), (-s, s, s), (-s, s, -s)],
+    "right": [(s, -s, -s), (s, s, -s), (s, s, s), (s, -s, s)],
+    "back": [(-s, -s, -s), (-s, s, -s), (s, s, -s), (s, -s, -s)],
+    "front": [(-s, -s, s), (s, -s, s), (s, s, s), (-s, s, s)],
+}
+for k, v in faces.items():
+    cube += quad(k, v[::-1], mat)  # listed outward-facing; reversed to face in
+cam = 'camera { eye = [0.1 0.2 0.05] look_at = [0.5 0.1 1] up = [0 1 0] fov = 120 resolution = [24 16] }\n'
+furnace = write("rt_furnace.mid", "mid 1\n" + cam + cube)
+out = os.path.join(TMP, "rt_furnace.pfm")
+run([furnace, "-o", out, "--spp", "4", "--threads", "2"])
+w, h, rows = read_pfm(out)
+expect = [m / math.pi for m in M]
+err = max_rel_err(rows, expect)
+check(err < 2e-6, "furnace: every pixel is M/pi (max relative error %.3g)" % err)
+
+# -------------------------------------------------------------- 2. mirror
+ks = (0.9, 0.5, 0.25)
+Me = (4.0, 4.0, 4.0)
+scene = "mid 1\n"
+scene += 'camera { eye = [0 0 1] look_at = [0 0 0] up = [0 1 0] fov = 30 resolution = [16 16] }\n'
+# Mirror in z = 0 facing +z; emitter in z = 2 facing -z, both 100 wide.
+scene += quad("mirror", [(-50, -50, 0), (50, -50, 0), (50, 50, 0), (-50, 50, 0)],
+              "diffuse = 0 specular = [%g %g %g]" % ks)
+scene += quad("lamp", [(-50, -50, 2), (-50, 50, 2), (50, 50, 2), (50, -50, 2)],
+              "diffuse = 0 emission = [%g %g %g]" % Me)
+mirror = write("rt_mirror.mid", scene)
+out = os.path.join(TMP, "rt_mirror.pfm")
+run([mirror, "-o", out, "--spp", "2"])
+w, h, rows = read_pfm(out)
+expect = [k * m / math.pi for k, m in zip(ks, Me)]
+err = max_rel_err(rows, expect)
+check(err < 2e-6, "mirror: ks M / pi in every pixel (max relative error %.3g)" % err)
+
+# --------------------------------------------------------------- 3. glass slab
+R = ((1.5 - 1) / (1.5 + 1)) ** 2
+scene = "mid 1\n"
+scene += 'camera { eye = [0 0 10] look_at = [0 0 0] up = [0 1 0] fov = 0.2 resolution = [3 3] }\n'
+glass = "diffuse = 0 transmission = 1 ior = 1.5"
+scene += quad("front", [(-5, -5, 1), (5, -5, 1), (5, 5, 1), (-5, 5, 1)], glass)   # normal +z (out)
+scene += quad("back", [(-5, -5, 0), (-5, 5, 0), (5, 5, 0), (5, -5, 0)], glass)    # normal -z (out)
+scene += quad("lamp", [(-50, -50, -3), (50, -50, -3), (50, 50, -3), (-50, 50, -3)],
+              "diffuse = 0 emission = [%g %g %g]" % Me)  # faces +z, toward the slab
+slab = write("rt_slab.mid", scene)
+for depth, expect_t in ((2, (1 - R) ** 2), (64, (1 - R) ** 2 / (1 - R * R))):
+    out = os.path.join(TMP, "rt_slab%d.pfm" % depth)
+    run([slab, "-o", out, "--max-depth", str(depth)])
+    w, h, rows = read_pfm(out)
+    centre = rows[1][3:6]
+    got = centre[0] / (Me[0] / math.pi)
+    check(abs(got - expect_t) < 2e-5,
+          "slab, max depth %d: transmittance %.7f, expected %.7f" % (depth, got, expect_t))
+
+# ------------------------------------------------------------ 4. point light
+I, hgt, rho = 50.0, 2.0, 0.5
+scene = "mid 1\n"
+scene += 'camera { eye = [0 5 0] look_at = [0 0 0] up = [0 0 -1] fov = 0.2 resolution = [3 3] }\n'
+scene += 'point_light { position = [0 %g 0] intensity = [%g %g %g] }\n' % (hgt, I, I, I)
+scene += quad("floor", [(-10, 0, -10), (-10, 0, 10), (10, 0, 10), (10, 0, -10)], "diffuse = %g" % rho)
+pl = write("rt_point.mid", scene)
+out = os.path.join(TMP, "rt_point.pfm")
+run([pl, "-o", out])
+w, h, rows = read_pfm(out)
+got = rows[1][4]
+exp = rho / math.pi * I / hgt ** 2
+check(abs(got - exp) / exp < 1e-4, "point light: L = rho/pi I/h^2: %.7g, expected %.7g" % (got, exp))
+
+# ---------------------------------------------------------------- 5. Cornell box
+cornell = os.path.join(SRC, "scenes", "cornell-box.mid")
+common = [cornell, "--spp", "1", "--light-samples", "1", "--seed", "7"]
+a = os.path.join(TMP, "rt_cb_t1.pfm")
+b = os.path.join(TMP, "rt_cb_t2.pfm")
+c = os.path.join(TMP, "rt_cb_grid.pfm")
+run(common + ["-o", a, "--threads", "1"])
+run(common + ["-o", b, "--threads", "2"])
+run(common + ["-o", c, "--threads", "2", "--accel", "grid"])
+da, db, dc = (open(p, "rb").read() for p in (a, b, c))
+check(da == db, "Cornell box: --threads 1 and 2 give byte-identical images")
+check(da == dc, "Cornell box: BVH and grid give byte-identical images")
+w, h, rows = read_pfm(a)
+finite = all(math.isfinite(x) for row in rows for x in row)
+check(finite, "Cornell box: no NaN or Inf")
+third = w // 3
+left = sum(row[3 * x] for row in rows for x in range(third)) / (h * third)
+right = sum(row[3 * x] for row in rows for x in range(w - third, w)) / (h * third)
+check(left > 1.5 * right, "Cornell box: red wall on the left (mean red %.4g left, %.4g right)" % (left, right))
+exr = os.path.join(TMP, "rt_cb.exr")
+run(common + ["-o", exr, "--max-depth", "1"])
+data = open(exr, "rb").read()
+check(b"testbed" in data and b"raytrace" in data, "Cornell box EXR carries the provenance attributes")
+
+# Bad command lines fail with the usage status and write nothing.
+bad = os.path.join(TMP, "rt_bad.png")
+run([cornell, "-o", bad, "--method", "pathtrace"], expect=2)
+check(not os.path.exists(bad), "unknown --method is refused and writes nothing")
+
+sys.exit(1 if failures else 0)
