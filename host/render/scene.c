@@ -600,12 +600,11 @@ static tb_status tb__make_prims(tb_scene *s)
 
 static bool tb__cb_intersect(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {
-    (void)index;
     const tb_scene *s = ctx;
     const tb_object *o = s->objects[prim->object];
     if (prim->sub == TB_SCENE_WHOLE_OBJECT)
         return tb_object_intersect(o, ray, hit);
-    return tb__scene_tri_intersect(o, prim->sub, ray, hit);
+    return tb__scene_tri_intersect(o, prim->sub, index, ray, hit);
 }
 
 static bool tb__cb_occluded(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray)
@@ -780,7 +779,13 @@ void tb_scene_free(tb_scene *s)
 
 bool tb_scene_intersect(const tb_scene *s, const tb_ray *ray, tb_hit *hit)
 {
-    return s && s->accel && tb_accel_intersect(s->accel, ray, hit);
+    if (!s || !s->accel)
+        return false;
+    tb__scene_tri_begin();
+    if (!tb_accel_intersect(s->accel, ray, hit))
+        return false;
+    tb__scene_tri_finish(ray, hit);
+    return true;
 }
 
 bool tb_scene_occluded(const tb_scene *s, const tb_ray *ray)

@@ -125,7 +125,9 @@ typedef struct tb_scene {
     tb_mid_camera mid_camera;   /* the camera as the file gave it (no names, attributes or references) */
     tb_camera camera;           /* ready to make rays, at the file's resolution */
     tb_aabb bounds;             /* world box of every object */
-    tb_accel *accel;            /* NULL with no_accel */
+    tb_accel *accel;            /* NULL with no_accel. Query it through tb_scene_intersect, which
+                                   completes the (u, v) of hits on mesh triangles (left 0 by the
+                                   callbacks); tb_accel_occluded may be called directly */
     size_t nprims;
     tb_accel_prim *prims;       /* the acceleration references in build order */
     tb_scene_stats stats;

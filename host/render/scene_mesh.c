@@ -13,7 +13,13 @@
  * (v1 - v0) x (v2 - v0) transformed by the inverse transpose. So a hit is the
  * record tb_object_intersect gives for the same triangle, and rays never leak
  * between the triangles of a mesh. (The object level offers no call for one
- * triangle of a mesh yet; if it gets one, this file should use it.) */
+ * triangle of a mesh yet; if it gets one, this file should use it.)
+ *
+ * (u, v) are computed once per query, for the winning triangle only: the
+ * callback keeps the best triangle candidate of the current query in
+ * thread-local storage, ordered by the structure's own tie rule (t, object,
+ * face, reference index), so the candidate kept is the one the structure
+ * returns whenever it returns a triangle. */
 #include "host/render/scene_internal.h"
 
 #include <math.h>
@@ -127,7 +133,51 @@ static bool tb__hit_tri(const tb_object *o, uint32_t tri, const tb_ray *ray, tb_
     return (float)*t >= ray->tmin && (float)*t <= ray->tmax;
 }
 
-bool tb__scene_tri_intersect(const tb_object *o, uint32_t tri, const tb_ray *ray, tb_hit *hit)
+/* The best triangle candidate of this thread's current query. */
+typedef struct tb__tri_best {
+    bool valid;
+    const tb_object *obj;
+    uint32_t tri, index, face;
+    float tf;   /* the reported t */
+    double t;   /* the line parameter in double, as the object level uses it for (u, v) */
+} tb__tri_best;
+
+static _Thread_local tb__tri_best tb__best;
+
+void tb__scene_tri_begin(void) { tb__best.valid = false; }
+
+/* True if candidate (t, object, face, index) precedes the kept one. */
+static bool tb__better(float t, uint32_t object, uint32_t face, uint32_t index)
+{
+    const tb__tri_best *b = &tb__best;
+    if (!b->valid || t != b->tf)
+        return !b->valid || t < b->tf;
+    if (object != b->obj->index)
+        return object < b->obj->index;
+    if (face != b->face)
+        return face < b->face;
+    return index < b->index;
+}
+
+void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
+{
+    const tb__tri_best *b = &tb__best;
+    if (!b->valid || hit->t != b->tf || hit->object != b->obj->index || hit->face != b->face)
+        return; /* the winner is not a triangle reference */
+    const tb_object *o = b->obj;
+    tb_dvec3 ro = tb_mat4_mul_point(&o->to_world.inv, (tb_dvec3){ray->o.x, ray->o.y, ray->o.z});
+    tb_dvec3 rd = tb_mat4_mul_vec(&o->to_world.inv, (tb_dvec3){ray->d.x, ray->d.y, ray->d.z});
+    tb_dvec3 p = {ro.x + b->t * rd.x, ro.y + b->t * rd.y, ro.z + b->t * rd.z};
+    uint32_t face = o->mesh->tri_face[b->tri];
+    int pf = (int)face;
+    double u = 0.0, v = 0.0;
+    if (tb_param_from_point(o->kind, &o->geom, p, (int)face, &pf, &u, &v) != TB_OK)
+        u = v = 0.0;
+    hit->u = (float)u;
+    hit->v = (float)v;
+}
+
+bool tb__scene_tri_intersect(const tb_object *o, uint32_t tri, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {
     tb__sray w;
     double t;
@@ -148,18 +198,14 @@ bool tb__scene_tri_intersect(const tb_object *o, uint32_t tri, const tb_ray *ray
         double s = (o->flip ? -1.0 : 1.0) / len;
         ng = (tb_vec3){(float)(nw.x * s), (float)(nw.y * s), (float)(nw.z * s)};
     }
-    uint32_t face = m->tri_face[tri];
-    tb_dvec3 p = {w.o[0] + t * w.d[0], w.o[1] + t * w.d[1], w.o[2] + t * w.d[2]};
-    int pf = (int)face;
-    double u = 0.0, v = 0.0;
-    if (tb_param_from_point(o->kind, &o->geom, p, (int)face, &pf, &u, &v) != TB_OK)
-        u = v = 0.0;
+    uint32_t face = o->face_base + m->tri_face[tri];
     hit->t = (float)t;
     hit->object = o->index;
-    hit->face = o->face_base + face;
-    hit->u = (float)u;
-    hit->v = (float)v;
+    hit->face = face;
+    hit->u = hit->v = 0.0f; /* tb__scene_tri_finish, for the winner */
     hit->ng = ng;
+    if (tb__better(hit->t, o->index, face, index))
+        tb__best = (tb__tri_best){true, o, tri, index, face, hit->t, t};
     return true;
 }
 
