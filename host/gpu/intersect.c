@@ -247,11 +247,20 @@ static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t
 
 _Static_assert(sizeof(tb_hit) == sizeof(tb_gpu_hit), "GPU hits download into tb_hit");
 
-/* True if a precedes b in the tie rule (t, object, face); references of
- * routed and GPU objects never share an object, so the reference key is not needed. */
+/* Relative t within which a routed object's hit (double, rounded once) and a
+ * GPU triangle's hit (float) count as a tie. The float t of a triangle is off
+ * by a few ulps, so without it coincident surfaces (a box standing on a
+ * floor) would be decided by those ulps instead of by the tie rule; the
+ * slack of the CPU BVH's pruning (2^-16, docs/accel.md) is used. */
+#define TB__TIE_TOL 1.52587890625e-5
+
+/* True if routed hit a (CPU) precedes GPU hit b: smaller t beyond the tie
+ * tolerance, else the tie rule (object, face); routed and GPU objects never
+ * share an object, so the reference key is not needed. */
 static bool tb__precedes(const tb_hit *a, const tb_hit *b)
 {
-    if (a->t != b->t)
+    double tol = TB__TIE_TOL * fabs((double)b->t);
+    if (fabs((double)a->t - b->t) > tol)
         return a->t < b->t;
     if (a->object != b->object)
         return a->object < b->object;
@@ -275,8 +284,8 @@ tb_status tb_gpu_intersect(tb_gpu_scene *g, const tb_ray *rays, size_t n, tb_hit
         bool gpu_hit = h->object != TB_GPU_NO_HIT;
         if (g->cpu_accel && tb_ray_is_valid(&rays[i])) {
             tb_ray r = rays[i];
-            if (gpu_hit)
-                r.tmax = h->t;
+            if (gpu_hit) /* up to the tie tolerance beyond the GPU hit, within the ray's range */
+                r.tmax = fminf(r.tmax, (float)((double)h->t + TB__TIE_TOL * fabs((double)h->t)));
             tb_hit c;
             ++routed;
             if (tb_accel_intersect(g->cpu_accel, &r, &c) && (!gpu_hit || tb__precedes(&c, h))) {

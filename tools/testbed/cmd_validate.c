@@ -225,6 +225,8 @@ int tb_cmd_validate(int argc, char **argv)
         bool c = ch[i].object != UINT32_MAX, v = gh[i].object != UINT32_MAX;
         occl += co[i] != go[i];
         if (c != v) {
+            if (hitmiss < 5)
+                printf("  differs: ray %zu: cpu %s, vulkan %s\n", i, c ? "hit" : "miss", v ? "hit" : "miss");
             ++hitmiss;
             continue;
         }
@@ -232,6 +234,9 @@ int tb_cmd_validate(int argc, char **argv)
             continue;
         ++both;
         if (ch[i].object != gh[i].object || ch[i].face != gh[i].face) {
+            if (objface < 5)
+                printf("  differs: ray %zu: cpu t %.9g object %u face %u, vulkan t %.9g object %u face %u\n", i,
+                       ch[i].t, ch[i].object, ch[i].face, gh[i].t, gh[i].object, gh[i].face);
             ++objface;
             continue;
         }

@@ -1,0 +1,246 @@
+/* The Vulkan intersect kernel (host/gpu/intersect.h) against the CPU path
+ * (tb_scene_intersect / tb_scene_occluded) on scenes mixing triangles (on the
+ * GPU) with a torus and a sphere (routed to the CPU per object). Runs with
+ * the validation layer and fails on any message. */
+#include "gpu_test.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "host/gpu/intersect.h"
+#include "host/render/scene.h"
+#include "util/math/rng.h"
+
+/* A quad at z = 0 (two triangles, one face), a triangle at z = 1, a torus
+ * about z at height 2 and a sphere off to the side. */
+static const char *tb__mixed =
+    "mid 1\n"
+    "polygons \"quad\" { geometry = { vertices = [[-2 -2 0] [2 -2 0] [2 2 0] [-2 2 0]] faces = [[0 1 2 3]] } }\n"
+    "polygons \"tri\" { geometry = { vertices = [[-1 -1 1] [1 -1 1] [0 1 1]] faces = [[0 1 2]] } }\n"
+    "torus \"ring\" { transform = [translate([0 0 2])] geometry = { major = 1 minor = 0.25 } }\n"
+    "sphere \"ball\" { transform = [scale(0.5) translate([3 3 0.5])] }\n";
+
+/* Only routed kinds: the kernel has nothing to do. */
+static const char *tb__analytic =
+    "mid 1\n"
+    "torus \"ring\" { transform = [translate([0 0 2])] geometry = { major = 1 minor = 0.25 } }\n"
+    "sphere \"ball\" { transform = [scale(0.5) translate([0.5 0.5 0.5])] }\n";
+
+static tb_scene *tb__load(const char *text)
+{
+    FILE *fp = fmemopen((void *)text, strlen(text), "r");
+    assert_non_null(fp);
+    tb_scene *s = NULL;
+    tb_status st = tb_scene_load_stream(fp, "t.mid", NULL, NULL, &s);
+    fclose(fp);
+    if (st)
+        fail_msg("scene: %s", tb_last_error());
+    return s;
+}
+
+typedef struct tb__env {
+    tb_gpu_instance *inst;
+    tb_gpu_device *dev;
+} tb__env;
+
+static void tb__open(tb__env *e)
+{
+    e->inst = gpu_test_instance();
+    int idx = -1;
+    char why[256];
+    assert_int_equal(tb_gpu_pick_device(tb_gpu_device_info_at(e->inst, 0), tb_gpu_device_count(e->inst),
+                                        TB_GPU_MODE_VULKAN, -1, &idx, why, sizeof why),
+                     TB_OK);
+    e->dev = tb_gpu_device_create(e->inst, idx, NULL);
+    assert_non_null(e->dev);
+}
+
+static void tb__close(tb__env *e)
+{
+    tb_gpu_device_destroy(e->dev);
+    gpu_assert_clean(e->inst);
+    tb_gpu_instance_destroy(e->inst);
+}
+
+static tb_hit tb__cpu(const tb_scene *s, const tb_ray *r)
+{
+    tb_hit h = {INFINITY, UINT32_MAX, UINT32_MAX, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
+    tb_scene_intersect(s, r, &h);
+    return h;
+}
+
+static bool tb__same(const tb_hit *a, const tb_hit *b, double uv_tol)
+{
+    return a->t == b->t && a->object == b->object && a->face == b->face && a->ng.x == b->ng.x &&
+           a->ng.y == b->ng.y && a->ng.z == b->ng.z && fabs((double)a->u - b->u) <= uv_tol &&
+           fabs((double)a->v - b->v) <= uv_tol;
+}
+
+/* Vertical rays through a grid of odd multiples of 1/8: every GPU operation
+ * is exact (shear 0, z differences of small dyadics), no ray meets an edge of
+ * the triangle or the torus's silhouette, so the mixed path's records equal
+ * the CPU's bit for bit (u, v: the host computes them from the float t, the
+ * CPU from the double t: equal here since t is exact). */
+static void test_exact_grid(void **state)
+{
+    (void)state;
+    tb__env e;
+    tb__open(&e);
+    tb_scene *s = tb__load(tb__mixed);
+    tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
+    assert_non_null(g);
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    assert_int_equal(info.gpu_objects, 2);
+    assert_int_equal(info.cpu_objects, 2);
+    assert_int_equal(info.gpu_triangles, 3);
+    assert_true(tb_gpu_scene_object_on_gpu(g, 0) && tb_gpu_scene_object_on_gpu(g, 1));
+    assert_false(tb_gpu_scene_object_on_gpu(g, 2) || tb_gpu_scene_object_on_gpu(g, 3));
+
+    enum { N = 32 * 32 };
+    tb_ray rays[N];
+    tb_hit hits[N];
+    for (int i = 0; i < N; ++i) {
+        float x = -3.875f + 0.25f * (float)(i % 32), y = -3.875f + 0.25f * (float)(i / 32);
+        rays[i] = (tb_ray){{x, y, 5.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY};
+    }
+    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
+    int on[4] = {0};
+    for (int i = 0; i < N; ++i) {
+        tb_hit c = tb__cpu(s, &rays[i]);
+        if (!tb__same(&c, &hits[i], 0.0))
+            fail_msg("ray %d (%g, %g): cpu t %.9g object %u face %u, gpu t %.9g object %u face %u", i,
+                     rays[i].o.x, rays[i].o.y, c.t, c.object, c.face, hits[i].t, hits[i].object, hits[i].face);
+        if (c.object < 4)
+            on[c.object]++;
+    }
+    /* Exact t on the planes, and every object was hit (the test covers both paths). */
+    for (int i = 0; i < N; ++i)
+        if (hits[i].object == 0)
+            assert_true(hits[i].t == 5.0f);
+        else if (hits[i].object == 1)
+            assert_true(hits[i].t == 4.0f);
+    for (int k = 0; k < 4; ++k)
+        assert_true(on[k] > 0);
+
+    /* Any hit on the same rays, and shortened so the planes are out of reach. */
+    uint8_t occ[N];
+    assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
+    for (int i = 0; i < N; ++i)
+        assert_int_equal(occ[i], tb_scene_occluded(s, &rays[i]));
+    for (int i = 0; i < N; ++i)
+        rays[i].tmax = 3.5f;
+    assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
+    for (int i = 0; i < N; ++i)
+        assert_int_equal(occ[i], tb_scene_occluded(s, &rays[i]));
+    tb_gpu_scene_destroy(g);
+    tb_scene_free(s);
+    tb__close(&e);
+}
+
+/* Random rays through the mixed scene: hits on routed objects are the CPU's
+ * records exactly; triangle hits agree within float tolerance; hit/miss and
+ * object may differ only for rays within float error of an edge (none
+ * expected among a few thousand random rays; allowed: 1 in 1000). */
+static void test_random_mixed(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("test_random_mixed", 6);
+    tb_rng rng;
+    tb_rng_seed(&rng, seed, 1);
+    tb__env e;
+    tb__open(&e);
+    tb_scene *s = tb__load(tb__mixed);
+    tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
+    assert_non_null(g);
+    enum { N = 4000 };
+    tb_ray *rays = malloc(N * sizeof *rays);
+    tb_hit *hits = malloc(N * sizeof *hits);
+    uint8_t *occ = malloc(N);
+    assert_true(rays && hits && occ);
+    for (int i = 0; i < N; ++i) {
+        float o[3], p[3];
+        for (int k = 0; k < 3; ++k) {
+            o[k] = (float)(tb_rng_double(&rng) * 12.0 - 6.0);
+            p[k] = (float)(tb_rng_double(&rng) * 6.0 - 3.0);
+        }
+        p[2] = (float)(tb_rng_double(&rng) * 3.0);
+        float tmax = tb_rng_double(&rng) < 0.25 ? (float)tb_rng_double(&rng) : INFINITY;
+        rays[i] = (tb_ray){{o[0], o[1], o[2]}, 0.0f, {p[0] - o[0], p[1] - o[1], p[2] - o[2]}, tmax};
+    }
+    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
+    assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
+    int differ = 0, routed = 0, tri = 0, occ_differ = 0;
+    for (int i = 0; i < N; ++i) {
+        tb_hit c = tb__cpu(s, &rays[i]);
+        occ_differ += occ[i] != tb_scene_occluded(s, &rays[i]);
+        if (c.object != hits[i].object || c.face != hits[i].face) {
+            ++differ;
+            continue;
+        }
+        if (c.object == UINT32_MAX)
+            continue;
+        if (c.object >= 2) {
+            ++routed;
+            if (!tb__same(&c, &hits[i], 0.0))
+                fail_msg("ray %d: routed object %u: records differ", i, c.object);
+        } else {
+            ++tri;
+            tb_assert_near(hits[i].t, c.t, 1e-5 * fabs(c.t));
+            assert_true(c.ng.x == hits[i].ng.x && c.ng.y == hits[i].ng.y && c.ng.z == hits[i].ng.z);
+            tb_assert_near(hits[i].u, c.u, 1e-4);
+            tb_assert_near(hits[i].v, c.v, 1e-4);
+        }
+    }
+    print_message("[ info     ] %d routed-object hits, %d triangle hits, %d differ, %d occlusion differ\n", routed,
+                  tri, differ, occ_differ);
+    assert_true(routed > 50 && tri > 50);
+    assert_true(differ <= N / 1000);
+    assert_true(occ_differ <= N / 1000);
+    free(rays), free(hits), free(occ);
+    tb_gpu_scene_destroy(g);
+    tb_scene_free(s);
+    tb__close(&e);
+}
+
+/* A scene with no triangles: no dispatch, every object routed, CPU records. */
+static void test_all_routed(void **state)
+{
+    (void)state;
+    tb__env e;
+    tb__open(&e);
+    tb_scene *s = tb__load(tb__analytic);
+    tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
+    assert_non_null(g);
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    assert_int_equal(info.gpu_objects, 0);
+    assert_int_equal(info.cpu_objects, 2);
+    enum { N = 64 };
+    tb_ray rays[N];
+    tb_hit hits[N];
+    for (int i = 0; i < N; ++i)
+        rays[i] = (tb_ray){{-1.5f + 0.05f * (float)i, 0.5f, 5.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY};
+    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
+    int hit = 0;
+    for (int i = 0; i < N; ++i) {
+        tb_hit c = tb__cpu(s, &rays[i]);
+        assert_true(tb__same(&c, &hits[i], 0.0));
+        hit += c.object != UINT32_MAX;
+    }
+    assert_true(hit > 0);
+    tb_gpu_scene_destroy(g);
+    tb_scene_free(s);
+    tb__close(&e);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_exact_grid),
+        cmocka_unit_test(test_random_mixed),
+        cmocka_unit_test(test_all_routed),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
