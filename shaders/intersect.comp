@@ -90,11 +90,21 @@ bool tb_tri_hit(tb_wray w, vec3 v0, vec3 v1, vec3 v2, out float t)
     return tb_isfinite(t);
 }
 
-// True if (t, object, face, ref) precedes the best so far (the CPU tie rule).
+// Relative difference in t below which two hits are a tie (2^-18, 64 ulps):
+// the float t of two coincident triangles (a light set into a ceiling)
+// differ by a few ulps, so the CPU tie rule (lower object, face, reference)
+// decides among hits this close, not the rounding. Must equal TB__TIE_TOL in
+// host/gpu/intersect.c.
+const float TB_TIE_TOL = 3.814697265625e-6;
+
+// True if (t, object, face, ref) precedes the best so far (the CPU tie rule,
+// with ties up to TB_TIE_TOL).
 bool tb_better(float t, uint object, uint face, uint ref, bool have, float bt, uint bo, uint bf, uint br)
 {
-    if (!have || t != bt)
-        return !have || t < bt;
+    if (!have)
+        return true;
+    if (abs(t - bt) > TB_TIE_TOL * abs(bt))
+        return t < bt;
     if (object != bo)
         return object < bo;
     if (face != bf)

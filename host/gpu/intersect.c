@@ -250,9 +250,9 @@ _Static_assert(sizeof(tb_hit) == sizeof(tb_gpu_hit), "GPU hits download into tb_
 /* Relative t within which a routed object's hit (double, rounded once) and a
  * GPU triangle's hit (float) count as a tie. The float t of a triangle is off
  * by a few ulps, so without it coincident surfaces (a box standing on a
- * floor) would be decided by those ulps instead of by the tie rule; the
- * slack of the CPU BVH's pruning (2^-16, docs/accel.md) is used. */
-#define TB__TIE_TOL 1.52587890625e-5
+ * floor) would be decided by those ulps instead of by the tie rule. 2^-18
+ * (64 ulps) covers the float triangle test's error on the bundled scenes. */
+#define TB__TIE_TOL 3.814697265625e-6 /* 2^-18, as TB_TIE_TOL in shaders/intersect.comp */
 
 /* True if routed hit a (CPU) precedes GPU hit b: smaller t beyond the tie
  * tolerance, else the tie rule (object, face); routed and GPU objects never
