@@ -55,15 +55,16 @@ tb_image *tb_render_resolve(const tb_scene *s, const tb_film *film)
 /* The per-sample context: the tracer plus the time budget. */
 typedef struct tb__render_ctx {
     const tb_raytracer *rt;
-    int64_t deadline_ns; /* 0: none */
-    atomic_int *cancel;  /* set when the deadline passes */
+    int64_t deadline_ns;       /* 0: none */
+    const atomic_int *external; /* the caller's cancel flag, or NULL */
+    atomic_int stop;            /* what the tile loop checks: set on a cancel or when the deadline passes */
 } tb__render_ctx;
 
 static void tb__render_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
 {
     tb__render_ctx *c = ctx;
-    if (c->deadline_ns > 0 && tb__now_ns() > c->deadline_ns)
-        atomic_store(c->cancel, 1);
+    if ((c->deadline_ns > 0 && tb__now_ns() > c->deadline_ns) || (c->external && atomic_load(c->external)))
+        atomic_store(&c->stop, 1);
     tb_rt_sample((void *)c->rt, x, y, rng, out);
 }
 
@@ -88,8 +89,8 @@ tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_i
         tb_rt_release(&rt);
         return TB_ERR_NOMEM;
     }
-    atomic_int local_cancel = 0;
-    tb__render_ctx ctx = {.rt = &rt, .cancel = o->cancel ? o->cancel : &local_cancel};
+    tb__render_ctx ctx = {.rt = &rt, .external = o->cancel};
+    atomic_init(&ctx.stop, o->cancel ? atomic_load(o->cancel) : 0);
     int64_t t0 = tb__now_ns();
     if (o->time_budget > 0.0)
         ctx.deadline_ns = t0 + (int64_t)(o->time_budget * 1e9);
@@ -97,7 +98,7 @@ tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_i
     bool use_prog = o->progress &&
                     tb_progress_start(&prog, "render", (int64_t)fd.width * fd.height * o->passes, NULL, 0) == TB_OK;
     tb_aa_render_desc desc = {.sample = tb__render_sample, .ctx = &ctx, .threads = o->threads,
-                              .progress = use_prog ? &prog : NULL, .cancel = ctx.cancel};
+                              .progress = use_prog ? &prog : NULL, .cancel = &ctx.stop};
     tb_aa_options aa = o->aa;
     for (int pass = 0; pass < o->passes && !err; pass++) {
         aa.pass = o->aa.pass + (uint32_t)pass;
@@ -112,7 +113,7 @@ tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_i
         st.aa.tiles_skipped += as.tiles_skipped;
         if (as.max_spp_used > st.aa.max_spp_used)
             st.aa.max_spp_used = as.max_spp_used;
-        if (as.tiles_skipped > 0 || atomic_load(ctx.cancel)) {
+        if (as.tiles_skipped > 0 || atomic_load(&ctx.stop)) {
             st.interrupted = as.tiles_skipped > 0 || pass + 1 < o->passes;
             if (as.tiles_skipped == 0)
                 st.passes_done++;

@@ -20,6 +20,7 @@
 """
 import math
 import os
+import signal
 import struct
 import subprocess
 import sys
@@ -192,6 +193,24 @@ exr = os.path.join(TMP, "rt_cb.exr")
 run(common + ["-o", exr, "--max-depth", "1"])
 data = open(exr, "rb").read()
 check(b"testbed" in data and b"raytrace" in data, "Cornell box EXR carries the provenance attributes")
+
+# Ctrl-C: the partial image is written and the exit status is 130.
+part = os.path.join(TMP, "rt_cb_sigint.pfm")
+if os.path.exists(part):
+    os.remove(part)
+proc = subprocess.Popen([TESTBED, "render", cornell, "-o", part, "--spp", "4096", "--threads", "2"],
+                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                        env=dict(os.environ, TB_NO_PROGRESS="1"))
+line = proc.stderr.readline()  # printed once the SIGINT handler is in place
+proc.send_signal(signal.SIGINT)
+out_s, err_s = proc.communicate(timeout=600)
+check(proc.returncode == 130 and os.path.exists(part) and "INTERRUPTED" in out_s,
+      "Ctrl-C writes the partial image and exits 130 (exit %d, %r)" % (proc.returncode, line.strip()))
+
+# --time-budget: stops early, writes the image, exits 0 (a budget is not an interrupt).
+tb = os.path.join(TMP, "rt_cb_budget.pfm")
+p = run([cornell, "-o", tb, "--spp", "4096", "--time-budget", "0.2"])
+check(os.path.exists(tb) and "INTERRUPTED" in p.stdout, "--time-budget stops early and writes the image")
 
 # Bad command lines fail with the usage status and write nothing.
 bad = os.path.join(TMP, "rt_bad.png")

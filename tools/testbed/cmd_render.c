@@ -204,6 +204,8 @@ int tb_cmd_render(int argc, char **argv)
     sigaction(SIGINT, &sa, &old_sa);
     ro.cancel = &tb__render_interrupt;
     ro.progress = true;
+    /* Tells a script that Ctrl-C now writes the partial image. */
+    fprintf(stderr, "testbed render: rendering %s (Ctrl-C writes the image so far)\n", scene_path);
     tb_render_stats rs;
     tb_status st = tb_render_raytrace(scene, &ro, &img, &rs);
     sigaction(SIGINT, &old_sa, NULL);
