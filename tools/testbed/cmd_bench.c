@@ -50,6 +50,12 @@ static void tb__bench_usage(FILE *out)
             "  tessellate   tb_polygonize of every kind: mesh size, meshes/s and Mtriangles/s\n"
             "               (details: testbed bench tessellate --help)\n"
             "\n"
+            "usage: testbed bench rays SCENE.mid [--embree] [--rays N] [--threads T,...] [--seed S]\n"
+            "\n"
+            "  rays         primary, shadow and diffuse rays of a scene through our BVH and (with\n"
+            "               --embree) Embree 3: Mrays/s, ratio, scaling, agreement (details:\n"
+            "               testbed bench rays --help)\n"
+            "\n"
             "Exit status: 0 done, 1 an object could not be built, 2 usage error.\n");
 }
 
@@ -290,6 +296,7 @@ static const struct {
     {"intersect", tb__bench_intersect_cmd},
     {"accel", tb_cmd_bench_accel}, /* cmd_bench_accel.c */
     {"tessellate", tb_cmd_bench_tessellate}, /* cmd_bench_tessellate.c */
+    {"rays", tb_cmd_bench_rays}, /* cmd_bench_rays.c */
 };
 
 int tb_cmd_bench(int argc, char **argv)

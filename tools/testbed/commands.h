@@ -16,6 +16,8 @@ int tb_cmd_bench(int argc, char **argv);
 int tb_cmd_bench_accel(int argc, char **argv);
 /* `testbed bench tessellate`: tessellation rate per kind (cmd_bench_tessellate.c; argv[0] is "tessellate"). */
 int tb_cmd_bench_tessellate(int argc, char **argv);
+/* `testbed bench rays`: scene rays through our BVH and Embree 3 (cmd_bench_rays.c; argv[0] is "rays"). */
+int tb_cmd_bench_rays(int argc, char **argv);
 /* `testbed check SCENE.mid`: validate and summarise a MID scene (cmd_check.c). */
 int tb_cmd_check(int argc, char **argv);
 /* `testbed compare A B`: error metrics against a reference image (cmd_compare.c). */

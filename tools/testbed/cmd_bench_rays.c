@@ -1,0 +1,545 @@
+/* `testbed bench rays SCENE.mid [--embree]`: rays per second of the scene's
+ * acceleration structure (the CPU path: tb_scene_intersect / _occluded)
+ * and, when built with Embree 3 (TB_HAVE_EMBREE), of Embree's single-ray API
+ * on the same rays, with the agreement between the two (docs/performance.md,
+ * "Rays: BVH vs Embree"). A row of the benchmark table in cmd_bench.c.
+ *
+ * Ray sets, made once from the scene and traced by both:
+ *   primary  the scene camera's rays: every pixel centre, or N random film
+ *            points with --rays N (closest hit);
+ *   shadow   one per primary hit, from the spawned hit point
+ *            (tb_spawn_ray_origin) to a point sampled on the area lights
+ *            (tb_area_light_sample) or, with no emitters, on a light chosen
+ *            at random (tb_light_sample_li); occlusion (any hit);
+ *   diffuse  one per primary hit, cosine-distributed about the geometric
+ *            normal on the side the camera ray came from (closest hit).
+ *
+ * In Embree every polygons object is one RTC_GEOMETRY_TYPE_TRIANGLE geometry
+ * (world-space float vertices, geometry ID = object index, primitive ID =
+ * triangle of obj->mesh) and every other object (analytic or CSG) a
+ * one-primitive user geometry whose callbacks call tb_object_intersect /
+ * tb_object_occluded, exactly the test our structure's leaves make. */
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "commands.h"
+#include "host/object/hit.h"
+#include "host/object/intersect.h"
+#include "host/render/lights.h"
+#include "host/render/scene.h"
+#include "util/math/rng.h"
+#include "util/math/transform.h"
+
+#ifdef TB_HAVE_EMBREE
+#include <embree3/rtcore.h>
+#endif
+
+enum { TB__SET_PRIMARY, TB__SET_SHADOW, TB__SET_DIFFUSE, TB__NSETS };
+static const char *const tb__set_names[TB__NSETS] = {"primary", "shadow", "diffuse"};
+
+/* One answer, reduced to what the agreement check compares. */
+typedef struct tb__answer {
+    float t;         /* closest-hit t (0 for occlusion sets) */
+    uint32_t object; /* UINT32_MAX: miss */
+    uint32_t face;   /* face ID on that object */
+} tb__answer;
+
+typedef struct tb__rayset {
+    tb_ray *rays;
+    size_t n;
+} tb__rayset;
+
+static double tb__wall(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ------------------------------------------------------------ our BVH */
+
+/* Traces set `k` through the scene with `threads` threads; answers into out (may be NULL). Wall seconds. */
+static double tb__trace_ours(const tb_scene *s, const tb__rayset *rs, int k, int threads, tb__answer *out)
+{
+    double t0 = tb__wall();
+    long n = (long)rs->n;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1024)
+    for (long i = 0; i < n; i++) {
+        tb__answer a = {0.0f, UINT32_MAX, 0};
+        if (k == TB__SET_SHADOW) {
+            if (tb_scene_occluded(s, &rs->rays[i]))
+                a.object = 0;
+        } else {
+            tb_hit h;
+            if (tb_scene_intersect(s, &rs->rays[i], &h))
+                a = (tb__answer){h.t, h.object, h.face};
+        }
+        if (out)
+            out[i] = a;
+    }
+    return tb__wall() - t0;
+}
+
+/* ------------------------------------------------------------ Embree */
+
+#ifdef TB_HAVE_EMBREE
+/* The intersect context handed to user geometries: Embree's, followed by the
+ * face ID of the last user-geometry hit (the RTCHit has no room for it). */
+typedef struct tb__ectx {
+    struct RTCIntersectContext rtc; /* must be first */
+    uint32_t face;           /* face of the closest user-geometry hit so far */
+} tb__ectx;
+
+typedef struct tb__embree {
+    RTCDevice dev;
+    RTCScene scene;
+    const tb_scene *s;
+} tb__embree;
+
+static void tb__user_bounds(const struct RTCBoundsFunctionArguments *args)
+{
+    const tb_accel_prim *p = args->geometryUserPtr;
+    args->bounds_o->lower_x = p->bounds.lo.x, args->bounds_o->lower_y = p->bounds.lo.y;
+    args->bounds_o->lower_z = p->bounds.lo.z;
+    args->bounds_o->upper_x = p->bounds.hi.x, args->bounds_o->upper_y = p->bounds.hi.y;
+    args->bounds_o->upper_z = p->bounds.hi.z;
+}
+
+static const tb_scene *tb__user_scene; /* set before any trace; read-only during traces */
+
+static void tb__user_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    if (!args->valid[0])
+        return;
+    const tb_accel_prim *p = args->geometryUserPtr;
+    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit; /* N == 1: the single-ray API */
+    tb_ray r = tb_ray_make((tb_vec3){rh->ray.org_x, rh->ray.org_y, rh->ray.org_z},
+                           (tb_vec3){rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z}, rh->ray.tnear, rh->ray.tfar);
+    tb_hit h;
+    if (!tb_object_intersect(tb__user_scene->objects[p->object], &r, &h))
+        return;
+    rh->ray.tfar = h.t;
+    rh->hit.u = h.u, rh->hit.v = h.v;
+    rh->hit.Ng_x = h.ng.x, rh->hit.Ng_y = h.ng.y, rh->hit.Ng_z = h.ng.z;
+    rh->hit.geomID = args->geomID;
+    rh->hit.primID = args->primID;
+    rh->hit.instID[0] = args->context->instID[0];
+    ((tb__ectx *)args->context)->face = h.face;
+}
+
+static void tb__user_occluded(const struct RTCOccludedFunctionNArguments *args)
+{
+    if (!args->valid[0])
+        return;
+    const tb_accel_prim *p = args->geometryUserPtr;
+    struct RTCRay *ray = (struct RTCRay *)args->ray;
+    tb_ray r = tb_ray_make((tb_vec3){ray->org_x, ray->org_y, ray->org_z},
+                           (tb_vec3){ray->dir_x, ray->dir_y, ray->dir_z}, ray->tnear, ray->tfar);
+    if (tb_object_occluded(tb__user_scene->objects[p->object], &r))
+        ray->tfar = -INFINITY;
+}
+
+/* Builds the Embree scene of `s`; 0 on failure (message printed). *user_objects counts user geometries. */
+static int tb__embree_build(const tb_scene *s, tb__embree *e, size_t *user_objects, double *build_seconds)
+{
+    *user_objects = 0;
+    e->s = s;
+    tb__user_scene = s;
+    e->dev = rtcNewDevice(NULL);
+    if (!e->dev) {
+        fprintf(stderr, "testbed bench rays: rtcNewDevice failed (error %d)\n", (int)rtcGetDeviceError(NULL));
+        return 0;
+    }
+    double t0 = tb__wall();
+    e->scene = rtcNewScene(e->dev);
+    /* The user geometries' boxes: the scene's whole-object references. */
+    for (size_t i = 0; i < s->nprims; i++) {
+        const tb_accel_prim *p = &s->prims[i];
+        if (p->sub != TB_SCENE_WHOLE_OBJECT)
+            continue;
+        RTCGeometry g = rtcNewGeometry(e->dev, RTC_GEOMETRY_TYPE_USER);
+        rtcSetGeometryUserPrimitiveCount(g, 1);
+        rtcSetGeometryUserData(g, (void *)p);
+        rtcSetGeometryBoundsFunction(g, tb__user_bounds, NULL);
+        rtcSetGeometryIntersectFunction(g, tb__user_intersect);
+        rtcSetGeometryOccludedFunction(g, tb__user_occluded);
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(e->scene, g, p->object);
+        rtcReleaseGeometry(g);
+        (*user_objects)++;
+    }
+    for (uint32_t o = 0; o < s->nobjects; o++) {
+        const tb_object *obj = s->objects[o];
+        if (!obj->mesh || obj->mesh->ntris == 0)
+            continue;
+        const tb_object_mesh *m = obj->mesh;
+        RTCGeometry g = rtcNewGeometry(e->dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+        float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                           m->nvertices);
+        unsigned *ix = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                               m->ntris);
+        if (!v || !ix) {
+            fprintf(stderr, "testbed bench rays: Embree buffer allocation failed\n");
+            rtcReleaseGeometry(g);
+            return 0;
+        }
+        for (uint32_t i = 0; i < m->nvertices; i++) {
+            tb_vec3 w = tb_transform_point(&obj->to_world, m->vertices[i]);
+            v[3 * i] = w.x, v[3 * i + 1] = w.y, v[3 * i + 2] = w.z;
+        }
+        memcpy(ix, m->tris, sizeof(unsigned) * 3 * (size_t)m->ntris);
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(e->scene, g, o);
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(e->scene);
+    *build_seconds = tb__wall() - t0;
+    enum RTCError err = rtcGetDeviceError(e->dev);
+    if (err != RTC_ERROR_NONE) {
+        fprintf(stderr, "testbed bench rays: Embree error %d while building the scene\n", (int)err);
+        return 0;
+    }
+    return 1;
+}
+
+static void tb__embree_free(tb__embree *e)
+{
+    if (e->scene)
+        rtcReleaseScene(e->scene);
+    if (e->dev)
+        rtcReleaseDevice(e->dev);
+}
+
+static double tb__trace_embree(const tb__embree *e, const tb__rayset *rs, int k, int threads, tb__answer *out)
+{
+    double t0 = tb__wall();
+    long n = (long)rs->n;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1024)
+    for (long i = 0; i < n; i++) {
+        const tb_ray *r = &rs->rays[i];
+        tb__ectx ctx;
+        rtcInitIntersectContext(&ctx.rtc);
+        ctx.face = 0;
+        tb__answer a = {0.0f, UINT32_MAX, 0};
+        if (k == TB__SET_SHADOW) {
+            struct RTCRay ray = {.org_x = r->o.x, .org_y = r->o.y, .org_z = r->o.z, .tnear = r->tmin,
+                          .dir_x = r->d.x, .dir_y = r->d.y, .dir_z = r->d.z, .time = 0.0f,
+                          .tfar = r->tmax, .mask = UINT32_MAX, .id = 0, .flags = 0};
+            rtcOccluded1(e->scene, &ctx.rtc, &ray);
+            if (ray.tfar < 0.0f)
+                a.object = 0;
+        } else {
+            struct RTCRayHit rh;
+            rh.ray = (struct RTCRay){.org_x = r->o.x, .org_y = r->o.y, .org_z = r->o.z, .tnear = r->tmin,
+                              .dir_x = r->d.x, .dir_y = r->d.y, .dir_z = r->d.z, .time = 0.0f,
+                              .tfar = r->tmax, .mask = UINT32_MAX, .id = 0, .flags = 0};
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(e->scene, &ctx.rtc, &rh);
+            if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+                const tb_object *obj = e->s->objects[rh.hit.geomID];
+                uint32_t face = obj->mesh ? obj->mesh->tri_face[rh.hit.primID] : ctx.face;
+                a = (tb__answer){rh.ray.tfar, rh.hit.geomID, face};
+            }
+        }
+        if (out)
+            out[i] = a;
+    }
+    return tb__wall() - t0;
+}
+#endif /* TB_HAVE_EMBREE */
+
+/* ------------------------------------------------------------ ray sets */
+
+/* Cosine-distributed direction about unit n from (u1, u2). */
+static tb_vec3 tb__cosine_dir(tb_vec3 n, float u1, float u2)
+{
+    tb_vec3 a = fabsf(n.x) > 0.9f ? (tb_vec3){0.0f, 1.0f, 0.0f} : (tb_vec3){1.0f, 0.0f, 0.0f};
+    tb_vec3 t = tb_vec3_normalize(tb_vec3_cross(a, n)), b = tb_vec3_cross(n, t);
+    float r = sqrtf(u1), phi = 6.28318530717958648f * u2, z = sqrtf(fmaxf(0.0f, 1.0f - u1));
+    float x = r * cosf(phi), y = r * sinf(phi);
+    return (tb_vec3){x * t.x + y * b.x + z * n.x, x * t.y + y * b.y + z * n.y, x * t.z + y * b.z + z * n.z};
+}
+
+/* Makes the three ray sets; 0 on failure (message printed). */
+static int tb__make_sets(const tb_scene *s, uint64_t nprimary, uint64_t seed, tb__rayset sets[TB__NSETS])
+{
+    const tb_camera *c = &s->camera;
+    size_t np = nprimary ? (size_t)nprimary : (size_t)c->width * (size_t)c->height;
+    for (int k = 0; k < TB__NSETS; k++) {
+        sets[k].rays = malloc(sizeof(tb_ray) * np);
+        sets[k].n = 0;
+        if (!sets[k].rays) {
+            fprintf(stderr, "testbed bench rays: out of memory for %zu rays\n", np);
+            return 0;
+        }
+    }
+    tb_rng rng;
+    tb_rng_seed(&rng, seed, 0);
+    for (size_t i = 0; i < np; i++) {
+        double x, y;
+        if (nprimary)
+            x = c->width * (double)tb_rng_float(&rng), y = c->height * (double)tb_rng_float(&rng);
+        else
+            x = (double)(i % (size_t)c->width) + 0.5, y = (double)(i / (size_t)c->width) + 0.5;
+        sets[TB__SET_PRIMARY].rays[sets[TB__SET_PRIMARY].n++] = tb_camera_ray(c, x, y, 0.5f, 0.5f);
+    }
+    tb_area_light area = {0};
+    if (s->nemitters > 0 && tb_area_light_init(&area, s->emitters, s->nemitters)) {
+        fprintf(stderr, "testbed bench rays: %s\n", tb_last_error());
+        return 0;
+    }
+    size_t no_shadow = 0;
+    for (size_t i = 0; i < np; i++) {
+        tb_ray r = sets[TB__SET_PRIMARY].rays[i];
+        tb_hit h;
+        tb_vec3 p, perr;
+        if (!tb_scene_intersect(s, &r, &h))
+            continue;
+        r.tmax = h.t;
+        if (!tb_object_hit_point(s->objects[h.object], &r, &h, &p, &perr))
+            continue;
+        float u1 = tb_rng_float(&rng), u2 = tb_rng_float(&rng), u3 = tb_rng_float(&rng), u4 = tb_rng_float(&rng);
+        /* Shadow: toward a point on a light. */
+        tb_light_sample ls;
+        bool ok = false;
+        if (s->nemitters > 0)
+            ok = tb_area_light_sample(&area, p, u1, u2, &ls);
+        else if (s->nlights > 0) {
+            int l = (int)(u1 * (float)s->nlights);
+            ok = tb_light_sample_li(&s->lights[l < s->nlights ? l : s->nlights - 1], p, &ls);
+        }
+        if (ok) {
+            tb_ray sh = ls.shadow;
+            sh.o = tb_spawn_ray_origin(p, perr, h.ng, ls.wi);
+            sets[TB__SET_SHADOW].rays[sets[TB__SET_SHADOW].n++] = sh;
+        } else
+            no_shadow++;
+        /* Diffuse: about the normal on the camera's side. */
+        tb_vec3 n = tb_vec3_dot(h.ng, r.d) > 0.0f ? tb_vec3_neg(h.ng) : h.ng;
+        tb_vec3 w = tb__cosine_dir(n, u3, u4);
+        sets[TB__SET_DIFFUSE].rays[sets[TB__SET_DIFFUSE].n++] =
+            tb_ray_make(tb_spawn_ray_origin(p, perr, h.ng, w), w, 0.0f, INFINITY);
+    }
+    tb_area_light_release(&area);
+    if (no_shadow)
+        printf("  (%zu primary hits gave no shadow ray: behind a one-sided emitter or outside a spot cone)\n",
+               no_shadow);
+    return 1;
+}
+
+/* ------------------------------------------------------------ command */
+
+static void tb__rays_usage(FILE *out)
+{
+    fprintf(out,
+            "usage: testbed bench rays SCENE.mid [--embree] [--rays N] [--threads T,...] [--seed S]\n"
+            "                                    [--repeat R]\n"
+            "\n"
+            "Primary (the scene camera), shadow (primary hit to a point on a light, any hit) and\n"
+            "diffuse (cosine bounce from primary hits, closest hit) rays through the scene's BVH\n"
+            "and, with --embree, through Embree 3's single-ray API on the same rays (triangles as\n"
+            "triangle geometries, other objects as user geometries calling tb_object_intersect).\n"
+            "Prints Mrays/s (wall clock, best of R runs) per set and thread count, the ratio\n"
+            "ours / Embree, the scaling from the first to the last thread count, and the\n"
+            "fraction of rays on which the two disagree (hit/miss, object or face).\n"
+            "\n"
+            "  --embree     also trace with Embree (needs a build configured with Embree 3)\n"
+            "  --rays N     N random camera rays (default: one per pixel at the file's resolution)\n"
+            "  --threads T  comma-separated thread counts (default 1,2)\n"
+            "  --seed S     random seed (default 1)\n"
+            "  --repeat R   timed runs per measurement, best kept (default 3)\n"
+            "\n"
+            "Exit status: 0 done, 1 the scene could not be loaded or Embree failed, 2 usage error.\n");
+}
+
+static int tb__count(const char *s, uint64_t max, uint64_t *out)
+{
+    if (!s || !*s || *s == '-' || *s == '+' || *s == ' ')
+        return 0;
+    errno = 0;
+    char *end;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (errno || *end || v > max)
+        return 0;
+    *out = v;
+    return 1;
+}
+
+int tb_cmd_bench_rays(int argc, char **argv)
+{
+    if (tb_wants_help(argc, argv)) {
+        tb__rays_usage(stdout);
+        return TB_EXIT_OK;
+    }
+    const char *path = NULL;
+    bool embree = false;
+    uint64_t nrays = 0, seed = 1, repeat = 3;
+    int threads[8] = {1, 2}, nthreads = 2;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "--embree") == 0)
+            embree = true;
+        else if (strcmp(a, "--rays") == 0 && i + 1 < argc) {
+            if (!tb__count(argv[++i], UINT64_C(1) << 28, &nrays) || nrays == 0) {
+                fprintf(stderr, "testbed bench rays: --rays needs a whole number in 1 .. 2^28, not '%s'\n", argv[i]);
+                return TB_EXIT_USAGE;
+            }
+        } else if (strcmp(a, "--seed") == 0 && i + 1 < argc) {
+            if (!tb__count(argv[++i], UINT64_MAX, &seed)) {
+                fprintf(stderr, "testbed bench rays: --seed needs an unsigned integer, not '%s'\n", argv[i]);
+                return TB_EXIT_USAGE;
+            }
+        } else if (strcmp(a, "--repeat") == 0 && i + 1 < argc) {
+            if (!tb__count(argv[++i], 100, &repeat) || repeat == 0) {
+                fprintf(stderr, "testbed bench rays: --repeat needs a whole number in 1 .. 100, not '%s'\n", argv[i]);
+                return TB_EXIT_USAGE;
+            }
+        } else if (strcmp(a, "--threads") == 0 && i + 1 < argc) {
+            char buf[128];
+            snprintf(buf, sizeof buf, "%s", argv[++i]);
+            nthreads = 0;
+            for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+                uint64_t t;
+                if (nthreads == 8 || !tb__count(tok, 256, &t) || t == 0) {
+                    fprintf(stderr, "testbed bench rays: --threads needs up to 8 counts in 1 .. 256, not '%s'\n",
+                            argv[i]);
+                    return TB_EXIT_USAGE;
+                }
+                threads[nthreads++] = (int)t;
+            }
+            if (nthreads == 0) {
+                fprintf(stderr, "testbed bench rays: --threads needs at least one count\n");
+                return TB_EXIT_USAGE;
+            }
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "testbed bench rays: unknown option '%s' (see testbed bench rays --help)\n", a);
+            return TB_EXIT_USAGE;
+        } else if (!path)
+            path = a;
+        else {
+            fprintf(stderr, "testbed bench rays: more than one scene ('%s')\n", a);
+            return TB_EXIT_USAGE;
+        }
+    }
+    if (!path) {
+        tb__rays_usage(stderr);
+        return TB_EXIT_USAGE;
+    }
+#ifndef TB_HAVE_EMBREE
+    if (embree) {
+        fprintf(stderr, "testbed bench rays: this testbed was built without Embree 3 (install libembree-dev and "
+                        "reconfigure); --embree is not available\n");
+        return TB_EXIT_USAGE;
+    }
+#endif
+    tb_scene *s;
+    if (tb_scene_load(path, NULL, &s)) {
+        fprintf(stderr, "testbed bench rays: %s\n", tb_last_error());
+        return TB_EXIT_FAIL;
+    }
+    size_t user_objects = 0;
+    for (uint32_t o = 0; o < s->nobjects; o++)
+        user_objects += !s->objects[o]->mesh;
+    printf("scene %s: %u objects (%zu non-mesh), %" PRIu64 " triangles, %d emitters, %d lights; BVH built in %.3f s\n",
+           path, s->nobjects, user_objects, s->stats.triangles, s->nemitters, s->nlights, s->stats.accel_seconds);
+    if (embree && user_objects)
+        printf("  non-mesh objects go to Embree as user geometry calling tb_object_intersect (not Embree's own code)\n");
+    tb__rayset sets[TB__NSETS] = {{0}};
+    int status = TB_EXIT_OK;
+    tb__answer *ours = NULL, *theirs = NULL;
+#ifdef TB_HAVE_EMBREE
+    tb__embree e = {0};
+#endif
+    if (!tb__make_sets(s, nrays, seed, sets)) {
+        status = TB_EXIT_FAIL;
+        goto done;
+    }
+    size_t maxn = sets[TB__SET_PRIMARY].n;
+    ours = malloc(sizeof *ours * (maxn ? maxn : 1));
+    theirs = malloc(sizeof *theirs * (maxn ? maxn : 1));
+    if (!ours || !theirs) {
+        fprintf(stderr, "testbed bench rays: out of memory\n");
+        status = TB_EXIT_FAIL;
+        goto done;
+    }
+#ifdef TB_HAVE_EMBREE
+    if (embree) {
+        size_t nu;
+        double bs;
+        if (!tb__embree_build(s, &e, &nu, &bs)) {
+            status = TB_EXIT_FAIL;
+            goto done;
+        }
+        printf("Embree %d.%d.%d scene built in %.3f s (%zu user geometries)\n", RTC_VERSION_MAJOR,
+               RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu);
+    }
+#endif
+    printf("%-8s %9s %6s %7s %14s %14s %8s\n", "set", "rays", "hit%", "threads", "ours Mrays/s", "Embree Mrays/s",
+           "ours/Em");
+    for (int k = 0; k < TB__NSETS; k++) {
+        const tb__rayset *rs = &sets[k];
+        if (rs->n == 0) {
+            printf("%-8s %9d  (no rays)\n", tb__set_names[k], 0);
+            continue;
+        }
+        double rate_ours[8] = {0}, rate_em[8] = {0};
+        size_t hits = 0, differ = 0;
+        for (int ti = 0; ti < nthreads; ti++) {
+            double best = INFINITY;
+            for (uint64_t r = 0; r < repeat; r++) {
+                double t = tb__trace_ours(s, rs, k, threads[ti], ti == 0 && r == 0 ? ours : NULL);
+                best = t < best ? t : best;
+            }
+            rate_ours[ti] = (double)rs->n / best * 1e-6;
+#ifdef TB_HAVE_EMBREE
+            if (embree) {
+                best = INFINITY;
+                for (uint64_t r = 0; r < repeat; r++) {
+                    double t = tb__trace_embree(&e, rs, k, threads[ti], ti == 0 && r == 0 ? theirs : NULL);
+                    best = t < best ? t : best;
+                }
+                rate_em[ti] = (double)rs->n / best * 1e-6;
+            }
+#endif
+            if (ti == 0)
+                for (size_t i = 0; i < rs->n; i++) {
+                    hits += ours[i].object != UINT32_MAX;
+                    differ += embree && (ours[i].object != theirs[i].object || ours[i].face != theirs[i].face);
+                }
+            if (embree)
+                printf("%-8s %9zu %6.1f %7d %14.3f %14.3f %8.2f\n", tb__set_names[k], rs->n,
+                       100.0 * (double)hits / (double)rs->n, threads[ti], rate_ours[ti], rate_em[ti],
+                       rate_ours[ti] / rate_em[ti]);
+            else
+                printf("%-8s %9zu %6.1f %7d %14.3f %14s %8s\n", tb__set_names[k], rs->n,
+                       100.0 * (double)hits / (double)rs->n, threads[ti], rate_ours[ti], "-", "-");
+            fflush(stdout);
+        }
+        if (nthreads > 1) {
+            printf("%-8s scaling %d -> %d threads: ours %.2fx", tb__set_names[k], threads[0], threads[nthreads - 1],
+                   rate_ours[nthreads - 1] / rate_ours[0]);
+            if (embree)
+                printf(", Embree %.2fx", rate_em[nthreads - 1] / rate_em[0]);
+            printf("\n");
+        }
+        if (embree)
+            printf("%-8s agreement: %zu of %zu rays differ (%.4f%%) in hit/miss%s\n", tb__set_names[k], differ,
+                   rs->n, 100.0 * (double)differ / (double)rs->n, k == TB__SET_SHADOW ? "" : ", object or face");
+    }
+done:
+#ifdef TB_HAVE_EMBREE
+    tb__embree_free(&e);
+#endif
+    free(ours);
+    free(theirs);
+    for (int k = 0; k < TB__NSETS; k++)
+        free(sets[k].rays);
+    tb_scene_free(s);
+    return status;
+}
