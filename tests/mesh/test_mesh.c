@@ -643,6 +643,43 @@ static void test_random_faces(void **state)
     tb_mesh_free(&m);
 }
 
+static void test_adjacency(void **state)
+{
+    (void)state;
+    /* A subdivided cube: every element edge has exactly two elements, the
+     * neighbour across an edge shares its two vertices, and the elements
+     * around a grid vertex inside a face are the 4 quads touching it. */
+    tb_fed *f = fed_from(cube_pos, 8, cube_quads);
+    tb_mesh m;
+    tb_mesh_init(&m);
+    tb_mesh_opts o = {.max_edge = 0.5, .quads = true};
+    assert_int_equal(tb_mesh_from_fed(f, &o, &m), TB_OK);
+    tb_fed *adj;
+    assert_int_equal(tb_mesh_adjacency(&m, &adj), TB_OK);
+    assert_int_equal(adj->nfaces, tb_mesh_nelems(&m));
+    assert_true(tb_fed_is_closed(adj));
+    for (uint32_t e = 0; e < adj->nedges; e++) {
+        uint32_t faces[2];
+        assert_int_equal(tb_fed_edge_faces(adj, e, faces, 2), 2);
+        for (int k = 0; k < 2; k++) {
+            const tb_mesh_elem *el = tb_mesh_elem_at(&m, faces[k]);
+            int has = 0;
+            for (int c = 0; c < tb_mesh_elem_size(el); c++)
+                has += el->v[c] == adj->edges[e].v[0] || el->v[c] == adj->edges[e].v[1];
+            assert_int_equal(has, 2);
+        }
+    }
+    uint32_t n, inner = 0;
+    for (uint32_t v = 0; v < adj->nverts; v++) {
+        tb_fed_vertex_faces(adj, v, &n);
+        inner += n == 4;
+    }
+    assert_int_equal(inner, 6 * 3 * 3 + 12 * 3); /* grid vertices inside faces, and inner edge points */
+    tb_fed_free(adj);
+    tb_mesh_free(&m);
+    tb_fed_free(f);
+}
+
 /* The checker itself must catch broken meshes. */
 static void test_checker_catches_problems(void **state)
 {
@@ -723,6 +760,7 @@ int main(void)
         cmocka_unit_test(test_subdivide_faces),
         cmocka_unit_test(test_attributes_interpolated),
         cmocka_unit_test(test_random_faces),
+        cmocka_unit_test(test_adjacency),
         cmocka_unit_test(test_checker_catches_problems),
         cmocka_unit_test(test_bad_bounds),
     };
