@@ -119,6 +119,18 @@ expect = [m / math.pi for m in M]
 err = max_rel_err(rows, expect)
 check(err < 2e-6, "furnace: every pixel is M/pi (max relative error %.3g)" % err)
 
+# --report: the furnace has no noise, so every pass has relMSE 0 against a
+# reference rendering of it; one row per pass with the running spp.
+ref = os.path.join(TMP, "rt_furnace_ref.exr")
+rep = os.path.join(TMP, "rt_furnace_report.csv")
+run([furnace, "-o", ref, "--spp", "2"])
+run([furnace, "-o", os.path.join(TMP, "rt_furnace_rep.exr"), "--spp", "1", "--passes", "3",
+     "--report", rep, "--reference", ref])
+rows_csv = [l.strip().split(",") for l in open(rep) if l.strip()]
+check(rows_csv[0] == ["seconds", "spp", "relmse"] and [r[1] for r in rows_csv[1:]] == ["1", "2", "3"]
+      and all(float(r[2]) < 1e-12 for r in rows_csv[1:]),
+      "--report: a row per pass, relMSE 0 in the furnace: %r" % rows_csv)
+
 # -------------------------------------------------------------- 2. mirror
 ks = (0.9, 0.5, 0.25)
 Me = (4.0, 4.0, 4.0)
