@@ -89,7 +89,7 @@ typedef struct tb_accel_stats {
     size_t bvh_nodes;      /* nodes, inner and leaf */
     size_t bvh_leaves;
     int bvh_depth;         /* longest root-to-leaf path in edges (0: the root is a leaf) */
-    int bvh_max_leaf_prims;/* largest leaf */
+    int bvh_max_leaf_prims; /* references in the largest leaf */
     double bvh_sah_cost;   /* SAH cost of the tree (docs/accel.md, "SAH cost"), with the build's constants */
     /* grid */
     int grid_res[3];       /* voxels along x, y, z */
