@@ -1,12 +1,14 @@
 // Closest hit (or any hit) of each ray with the scene's GPU-resident
 // geometry: a BVH converted from the CPU BVH (shared/bvh.h) over world-space
-// triangles. One invocation per ray, fixed-size traversal stack. Objects of
+// triangles and sphere objects. One invocation per ray, fixed-size traversal stack. Objects of
 // kinds this kernel does not implement are not in its BVH: host/gpu/intersect.c
 // tests them on the CPU afterwards with tmax = this kernel's t and merges by
 // the tie rule (docs/gpu.md, "Intersect kernel").
 //
 // Triangles: Woop, Benthin and Wald's watertight test (JCGT 2013), the CPU's
-// method (host/render/scene_mesh.c), in float in world space. Ties in t are
+// method (host/render/scene_mesh.c), in float in world space. Spheres: the
+// ray mapped to object space by the float world-to-object map, then
+// lib/sphere.glsl (host/object's method in float). Ties in t are
 // broken as on the CPU (docs/accel.md, "Tie rule"): lower object, then face,
 // then reference index. Hit records are tb_gpu_hit (shared/hit.h); (u, v) are
 // left 0 and filled by the host for the winning triangle.
@@ -17,10 +19,12 @@
 #include "shared/hit.h"
 #include "shared/ray.h"
 #include "lib/aabb.glsl"
+#include "lib/sphere.glsl"
 
 layout(local_size_x_id = 0) in;
 // Primitive kinds present in the scene: a kind the scene lacks is compiled out.
 layout(constant_id = 1) const bool TB_HAS_TRIANGLES = true;
+layout(constant_id = 3) const bool TB_HAS_SPHERES = false;
 // Traversal stack entries; the CPU BVH's depth is below 96 (docs/accel.md).
 layout(constant_id = 2) const int TB_STACK = 128;
 
@@ -28,6 +32,8 @@ layout(std430, binding = 0) readonly buffer Rays { tb_gpu_ray rays[]; };
 layout(std430, binding = 1) readonly buffer Nodes { tb_gpu_bvh_node nodes[]; };
 layout(std430, binding = 2) readonly buffer Tris { tb_gpu_tri tris[]; };
 layout(std430, binding = 3) writeonly buffer Hits { tb_gpu_hit hits[]; };
+layout(std430, binding = 4) readonly buffer Spheres { tb_gpu_sphere spheres[]; };
+layout(std430, binding = 5) readonly buffer Refs { uint refs[]; };
 
 layout(push_constant) uniform Push {
     uint n;        // rays
@@ -120,11 +126,11 @@ void main()
     tb_gpu_ray r = rays[i];
     bool have = false;
     float bt = r.tmax;
-    uint bo = TB_GPU_NO_HIT, bf = 0u, br = 0u, btri = 0u;
+    uint bo = TB_GPU_NO_HIT, bf = 0u, br = 0u, bref = 0u;
     bool valid = tb_isfinite(r.o.x) && tb_isfinite(r.o.y) && tb_isfinite(r.o.z) && tb_isfinite(r.d.x) &&
                  tb_isfinite(r.d.y) && tb_isfinite(r.d.z) && tb_isfinite(r.tmin) &&
                  !(r.d.x == 0.0 && r.d.y == 0.0 && r.d.z == 0.0) && r.tmin <= r.tmax;
-    if (TB_HAS_TRIANGLES && valid && pc.nnodes > 0u) {
+    if ((TB_HAS_TRIANGLES || TB_HAS_SPHERES) && valid && pc.nnodes > 0u) {
         vec3 inv = tb_ray_inv_dir(r.d);
         tb_wray w = tb_wray_init(r.o, r.d);
         float lo_t = r.tmin - abs(r.tmin) * TB_T_TOL;
@@ -153,17 +159,35 @@ void main()
                     continue;
                 }
                 for (uint k = nd.offset; k < nd.offset + count; ++k) {
-                    tb_gpu_tri tri = tris[k];
+                    uint ref = refs[k];
                     float t;
-                    if (!tb_tri_hit(w, tri.v0, tri.v1, tri.v2, t) || t < r.tmin || t > r.tmax)
+                    uint object, face, sref;
+                    if (TB_HAS_SPHERES && (ref & TB_GPU_REF_SPHERE) != 0u) {
+                        tb_gpu_sphere sp = spheres[ref & ~TB_GPU_REF_SPHERE];
+                        precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+                        precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+                        if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
+                            continue;
+                        object = sp.object;
+                        face = sp.face;
+                        sref = sp.ref;
+                    } else if (TB_HAS_TRIANGLES && (ref & TB_GPU_REF_SPHERE) == 0u) {
+                        tb_gpu_tri tri = tris[ref];
+                        if (!tb_tri_hit(w, tri.v0, tri.v1, tri.v2, t) || t < r.tmin || t > r.tmax)
+                            continue;
+                        object = tri.object;
+                        face = tri.face;
+                        sref = tri.ref;
+                    } else {
                         continue;
-                    if (tb_better(t, tri.object, tri.face, tri.ref, have, bt, bo, bf, br)) {
+                    }
+                    if (tb_better(t, object, face, sref, have, bt, bo, bf, br)) {
                         have = true;
                         bt = t;
-                        bo = tri.object;
-                        bf = tri.face;
-                        br = tri.ref;
-                        btri = k;
+                        bo = object;
+                        bf = face;
+                        br = sref;
+                        bref = ref;
                     }
                     if (pc.any_hit != 0u)
                         break;
@@ -183,7 +207,17 @@ void main()
     h.u = 0.0;
     h.v = 0.0;
     if (have) {
-        vec3 ng = tris[btri].ng;
+        vec3 ng;
+        if (TB_HAS_SPHERES && (bref & TB_GPU_REF_SPHERE) != 0u) {
+            // Object-space point -> world normal by the inverse transpose.
+            tb_gpu_sphere sp = spheres[bref & ~TB_GPU_REF_SPHERE];
+            vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+            vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+            vec3 p = so + bt * sd;
+            ng = sp.sign * normalize(sp.r0 * p.x + sp.r1 * p.y + sp.r2 * p.z);
+        } else {
+            ng = tris[bref].ng;
+        }
         h.ng[0] = ng.x;
         h.ng[1] = ng.y;
         h.ng[2] = ng.z;

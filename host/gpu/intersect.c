@@ -30,8 +30,8 @@ struct tb_gpu_scene {
     bool *on_gpu;            /* per object */
     tb_gpu_scene_info info;
     tb_accel *cpu_accel;     /* BVH over the routed objects' references (NULL if none) */
-    tb_gpu_buffer *nodes, *tris, *rays, *hits;
-    uint32_t nnodes, ntris;
+    tb_gpu_buffer *nodes, *tris, *spheres, *refs, *rays, *hits;
+    uint32_t nnodes, ntris, nspheres;
 };
 
 /* The build needs a callback; the GPU BVH is only read, never traversed here. */
@@ -93,8 +93,10 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     const uint32_t *order = tb_accel_bvh_refs(acc, &nr);
     tb_gpu_bvh_node *gn = calloc(nn ? nn : 1, sizeof *gn);
     tb_gpu_tri *gt = calloc(nr ? nr : 1, sizeof *gt);
-    if (!gn || !gt) {
-        free(gn), free(gt), tb_accel_free(acc);
+    tb_gpu_sphere *gs = calloc(nr ? nr : 1, sizeof *gs);
+    uint32_t *gr = calloc(nr ? nr : 1, sizeof *gr);
+    if (!gn || !gt || !gs || !gr) {
+        free(gn), free(gt), free(gs), free(gr), tb_accel_free(acc);
         return tb_error(TB_ERR_NOMEM, "out of memory for the GPU scene");
     }
     for (size_t i = 0; i < nn; ++i) {
@@ -104,33 +106,59 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
         gn[i].offset = c->offset;
         gn[i].count = (uint32_t)c->count | (c->count == 0 ? (uint32_t)c->axis << 16 : 0u);
     }
+    uint32_t nt = 0, ns = 0;
     for (size_t k = 0; k < nr; ++k) {
         const tb_accel_prim *p = &refs[order[k]];
         const tb_object *o = s->objects[p->object];
+        if (p->sub == TB_SCENE_WHOLE_OBJECT) { /* a sphere object */
+            const tb_mat4 *w = &o->to_world.inv;
+            tb_gpu_sphere *q = &gs[ns];
+            q->r0 = (tb_vec3){(float)w->m[0][0], (float)w->m[0][1], (float)w->m[0][2]};
+            q->r1 = (tb_vec3){(float)w->m[1][0], (float)w->m[1][1], (float)w->m[1][2]};
+            q->r2 = (tb_vec3){(float)w->m[2][0], (float)w->m[2][1], (float)w->m[2][2]};
+            q->w0 = (float)w->m[0][3];
+            q->w1 = (float)w->m[1][3];
+            q->w2 = (float)w->m[2][3];
+            q->object = o->index;
+            q->face = o->face_base + TB_FACE_SPHERE;
+            q->ref = scene_ref[order[k]];
+            q->sign = o->flip ? -1.0f : 1.0f;
+            gr[k] = TB_GPU_REF_SPHERE | ns++;
+            continue;
+        }
         const tb_object_mesh *m = o->mesh;
         const uint32_t *tv = &m->tris[3 * (size_t)p->sub];
         tb_vec3 a = m->vertices[tv[0]], b = m->vertices[tv[1]], c = m->vertices[tv[2]];
-        gt[k].v0 = tb__world(o, a);
-        gt[k].v1 = tb__world(o, b);
-        gt[k].v2 = tb__world(o, c);
-        gt[k].object = o->index;
-        gt[k].face = o->face_base + m->tri_face[p->sub];
-        gt[k].ref = scene_ref[order[k]];
-        gt[k].ng = tb__tri_normal(o, a, b, c);
-        gt[k].pad0 = 0;
+        tb_gpu_tri *q = &gt[nt];
+        q->v0 = tb__world(o, a);
+        q->v1 = tb__world(o, b);
+        q->v2 = tb__world(o, c);
+        q->object = o->index;
+        q->face = o->face_base + m->tri_face[p->sub];
+        q->ref = scene_ref[order[k]];
+        q->ng = tb__tri_normal(o, a, b, c);
+        q->pad0 = 0;
+        gr[k] = nt++;
     }
     g->nnodes = (uint32_t)nn;
-    g->ntris = (uint32_t)nr;
+    g->ntris = nt;
+    g->nspheres = ns;
     g->info.gpu_nodes = nn;
-    g->info.gpu_bytes = nn * sizeof *gn + nr * sizeof *gt;
+    g->info.gpu_bytes = nn * sizeof *gn + nt * sizeof *gt + ns * sizeof *gs + nr * sizeof *gr;
     g->nodes = tb_gpu_buffer_create(g->dev, (nn ? nn : 1) * sizeof *gn);
-    g->tris = tb_gpu_buffer_create(g->dev, (nr ? nr : 1) * sizeof *gt);
-    st = (!g->nodes || !g->tris) ? TB_ERR_DEVICE : TB_OK;
+    g->tris = g->nodes ? tb_gpu_buffer_create(g->dev, (nt ? nt : 1) * sizeof *gt) : NULL;
+    g->spheres = g->tris ? tb_gpu_buffer_create(g->dev, (ns ? ns : 1) * sizeof *gs) : NULL;
+    g->refs = g->spheres ? tb_gpu_buffer_create(g->dev, (nr ? nr : 1) * sizeof *gr) : NULL;
+    st = !g->refs ? TB_ERR_DEVICE : TB_OK;
     if (!st && nn)
         st = tb_gpu_buffer_upload(g->nodes, 0, gn, nn * sizeof *gn);
+    if (!st && nt)
+        st = tb_gpu_buffer_upload(g->tris, 0, gt, nt * sizeof *gt);
+    if (!st && ns)
+        st = tb_gpu_buffer_upload(g->spheres, 0, gs, ns * sizeof *gs);
     if (!st && nr)
-        st = tb_gpu_buffer_upload(g->tris, 0, gt, nr * sizeof *gt);
-    free(gn), free(gt), tb_accel_free(acc);
+        st = tb_gpu_buffer_upload(g->refs, 0, gr, nr * sizeof *gr);
+    free(gn), free(gt), free(gs), free(gr), tb_accel_free(acc);
     return st;
 }
 
@@ -157,7 +185,9 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
     for (size_t i = 0; i < scene->nprims; ++i) {
         const tb_accel_prim *p = &scene->prims[i];
         const tb_object *o = scene->objects[p->object];
-        if (p->sub != TB_SCENE_WHOLE_OBJECT && o->kind == TB_PRIM_POLYGONS && o->mesh) {
+        bool tri = p->sub != TB_SCENE_WHOLE_OBJECT && o->kind == TB_PRIM_POLYGONS && o->mesh;
+        bool sphere = p->sub == TB_SCENE_WHOLE_OBJECT && o->kind == TB_PRIM_SPHERE;
+        if (tri || sphere) {
             gidx[ng] = (uint32_t)i;
             gref[ng++] = *p;
             has_tri[p->object] = true;
@@ -171,8 +201,9 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
         else
             g->info.cpu_objects++;
     }
-    g->info.gpu_triangles = ng;
     tb_status st = tb__build_gpu(g, gref, gidx, ng);
+    g->info.gpu_triangles = g->ntris;
+    g->info.gpu_spheres = g->nspheres;
     if (!st && nc) {
         tb_accel_callbacks cb = {tb__cpu_isect, tb__cpu_occl, (void *)scene};
         st = tb_accel_build(TB_ACCEL_BVH, cref, nc, &cb, NULL, &g->cpu_accel);
@@ -197,6 +228,8 @@ void tb_gpu_scene_destroy(tb_gpu_scene *g)
         return;
     tb_gpu_buffer_destroy(g->nodes);
     tb_gpu_buffer_destroy(g->tris);
+    tb_gpu_buffer_destroy(g->spheres);
+    tb_gpu_buffer_destroy(g->refs);
     tb_gpu_buffer_destroy(g->rays);
     tb_gpu_buffer_destroy(g->hits);
     tb_accel_free(g->cpu_accel);
@@ -215,17 +248,18 @@ bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object)
 static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t any_hit, tb_hit *hits,
                          double *kernel_seconds)
 {
-    if (g->ntris == 0) {
+    if (g->ntris == 0 && g->nspheres == 0) {
         for (size_t i = 0; i < n; ++i)
             hits[i] = (tb_hit){INFINITY, TB_GPU_NO_HIT, TB_GPU_NO_HIT, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
         return TB_OK;
     }
-    tb_gpu_spec_constant spec[2] = {{1, 1u}, {2, 128u}};
+    /* Only the kinds the scene has are compiled in. */
+    tb_gpu_spec_constant spec[3] = {{1, g->ntris > 0}, {2, 128u}, {3, g->nspheres > 0}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("intersect"),
-                                                                        .buffers = 4,
+                                                                        .buffers = 6,
                                                                         .push_size = 16,
                                                                         .spec = spec,
-                                                                        .spec_count = 2});
+                                                                        .spec_count = 3});
     if (!k)
         return TB_ERR_DEVICE;
     for (size_t at = 0; at < n; at += TB__GPU_CHUNK) {
@@ -234,7 +268,7 @@ static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t
         if (st)
             return st;
         uint32_t push[4] = {(uint32_t)m, any_hit, g->nnodes, 0};
-        tb_gpu_dispatch d = {k, {g->rays, g->nodes, g->tris, g->hits}, push, m, 0.0};
+        tb_gpu_dispatch d = {k, {g->rays, g->nodes, g->tris, g->hits, g->spheres, g->refs}, push, m, 0.0};
         if ((st = tb_gpu_run(g->dev, &d, 1)))
             return st;
         *kernel_seconds += d.seconds;
@@ -294,7 +328,7 @@ tb_status tb_gpu_intersect(tb_gpu_scene *g, const tb_ray *rays, size_t n, tb_hit
             }
         }
         if (gpu_hit) {
-            /* (u, v) of the winning triangle, as the CPU path computes them from the point. */
+            /* (u, v) of the winning triangle or sphere, as the CPU path computes them from the point. */
             const tb_object *o = s->objects[h->object];
             tb_dvec3 ro = tb_mat4_mul_point(&o->to_world.inv, (tb_dvec3){rays[i].o.x, rays[i].o.y, rays[i].o.z});
             tb_dvec3 rd = tb_mat4_mul_vec(&o->to_world.inv, (tb_dvec3){rays[i].d.x, rays[i].d.y, rays[i].d.z});

@@ -3,8 +3,8 @@
  * GPU layout (shaders/shared/bvh.h), closest-hit and any-hit queries for
  * arrays of rays, giving the records the CPU path gives (tb_scene_intersect).
  *
- * Kinds on the GPU: triangles of polygons objects. Every other object
- * (analytic primitives, CSG) is **routed to the CPU path per object**: after
+ * Kinds on the GPU: triangles of polygons objects and (top-level) spheres.
+ * Every other object (other analytic primitives, CSG) is **routed to the CPU path per object**: after
  * the kernel, the host tests those objects (through a CPU BVH over them
  * alone) with tmax = the GPU hit's t and keeps the better hit by the tie rule
  * (docs/accel.md). tb_gpu_scene_object_on_gpu says where each object runs.
@@ -31,8 +31,9 @@ typedef struct tb_gpu_scene tb_gpu_scene;
 
 /* Where the work of a scene runs. */
 typedef struct tb_gpu_scene_info {
-    uint32_t gpu_objects;   /* objects intersected by the kernel (polygons objects) */
-    uint64_t gpu_triangles; /* their triangles */
+    uint32_t gpu_objects;   /* objects intersected by the kernel (polygons and sphere objects) */
+    uint64_t gpu_triangles; /* triangles of the polygons objects */
+    uint32_t gpu_spheres;   /* sphere objects */
     uint32_t cpu_objects;   /* objects routed to the CPU path (every other kind, CSG) */
     size_t gpu_nodes;       /* BVH nodes uploaded */
     size_t gpu_bytes;       /* bytes of nodes and triangles uploaded */

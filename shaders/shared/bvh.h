@@ -1,7 +1,7 @@
 /* The scene as the intersect kernel (shaders/intersect.comp) reads it: BVH
- * nodes converted from the CPU BVH (host/render/accel.h, tb_bvh_node) and
- * world-space triangles in leaf order. Built by host/gpu/intersect.c. See
- * shared/types.h for the layout rules. */
+ * nodes converted from the CPU BVH (host/render/accel.h, tb_bvh_node), leaf
+ * references (TB_GPU_REF_*), world-space triangles and spheres. Built by
+ * host/gpu/intersect.c. See shared/types.h for the layout rules. */
 #ifndef TB_SHADERS_SHARED_BVH_H
 #define TB_SHADERS_SHARED_BVH_H
 
@@ -10,16 +10,21 @@
 #ifndef TB_GPU_GLSL
 typedef struct tb_gpu_bvh_node tb_gpu_bvh_node;
 typedef struct tb_gpu_tri tb_gpu_tri;
+typedef struct tb_gpu_sphere tb_gpu_sphere;
 #endif
+
+/* A leaf reference (one uint): a triangle index, or TB_GPU_REF_SPHERE | a sphere index. */
+#define TB_GPU_REF_SPHERE 0x80000000u
 
 /* One BVH node, 32 bytes: the CPU node's box with the two words moved next to
  * the vec3s so that std430 and C agree. Depth-first order, node 0 the root;
  * an inner node's first child is the next node. */
 struct tb_gpu_bvh_node {
     TB_GPU_VEC3 lo;     /* box, low corner (offset 0) */
-    TB_GPU_UINT offset; /* inner: index of the second child; leaf: first triangle (offset 12) */
+    TB_GPU_UINT offset; /* inner: index of the second child; leaf: first leaf reference (offset 12) */
     TB_GPU_VEC3 hi;     /* box, high corner (offset 16) */
-    TB_GPU_UINT count;  /* leaf: number of triangles (>= 1); 0 marks an inner node (offset 28) */
+    TB_GPU_UINT count;  /* low 16 bits: leaf references (>= 1), 0 for an inner node; bits 16-17: an
+                           inner node's split axis (offset 28) */
 };
 
 /* One triangle, 64 bytes: world-space vertices (the object's float vertices
@@ -38,7 +43,29 @@ struct tb_gpu_tri {
     TB_GPU_UINT pad0;   /* zero (offset 60) */
 };
 
+/* One sphere object (a top-level MID sphere: the unit sphere placed by its
+ * transform), 64 bytes: the rows of the world-to-object affine map in float
+ * (p_obj.x = dot(r0, p) + w0 ...), which also give the world normal
+ * r0 n.x + r1 n.y + r2 n.z (the inverse transpose), and the hit record's keys. */
+struct tb_gpu_sphere {
+    TB_GPU_VEC3 r0;     /* offset 0 */
+    float w0;           /* offset 12 */
+    TB_GPU_VEC3 r1;     /* offset 16 */
+    float w1;           /* offset 28 */
+    TB_GPU_VEC3 r2;     /* offset 32 */
+    float w2;           /* offset 44 */
+    TB_GPU_UINT object; /* offset 48 */
+    TB_GPU_UINT face;   /* face ID of the sphere's one face (offset 52) */
+    TB_GPU_UINT ref;    /* index of its reference in tb_scene.prims (offset 56) */
+    float sign;         /* +1, or -1 when the object's normals are flipped (offset 60) */
+};
+
 #ifndef TB_GPU_GLSL
+_Static_assert(sizeof(tb_gpu_sphere) == 64, "tb_gpu_sphere is 64 bytes");
+_Static_assert(offsetof(tb_gpu_sphere, w0) == 12 && offsetof(tb_gpu_sphere, r1) == 16 &&
+                   offsetof(tb_gpu_sphere, r2) == 32 && offsetof(tb_gpu_sphere, w2) == 44 &&
+                   offsetof(tb_gpu_sphere, object) == 48 && offsetof(tb_gpu_sphere, sign) == 60,
+               "tb_gpu_sphere follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_bvh_node) == 32, "tb_gpu_bvh_node is 32 bytes");
 _Static_assert(offsetof(tb_gpu_bvh_node, offset) == 12 && offsetof(tb_gpu_bvh_node, hi) == 16 &&
                    offsetof(tb_gpu_bvh_node, count) == 28,

@@ -1,7 +1,7 @@
 /* The Vulkan intersect kernel (host/gpu/intersect.h) against the CPU path
- * (tb_scene_intersect / tb_scene_occluded) on scenes mixing triangles (on the
- * GPU) with a torus and a sphere (routed to the CPU per object). Runs with
- * the validation layer and fails on any message. */
+ * (tb_scene_intersect / tb_scene_occluded) on scenes mixing triangles and a
+ * sphere (on the GPU) with a torus and a cube (routed to the CPU per object).
+ * Runs with the validation layer and fails on any message. */
 #include "gpu_test.h"
 
 #include <math.h>
@@ -25,7 +25,7 @@ static const char *tb__mixed =
 static const char *tb__analytic =
     "mid 1\n"
     "torus \"ring\" { transform = [translate([0 0 2])] geometry = { major = 1 minor = 0.25 } }\n"
-    "sphere \"ball\" { transform = [scale(0.5) translate([0.5 0.5 0.5])] }\n";
+    "cube \"box\" { transform = [scale(0.5) translate([0.5 0.5 0.5])] }\n";
 
 static tb_scene *tb__load(const char *text)
 {
@@ -92,11 +92,13 @@ static void test_exact_grid(void **state)
     assert_non_null(g);
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    assert_int_equal(info.gpu_objects, 2);
-    assert_int_equal(info.cpu_objects, 2);
+    assert_int_equal(info.gpu_objects, 3);
+    assert_int_equal(info.cpu_objects, 1);
     assert_int_equal(info.gpu_triangles, 3);
-    assert_true(tb_gpu_scene_object_on_gpu(g, 0) && tb_gpu_scene_object_on_gpu(g, 1));
-    assert_false(tb_gpu_scene_object_on_gpu(g, 2) || tb_gpu_scene_object_on_gpu(g, 3));
+    assert_int_equal(info.gpu_spheres, 1);
+    assert_true(tb_gpu_scene_object_on_gpu(g, 0) && tb_gpu_scene_object_on_gpu(g, 1) &&
+                tb_gpu_scene_object_on_gpu(g, 3));
+    assert_false(tb_gpu_scene_object_on_gpu(g, 2));
 
     enum { N = 32 * 32 };
     tb_ray rays[N];
@@ -109,6 +111,14 @@ static void test_exact_grid(void **state)
     int on[4] = {0};
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
+        if (c.object == 3 && hits[i].object == 3) { /* the sphere off its centre: sqrt, not exact */
+            tb_assert_near(hits[i].t, c.t, 1e-5 * c.t);
+            tb_assert_near(hits[i].ng.x, c.ng.x, 1e-4);
+            tb_assert_near(hits[i].ng.y, c.ng.y, 1e-4);
+            tb_assert_near(hits[i].ng.z, c.ng.z, 1e-4);
+            on[3]++;
+            continue;
+        }
         if (!tb__same(&c, &hits[i], 0.0))
             fail_msg("ray %d (%g, %g): cpu t %.9g object %u face %u, gpu t %.9g object %u face %u", i,
                      rays[i].o.x, rays[i].o.y, c.t, c.object, c.face, hits[i].t, hits[i].object, hits[i].face);
@@ -123,6 +133,21 @@ static void test_exact_grid(void **state)
             assert_true(hits[i].t == 4.0f);
     for (int k = 0; k < 4; ++k)
         assert_true(on[k] > 0);
+
+    /* Rays through the sphere's centre: every step of the GPU sphere is exact
+     * (object-space origin and direction, p0 = 0, discriminant 16), so t and
+     * the normal are exact: down from above (t 4, normal +z) and along +x (t 2.5, normal -x). */
+    tb_ray cr[2] = {{{3.0f, 3.0f, 5.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY},
+                    {{0.0f, 3.0f, 0.5f}, 0.0f, {1.0f, 0.0f, 0.0f}, INFINITY}};
+    tb_hit ch[2];
+    assert_int_equal(tb_gpu_intersect(g, cr, 2, ch, NULL), TB_OK);
+    for (int i = 0; i < 2; ++i) {
+        tb_hit c = tb__cpu(s, &cr[i]);
+        assert_int_equal(c.object, 3);
+        assert_true(tb__same(&c, &ch[i], 1e-6));
+    }
+    assert_true(ch[0].t == 4.0f && ch[0].ng.z == 1.0f);
+    assert_true(ch[1].t == 2.5f && ch[1].ng.x == -1.0f);
 
     /* Any hit on the same rays, and shortened so the planes are out of reach. */
     uint8_t occ[N];
@@ -139,8 +164,8 @@ static void test_exact_grid(void **state)
     tb__close(&e);
 }
 
-/* Random rays through the mixed scene: hits on routed objects are the CPU's
- * records exactly; triangle hits agree within float tolerance; hit/miss and
+/* Random rays through the mixed scene: hits on the routed torus are the CPU's
+ * records exactly; triangle and sphere hits agree within float tolerance; hit/miss and
  * object may differ only for rays within float error of an edge (none
  * expected among a few thousand random rays; allowed: 1 in 1000). */
 static void test_random_mixed(void **state)
@@ -181,7 +206,12 @@ static void test_random_mixed(void **state)
         }
         if (c.object == UINT32_MAX)
             continue;
-        if (c.object >= 2) {
+        if (c.object == 3) { /* the sphere, on the GPU in float */
+            ++tri;
+            tb_assert_near(hits[i].t, c.t, 1e-5 * fabs(c.t));
+            assert_true(fabs((double)hits[i].ng.x - c.ng.x) + fabs((double)hits[i].ng.y - c.ng.y) +
+                            fabs((double)hits[i].ng.z - c.ng.z) <= 1e-3);
+        } else if (c.object == 2) {
             ++routed;
             if (!tb__same(&c, &hits[i], 0.0))
                 fail_msg("ray %d: routed object %u: records differ", i, c.object);
@@ -193,9 +223,9 @@ static void test_random_mixed(void **state)
             tb_assert_near(hits[i].v, c.v, 1e-4);
         }
     }
-    print_message("[ info     ] %d routed-object hits, %d triangle hits, %d differ, %d occlusion differ\n", routed,
+    print_message("[ info     ] %d routed-object hits, %d triangle and sphere hits, %d differ, %d occlusion differ\n", routed,
                   tri, differ, occ_differ);
-    assert_true(routed > 50 && tri > 50);
+    assert_true(routed > 20 && tri > 50);
     assert_true(differ <= N / 1000);
     assert_true(occ_differ <= N / 1000);
     free(rays), free(hits), free(occ);
