@@ -18,8 +18,36 @@
 #include "util/mesh/triangulate.h"
 #include "util/stats/stats.h"
 
-TB_STAT_COUNTER(tb__param_from_point_calls, "Param/from point");
-TB_STAT_COUNTER(tb__param_eval_calls, "Param/eval");
+/* Calls per kind and function: "Param/<kind> from point", "Param/<kind> eval". */
+#define TB__PARAM_STATS(k, name)                                                                    \
+    TB_STAT_COUNTER(tb__param_fp_##k, "Param/" name " from point");                                \
+    TB_STAT_COUNTER(tb__param_ev_##k, "Param/" name " eval")
+TB__PARAM_STATS(sphere, "sphere");
+TB__PARAM_STATS(cube, "cube");
+TB__PARAM_STATS(cylinder, "cylinder");
+TB__PARAM_STATS(cone, "cone");
+TB__PARAM_STATS(pyramid, "pyramid");
+TB__PARAM_STATS(prism, "prism");
+TB__PARAM_STATS(torus, "torus");
+TB__PARAM_STATS(polygons, "polygons");
+TB__PARAM_STATS(conic, "conic");
+TB__PARAM_STATS(square_arch, "square_arch");
+TB__PARAM_STATS(round_arch, "round_arch");
+
+/* Counts one call of from_point (eval false) or eval (true) for `kind`. */
+static void tb__param_count(tb_prim_kind kind, bool eval)
+{
+    static tb_stat *const fp[] = {&tb__param_fp_sphere, &tb__param_fp_cube, &tb__param_fp_cylinder,
+                                  &tb__param_fp_cone, &tb__param_fp_pyramid, &tb__param_fp_prism,
+                                  &tb__param_fp_torus, &tb__param_fp_polygons, &tb__param_fp_conic,
+                                  &tb__param_fp_square_arch, &tb__param_fp_round_arch};
+    static tb_stat *const ev[] = {&tb__param_ev_sphere, &tb__param_ev_cube, &tb__param_ev_cylinder,
+                                  &tb__param_ev_cone, &tb__param_ev_pyramid, &tb__param_ev_prism,
+                                  &tb__param_ev_torus, &tb__param_ev_polygons, &tb__param_ev_conic,
+                                  &tb__param_ev_square_arch, &tb__param_ev_round_arch};
+    if ((unsigned)kind < sizeof fp / sizeof fp[0])
+        TB_STAT_INC(*(eval ? ev : fp)[kind]);
+}
 
 /* Everything eval gives. */
 typedef struct tb__surf {
@@ -1155,7 +1183,7 @@ static void tb__candidate_faces(tb_prim_kind kind, const tb_mid_geometry *g, tb_
 tb_status tb_param_from_point(tb_prim_kind kind, const tb_mid_geometry *geom, tb_dvec3 p, int face_hint,
                               int *face, double *u, double *v)
 {
-    TB_STAT_INC(tb__param_from_point_calls);
+    tb__param_count(kind, false);
     tb_status st = tb_param_check(kind, geom);
     if (st)
         return st;
@@ -1200,7 +1228,7 @@ tb_status tb_param_from_point(tb_prim_kind kind, const tb_mid_geometry *geom, tb
 tb_status tb_param_eval(tb_prim_kind kind, const tb_mid_geometry *geom, int face, double u, double v,
                         tb_dvec3 *p, tb_dvec3 *n, tb_dvec3 *dpdu, tb_dvec3 *dpdv)
 {
-    TB_STAT_INC(tb__param_eval_calls);
+    tb__param_count(kind, true);
     tb_status st = tb_param_check(kind, geom);
     if (st)
         return st;
