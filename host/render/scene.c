@@ -340,8 +340,13 @@ static tb_status tb__add_object(tb_scene *s, const tb_mid_object *m)
             return tb_error(TB_ERR_NOMEM, "scene: out of memory for emissive objects");
         tb_scene_emissive *e = &s->emissive[s->nemissive];
         *e = (tb_scene_emissive){o->index, leaf->material, NAN, 0, 0};
-        if (!tb_prim_is_csg(o->kind) && (st = tb__scene_leaf_area(o, &e->area)))
-            return tb__located(st, s, m->loc, what);
+        /* An area that cannot be computed is not worth refusing the scene
+         * for: it stays NaN, as for CSG objects (only memory is fatal). */
+        if (!tb_prim_is_csg(o->kind) && (st = tb__scene_leaf_area(o, &e->area))) {
+            e->area = NAN;
+            if (st == TB_ERR_NOMEM)
+                return tb__located(st, s, m->loc, what);
+        }
         s->nemissive++;
     }
     return TB_OK;
