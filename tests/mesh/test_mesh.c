@@ -538,6 +538,31 @@ static void test_subdivide_faces(void **state)
     tb_mesh_free(&m);
 }
 
+static void test_hole_touching_boundary(void **state)
+{
+    (void)state;
+    /* A hole touching the outer loop at vertex 0 (the same index in both
+     * loops), and a second hole touching the first at vertex 5. */
+    const tb_vec3 p[9] = {{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}, {1, 2, 0},
+                          {2, 1, 0}, {3, 1.5f, 0}, {3, 0.5f, 0}, {0, 0, 0}};
+    const int faces[] = {0, 1, 2, 3, -2, 0, 4, 5, -2, 5, 6, 7, -1, -9};
+    tb_fed *f = fed_from(p, 8, faces);
+    tb_mesh m;
+    tb_mesh_init(&m);
+    const double bounds[3] = {0, 0.9, 0.3};
+    for (int k = 0; k < 3; k++)
+        for (int q = 0; q < 2; q++) {
+            tb_mesh_opts o = {.max_edge = bounds[k], .quads = q};
+            assert_int_equal(tb_mesh_from_fed(f, &o, &m), TB_OK);
+            check_mesh(f, &m, (check){bounds[k], q});
+        }
+    /* without subdivision: 4 + 3 + 3 corners, the holes spliced, no bridge: 8 triangles */
+    assert_int_equal(tb_mesh_from_fed(f, NULL, &m), TB_OK);
+    assert_int_equal(tb_mesh_nelems(&m), 8);
+    tb_mesh_free(&m);
+    tb_fed_free(f);
+}
+
 static void test_attributes_interpolated(void **state)
 {
     (void)state;
@@ -758,6 +783,7 @@ int main(void)
         cmocka_unit_test(test_subdivide_frame),
         cmocka_unit_test(test_subdivide_cornell_room),
         cmocka_unit_test(test_subdivide_faces),
+        cmocka_unit_test(test_hole_touching_boundary),
         cmocka_unit_test(test_attributes_interpolated),
         cmocka_unit_test(test_random_faces),
         cmocka_unit_test(test_adjacency),
