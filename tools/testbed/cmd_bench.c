@@ -268,6 +268,10 @@ static int tb__bench_intersect(uint64_t nrays, uint64_t seed)
 /* `testbed bench intersect [--rays N] [--seed S]` (argv[0] is "intersect"). */
 static int tb__bench_intersect_cmd(int argc, char **argv)
 {
+    if (tb_wants_help(argc, argv)) {
+        tb__bench_usage(stdout);
+        return TB_EXIT_OK;
+    }
     uint64_t nrays = 1000000, seed = 1;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--rays") == 0 && i + 1 < argc) {
@@ -301,7 +305,8 @@ static const struct {
 
 int tb_cmd_bench(int argc, char **argv)
 {
-    if (tb_wants_help(argc, argv) || argc < 2) {
+    /* `bench WHAT --help` is the benchmark's own help, except for accel, whose help is here. */
+    if (argc < 2 || tb_wants_help(2, argv) || (strcmp(argv[1], "accel") == 0 && tb_wants_help(argc, argv))) {
         tb__bench_usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? TB_EXIT_USAGE : TB_EXIT_OK;
     }

@@ -34,6 +34,7 @@
 #include "host/render/scene.h"
 #include "util/math/rng.h"
 #include "util/math/transform.h"
+#include "util/stats/stats.h"
 
 #ifdef TB_HAVE_EMBREE
 #include <embree3/rtcore.h>
@@ -54,21 +55,33 @@ typedef struct tb__rayset {
     size_t n;
 } tb__rayset;
 
-static double tb__wall(void)
+static double tb__clock(clockid_t id)
 {
     struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
+    clock_gettime(id, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
+
+static double tb__wall(void) { return tb__clock(CLOCK_MONOTONIC); }
+
+/* This thread's CPU seconds. The tracing threads' CPU time is summed: on a
+ * loaded (shared) machine rays per CPU second are the steadier figure
+ * (wall-clock rates and scaling need an idle machine), and the process's CPU
+ * time would also count Embree's idle TBB workers spinning after a build. */
+static double tb__cpu(void) { return tb__clock(CLOCK_THREAD_CPUTIME_ID); }
 
 /* ------------------------------------------------------------ our BVH */
 
 /* Traces set `k` through the scene with `threads` threads; answers into out (may be NULL). Wall seconds. */
-static double tb__trace_ours(const tb_scene *s, const tb__rayset *rs, int k, int threads, tb__answer *out)
+static double tb__trace_ours(const tb_scene *s, const tb__rayset *rs, int k, int threads, tb__answer *out,
+                             double *cpu)
 {
-    double t0 = tb__wall();
+    double cpu_sum = 0.0, t0 = tb__wall();
     long n = (long)rs->n;
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1024)
+#pragma omp parallel num_threads(threads) reduction(+ : cpu_sum)
+    {
+    double c0 = tb__cpu();
+#pragma omp for schedule(dynamic, 1024) nowait
     for (long i = 0; i < n; i++) {
         tb__answer a = {0.0f, UINT32_MAX, 0};
         if (k == TB__SET_SHADOW) {
@@ -82,6 +95,9 @@ static double tb__trace_ours(const tb_scene *s, const tb__rayset *rs, int k, int
         if (out)
             out[i] = a;
     }
+    cpu_sum += tb__cpu() - c0;
+    }
+    *cpu = cpu_sum;
     return tb__wall() - t0;
 }
 
@@ -215,11 +231,15 @@ static void tb__embree_free(tb__embree *e)
         rtcReleaseDevice(e->dev);
 }
 
-static double tb__trace_embree(const tb__embree *e, const tb__rayset *rs, int k, int threads, tb__answer *out)
+static double tb__trace_embree(const tb__embree *e, const tb__rayset *rs, int k, int threads, tb__answer *out,
+                               double *cpu)
 {
-    double t0 = tb__wall();
+    double cpu_sum = 0.0, t0 = tb__wall();
     long n = (long)rs->n;
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1024)
+#pragma omp parallel num_threads(threads) reduction(+ : cpu_sum)
+    {
+    double c0 = tb__cpu();
+#pragma omp for schedule(dynamic, 1024) nowait
     for (long i = 0; i < n; i++) {
         const tb_ray *r = &rs->rays[i];
         tb__ectx ctx;
@@ -250,6 +270,9 @@ static double tb__trace_embree(const tb__embree *e, const tb__rayset *rs, int k,
         if (out)
             out[i] = a;
     }
+    cpu_sum += tb__cpu() - c0;
+    }
+    *cpu = cpu_sum;
     return tb__wall() - t0;
 }
 #endif /* TB_HAVE_EMBREE */
@@ -339,21 +362,23 @@ static void tb__rays_usage(FILE *out)
 {
     fprintf(out,
             "usage: testbed bench rays SCENE.mid [--embree] [--rays N] [--threads T,...] [--seed S]\n"
-            "                                    [--repeat R]\n"
+            "                                    [--repeat R] [--no-stats]\n"
             "\n"
             "Primary (the scene camera), shadow (primary hit to a point on a light, any hit) and\n"
             "diffuse (cosine bounce from primary hits, closest hit) rays through the scene's BVH\n"
             "and, with --embree, through Embree 3's single-ray API on the same rays (triangles as\n"
             "triangle geometries, other objects as user geometries calling tb_object_intersect).\n"
-            "Prints Mrays/s (wall clock, best of R runs) per set and thread count, the ratio\n"
-            "ours / Embree, the scaling from the first to the last thread count, and the\n"
-            "fraction of rays on which the two disagree (hit/miss, object or face).\n"
+            "Prints Mrays/s (wall clock) and Mrays per CPU second of the tracing threads (best of\n"
+            "R runs each) per set and thread count, the ratios ours / Embree, the scaling from\n"
+            "the first to the last thread count, and the fraction of rays on which the two\n"
+            "disagree (hit/miss, object or face).\n"
             "\n"
             "  --embree     also trace with Embree (needs a build configured with Embree 3)\n"
             "  --rays N     N random camera rays (default: one per pixel at the file's resolution)\n"
             "  --threads T  comma-separated thread counts (default 1,2)\n"
             "  --seed S     random seed (default 1)\n"
             "  --repeat R   timed runs per measurement, best kept (default 3)\n"
+            "  --no-stats   turn the statistics counters (util/stats) off while tracing\n"
             "\n"
             "Exit status: 0 done, 1 the scene could not be loaded or Embree failed, 2 usage error.\n");
 }
@@ -385,6 +410,8 @@ int tb_cmd_bench_rays(int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "--embree") == 0)
             embree = true;
+        else if (strcmp(a, "--no-stats") == 0)
+            tb_stats_set_enabled(0); /* the BVH's per-ray counters (util/stats) cost time */
         else if (strcmp(a, "--rays") == 0 && i + 1 < argc) {
             if (!tb__count(argv[++i], UINT64_C(1) << 28, &nrays) || nrays == 0) {
                 fprintf(stderr, "testbed bench rays: --rays needs a whole number in 1 .. 2^28, not '%s'\n", argv[i]);
@@ -480,31 +507,45 @@ int tb_cmd_bench_rays(int argc, char **argv)
                RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu);
     }
 #endif
-    printf("%-8s %9s %6s %7s %14s %14s %8s\n", "set", "rays", "hit%", "threads", "ours Mrays/s", "Embree Mrays/s",
-           "ours/Em");
+    double load[1] = {0};
+    FILE *lf = fopen("/proc/loadavg", "r");
+    if (lf) {
+        if (fscanf(lf, "%lf", &load[0]) != 1)
+            load[0] = 0;
+        fclose(lf);
+    }
+    printf("load average %.2f: wall-clock rates and scaling mean something only on an idle machine; rates per\n"
+           "CPU second (Mrays/CPU-s) are the steadier comparison on a shared one\n",
+           load[0]);
+    printf("%-8s %8s %6s %3s %12s %12s %7s %12s %12s %7s\n", "set", "rays", "hit%", "thr", "ours Mr/s", "Embree Mr/s",
+           "ratio", "ours Mr/CPUs", "Emb Mr/CPUs", "ratio");
     for (int k = 0; k < TB__NSETS; k++) {
         const tb__rayset *rs = &sets[k];
         if (rs->n == 0) {
-            printf("%-8s %9d  (no rays)\n", tb__set_names[k], 0);
+            printf("%-8s %8d  (no rays)\n", tb__set_names[k], 0);
             continue;
         }
-        double rate_ours[8] = {0}, rate_em[8] = {0};
+        double rate_ours[8] = {0}, rate_em[8] = {0}, cpu_ours[8] = {0}, cpu_em[8] = {0};
         size_t hits = 0, differ = 0;
         for (int ti = 0; ti < nthreads; ti++) {
-            double best = INFINITY;
+            double best = INFINITY, bestc = INFINITY, c;
             for (uint64_t r = 0; r < repeat; r++) {
-                double t = tb__trace_ours(s, rs, k, threads[ti], ti == 0 && r == 0 ? ours : NULL);
+                double t = tb__trace_ours(s, rs, k, threads[ti], ti == 0 && r == 0 ? ours : NULL, &c);
                 best = t < best ? t : best;
+                bestc = c < bestc ? c : bestc;
             }
             rate_ours[ti] = (double)rs->n / best * 1e-6;
+            cpu_ours[ti] = (double)rs->n / bestc * 1e-6;
 #ifdef TB_HAVE_EMBREE
             if (embree) {
-                best = INFINITY;
+                best = INFINITY, bestc = INFINITY;
                 for (uint64_t r = 0; r < repeat; r++) {
-                    double t = tb__trace_embree(&e, rs, k, threads[ti], ti == 0 && r == 0 ? theirs : NULL);
+                    double t = tb__trace_embree(&e, rs, k, threads[ti], ti == 0 && r == 0 ? theirs : NULL, &c);
                     best = t < best ? t : best;
+                    bestc = c < bestc ? c : bestc;
                 }
                 rate_em[ti] = (double)rs->n / best * 1e-6;
+                cpu_em[ti] = (double)rs->n / bestc * 1e-6;
             }
 #endif
             if (ti == 0)
@@ -513,12 +554,13 @@ int tb_cmd_bench_rays(int argc, char **argv)
                     differ += embree && (ours[i].object != theirs[i].object || ours[i].face != theirs[i].face);
                 }
             if (embree)
-                printf("%-8s %9zu %6.1f %7d %14.3f %14.3f %8.2f\n", tb__set_names[k], rs->n,
+                printf("%-8s %8zu %6.1f %3d %12.3f %12.3f %7.2f %12.3f %12.3f %7.2f\n", tb__set_names[k], rs->n,
                        100.0 * (double)hits / (double)rs->n, threads[ti], rate_ours[ti], rate_em[ti],
-                       rate_ours[ti] / rate_em[ti]);
+                       rate_ours[ti] / rate_em[ti], cpu_ours[ti], cpu_em[ti], cpu_ours[ti] / cpu_em[ti]);
             else
-                printf("%-8s %9zu %6.1f %7d %14.3f %14s %8s\n", tb__set_names[k], rs->n,
-                       100.0 * (double)hits / (double)rs->n, threads[ti], rate_ours[ti], "-", "-");
+                printf("%-8s %8zu %6.1f %3d %12.3f %12s %7s %12.3f %12s %7s\n", tb__set_names[k], rs->n,
+                       100.0 * (double)hits / (double)rs->n, threads[ti], rate_ours[ti], "-", "-", cpu_ours[ti], "-",
+                       "-");
             fflush(stdout);
         }
         if (nthreads > 1) {
