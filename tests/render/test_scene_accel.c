@@ -6,8 +6,11 @@
  * ties to the lower object index), for the BVH, the grid and the list, on
  * the bundled scenes and on meshes under mirroring transforms, with rays
  * aimed at vertices and edges (where the watertight tie rule decides). */
+#define _XOPEN_SOURCE 700 /* realpath */
 #include "tb_test.h"
 
+#include <limits.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -16,6 +19,7 @@
 #include "host/render/scene.h"
 #include "util/math/rng.h"
 #include "util/math/transform.h"
+#include "util/mesh/fed.h"
 
 /* 1/10 of the rays under AddressSanitizer. */
 static long scaled(long n)
@@ -276,12 +280,85 @@ static void test_meshes(void **state)
     free(text);
 }
 
+/* A FED mesh file: a thick square plate with a square hole through it (top
+ * and bottom faces with a hole loop each, 4 outer and 4 inner sides), used
+ * twice under different transforms (one mirroring), between analytic objects. */
+static void test_fed_file(void **state)
+{
+    (void)state;
+    tb_vec3 pos[16];
+    const float o = 1.0f, in = 0.4f, h = 0.1f;
+    const float sq[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+    for (int k = 0; k < 4; k++) {
+        pos[k] = (tb_vec3){o * sq[k][0], o * sq[k][1], h};        /* outer top */
+        pos[4 + k] = (tb_vec3){o * sq[k][0], o * sq[k][1], -h};   /* outer bottom */
+        pos[8 + k] = (tb_vec3){in * sq[k][0], in * sq[k][1], h};  /* inner top */
+        pos[12 + k] = (tb_vec3){in * sq[k][0], in * sq[k][1], -h};/* inner bottom */
+    }
+    uint32_t corners[128], sizes[16], nloops_of[16];
+    uint32_t nc = 0, nl = 0, nf = 0;
+#define LOOP(a, b, c, d) (corners[nc++] = (a), corners[nc++] = (b), corners[nc++] = (c), corners[nc++] = (d), sizes[nl++] = 4)
+    LOOP(0, 1, 2, 3), LOOP(8, 11, 10, 9), nloops_of[nf++] = 2;      /* top with its hole */
+    LOOP(4, 7, 6, 5), LOOP(12, 13, 14, 15), nloops_of[nf++] = 2;    /* bottom with its hole */
+    for (uint32_t k = 0; k < 4; k++) {
+        uint32_t k1 = (k + 1) % 4;
+        LOOP(4 + k, 4 + k1, k1, k), nloops_of[nf++] = 1;            /* outer side, facing out */
+        LOOP(8 + k, 8 + k1, 12 + k1, 12 + k), nloops_of[nf++] = 1;  /* inner side, facing the hole */
+    }
+#undef LOOP
+    tb_fed_desc d = {0};
+    d.nverts = 16;
+    d.positions = pos;
+    d.nfaces = nf;
+    d.face_nloops = nloops_of;
+    d.nloops = nl;
+    d.loop_sizes = sizes;
+    d.corners = corners;
+    tb_fed *fed;
+    if (tb_fed_build(&d, &fed, NULL))
+        fail_msg("%s", tb_last_error());
+    assert_true(tb_fed_is_closed(fed));
+    char dir[PATH_MAX], path[PATH_MAX + 32];
+    assert_non_null(realpath(tb_test_tmpdir(), dir));
+    snprintf(path, sizeof path, "%s/scene_plate.fed", dir);
+    assert_int_equal(tb_fed_write_file(path, fed, TB_FED_FORMAT_TEXT), TB_OK);
+    tb_fed_free(fed);
+    char text[4 * PATH_MAX];
+    snprintf(text, sizeof text,
+             "mid 1\ncamera { eye = [0 -6 3] look_at = [0 0 0] up = [0 0 1] resolution = [64 64] }\n"
+             "sphere { transform = [scale(0.3) translate([0 0 -1])] }\n"
+             "polygons { transform = [rotate([1 0 0], 20) translate([0 0 0.5])] geometry = { mesh = file(\"%s\") } }\n"
+             "polygons { transform = [scale([-1.5 1 1]) rotate([0 1 1], 50) translate([0.2 0 -0.5])]\n"
+             "  geometry = { mesh = file(\"%s\") } }\n"
+             "cube { transform = [scale(0.2) translate([1.5 0 0])] }\n",
+             path, path);
+    FILE *fp = fmemopen(text, strlen(text), "r");
+    assert_non_null(fp);
+    tb_scene *s;
+    if (tb_scene_load_stream(fp, "fed.mid", NULL, NULL, &s))
+        fail_msg("%s", tb_last_error());
+    fclose(fp);
+    assert_int_equal(s->nobjects, 4);
+    /* Each plate: top and bottom (a square ring: 8 triangles each) and 8 quads (16). */
+    assert_int_equal(s->stats.triangles, 2 * (8 + 8 + 16));
+    assert_int_equal(s->nprims, s->stats.triangles + 2);
+    check_scene("fed plates", s, 6000, tb_test_seed("fed", 6));
+    /* Straight down the hole of the first plate: through it, onto the sphere. */
+    tb_ray r = tb_ray_make((tb_vec3){0, 0, 3}, (tb_vec3){0, 0, -1}, 0, INFINITY);
+    tb_hit hit;
+    assert_true(tb_scene_intersect(s, &r, &hit));
+    assert_int_equal(hit.object, 0);
+    tb_scene_free(s);
+    remove(path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell),
         cmocka_unit_test(test_showcase),
         cmocka_unit_test(test_meshes),
+        cmocka_unit_test(test_fed_file),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
