@@ -25,7 +25,10 @@ layout(local_size_x_id = 0) in;
 // Primitive kinds present in the scene: a kind the scene lacks is compiled out.
 layout(constant_id = 1) const bool TB_HAS_TRIANGLES = true;
 layout(constant_id = 3) const bool TB_HAS_SPHERES = false;
-// Traversal stack entries; the CPU BVH's depth is below 96 (docs/accel.md).
+// Traversal stack entries: the host sets the BVH's depth (rounded up to a
+// multiple of 8); one entry per level is enough, since every inner node
+// pushes one child and continues with the other. The CPU BVH's depth is
+// below 96 (docs/accel.md).
 layout(constant_id = 2) const int TB_STACK = 128;
 
 layout(std430, binding = 0) readonly buffer Rays { tb_gpu_ray rays[]; };

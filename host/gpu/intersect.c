@@ -32,6 +32,7 @@ struct tb_gpu_scene {
     tb_accel *cpu_accel;     /* BVH over the routed objects' references (NULL if none) */
     tb_gpu_buffer *nodes, *tris, *spheres, *refs, *rays, *hits;
     uint32_t nnodes, ntris, nspheres;
+    uint32_t stack;          /* traversal stack entries: the GPU BVH's depth, rounded up to a multiple of 8 */
 };
 
 /* The build needs a callback; the GPU BVH is only read, never traversed here. */
@@ -89,6 +90,10 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     if (st)
         return st;
     size_t nn = 0, nr = 0;
+    tb_accel_stats ast;
+    tb_accel_get_stats(acc, &ast);
+    /* At most one entry per level is on the stack: depth entries suffice. */
+    g->stack = ((uint32_t)(ast.bvh_depth > 0 ? ast.bvh_depth : 1) + 7u) / 8u * 8u;
     const tb_bvh_node *nodes = tb_accel_bvh_nodes(acc, &nn);
     const uint32_t *order = tb_accel_bvh_refs(acc, &nr);
     tb_gpu_bvh_node *gn = calloc(nn ? nn : 1, sizeof *gn);
@@ -170,9 +175,9 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
     }
     tb_gpu_scene *g = calloc(1, sizeof *g);
     bool *has_tri = calloc(scene->nobjects ? scene->nobjects : 1, sizeof *has_tri);
-    tb_accel_prim *gref = malloc((scene->nprims ? scene->nprims : 1) * sizeof *gref);
-    tb_accel_prim *cref = malloc((scene->nprims ? scene->nprims : 1) * sizeof *cref);
-    uint32_t *gidx = malloc((scene->nprims ? scene->nprims : 1) * sizeof *gidx);
+    tb_accel_prim *gref = calloc(scene->nprims ? scene->nprims : 1, sizeof *gref);
+    tb_accel_prim *cref = calloc(scene->nprims ? scene->nprims : 1, sizeof *cref);
+    uint32_t *gidx = calloc(scene->nprims ? scene->nprims : 1, sizeof *gidx);
     if (!g || !has_tri || !gref || !cref || !gidx) {
         free(g), free(has_tri), free(gref), free(cref), free(gidx);
         tb_error(TB_ERR_NOMEM, "out of memory for the GPU scene");
@@ -254,7 +259,7 @@ static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t
         return TB_OK;
     }
     /* Only the kinds the scene has are compiled in. */
-    tb_gpu_spec_constant spec[3] = {{1, g->ntris > 0}, {2, 128u}, {3, g->nspheres > 0}};
+    tb_gpu_spec_constant spec[3] = {{1, g->ntris > 0}, {2, g->stack}, {3, g->nspheres > 0}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("intersect"),
                                                                         .buffers = 6,
                                                                         .push_size = 16,
