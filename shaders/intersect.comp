@@ -1,6 +1,6 @@
 // Closest hit (or any hit) of each ray with the scene's GPU-resident
 // geometry: a BVH converted from the CPU BVH (shared/bvh.h) over world-space
-// triangles and sphere objects. One invocation per ray, fixed-size traversal stack. Objects of
+// triangles, sphere and cube objects. One invocation per ray, fixed-size traversal stack. Objects of
 // kinds this kernel does not implement are not in its BVH: host/gpu/intersect.c
 // tests them on the CPU afterwards with tmax = this kernel's t and merges by
 // the tie rule (docs/gpu.md, "Intersect kernel").
@@ -8,7 +8,8 @@
 // Triangles: Woop, Benthin and Wald's watertight test (JCGT 2013), the CPU's
 // method (host/render/scene_mesh.c), in float in world space. Spheres: the
 // ray mapped to object space by the float world-to-object map, then
-// lib/sphere.glsl (host/object's method in float). Ties in t are
+// lib/sphere.glsl (host/object's method in float); cubes likewise, clipped
+// by their six planes (tb_cube_hit). Ties in t are
 // broken as on the CPU (docs/accel.md, "Tie rule"): lower object, then face,
 // then reference index. Hit records are tb_gpu_hit (shared/hit.h); (u, v) are
 // left 0 and filled by the host for the winning triangle.
@@ -25,6 +26,7 @@ layout(local_size_x_id = 0) in;
 // Primitive kinds present in the scene: a kind the scene lacks is compiled out.
 layout(constant_id = 1) const bool TB_HAS_TRIANGLES = true;
 layout(constant_id = 3) const bool TB_HAS_SPHERES = false;
+layout(constant_id = 4) const bool TB_HAS_CUBES = false;
 // Traversal stack entries: the host sets the BVH's depth (rounded up to a
 // multiple of 8); one entry per level is enough, since every inner node
 // pushes one child and continues with the other. The CPU BVH's depth is
@@ -35,7 +37,7 @@ layout(std430, binding = 0) readonly buffer Rays { tb_gpu_ray rays[]; };
 layout(std430, binding = 1) readonly buffer Nodes { tb_gpu_bvh_node nodes[]; };
 layout(std430, binding = 2) readonly buffer Tris { tb_gpu_tri tris[]; };
 layout(std430, binding = 3) writeonly buffer Hits { tb_gpu_hit hits[]; };
-layout(std430, binding = 4) readonly buffer Spheres { tb_gpu_sphere spheres[]; };
+layout(std430, binding = 4) readonly buffer Placed { tb_gpu_placed placed[]; };
 layout(std430, binding = 5) readonly buffer Refs { uint refs[]; };
 
 layout(push_constant) uniform Push {
@@ -106,6 +108,57 @@ bool tb_tri_hit(tb_wray w, vec3 v0, vec3 v1, vec3 v2, out float t)
 // host/gpu/intersect.c.
 const float TB_TIE_TOL = 3.814697265625e-6;
 
+// The cube [-1,1]^3, host/object's method (intersect_planar.c) in float: the
+// line from its point nearest the origin clipped by the six half-spaces in
+// face order -x +x -y +y -z +z (the first face wins ties); the nearer end in
+// [tmin, tmax]. Writes t and the face 0..5.
+bool tb_cube_hit(vec3 o, vec3 d, float tmin, float tmax, out float t, out uint face)
+{
+    t = 0.0;
+    face = 0u;
+    precise float dd = dot(d, d);
+    precise float t0 = -dot(o, d) / dd;
+    precise vec3 p0 = vec3(o.x + t0 * d.x, o.y + t0 * d.y, o.z + t0 * d.z);
+    float a = -tb_inf(), b = tb_inf();
+    uint fa = 0u, fb = 0u;
+    for (uint f = 0u; f < 6u; ++f) {
+        uint axis = f >> 1;
+        float sg = (f & 1u) != 0u ? 1.0 : -1.0;
+        float den = sg * d[axis];
+        precise float num = 1.0 - sg * p0[axis];
+        if (den == 0.0) {
+            if (num < 0.0)
+                return false;
+            continue;
+        }
+        float sv = num / den;
+        if (den < 0.0) {
+            if (sv > a) {
+                a = sv;
+                fa = f;
+            }
+        } else if (sv < b) {
+            b = sv;
+            fb = f;
+        }
+    }
+    if (!(a <= b) || !tb_isfinite(a) || !tb_isfinite(b))
+        return false;
+    precise float ta = a + t0;
+    precise float tb = b + t0;
+    if (ta >= tmin && ta <= tmax) {
+        t = ta;
+        face = fa;
+        return true;
+    }
+    if (tb >= tmin && tb <= tmax) {
+        t = tb;
+        face = fb;
+        return true;
+    }
+    return false;
+}
+
 // True if (t, object, face, ref) precedes the best so far (the CPU tie rule,
 // with ties up to TB_TIE_TOL).
 bool tb_better(float t, uint object, uint face, uint ref, bool have, float bt, uint bo, uint bf, uint br)
@@ -165,8 +218,18 @@ void main()
                     uint ref = refs[k];
                     float t;
                     uint object, face, sref;
-                    if (TB_HAS_SPHERES && (ref & TB_GPU_REF_SPHERE) != 0u) {
-                        tb_gpu_sphere sp = spheres[ref & ~TB_GPU_REF_SPHERE];
+                    if (TB_HAS_CUBES && (ref & TB_GPU_REF_CUBE) != 0u) {
+                        tb_gpu_placed sp = placed[ref & TB_GPU_REF_INDEX];
+                        precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+                        precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+                        uint cf;
+                        if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
+                            continue;
+                        object = sp.object;
+                        face = sp.face + cf;
+                        sref = sp.ref;
+                    } else if (TB_HAS_SPHERES && (ref & TB_GPU_REF_SPHERE) != 0u) {
+                        tb_gpu_placed sp = placed[ref & TB_GPU_REF_INDEX];
                         precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
                         precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
                         if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
@@ -174,7 +237,7 @@ void main()
                         object = sp.object;
                         face = sp.face;
                         sref = sp.ref;
-                    } else if (TB_HAS_TRIANGLES && (ref & TB_GPU_REF_SPHERE) == 0u) {
+                    } else if (TB_HAS_TRIANGLES && (ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) == 0u) {
                         tb_gpu_tri tri = tris[ref];
                         if (!tb_tri_hit(w, tri.v0, tri.v1, tri.v2, t) || t < r.tmin || t > r.tmax)
                             continue;
@@ -211,9 +274,16 @@ void main()
     h.v = 0.0;
     if (have) {
         vec3 ng;
-        if (TB_HAS_SPHERES && (bref & TB_GPU_REF_SPHERE) != 0u) {
+        if (TB_HAS_CUBES && (bref & TB_GPU_REF_CUBE) != 0u) {
+            // The face's object-space normal -> world by the inverse transpose.
+            tb_gpu_placed sp = placed[bref & TB_GPU_REF_INDEX];
+            uint f = bf - sp.face;
+            float sg = (f & 1u) != 0u ? 1.0 : -1.0;
+            vec3 n = (f >> 1) == 0u ? sp.r0 : ((f >> 1) == 1u ? sp.r1 : sp.r2);
+            ng = sp.sign * normalize(sg * n);
+        } else if (TB_HAS_SPHERES && (bref & TB_GPU_REF_SPHERE) != 0u) {
             // Object-space point -> world normal by the inverse transpose.
-            tb_gpu_sphere sp = spheres[bref & ~TB_GPU_REF_SPHERE];
+            tb_gpu_placed sp = placed[bref & TB_GPU_REF_INDEX];
             vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
             vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
             vec3 p = so + bt * sd;

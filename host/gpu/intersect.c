@@ -30,8 +30,8 @@ struct tb_gpu_scene {
     bool *on_gpu;            /* per object */
     tb_gpu_scene_info info;
     tb_accel *cpu_accel;     /* BVH over the routed objects' references (NULL if none) */
-    tb_gpu_buffer *nodes, *tris, *spheres, *refs, *rays, *hits;
-    uint32_t nnodes, ntris, nspheres;
+    tb_gpu_buffer *nodes, *tris, *placed, *refs, *rays, *hits; /* placed: spheres and cubes */
+    uint32_t nnodes, ntris, nspheres, ncubes;
     uint32_t stack;          /* traversal stack entries: the GPU BVH's depth, rounded up to a multiple of 8 */
 };
 
@@ -98,7 +98,7 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     const uint32_t *order = tb_accel_bvh_refs(acc, &nr);
     tb_gpu_bvh_node *gn = calloc(nn ? nn : 1, sizeof *gn);
     tb_gpu_tri *gt = calloc(nr ? nr : 1, sizeof *gt);
-    tb_gpu_sphere *gs = calloc(nr ? nr : 1, sizeof *gs);
+    tb_gpu_placed *gs = calloc(nr ? nr : 1, sizeof *gs);
     uint32_t *gr = calloc(nr ? nr : 1, sizeof *gr);
     if (!gn || !gt || !gs || !gr) {
         free(gn), free(gt), free(gs), free(gr), tb_accel_free(acc);
@@ -111,13 +111,13 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
         gn[i].offset = c->offset;
         gn[i].count = (uint32_t)c->count | (c->count == 0 ? (uint32_t)c->axis << 16 : 0u);
     }
-    uint32_t nt = 0, ns = 0;
+    uint32_t nt = 0, ns = 0, nc = 0; /* triangles, placed primitives, of which cubes */
     for (size_t k = 0; k < nr; ++k) {
         const tb_accel_prim *p = &refs[order[k]];
         const tb_object *o = s->objects[p->object];
-        if (p->sub == TB_SCENE_WHOLE_OBJECT) { /* a sphere object */
+        if (p->sub == TB_SCENE_WHOLE_OBJECT) { /* a sphere or cube object */
             const tb_mat4 *w = &o->to_world.inv;
-            tb_gpu_sphere *q = &gs[ns];
+            tb_gpu_placed *q = &gs[ns];
             q->r0 = (tb_vec3){(float)w->m[0][0], (float)w->m[0][1], (float)w->m[0][2]};
             q->r1 = (tb_vec3){(float)w->m[1][0], (float)w->m[1][1], (float)w->m[1][2]};
             q->r2 = (tb_vec3){(float)w->m[2][0], (float)w->m[2][1], (float)w->m[2][2]};
@@ -125,10 +125,12 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
             q->w1 = (float)w->m[1][3];
             q->w2 = (float)w->m[2][3];
             q->object = o->index;
-            q->face = o->face_base + TB_FACE_SPHERE;
+            bool cube = o->kind == TB_PRIM_CUBE;
+            q->face = o->face_base + (cube ? TB_FACE_CUBE_NEG_X : TB_FACE_SPHERE);
             q->ref = scene_ref[order[k]];
             q->sign = o->flip ? -1.0f : 1.0f;
-            gr[k] = TB_GPU_REF_SPHERE | ns++;
+            gr[k] = (cube ? TB_GPU_REF_CUBE : TB_GPU_REF_SPHERE) | ns++;
+            nc += cube;
             continue;
         }
         const tb_object_mesh *m = o->mesh;
@@ -147,20 +149,21 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     }
     g->nnodes = (uint32_t)nn;
     g->ntris = nt;
-    g->nspheres = ns;
+    g->nspheres = ns - nc;
+    g->ncubes = nc;
     g->info.gpu_nodes = nn;
     g->info.gpu_bytes = nn * sizeof *gn + nt * sizeof *gt + ns * sizeof *gs + nr * sizeof *gr;
     g->nodes = tb_gpu_buffer_create(g->dev, (nn ? nn : 1) * sizeof *gn);
     g->tris = g->nodes ? tb_gpu_buffer_create(g->dev, (nt ? nt : 1) * sizeof *gt) : NULL;
-    g->spheres = g->tris ? tb_gpu_buffer_create(g->dev, (ns ? ns : 1) * sizeof *gs) : NULL;
-    g->refs = g->spheres ? tb_gpu_buffer_create(g->dev, (nr ? nr : 1) * sizeof *gr) : NULL;
+    g->placed = g->tris ? tb_gpu_buffer_create(g->dev, (ns ? ns : 1) * sizeof *gs) : NULL;
+    g->refs = g->placed ? tb_gpu_buffer_create(g->dev, (nr ? nr : 1) * sizeof *gr) : NULL;
     st = !g->refs ? TB_ERR_DEVICE : TB_OK;
     if (!st && nn)
         st = tb_gpu_buffer_upload(g->nodes, 0, gn, nn * sizeof *gn);
     if (!st && nt)
         st = tb_gpu_buffer_upload(g->tris, 0, gt, nt * sizeof *gt);
     if (!st && ns)
-        st = tb_gpu_buffer_upload(g->spheres, 0, gs, ns * sizeof *gs);
+        st = tb_gpu_buffer_upload(g->placed, 0, gs, ns * sizeof *gs);
     if (!st && nr)
         st = tb_gpu_buffer_upload(g->refs, 0, gr, nr * sizeof *gr);
     free(gn), free(gt), free(gs), free(gr), tb_accel_free(acc);
@@ -191,7 +194,7 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
         const tb_accel_prim *p = &scene->prims[i];
         const tb_object *o = scene->objects[p->object];
         bool tri = p->sub != TB_SCENE_WHOLE_OBJECT && o->kind == TB_PRIM_POLYGONS && o->mesh;
-        bool sphere = p->sub == TB_SCENE_WHOLE_OBJECT && o->kind == TB_PRIM_SPHERE;
+        bool sphere = p->sub == TB_SCENE_WHOLE_OBJECT && (o->kind == TB_PRIM_SPHERE || o->kind == TB_PRIM_CUBE);
         if (tri || sphere) {
             gidx[ng] = (uint32_t)i;
             gref[ng++] = *p;
@@ -209,6 +212,7 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
     tb_status st = tb__build_gpu(g, gref, gidx, ng);
     g->info.gpu_triangles = g->ntris;
     g->info.gpu_spheres = g->nspheres;
+    g->info.gpu_cubes = g->ncubes;
     if (!st && nc) {
         tb_accel_callbacks cb = {tb__cpu_isect, tb__cpu_occl, (void *)scene};
         st = tb_accel_build(TB_ACCEL_BVH, cref, nc, &cb, NULL, &g->cpu_accel);
@@ -233,7 +237,7 @@ void tb_gpu_scene_destroy(tb_gpu_scene *g)
         return;
     tb_gpu_buffer_destroy(g->nodes);
     tb_gpu_buffer_destroy(g->tris);
-    tb_gpu_buffer_destroy(g->spheres);
+    tb_gpu_buffer_destroy(g->placed);
     tb_gpu_buffer_destroy(g->refs);
     tb_gpu_buffer_destroy(g->rays);
     tb_gpu_buffer_destroy(g->hits);
@@ -253,18 +257,18 @@ bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object)
 static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t any_hit, tb_hit *hits,
                          double *kernel_seconds)
 {
-    if (g->ntris == 0 && g->nspheres == 0) {
+    if (g->ntris == 0 && g->nspheres == 0 && g->ncubes == 0) {
         for (size_t i = 0; i < n; ++i)
             hits[i] = (tb_hit){INFINITY, TB_GPU_NO_HIT, TB_GPU_NO_HIT, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
         return TB_OK;
     }
     /* Only the kinds the scene has are compiled in. */
-    tb_gpu_spec_constant spec[3] = {{1, g->ntris > 0}, {2, g->stack}, {3, g->nspheres > 0}};
+    tb_gpu_spec_constant spec[4] = {{1, g->ntris > 0}, {2, g->stack}, {3, g->nspheres > 0}, {4, g->ncubes > 0}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("intersect"),
                                                                         .buffers = 6,
                                                                         .push_size = 16,
                                                                         .spec = spec,
-                                                                        .spec_count = 3});
+                                                                        .spec_count = 4});
     if (!k)
         return TB_ERR_DEVICE;
     for (size_t at = 0; at < n; at += TB__GPU_CHUNK) {
@@ -273,7 +277,7 @@ static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t
         if (st)
             return st;
         uint32_t push[4] = {(uint32_t)m, any_hit, g->nnodes, 0};
-        tb_gpu_dispatch d = {k, {g->rays, g->nodes, g->tris, g->hits, g->spheres, g->refs}, push, m, 0.0};
+        tb_gpu_dispatch d = {k, {g->rays, g->nodes, g->tris, g->hits, g->placed, g->refs}, push, m, 0.0};
         if ((st = tb_gpu_run(g->dev, &d, 1)))
             return st;
         *kernel_seconds += d.seconds;
@@ -333,7 +337,7 @@ tb_status tb_gpu_intersect(tb_gpu_scene *g, const tb_ray *rays, size_t n, tb_hit
             }
         }
         if (gpu_hit) {
-            /* (u, v) of the winning triangle or sphere, as the CPU path computes them from the point. */
+            /* (u, v) of the winning triangle, sphere or cube, as the CPU path computes them from the point. */
             const tb_object *o = s->objects[h->object];
             tb_dvec3 ro = tb_mat4_mul_point(&o->to_world.inv, (tb_dvec3){rays[i].o.x, rays[i].o.y, rays[i].o.z});
             tb_dvec3 rd = tb_mat4_mul_vec(&o->to_world.inv, (tb_dvec3){rays[i].d.x, rays[i].d.y, rays[i].d.z});

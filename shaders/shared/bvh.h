@@ -10,11 +10,14 @@
 #ifndef TB_GPU_GLSL
 typedef struct tb_gpu_bvh_node tb_gpu_bvh_node;
 typedef struct tb_gpu_tri tb_gpu_tri;
-typedef struct tb_gpu_sphere tb_gpu_sphere;
+typedef struct tb_gpu_placed tb_gpu_placed;
 #endif
 
-/* A leaf reference (one uint): a triangle index, or TB_GPU_REF_SPHERE | a sphere index. */
+/* A leaf reference (one uint): a triangle index, or TB_GPU_REF_SPHERE or
+ * TB_GPU_REF_CUBE | an index into the placed-primitive array. */
 #define TB_GPU_REF_SPHERE 0x80000000u
+#define TB_GPU_REF_CUBE 0x40000000u
+#define TB_GPU_REF_INDEX 0x3fffffffu
 
 /* One BVH node, 32 bytes: the CPU node's box with the two words moved next to
  * the vec3s so that std430 and C agree. Depth-first order, node 0 the root;
@@ -43,11 +46,11 @@ struct tb_gpu_tri {
     TB_GPU_UINT pad0;   /* zero (offset 60) */
 };
 
-/* One sphere object (a top-level MID sphere: the unit sphere placed by its
- * transform), 64 bytes: the rows of the world-to-object affine map in float
+/* One placed analytic object (a top-level MID sphere or cube: the unit
+ * sphere or the cube [-1,1]^3 placed by its transform), 64 bytes: the rows of the world-to-object affine map in float
  * (p_obj.x = dot(r0, p) + w0 ...), which also give the world normal
  * r0 n.x + r1 n.y + r2 n.z (the inverse transpose), and the hit record's keys. */
-struct tb_gpu_sphere {
+struct tb_gpu_placed {
     TB_GPU_VEC3 r0;     /* offset 0 */
     float w0;           /* offset 12 */
     TB_GPU_VEC3 r1;     /* offset 16 */
@@ -55,17 +58,17 @@ struct tb_gpu_sphere {
     TB_GPU_VEC3 r2;     /* offset 32 */
     float w2;           /* offset 44 */
     TB_GPU_UINT object; /* offset 48 */
-    TB_GPU_UINT face;   /* face ID of the sphere's one face (offset 52) */
+    TB_GPU_UINT face;   /* face ID of the primitive's first face (face_base) (offset 52) */
     TB_GPU_UINT ref;    /* index of its reference in tb_scene.prims (offset 56) */
     float sign;         /* +1, or -1 when the object's normals are flipped (offset 60) */
 };
 
 #ifndef TB_GPU_GLSL
-_Static_assert(sizeof(tb_gpu_sphere) == 64, "tb_gpu_sphere is 64 bytes");
-_Static_assert(offsetof(tb_gpu_sphere, w0) == 12 && offsetof(tb_gpu_sphere, r1) == 16 &&
-                   offsetof(tb_gpu_sphere, r2) == 32 && offsetof(tb_gpu_sphere, w2) == 44 &&
-                   offsetof(tb_gpu_sphere, object) == 48 && offsetof(tb_gpu_sphere, sign) == 60,
-               "tb_gpu_sphere follows the std430 offsets of its GLSL twin");
+_Static_assert(sizeof(tb_gpu_placed) == 64, "tb_gpu_placed is 64 bytes");
+_Static_assert(offsetof(tb_gpu_placed, w0) == 12 && offsetof(tb_gpu_placed, r1) == 16 &&
+                   offsetof(tb_gpu_placed, r2) == 32 && offsetof(tb_gpu_placed, w2) == 44 &&
+                   offsetof(tb_gpu_placed, object) == 48 && offsetof(tb_gpu_placed, sign) == 60,
+               "tb_gpu_placed follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_bvh_node) == 32, "tb_gpu_bvh_node is 32 bytes");
 _Static_assert(offsetof(tb_gpu_bvh_node, offset) == 12 && offsetof(tb_gpu_bvh_node, hi) == 16 &&
                    offsetof(tb_gpu_bvh_node, count) == 28,

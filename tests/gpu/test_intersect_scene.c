@@ -1,6 +1,7 @@
 /* The Vulkan intersect kernel (host/gpu/intersect.h) against the CPU path
  * (tb_scene_intersect / tb_scene_occluded) on scenes mixing triangles and a
- * sphere (on the GPU) with a torus and a cube (routed to the CPU per object).
+ * sphere and a cube (on the GPU) with a torus and a cylinder (routed to the
+ * CPU per object).
  * Runs with the validation layer and fails on any message. */
 #include "gpu_test.h"
 
@@ -19,13 +20,14 @@ static const char *tb__mixed =
     "polygons \"quad\" { geometry = { vertices = [[-2 -2 0] [2 -2 0] [2 2 0] [-2 2 0]] faces = [[0 1 2 3]] } }\n"
     "polygons \"tri\" { geometry = { vertices = [[-1 -1 1] [1 -1 1] [0 1 1]] faces = [[0 1 2]] } }\n"
     "torus \"ring\" { transform = [translate([0 0 2])] geometry = { major = 1 minor = 0.25 } }\n"
-    "sphere \"ball\" { transform = [scale(0.5) translate([3 3 0.5])] }\n";
+    "sphere \"ball\" { transform = [scale(0.5) translate([3 3 0.5])] }\n"
+    "cube \"box\" { transform = [scale([0.25 0.5 0.25]) translate([-3 3 0.25])] }\n";
 
 /* Only routed kinds: the kernel has nothing to do. */
 static const char *tb__analytic =
     "mid 1\n"
     "torus \"ring\" { transform = [translate([0 0 2])] geometry = { major = 1 minor = 0.25 } }\n"
-    "cube \"box\" { transform = [scale(0.5) translate([0.5 0.5 0.5])] }\n";
+    "cylinder \"can\" { transform = [scale(0.5) translate([0.5 0.5 0.5])] }\n";
 
 static tb_scene *tb__load(const char *text)
 {
@@ -92,12 +94,13 @@ static void test_exact_grid(void **state)
     assert_non_null(g);
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    assert_int_equal(info.gpu_objects, 3);
+    assert_int_equal(info.gpu_objects, 4);
     assert_int_equal(info.cpu_objects, 1);
     assert_int_equal(info.gpu_triangles, 3);
     assert_int_equal(info.gpu_spheres, 1);
+    assert_int_equal(info.gpu_cubes, 1);
     assert_true(tb_gpu_scene_object_on_gpu(g, 0) && tb_gpu_scene_object_on_gpu(g, 1) &&
-                tb_gpu_scene_object_on_gpu(g, 3));
+                tb_gpu_scene_object_on_gpu(g, 3) && tb_gpu_scene_object_on_gpu(g, 4));
     assert_false(tb_gpu_scene_object_on_gpu(g, 2));
 
     enum { N = 32 * 32 };
@@ -108,7 +111,7 @@ static void test_exact_grid(void **state)
         rays[i] = (tb_ray){{x, y, 5.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY};
     }
     assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
-    int on[4] = {0};
+    int on[5] = {0};
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
         if (c.object == 3 && hits[i].object == 3) { /* the sphere off its centre: sqrt, not exact */
@@ -122,7 +125,7 @@ static void test_exact_grid(void **state)
         if (!tb__same(&c, &hits[i], 0.0))
             fail_msg("ray %d (%g, %g): cpu t %.9g object %u face %u, gpu t %.9g object %u face %u", i,
                      rays[i].o.x, rays[i].o.y, c.t, c.object, c.face, hits[i].t, hits[i].object, hits[i].face);
-        if (c.object < 4)
+        if (c.object < 5)
             on[c.object]++;
     }
     /* Exact t on the planes, and every object was hit (the test covers both paths). */
@@ -131,7 +134,7 @@ static void test_exact_grid(void **state)
             assert_true(hits[i].t == 5.0f);
         else if (hits[i].object == 1)
             assert_true(hits[i].t == 4.0f);
-    for (int k = 0; k < 4; ++k)
+    for (int k = 0; k < 5; ++k)
         assert_true(on[k] > 0);
 
     /* Rays through the sphere's centre: every step of the GPU sphere is exact
@@ -165,7 +168,7 @@ static void test_exact_grid(void **state)
 }
 
 /* Random rays through the mixed scene: hits on the routed torus are the CPU's
- * records exactly; triangle and sphere hits agree within float tolerance; hit/miss and
+ * records exactly; triangle, sphere and cube hits agree within float tolerance; hit/miss and
  * object may differ only for rays within float error of an edge (none
  * expected among a few thousand random rays; allowed: 1 in 1000). */
 static void test_random_mixed(void **state)
@@ -206,7 +209,7 @@ static void test_random_mixed(void **state)
         }
         if (c.object == UINT32_MAX)
             continue;
-        if (c.object == 3) { /* the sphere, on the GPU in float */
+        if (c.object == 3 || c.object == 4) { /* the sphere and the cube, on the GPU in float */
             ++tri;
             tb_assert_near(hits[i].t, c.t, 1e-5 * fabs(c.t));
             assert_true(fabs((double)hits[i].ng.x - c.ng.x) + fabs((double)hits[i].ng.y - c.ng.y) +
@@ -223,7 +226,7 @@ static void test_random_mixed(void **state)
             tb_assert_near(hits[i].v, c.v, 1e-4);
         }
     }
-    print_message("[ info     ] %d routed-object hits, %d triangle and sphere hits, %d differ, %d occlusion differ\n", routed,
+    print_message("[ info     ] %d routed-object hits, %d triangle, sphere and cube hits, %d differ, %d occlusion differ\n", routed,
                   tri, differ, occ_differ);
     assert_true(routed > 20 && tri > 50);
     assert_true(differ <= N / 1000);
