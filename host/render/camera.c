@@ -104,7 +104,7 @@ tb_ray tb_camera_ray(const tb_camera *c, double x, double y, float lens_u, float
 }
 
 void tb_camera_ray_differential(const tb_camera *c, double x, double y, float lens_u, float lens_v,
-                                tb_ray_differential *out)
+                                tb_camera_ray_diff *out)
 {
     double lx, ly;
     tb__lens(c, lens_u, lens_v, &lx, &ly);

@@ -39,12 +39,15 @@ typedef struct tb_camera {
 
 /* A primary ray with the rays of the film points one pixel to the right and
  * one pixel down (same lens point): texture filtering estimates the footprint
- * of a pixel from how far the neighbours land (pbrt's RayDifferential). */
-typedef struct tb_ray_differential {
+ * of a pixel from how far the neighbours land (pbrt's RayDifferential). The
+ * rx/ry fields are those of host/render/texture.h's tb_ray_differential:
+ * copy them into one for tb_tex_footprint_from_rays (this header does not
+ * include texture.h, so both can be used together). */
+typedef struct tb_camera_ray_diff {
     tb_ray ray;           /* the ray of film point (x, y): unit direction, tmin 0, tmax +inf */
     tb_vec3 rx_o, rx_d;   /* origin and unit direction of the ray of (x + 1, y) */
     tb_vec3 ry_o, ry_d;   /* origin and unit direction of the ray of (x, y + 1) */
-} tb_ray_differential;
+} tb_camera_ray_diff;
 
 /* Sets up a camera at `eye` looking at `look_at` with image up from `up`
  * (the part perpendicular to the view direction), vertical field of view
@@ -72,7 +75,7 @@ tb_ray tb_camera_ray(const tb_camera *c, double x, double y, float lens_u, float
 /* tb_camera_ray plus the neighbours' rays (film points (x + 1, y) and
  * (x, y + 1) through the same lens point). */
 void tb_camera_ray_differential(const tb_camera *c, double x, double y, float lens_u, float lens_v,
-                                tb_ray_differential *out);
+                                tb_camera_ray_diff *out);
 
 /* Film coordinates of the world point p as the pinhole sees it (the inverse
  * of tb_camera_ray with a pinhole; for a thin lens, where p is in focus).

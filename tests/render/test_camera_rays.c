@@ -158,7 +158,7 @@ static void test_random_cameras(void **state)
         /* Pinhole rays start at the eye; unit directions; projection is the inverse. */
         for (int i = 0; i < 8; i++) {
             double x = (1.4 * tb_rng_double(&rng) - 0.2) * w, y = (1.4 * tb_rng_double(&rng) - 0.2) * h;
-            tb_ray_differential rd;
+            tb_camera_ray_diff rd;
             tb_camera_ray_differential(&cam, x, y, tb_rng_float(&rng), tb_rng_float(&rng), &rd);
             assert_true(rd.ray.o.x == (float)eye.x && rd.ray.o.y == (float)eye.y && rd.ray.o.z == (float)eye.z);
             assert_true(tb_vec3_equal(rd.rx_o, rd.ray.o) && tb_vec3_equal(rd.ry_o, rd.ray.o));
@@ -205,7 +205,7 @@ static void test_thin_lens(void **state)
         tb_vec3 first = {0};
         for (int i = 0; i < 64; i++) {
             float u = tb_rng_float(&rng), v = tb_rng_float(&rng);
-            tb_ray_differential rd;
+            tb_camera_ray_diff rd;
             tb_camera_ray_differential(&cam, x, y, u, v, &rd);
             tb_ray r = rd.ray;
             assert_true(tb_vec3_equal(r.o, tb_camera_ray(&cam, x, y, u, v).o));
