@@ -356,6 +356,13 @@ static int tb__make_sets(const tb_scene *s, uint64_t nprimary, uint64_t seed, tb
     return 1;
 }
 
+/* The current total of counter `name` (0 if it does not exist). */
+static int64_t tb__counter(const char *name)
+{
+    tb_stat_total t;
+    return tb_stats_get(name, TB_STAT_KIND_COUNTER, &t) == TB_OK ? t.v[0] : 0;
+}
+
 /* ------------------------------------------------------------ command */
 
 static void tb__rays_usage(FILE *out)
@@ -527,10 +534,16 @@ int tb_cmd_bench_rays(int argc, char **argv)
         }
         double rate_ours[8] = {0}, rate_em[8] = {0}, cpu_ours[8] = {0}, cpu_em[8] = {0};
         size_t hits = 0, differ = 0;
+        double nodes = 0.0, tests = 0.0; /* our BVH per ray (0 with --no-stats) */
         for (int ti = 0; ti < nthreads; ti++) {
             double best = INFINITY, bestc = INFINITY, c;
+            int64_t nodes0 = tb__counter("BVH/nodes visited"), tests0 = tb__counter("BVH/primitives tested");
             for (uint64_t r = 0; r < repeat; r++) {
                 double t = tb__trace_ours(s, rs, k, threads[ti], ti == 0 && r == 0 ? ours : NULL, &c);
+                if (r == 0 && ti == 0) {
+                    nodes = (double)(tb__counter("BVH/nodes visited") - nodes0) / (double)rs->n;
+                    tests = (double)(tb__counter("BVH/primitives tested") - tests0) / (double)rs->n;
+                }
                 best = t < best ? t : best;
                 bestc = c < bestc ? c : bestc;
             }
@@ -563,6 +576,9 @@ int tb_cmd_bench_rays(int argc, char **argv)
                        "-");
             fflush(stdout);
         }
+        if (nodes > 0.0)
+            printf("%-8s our BVH per ray: %.1f nodes visited, %.1f references tested\n", tb__set_names[k], nodes,
+                   tests);
         if (nthreads > 1) {
             printf("%-8s scaling %d -> %d threads: ours %.2fx", tb__set_names[k], threads[0], threads[nthreads - 1],
                    rate_ours[nthreads - 1] / rate_ours[0]);
