@@ -2,12 +2,14 @@
 #include "host/render/raytrace.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "host/object/hit.h"
 #include "host/object/intersect.h"
 #include "host/render/sampling.h"
 #include "host/render/shading.h"
+#include "util/color/bands.h"
 #include "util/math/float.h"
 #include "util/stats/stats.h"
 
@@ -36,6 +38,24 @@ tb_status tb_rt_init(tb_raytracer *rt, const tb_scene *scene, const tb_rt_option
             return st;
         rt->has_area = true;
     }
+    bool any_tex = false;
+    for (int i = 0; i < scene->nmaterials; i++)
+        any_tex = any_tex || scene->materials[i].diffuse_texture;
+    if (any_tex) {
+        const char **paths = calloc((size_t)scene->nmaterials, sizeof *paths);
+        if (!paths) {
+            tb_rt_release(rt);
+            return tb_error(TB_ERR_NOMEM, "raytrace: out of memory");
+        }
+        for (int i = 0; i < scene->nmaterials; i++)
+            paths[i] = scene->materials[i].diffuse_texture;
+        tb_status st = tb__rt_textures_load(scene->nmaterials, paths, &rt->textures);
+        free(paths);
+        if (st) {
+            tb_rt_release(rt);
+            return st;
+        }
+    }
     return TB_OK;
 }
 
@@ -46,6 +66,8 @@ void tb_rt_release(tb_raytracer *rt)
     if (rt->has_area)
         tb_area_light_release(&rt->area);
     rt->has_area = false;
+    tb__rt_textures_free(rt->textures);
+    rt->textures = NULL;
 }
 
 /* True if the shadow segment of light sample `s` from the surface point p
@@ -77,6 +99,27 @@ static tb_ray tb__spawn(tb_vec3 p, tb_vec3 perr, tb_vec3 ng, tb_vec3 w)
     return r;
 }
 
+/* The diffuse colour at a hit: the material's, times its texture if any. */
+static tb_channels tb__diffuse(const tb_raytracer *rt, const tb_material *m, const tb_hit *hit)
+{
+    const tb_scene *s = rt->scene;
+    double rgb[3];
+    if (!rt->textures || !tb__rt_texture_rgb(rt->textures, (int)(m - s->materials), hit->u, hit->v, rgb))
+        return m->diffuse;
+    tb_channels t;
+    if (s->spectral) {
+        double v[TB_CHANNELS_MAX];
+        if (tb_bands_from_rgb_reflectance(&s->bands, rgb, v))
+            return m->diffuse;
+        t = tb_channels_splat(s->nchannels, 0.0f);
+        for (int i = 0; i < t.n; i++)
+            t.v[i] = (float)v[i];
+    } else {
+        t = tb_channels_rgb((float)rgb[0], (float)rgb[1], (float)rgb[2]);
+    }
+    return tb_channels_mul(m->diffuse, t);
+}
+
 static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng, int depth)
 {
     const tb_scene *s = rt->scene;
@@ -105,7 +148,8 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, tb_rng *
     if (m->emits && front)
         L = tb_channels_add(L, tb_radiance_from_exitance(m->emission));
 
-    bool has_diffuse = !tb_channels_is_black(m->diffuse);
+    tb_channels diffuse = tb__diffuse(rt, m, &hit);
+    bool has_diffuse = !tb_channels_is_black(diffuse);
     bool has_specular = !tb_channels_is_black(m->specular);
     bool has_transmission = !tb_channels_is_black(m->transmission);
 
@@ -122,7 +166,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, tb_rng *
                 continue;
             if (tb__shadowed(s, p, perr, ng, &ls))
                 continue;
-            tb_channels f = tb_channels_scale(m->diffuse, (float)(1.0 / TB_PI));
+            tb_channels f = tb_channels_scale(diffuse, (float)(1.0 / TB_PI));
             if (has_specular) {
                 double ca = tb_vec3_dot(wr, ls.wi);
                 if (ca > 0.0)
@@ -149,7 +193,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, tb_rng *
                 continue;
             E = tb_channels_add_scaled(E, ls.L, (float)(cosi / ls.pdf));
         }
-        L = tb_channels_add(L, tb_channels_mul(m->diffuse,
+        L = tb_channels_add(L, tb_channels_mul(diffuse,
                                                tb_channels_scale(E, (float)(1.0 / (TB_PI * rt->light_samples)))));
     }
 

@@ -5,7 +5,9 @@
  * Lambert + normalised Phong from the MID material, perfect mirror
  * reflection weighted by the specular colour, and refraction with exact
  * Fresnel reflectance and total internal reflection for materials with a
- * transmission colour. No indirect diffuse light.
+ * transmission colour. A material's diffuse texture multiplies its diffuse
+ * colour by the image's linear RGB at the hit's (u, v) (bilinear, finest
+ * level; Smits-upsampled in spectral scenes). No indirect diffuse light.
  *
  *     tb_raytracer rt;
  *     if (tb_rt_init(&rt, scene, NULL)) die(tb_last_error());
@@ -38,6 +40,9 @@ typedef struct tb_rt_options {
 } tb_rt_options;
 
 /* A ray tracer over a loaded scene (read-only after init, shareable by threads). */
+/* Private: the images of the materials' diffuse textures (raytrace_texture.c). */
+typedef struct tb__rt_textures tb__rt_textures;
+
 typedef struct tb_raytracer {
     const tb_scene *scene;  /* not owned */
     int max_depth;          /* in effect */
@@ -45,6 +50,7 @@ typedef struct tb_raytracer {
     int lsx, lsy;           /* strata of the light samples (lsx * lsy = light_samples) */
     bool has_area;          /* area light below is set up */
     tb_area_light area;     /* every exact emitter of the scene as one light */
+    tb__rt_textures *textures; /* owned; NULL when no material has a diffuse texture */
 } tb_raytracer;
 
 /* Prepares a tracer for `scene` (which must stay alive). TB_ERR_ARG for bad
@@ -62,5 +68,12 @@ tb_channels tb_rt_radiance(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rn
  * camera ray of film point (x, y) (pinhole, or the lens point from rng),
  * radiance written to out[0 .. scene->nchannels). */
 void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out);
+
+/* Private (raytrace_texture.c): loads the images paths[0..n) (NULL: none) into *out. */
+tb_status tb__rt_textures_load(int n, const char *const *paths, tb__rt_textures **out);
+/* Private: frees them; NULL is allowed. */
+void tb__rt_textures_free(tb__rt_textures *t);
+/* Private: linear RGB of texture i at (u, v); false if material i has none. */
+bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, float u, float v, double rgb[3]);
 
 #endif

@@ -182,6 +182,21 @@ got = rows[1][4]
 exp = rho / math.pi * I / hgt ** 2
 check(abs(got - exp) / exp < 1e-4, "point light: L = rho/pi I/h^2: %.7g, expected %.7g" % (got, exp))
 
+# A diffuse texture multiplies the diffuse colour: a uniform 2x2 PFM texture
+# on the same floor gives rho * tex / pi * I / h^2 per channel.
+tex = (0.5, 0.25, 1.0)
+with open(os.path.join(TMP, "rt_tex.pfm"), "wb") as f:
+    f.write(b"PF\n2 2\n-1.0\n" + struct.pack("<12f", *(tex * 4)))
+scene = scene.replace('diffuse = %g' % rho, 'diffuse = %g diffuse_texture = file("rt_tex.pfm")' % rho)
+pt = write("rt_point_tex.mid", scene)
+out = os.path.join(TMP, "rt_point_tex.pfm")
+run([pt, "-o", out])
+w, h, rows = read_pfm(out)
+got = rows[1][3:6]
+exp = [rho * t / math.pi * I / hgt ** 2 for t in tex]
+check(all(abs(g - e) / e < 1e-4 for g, e in zip(got, exp)),
+      "diffuse texture multiplies the colour: %r, expected %r" % (got, exp))
+
 # ---------------------------------------------------------------- 5. Cornell box
 cornell = os.path.join(SRC, "scenes", "cornell-box.mid")
 common = [cornell, "--spp", "1", "--light-samples", "1", "--seed", "7"]
