@@ -24,7 +24,7 @@ static void tb__generate_usage(FILE *out)
             "  grid   one primitive per cell, all 11 kinds mixed, random parameters,\n"
             "         rotations, scales and materials (about 0.3 KB per object)\n"
             "  csg    one random CSG tree per cell: union/intersection/difference nodes,\n"
-            "         1 to 3 levels deep, over closed primitives (about 2.4 KB per object)\n"
+            "         1 to 3 levels deep, over closed primitives (about 2.3 KB per object)\n"
             "  mesh   one inline polygon mesh per cell: a geodesic sphere (42 to 1002\n"
             "         vertices, with normals) or a height field (81 to 625 vertices, with\n"
             "         normals and uvs) (about 46 KB per object)\n"
