@@ -1,14 +1,14 @@
-/* The ray tracer's diffuse textures (raytrace.h). A file of its own because
- * host/render/texture.h and camera.h (through scene.h) both define
- * tb_ray_differential and cannot be included together. */
+/* The ray tracer's diffuse textures (raytrace.h). A file of its own from
+ * when host/render/texture.h and camera.h (through scene.h) both defined
+ * tb_ray_differential and could not be included together. */
 #include <stdbool.h>
 #include <stdlib.h>
 
 #include "host/render/texture.h"
 #include "util/base/error.h"
 
-/* The private declarations of raytrace.h, repeated here: including it would
- * bring in camera.h (see above). A mismatch is caught when raytrace.c links. */
+/* The private declarations of raytrace.h, repeated here (see above); keep
+ * them identical. */
 typedef struct tb__rt_textures tb__rt_textures;
 tb_status tb__rt_textures_load(int n, const char *const *paths, tb__rt_textures **out);
 void tb__rt_textures_free(tb__rt_textures *t);
