@@ -313,9 +313,10 @@ static int tb__make_sets(const tb_scene *s, uint64_t nprimary, uint64_t seed, tb
         sets[TB__SET_PRIMARY].rays[sets[TB__SET_PRIMARY].n++] = tb_camera_ray(c, x, y, 0.5f, 0.5f);
     }
     tb_area_light area = {0};
-    if (s->nemitters > 0 && tb_area_light_init(&area, s->emitters, s->nemitters)) {
-        fprintf(stderr, "testbed bench rays: %s\n", tb_last_error());
-        return 0;
+    bool use_area = s->nemitters > 0;
+    if (use_area && tb_area_light_init(&area, s->emitters, s->nemitters)) {
+        printf("  (area lights unusable for shadow rays: %s; using the other lights)\n", tb_last_error());
+        use_area = false;
     }
     size_t no_shadow = 0;
     for (size_t i = 0; i < np; i++) {
@@ -331,7 +332,7 @@ static int tb__make_sets(const tb_scene *s, uint64_t nprimary, uint64_t seed, tb
         /* Shadow: toward a point on a light. */
         tb_light_sample ls;
         bool ok = false;
-        if (s->nemitters > 0)
+        if (use_area)
             ok = tb_area_light_sample(&area, p, u1, u2, &ls);
         else if (s->nlights > 0) {
             int l = (int)(u1 * (float)s->nlights);
