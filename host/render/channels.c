@@ -5,11 +5,15 @@
 
 #include "util/color/cie.h"
 #include "util/color/smits.h"
+#include "util/color/spectrum_file.h"
 #include "util/color/srgb.h"
 
-/* The inline spectrum of a MID colour as a tb_spectrum (floats widened). */
+/* The spectrum of a MID colour as a tb_spectrum: inline samples (floats
+ * widened) or the samples of its spectrum file. */
 static tb_status tb__mid_spectrum(const tb_mid_color *c, tb_spectrum *out)
 {
+    if (c->type == TB_MID_COLOR_SPECTRUM_FILE)
+        return tb_spectrum_read_file(c->file.path, out);
     double lambda[64], value[64];
     double *l = lambda, *v = value;
     double *heap = NULL;
@@ -34,13 +38,11 @@ tb_status tb_channels_from_mid_color(const tb_mid_color *c, const tb_bands *band
 {
     if (!c || !out)
         return tb_error(TB_ERR_ARG, "colour: NULL argument");
-    if (c->type == TB_MID_COLOR_SPECTRUM_FILE)
-        return tb_error(TB_ERR_UNSUPPORTED, "colour: spectrum files (%s) are not supported yet",
-                        c->file.text ? c->file.text : "?");
     if (bands && bands->n > TB_CHANNELS_MAX)
         return tb_error(TB_ERR_UNSUPPORTED, "colour: %d render bands, at most %d per shading value",
                         bands->n, TB_CHANNELS_MAX);
-    if (c->type != TB_MID_COLOR_RGB && c->type != TB_MID_COLOR_SPECTRUM)
+    bool spectrum = c->type == TB_MID_COLOR_SPECTRUM || c->type == TB_MID_COLOR_SPECTRUM_FILE;
+    if (c->type != TB_MID_COLOR_RGB && !spectrum)
         return tb_error(TB_ERR_ARG, "colour: unknown colour type %d", (int)c->type);
 
     double rgb[3] = {c->rgb[0], c->rgb[1], c->rgb[2]};
@@ -48,7 +50,7 @@ tb_status tb_channels_from_mid_color(const tb_mid_color *c, const tb_bands *band
     tb_status st = TB_OK;
 
     if (!bands) {
-        if (c->type == TB_MID_COLOR_SPECTRUM) {
+        if (spectrum) {
             tb_spectrum s;
             if ((st = tb__mid_spectrum(c, &s)))
                 return st;
@@ -66,7 +68,7 @@ tb_status tb_channels_from_mid_color(const tb_mid_color *c, const tb_bands *band
         return TB_OK;
     }
 
-    if (c->type == TB_MID_COLOR_SPECTRUM) {
+    if (spectrum) {
         tb_spectrum s;
         if ((st = tb__mid_spectrum(c, &s)))
             return st;
