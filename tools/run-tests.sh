@@ -21,7 +21,7 @@ if [[ "${1:-}" != "--quick" ]]; then
     -DTB_SANITIZE=ON -DTB_FUZZ=ON >/dev/null
   cmake --build build/asan -j "$jobs"
   echo "== unit tests and fuzzers under sanitizers"
-  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:quarantine_size_mb=256 UBSAN_OPTIONS=print_stacktrace=1 \
     LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp \
     ctest --test-dir build/asan --output-on-failure -j "$jobs" -L 'unit|fuzz' --timeout 900
 fi
