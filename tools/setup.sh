@@ -17,7 +17,7 @@ packages=(
   libcmocka-dev netpbm assimp-testmodels gnuplot-nox python3
 )
 if [[ "${1:-}" == "--bench" ]]; then
-  packages+=(libembree-dev povray hyperfine)
+  packages+=(libembree-dev povray hyperfine time)
 fi
 
 missing=()
