@@ -7,6 +7,7 @@
 
 #include "host/object/hit.h"
 #include "host/object/intersect.h"
+#include "host/object/param.h"
 #include "host/render/sampling.h"
 #include "host/render/shading.h"
 #include "util/color/bands.h"
@@ -19,6 +20,12 @@ TB_STAT_COUNTER(tb__rt_shadow_rays, "Raytrace/shadow rays");
 
 /* The most light samples a shading point takes (a stack array holds them). */
 #define TB__RT_MAX_LIGHT_SAMPLES 1024
+/* texture.h's TB_TEX_EWA (that header cannot be included with scene.h: see
+ * raytrace_texture.c); checked there against the enum. */
+#define TB__RT_TEX_EWA 3
+
+/* The textured colours of a material, in the order of the texture table. */
+enum { TB__RT_SLOT_DIFFUSE, TB__RT_SLOT_SPECULAR, TB__RT_SLOT_TRANSMISSION, TB__RT_SLOT_EMISSION, TB__RT_NSLOTS };
 
 tb_status tb_rt_init(tb_raytracer *rt, const tb_scene *scene, const tb_rt_options *opt)
 {
@@ -38,18 +45,32 @@ tb_status tb_rt_init(tb_raytracer *rt, const tb_scene *scene, const tb_rt_option
             return st;
         rt->has_area = true;
     }
+    if (o.texture_filter < 0 || o.texture_filter > TB__RT_TEX_EWA)
+        return tb_error(TB_ERR_ARG, "raytrace: unknown texture filter %d", o.texture_filter);
+    rt->texture_filter = o.texture_filter == 0 ? TB__RT_TEX_EWA : o.texture_filter;
+    rt->diff_scale = (float)fmax(0.125, 1.0 / sqrt(o.spp > 1 ? (double)o.spp : 1.0));
+    const int nm = scene->nmaterials;
     bool any_tex = false;
-    for (int i = 0; i < scene->nmaterials; i++)
-        any_tex = any_tex || scene->materials[i].diffuse_texture;
+    for (int i = 0; i < nm; i++) {
+        const tb_material *mi = &scene->materials[i];
+        any_tex = any_tex || mi->diffuse_texture || mi->specular_texture || mi->transmission_texture ||
+                  mi->emission_texture;
+    }
     if (any_tex) {
-        const char **paths = calloc((size_t)scene->nmaterials, sizeof *paths);
+        /* Texture index slot * nmaterials + material (the TB__RT_SLOT_* order). */
+        const char **paths = calloc((size_t)(TB__RT_NSLOTS * nm), sizeof *paths);
         if (!paths) {
             tb_rt_release(rt);
             return tb_error(TB_ERR_NOMEM, "raytrace: out of memory");
         }
-        for (int i = 0; i < scene->nmaterials; i++)
-            paths[i] = scene->materials[i].diffuse_texture;
-        tb_status st = tb__rt_textures_load(scene->nmaterials, paths, &rt->textures);
+        for (int i = 0; i < nm; i++) {
+            const tb_material *mi = &scene->materials[i];
+            paths[TB__RT_SLOT_DIFFUSE * nm + i] = mi->diffuse_texture;
+            paths[TB__RT_SLOT_SPECULAR * nm + i] = mi->specular_texture;
+            paths[TB__RT_SLOT_TRANSMISSION * nm + i] = mi->transmission_texture;
+            paths[TB__RT_SLOT_EMISSION * nm + i] = mi->emission_texture;
+        }
+        tb_status st = tb__rt_textures_load(TB__RT_NSLOTS * nm, paths, &rt->textures);
         free(paths);
         if (st) {
             tb_rt_release(rt);
@@ -99,28 +120,62 @@ static tb_ray tb__spawn(tb_vec3 p, tb_vec3 perr, tb_vec3 ng, tb_vec3 w)
     return r;
 }
 
-/* The diffuse colour at a hit: the material's, times its texture if any. */
-static tb_channels tb__diffuse(const tb_raytracer *rt, const tb_material *m, const tb_hit *hit)
+/* World-space tangents dp/du, dp/dv at a hit: the CSG leaf holding the hit's
+ * face, evaluated at (u, v). False if there is none. */
+static bool tb__hit_tangents(const tb_scene *s, const tb_hit *hit, tb_vec3 *dpdu, tb_vec3 *dpdv)
+{
+    const tb_object *o = s->objects[hit->object];
+    while (o && o->nchildren > 0) {
+        const tb_object *next = NULL;
+        for (int i = 0; i < o->nchildren && !next; i++) {
+            const tb_object *c = &o->children[i];
+            if (hit->face >= c->face_base && hit->face < c->face_base + c->nfaces)
+                next = c;
+        }
+        o = next;
+    }
+    if (!o)
+        return false;
+    tb_dvec3 du, dv;
+    double u = fmin(fmax((double)hit->u, 0.0), 1.0), v = fmin(fmax((double)hit->v, 0.0), 1.0);
+    if (tb_param_eval_world(o->kind, &o->geom, &o->to_world, (int)(hit->face - o->face_base), u, v, NULL,
+                            NULL, &du, &dv)) {
+        tb_clear_error();
+        return false;
+    }
+    *dpdu = (tb_vec3){(float)du.x, (float)du.y, (float)du.z};
+    *dpdv = (tb_vec3){(float)dv.x, (float)dv.y, (float)dv.z};
+    return true;
+}
+
+/* `base` times texture `slot` of material m at the hit (footprint fp, NULL:
+ * point sample), or `base` if there is no such texture. */
+static tb_channels tb__textured(const tb_raytracer *rt, const tb_material *m, int slot, tb_channels base,
+                                const tb_hit *hit, const float *fp)
 {
     const tb_scene *s = rt->scene;
     double rgb[3];
-    if (!rt->textures || !tb__rt_texture_rgb(rt->textures, (int)(m - s->materials), hit->u, hit->v, rgb))
-        return m->diffuse;
+    int i = slot * s->nmaterials + (int)(m - s->materials);
+    if (!rt->textures || !tb__rt_texture_rgb(rt->textures, i, rt->texture_filter, hit->u, hit->v, fp, rgb))
+        return base;
     tb_channels t;
     if (s->spectral) {
         double v[TB_CHANNELS_MAX];
         if (tb_bands_from_rgb_reflectance(&s->bands, rgb, v))
-            return m->diffuse;
+            return base;
         t = tb_channels_splat(s->nchannels, 0.0f);
-        for (int i = 0; i < t.n; i++)
-            t.v[i] = (float)v[i];
+        for (int k = 0; k < t.n; k++)
+            t.v[k] = (float)v[k];
     } else {
         t = tb_channels_rgb((float)rgb[0], (float)rgb[1], (float)rgb[2]);
     }
-    return tb_channels_mul(m->diffuse, t);
+    return tb_channels_mul(base, t);
 }
 
-static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng, int depth)
+/* rd: the camera ray's offset rays {rx_o, rx_d, ry_o, ry_d} (NULL past the
+ * first hit: reflected and refracted rays are point sampled). */
+static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb_vec3 *rd, tb_rng *rng,
+                             int depth)
 {
     const tb_scene *s = rt->scene;
     const int nch = s->nchannels;
@@ -144,14 +199,25 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, tb_rng *
     bool front = tb_vec3_dot(d, ng) < 0.0f;
     tb_vec3 n = front ? ng : tb_vec3_neg(ng); /* the normal on the viewer's side */
 
+    /* The pixel's footprint in (u, v) for the texture filters. */
+    float fpv[4];
+    const float *fp = NULL;
+    tb_vec3 dpdu, dpdv;
+    if (rt->textures && rd && tb__hit_tangents(s, &hit, &dpdu, &dpdv) &&
+        tb__rt_footprint(p, ng, dpdu, dpdv, rd, rt->diff_scale, fpv))
+        fp = fpv;
+
     /* Emitters are one-sided: M / pi on the front side only. */
     if (m->emits && front)
-        L = tb_channels_add(L, tb_radiance_from_exitance(m->emission));
+        L = tb_channels_add(L, tb_radiance_from_exitance(
+                                   tb__textured(rt, m, TB__RT_SLOT_EMISSION, m->emission, &hit, fp)));
 
-    tb_channels diffuse = tb__diffuse(rt, m, &hit);
+    tb_channels diffuse = tb__textured(rt, m, TB__RT_SLOT_DIFFUSE, m->diffuse, &hit, fp);
+    tb_channels specular = tb__textured(rt, m, TB__RT_SLOT_SPECULAR, m->specular, &hit, fp);
+    tb_channels transmission = tb__textured(rt, m, TB__RT_SLOT_TRANSMISSION, m->transmission, &hit, fp);
     bool has_diffuse = !tb_channels_is_black(diffuse);
-    bool has_specular = !tb_channels_is_black(m->specular);
-    bool has_transmission = !tb_channels_is_black(m->transmission);
+    bool has_specular = !tb_channels_is_black(specular);
+    bool has_transmission = !tb_channels_is_black(transmission);
 
     /* Point, spot and directional lights: Lambert + normalised Phong highlight. */
     if ((has_diffuse || has_specular) && s->nlights > 0) {
@@ -170,7 +236,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, tb_rng *
             if (has_specular) {
                 double ca = tb_vec3_dot(wr, ls.wi);
                 if (ca > 0.0)
-                    f = tb_channels_add_scaled(f, m->specular, (float)(knorm * pow(ca, m->exponent)));
+                    f = tb_channels_add_scaled(f, specular, (float)(knorm * pow(ca, m->exponent)));
             }
             L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(f, ls.L), cosi));
         }
@@ -208,26 +274,26 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, tb_rng *
         if (sp.R > 0.0) {
             tb_ray r = tb__spawn(p, perr, ng, tb_frame_to_world(&fr, sp.wr));
             TB_STAT_INC(tb__rt_secondary_rays);
-            L = tb_channels_add_scaled(L, tb__trace(rt, &r, rng, depth + 1), (float)sp.R);
+            L = tb_channels_add_scaled(L, tb__trace(rt, &r, NULL, rng, depth + 1), (float)sp.R);
         }
         if (sp.refracts && sp.T > 0.0) {
             tb_ray r = tb__spawn(p, perr, ng, tb_vec3_normalize(tb_frame_to_world(&fr, sp.wt)));
             TB_STAT_INC(tb__rt_secondary_rays);
-            tb_channels Lt = tb__trace(rt, &r, rng, depth + 1);
-            L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(m->transmission, Lt), (float)sp.T));
+            tb_channels Lt = tb__trace(rt, &r, NULL, rng, depth + 1);
+            L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(transmission, Lt), (float)sp.T));
         }
     } else if (has_specular) {
         /* Perfect mirror weighted by the specular colour (Whitted's k_s S). */
         tb_ray r = tb__spawn(p, perr, ng, tb_vec3_normalize(tb_reflect(wo, n)));
         TB_STAT_INC(tb__rt_secondary_rays);
-        L = tb_channels_add(L, tb_channels_mul(m->specular, tb__trace(rt, &r, rng, depth + 1)));
+        L = tb_channels_add(L, tb_channels_mul(specular, tb__trace(rt, &r, NULL, rng, depth + 1)));
     }
     return L;
 }
 
 tb_channels tb_rt_radiance(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng)
 {
-    return tb__trace(rt, ray, rng, 0);
+    return tb__trace(rt, ray, NULL, rng, 0);
 }
 
 void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
@@ -239,9 +305,17 @@ void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
         lu = tb_rng_float(rng);
         lv = tb_rng_float(rng);
     }
-    tb_ray r = tb_camera_ray(cam, x, y, lu, lv);
     TB_STAT_INC(tb__rt_camera_rays);
-    tb_channels L = tb_rt_radiance(rt, &r, rng);
+    tb_channels L;
+    if (rt->textures) {
+        tb_camera_ray_diff cd;
+        tb_camera_ray_differential(cam, x, y, lu, lv, &cd);
+        const tb_vec3 rd[4] = {cd.rx_o, cd.rx_d, cd.ry_o, cd.ry_d};
+        L = tb__trace(rt, &cd.ray, rd, rng, 0);
+    } else {
+        tb_ray r = tb_camera_ray(cam, x, y, lu, lv);
+        L = tb_rt_radiance(rt, &r, rng);
+    }
     for (int i = 0; i < rt->scene->nchannels; i++)
         out[i] = L.v[i];
 }

@@ -5,9 +5,11 @@
  * Lambert + normalised Phong from the MID material, perfect mirror
  * reflection weighted by the specular colour, and refraction with exact
  * Fresnel reflectance and total internal reflection for materials with a
- * transmission colour. A material's diffuse texture multiplies its diffuse
- * colour by the image's linear RGB at the hit's (u, v) (bilinear, finest
- * level; Smits-upsampled in spectral scenes). No indirect diffuse light.
+ * transmission colour. A material's diffuse, specular, transmission and
+ * emission textures multiply those colours by the image's linear RGB at the
+ * hit's (u, v) (Smits-upsampled in spectral scenes), filtered over the
+ * pixel's footprint from camera ray differentials (EWA by default;
+ * docs/raytrace.md). No indirect diffuse light.
  *
  *     tb_raytracer rt;
  *     if (tb_rt_init(&rt, scene, NULL)) die(tb_last_error());
@@ -37,10 +39,12 @@
 typedef struct tb_rt_options {
     int max_depth;     /* deepest reflected/refracted ray (0: TB_RT_DEFAULT_MAX_DEPTH; < 0: camera rays only) */
     int light_samples; /* area-light samples per shading point, stratified (0: the default) */
+    int texture_filter; /* image texture filter, a tb_tex_filter value of host/render/texture.h (0: EWA) */
+    int spp;           /* camera samples per pixel: differentials are scaled by max(1/8, 1/sqrt(spp)) (0: 1) */
 } tb_rt_options;
 
 /* A ray tracer over a loaded scene (read-only after init, shareable by threads). */
-/* Private: the images of the materials' diffuse textures (raytrace_texture.c). */
+/* Private: the images of the materials' textures (raytrace_texture.c). */
 typedef struct tb__rt_textures tb__rt_textures;
 
 typedef struct tb_raytracer {
@@ -50,7 +54,9 @@ typedef struct tb_raytracer {
     int lsx, lsy;           /* strata of the light samples (lsx * lsy = light_samples) */
     bool has_area;          /* area light below is set up */
     tb_area_light area;     /* every exact emitter of the scene as one light */
-    tb__rt_textures *textures; /* owned; NULL when no material has a diffuse texture */
+    tb__rt_textures *textures; /* owned; NULL when no material has a texture */
+    int texture_filter;     /* tb_tex_filter value in effect */
+    float diff_scale;       /* scale of the camera ray differentials, max(1/8, 1/sqrt(spp)) */
 } tb_raytracer;
 
 /* Prepares a tracer for `scene` (which must stay alive). TB_ERR_ARG for bad
@@ -73,7 +79,15 @@ void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out);
 tb_status tb__rt_textures_load(int n, const char *const *paths, tb__rt_textures **out);
 /* Private: frees them; NULL is allowed. */
 void tb__rt_textures_free(tb__rt_textures *t);
-/* Private: linear RGB of texture i at (u, v); false if material i has none. */
-bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, float u, float v, double rgb[3]);
+/* Private: linear RGB of texture i at (u, v) with footprint fp = (du/dx,
+ * dv/dx, du/dy, dv/dy) (NULL: point sample) through `filter` (a
+ * tb_tex_filter); false if there is no texture i. */
+bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, int filter, float u, float v, const float fp[4],
+                        double rgb[3]);
+/* Private: the footprint (as above) at hit point p, normal n, tangents
+ * dpdu, dpdv, of the offset rays rd = {rx_o, rx_d, ry_o, ry_d}, scaled by
+ * `scale`; false (fp zeroed) if it cannot be computed. */
+bool tb__rt_footprint(tb_vec3 p, tb_vec3 n, tb_vec3 dpdu, tb_vec3 dpdv, const tb_vec3 rd[4], float scale,
+                      float fp[4]);
 
 #endif

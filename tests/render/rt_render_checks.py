@@ -17,6 +17,12 @@
    left (mean red of the left third above that of the right third), byte-
    identical PFM files for --threads 1 and 2, and for --accel bvh and grid;
    provenance attributes in an EXR.
+6. Texture filtering from ray differentials: a grazing floor (rho = 1) under
+   a directional light of irradiance pi (shading factor rho E / pi = 1) with
+   a 512x512 one-texel black/white checker image: in the far rows, where a
+   pixel covers many checks, the default EWA filter gives the mean 0.5 with
+   a tiny spread, trilinear the mean 0.5, and --texture-filter bilinear at
+   1 spp (no prefiltering) a large spread (aliasing).
 """
 import math
 import os
@@ -196,6 +202,43 @@ got = rows[1][3:6]
 exp = [rho * t / math.pi * I / hgt ** 2 for t in tex]
 check(all(abs(g - e) / e < 1e-4 for g, e in zip(got, exp)),
       "diffuse texture multiplies the colour: %r, expected %r" % (got, exp))
+
+
+# ------------------------------------------------ 6. texture filtering (grazing checker)
+n = 512
+vals = []
+for y in range(n):
+    for x in range(n):
+        c = float((x + y) & 1)
+        vals += [c, c, c]
+with open(os.path.join(TMP, "rt_checker.pfm"), "wb") as f:
+    f.write(b"PF\n%d %d\n-1.0\n" % (n, n) + struct.pack("<%df" % len(vals), *vals))
+scene = "mid 1\n"
+scene += 'camera { eye = [0 1 0] look_at = [0 0 20] up = [0 1 0] fov = 30 resolution = [64 48] }\n'
+scene += 'directional_light { direction = [0 -1 0] irradiance = [%.9g %.9g %.9g] }\n' % ((math.pi,) * 3)
+scene += quad("floor", [(-100, 0, 0), (-100, 0, 100), (100, 0, 100), (100, 0, 0)],
+              'diffuse = 1 diffuse_texture = file("rt_checker.pfm")')
+gz = write("rt_grazing.mid", scene)
+# Rows 24..33 of 48 look 3.5 to 9 degrees below the horizon: the floor fills
+# them and one pixel spans many checks along the view direction.
+far = range(24, 34)
+stats = {}
+for filt in ("ewa", "trilinear", "bilinear"):
+    out = os.path.join(TMP, "rt_grazing_%s.pfm" % filt)
+    run([gz, "-o", out, "--spp", "1", "--texture-filter", filt])
+    w, h, rows = read_pfm(out)
+    px = [rows[y][3 * x] for y in far for x in range(w)]
+    mean = sum(px) / len(px)
+    sd = math.sqrt(sum((p - mean) ** 2 for p in px) / len(px))
+    stats[filt] = (mean, sd, min(px))
+    print("grazing checker, %s: mean %.4f, standard deviation %.4f" % (filt, mean, sd))
+m, sd, lo = stats["ewa"]
+check(lo > 0 and abs(m - 0.5) < 0.01 and sd < 0.02,
+      "EWA from ray differentials: far rows average the checker to 0.5 (mean %.4f, sd %.4f)" % (m, sd))
+m, sd, lo = stats["trilinear"]
+check(abs(m - 0.5) < 0.01, "trilinear: far rows average to 0.5 (mean %.4f, sd %.4f)" % (m, sd))
+m, sd, lo = stats["bilinear"]
+check(sd > 0.1, "bilinear at 1 spp aliases: far-row standard deviation %.4f > 0.1" % sd)
 
 # ---------------------------------------------------------------- 5. Cornell box
 cornell = os.path.join(SRC, "scenes", "cornell-box.mid")

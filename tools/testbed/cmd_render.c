@@ -41,6 +41,7 @@ static void tb__render_usage(FILE *out)
             "  --accel bvh|grid|list  acceleration structure (default bvh)\n"
             "  --max-depth N        deepest reflected/refracted ray (default %d)\n"
             "  --light-samples N    area-light samples per shading point (default %d)\n"
+            "  --texture-filter bilinear|trilinear|ewa  image texture filter over the pixel footprint (default ewa)\n"
             "  --passes N           progressive passes of --spp samples each (default 1)\n"
             "  --time-budget S      stop starting new tiles after S seconds\n"
             "  --exposure STOPS     PNG/RLE only: scale by 2^STOPS (default: mean luminance to 0.18)\n"
@@ -135,6 +136,17 @@ int tb_cmd_render(int argc, char **argv)
             ro.rt.max_depth = v == 0 ? -1 : (int)v, i++;
         else if (!strcmp(a, "--light-samples") && has && tb__parse_long(argv[i + 1], 1, 1024, &v))
             ro.rt.light_samples = (int)v, i++;
+        else if (!strcmp(a, "--texture-filter") && has) {
+            const char *f = argv[++i];
+            if (!strcmp(f, "bilinear"))
+                ro.rt.texture_filter = 1;
+            else if (!strcmp(f, "trilinear"))
+                ro.rt.texture_filter = 2;
+            else if (!strcmp(f, "ewa"))
+                ro.rt.texture_filter = 3;
+            else
+                return tb__render_fail("unknown --texture-filter '%s' (bilinear, trilinear, ewa)", f), TB_EXIT_USAGE;
+        }
         else if (!strcmp(a, "--passes") && has && tb__parse_long(argv[i + 1], 1, 1 << 20, &v))
             ro.passes = (int)v, i++;
         else if (!strcmp(a, "--time-budget") && has) {
@@ -207,6 +219,7 @@ int tb_cmd_render(int argc, char **argv)
     /* Tells a script that Ctrl-C now writes the partial image. */
     fprintf(stderr, "testbed render: rendering %s (Ctrl-C writes the image so far)\n", scene_path);
     tb_render_stats rs;
+    ro.rt.spp = ro.aa.spp; /* scales the texture footprints (docs/raytrace.md) */
     tb_status st = tb_render_raytrace(scene, &ro, &img, &rs);
     sigaction(SIGINT, &old_sa, NULL);
     bool sigint = atomic_load(&tb__render_interrupt) != 0;
