@@ -50,4 +50,25 @@ typedef struct tb_poly_options {
  * TB_ERR_NOMEM. */
 tb_status tb_polygonize(tb_prim_kind kind, const tb_mid_geometry *geom, const tb_poly_options *opt, tb_fed **out);
 
+
+typedef struct tb_object tb_object;
+
+/* Polygonal approximation of a built object (host/object/object.h), a
+ * primitive or a CSG tree, in WORLD space (docs/primitives.md, "Tessellating
+ * CSG trees"): every leaf is tessellated with `opt` (max_edge in world units),
+ * each leaf triangle is kept, flipped (subtracted surfaces: normals out of
+ * the result) or dropped by probing the tree along its normal, and triangles
+ * whose samples disagree are split 4 ways, midpoints projected onto the
+ * leaf's surface, until their longest world edge is at most csg_edge (> 0).
+ * Guarantees: every output vertex is a point of a leaf's surface (a leaf
+ * tessellation vertex or a projected midpoint, float), and every output
+ * triangle whose samples all agree lies on the CSG boundary; along the curves
+ * where surfaces meet, triangles of at most csg_edge are kept or dropped by
+ * their centroid, so the result overshoots or leaves gaps there of width at
+ * most csg_edge. A triangle soup: no vertex is shared, the mesh is not
+ * watertight. Faces carry the tree's face IDs (leaf face_base + local face).
+ * TB_ERR_ARG for a bad csg_edge or options, TB_ERR_NOMEM, and the errors of
+ * tb_polygonize. */
+tb_status tb_polygonize_object(const tb_object *obj, const tb_poly_options *opt, double csg_edge, tb_fed **out);
+
 #endif
