@@ -533,8 +533,11 @@ static tb_status tb__finish_emitters(tb_scene *s)
     size_t total = 0;
     for (int i = 0; i < s->nemissive; i++) {
         const tb_object *o = s->objects[s->emissive[i].object];
-        if (!tb_prim_is_csg(o->kind))
-            total += (size_t)tb__scene_leaf_emitters(o, tb_channels_splat(s->nchannels, 0.0f), NULL);
+        int k;
+        tb_status st = tb__scene_leaf_emitters(o, tb_channels_splat(s->nchannels, 0.0f), NULL, &k);
+        if (st)
+            return st;
+        total += (size_t)k;
     }
     if (total > (size_t)INT32_MAX)
         return tb_error(TB_ERR_UNSUPPORTED, "scene: more than 2^31 - 1 emitters");
@@ -549,10 +552,10 @@ static tb_status tb__finish_emitters(tb_scene *s)
         const tb_object *o = s->objects[e->object];
         e->first_emitter = n;
         e->nemitters = 0;
-        if (tb_prim_is_csg(o->kind))
-            continue;
         tb_channels L = tb_radiance_from_exitance(s->materials[e->material].emission);
-        e->nemitters = tb__scene_leaf_emitters(o, L, s->emitters + n);
+        tb_status st = tb__scene_leaf_emitters(o, L, s->emitters + n, &e->nemitters);
+        if (st)
+            return st;
         n += e->nemitters;
     }
     s->nemitters = n;

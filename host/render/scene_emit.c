@@ -1,13 +1,18 @@
 /* Emissive objects: the world-space area of an emitting primitive and its
- * exact emitters for area-light sampling (docs/rendering.md, "Emissive
- * objects"). */
+ * emitters for area-light sampling (docs/rendering.md, "Emissive objects";
+ * docs/raytrace.md): exact ones for polygons and spheres under a similarity,
+ * triangles of the world-space tessellation for every other primitive and
+ * for CSG objects. */
 #include <math.h>
 #include <stdlib.h>
 
 #include "host/object/polygonize.h"
 #include "host/render/scene_internal.h"
+#include "util/base/error.h"
+#include "util/container/array.h"
 #include "util/math/transform.h"
 #include "util/mesh/fed.h"
+#include "util/mesh/triangulate.h"
 
 /* Angular tolerances of the two tessellations whose areas are extrapolated:
  * 4 and 2 degrees (90 and 180 segments per full turn, exactly doubling). */
@@ -69,6 +74,17 @@ static bool tb__all_flat(tb_prim_kind k)
     return k == TB_PRIM_CUBE || k == TB_PRIM_PYRAMID || k == TB_PRIM_PRISM || k == TB_PRIM_SQUARE_ARCH;
 }
 
+/* True if every leaf of the tree under o has only flat faces. */
+static bool tb__tree_flat(const tb_object *o)
+{
+    if (!tb_prim_is_csg(o->kind))
+        return tb__all_flat(o->kind) || o->kind == TB_PRIM_POLYGONS;
+    for (int i = 0; i < o->nchildren; i++)
+        if (!tb__tree_flat(&o->children[i]))
+            return false;
+    return true;
+}
+
 tb_status tb__scene_leaf_area(const tb_object *leaf, double *area)
 {
     if (tb_prim_is_csg(leaf->kind))
@@ -115,22 +131,119 @@ static bool tb__similarity(const tb_transform *t, double *s)
     return true;
 }
 
-int tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out)
+/* Angular tolerance of the tessellation that stands in for a curved or CSG
+ * emitter in light sampling (4 degrees: 90 segments per full turn). */
+#define TB__EMIT_ANGLE (4.0 * 3.14159265358979323846 / 180.0)
+/* Edge of the CSG refinement along intersection curves, as a fraction of the
+ * object's world box diagonal (the size the tessellation tolerance is tied to). */
+#define TB__EMIT_CSG_EDGE 0.02
+
+/* Emitters from the world-space tessellation of o (a primitive other than
+ * polygons, or a CSG tree): every face triangulated, triangles keeping the
+ * face's outward (front) orientation. On a curved surface the inscribed
+ * triangles lie up to a sagitta inside the exact surface, where shadow rays
+ * aimed at them would be stopped by the exact surface itself; each is moved
+ * out along its normal by a bound on that gap, half its longest edge times
+ * tan(angle / 2). Writes the count to *count. */
+static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_emitter *out, int *count)
 {
+    *count = 0;
+    tb_aabb box;
+    tb_status st = tb__scene_object_bounds(o, &box);
+    if (st)
+        return st;
+    double diag = tb_dvec3_length(tb_dvec3_sub(tb_vec3_to_d(box.hi), tb_vec3_to_d(box.lo)));
+    if (!(diag > 0.0) || !isfinite(diag))
+        return tb_error(TB_ERR_UNSUPPORTED, "scene: emissive object with an empty or unbounded box");
+    tb_poly_options po = {0};
+    po.max_angle = TB__EMIT_ANGLE;
+    po.max_segments = TB_POLY_DEFAULT_SEGMENTS;
+    tb_fed *fed;
+    if ((st = tb_polygonize_object(o, &po, TB__EMIT_CSG_EDGE * diag, &fed)))
+        return st;
+    bool curved = !tb__tree_flat(o);
+    double lift_k = curved ? 0.5 * tan(0.5 * TB__EMIT_ANGLE) : 0.0;
+    tb_array tris, pts, sizes;
+    tb_array_init(&tris, sizeof(tb_tri));
+    tb_array_init(&pts, sizeof(tb_vec3));
+    tb_array_init(&sizes, sizeof(uint32_t));
+    int n = 0;
+    for (uint32_t f = 0; f < fed->nfaces && n >= 0; f++) {
+        pts.len = sizes.len = tris.len = 0;
+        for (uint32_t l = fed->face_loops[f]; l < fed->face_loops[f + 1] && n >= 0; l++) {
+            uint32_t c0 = fed->loop_corners[l], c1 = fed->loop_corners[l + 1], sz = c1 - c0;
+            for (uint32_t c = c0; c < c1 && n >= 0; c++)
+                if (tb_array_push(&pts, &fed->positions[fed->corner_vert[c]]))
+                    n = -1;
+            if (n >= 0 && tb_array_push(&sizes, &sz))
+                n = -1;
+        }
+        if (n < 0)
+            break;
+        if (tb_triangulate_3d(pts.data, NULL, sizes.data, (uint32_t)sizes.len, &tris, NULL)) {
+            tb_clear_error(); /* a degenerate face (a sliver at a pole): nothing to sample */
+            continue;
+        }
+        uint32_t face = fed->face_ids ? (uint32_t)fed->face_ids[f] : o->face_base;
+        for (size_t t = 0; t < tris.len; t++) {
+            const tb_tri *tr = tb_array_at(&tris, t);
+            tb_vec3 p[3];
+            for (int k = 0; k < 3; k++)
+                p[k] = ((const tb_vec3 *)pts.data)[tr->v[k]];
+            tb_emitter e = tb_emitter_triangle(p[0], p[1], p[2], L);
+            double area = tb_emitter_area(&e);
+            if (!(area > 0.0))
+                continue; /* a sliver that vanished in float: nothing to sample */
+            if (curved) {
+                tb_dvec3 d[3];
+                for (int k = 0; k < 3; k++)
+                    d[k] = tb_vec3_to_d(p[k]);
+                tb_dvec3 nrm = tb_dvec3_cross(tb_dvec3_sub(d[1], d[0]), tb_dvec3_sub(d[2], d[0]));
+                double edge = fmax(tb_dvec3_length(tb_dvec3_sub(d[1], d[0])),
+                                   fmax(tb_dvec3_length(tb_dvec3_sub(d[2], d[1])),
+                                        tb_dvec3_length(tb_dvec3_sub(d[0], d[2]))));
+                tb_dvec3 off = tb_dvec3_scale(nrm, lift_k * edge / tb_dvec3_length(nrm));
+                for (int k = 0; k < 3; k++)
+                    p[k] = tb_dvec3_to_f(tb_dvec3_add(d[k], off));
+                e = tb_emitter_triangle(p[0], p[1], p[2], L);
+            }
+            e.object = o->index;
+            e.face = face;
+            if (out)
+                out[n] = e;
+            n++;
+        }
+    }
+    tb_array_free(&tris);
+    tb_array_free(&pts);
+    tb_array_free(&sizes);
+    tb_fed_free(fed);
+    if (n < 0)
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for the emitters of a tessellated object");
+    *count = n;
+    return TB_OK;
+}
+
+tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out, int *count)
+{
+    *count = 0;
     if (leaf->kind == TB_PRIM_SPHERE) {
         double s;
         if (!tb__similarity(&leaf->to_world, &s))
-            return 0;
+            return tb__tess_emitters(leaf, L, out, count);
         if (out) {
             tb_dvec3 c = tb_transform_dpoint(&leaf->to_world, (tb_dvec3){0.0, 0.0, 0.0});
             *out = tb_emitter_sphere(tb_dvec3_to_f(c), (float)s, L);
             out->object = leaf->index;
             out->face = leaf->face_base;
         }
-        return 1;
+        *count = 1;
+        return TB_OK;
     }
-    if (leaf->kind != TB_PRIM_POLYGONS || !leaf->mesh)
-        return 0;
+    if (leaf->kind != TB_PRIM_POLYGONS)
+        return tb__tess_emitters(leaf, L, out, count);
+    if (!leaf->mesh)
+        return TB_OK;
     const tb_object_mesh *m = leaf->mesh;
     /* A mirroring transform reverses the winding in world space; the front
      * side must stay the object's front side. */
@@ -150,5 +263,6 @@ int tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *ou
             out[n] = e;
         n++;
     }
-    return n;
+    *count = n;
+    return TB_OK;
 }

@@ -46,10 +46,11 @@ tb_status tb__scene_object_bounds(const tb_object *o, tb_aabb *out);
  * tessellations and Richardson extrapolation (docs/rendering.md). */
 tb_status tb__scene_leaf_area(const tb_object *leaf, double *area);
 
-/* The exact emitters of primitive `leaf` with radiance L: one triangle per
- * triangle of a polygons object, one sphere for a sphere under a similarity
- * transform, none otherwise. Writes them to out (when not NULL) and returns
- * how many there are. */
-int tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out);
+/* The emitters of object `leaf` (a primitive or a CSG tree) with radiance L:
+ * one triangle per triangle of a polygons object, one sphere for a sphere
+ * under a similarity transform, otherwise the triangles of its world-space
+ * tessellation (scene_emit.c). Writes them to out (when not NULL) and their
+ * count to *n. Errors of the tessellation, TB_ERR_NOMEM. */
+tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out, int *n);
 
 #endif

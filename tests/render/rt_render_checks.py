@@ -23,6 +23,14 @@
    pixel covers many checks, the default EWA filter gives the mean 0.5 with
    a tiny spread, trilinear the mean 0.5, and --texture-filter bilinear at
    1 spp (no prefiltering) a large spread (aliasing).
+7. Emitters from tessellations: an emissive cube (exitance M, edge 1) above
+   a Lambertian floor, seen at a floor point P off to one side: the bottom
+   face and one vertical face see P, E(P) = M (F_bottom + F_side) with each
+   form factor from the polygon contour integral (Lambert),
+   F = |sum_i beta_i (n . unit(R_i x R_i+1))| / (2 pi), and L = rho E / pi
+   (1%). The same cube as a CSG intersection with a large sphere gives the
+   same value; a sphere of radius r under a (barely) non-uniform scale, at
+   height d above P, gives E = M r^2 / d^2 (1%).
 """
 import math
 import os
@@ -239,6 +247,61 @@ m, sd, lo = stats["trilinear"]
 check(abs(m - 0.5) < 0.01, "trilinear: far rows average to 0.5 (mean %.4f, sd %.4f)" % (m, sd))
 m, sd, lo = stats["bilinear"]
 check(sd > 0.1, "bilinear at 1 spp aliases: far-row standard deviation %.4f > 0.1" % sd)
+
+
+# ------------------------------------------- 7. emitters from tessellations
+Mc, rho = 2.0, 0.5
+P = (1.5, 0.0, 0.3)
+
+
+def polygon_ff(poly, n):
+    """Form factor from a differential area at P (normal n) to a polygon."""
+    def sub(a, b):
+        return [a[i] - b[i] for i in range(3)]
+
+    def cross(a, b):
+        return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+    def dot(a, b):
+        return sum(a[i] * b[i] for i in range(3))
+    tot = 0.0
+    for i in range(len(poly)):
+        r0, r1 = sub(poly[i], P), sub(poly[(i + 1) % len(poly)], P)
+        c = cross(r0, r1)
+        cn = math.sqrt(dot(c, c))
+        tot += math.atan2(cn, dot(r0, r1)) * dot(c, n) / cn
+    return abs(tot) / (2 * math.pi)
+
+
+def emitter_scene(name, obj):
+    sc = "mid 1\n"
+    sc += 'camera { eye = [3 1 %g] look_at = [%g %g %g] up = [0 1 0] fov = 0.2 resolution = [3 3] }\n' % (
+        P[2], P[0], P[1], P[2])
+    sc += obj
+    sc += quad("floor", [(-10, 0, -10), (-10, 0, 10), (10, 0, 10), (10, 0, -10)], "diffuse = %g" % rho)
+    path = write(name + ".mid", sc)
+    out = os.path.join(TMP, name + ".pfm")
+    run([path, "-o", out, "--spp", "16", "--light-samples", "1024"])
+    w, h, rows = read_pfm(out)
+    return sum(rows[y][3 * x] for y in range(h) for x in range(w)) / (w * h)
+
+
+emit = "rendering = { diffuse = 0 emission = [%g %g %g] }" % (Mc, Mc, Mc)
+hs = 0.5  # the cube [-1,1]^3 scaled by 0.5 and lifted to y in [1, 2]
+bottom = [(-hs, 1, -hs), (hs, 1, -hs), (hs, 1, hs), (-hs, 1, hs)]
+side = [(hs, 1, -hs), (hs, 2, -hs), (hs, 2, hs), (hs, 1, hs)]
+exp = rho / math.pi * Mc * (polygon_ff(bottom, (0, 1, 0)) + polygon_ff(side, (0, 1, 0)))
+got = emitter_scene("rt_emit_cube", 'cube "lamp" { transform = [scale(%g) translate([0 1.5 0])] %s }\n' % (hs, emit))
+check(abs(got - exp) / exp < 0.01, "emissive cube lights the floor: L = %.6g, expected %.6g (contour integral)" % (got, exp))
+got = emitter_scene("rt_emit_csg", 'intersection "lamp" { transform = [scale(%g) translate([0 1.5 0])] %s\n'
+                    ' cube {} sphere { transform = [scale(5)] } }\n' % (hs, emit))
+check(abs(got - exp) / exp < 0.01, "emissive CSG (cube within a sphere): L = %.6g, expected %.6g" % (got, exp))
+r, d = 0.5, 2.0
+exp = rho / math.pi * Mc * r * r / (d * d)
+got = emitter_scene("rt_emit_ellipsoid", 'sphere "lamp" { transform = [scale([%.9g %g %g]) translate([%g %g %g])] %s }\n' % (
+    r * (1 + 1e-6), r, r, P[0], d, P[2], emit))
+check(abs(got - exp) / exp < 0.01, "emissive sphere under a non-uniform scale: L = %.6g, expected rho/pi M r^2/d^2 = %.6g"
+      % (got, exp))
 
 # ---------------------------------------------------------------- 5. Cornell box
 cornell = os.path.join(SRC, "scenes", "cornell-box.mid")
