@@ -60,6 +60,8 @@ typedef struct tb_object tb_object;
  * the result) or dropped by probing the tree along its normal, and triangles
  * whose samples disagree are split 4 ways, midpoints projected onto the
  * leaf's surface, until their longest world edge is at most csg_edge (> 0).
+ * A lone primitive is emitted whole; polygons (FED holes included) come
+ * from the object's triangulated mesh.
  * Guarantees: every output vertex is a point of a leaf's surface (a leaf
  * tessellation vertex or a projected midpoint, float), and every output
  * triangle whose samples all agree lies on the CSG boundary; along the curves

@@ -109,6 +109,12 @@ static void tb__csg_tri(tb__csg_ctx *c, const tb__csg_leaf *L, const tb_dvec3 p[
     if (!(nl > 0.0))
         return;
     n = tb_dvec3_scale(n, 1.0 / nl);
+    /* A lone primitive is its own boundary (open surfaces too, whose probes
+     * would say nothing about orientation). */
+    if (c->root->nchildren == 0) {
+        tb__emit(c, L, w, TB__KEEP);
+        return;
+    }
     /* Samples on the facet itself (not projected): the probe crosses the
      * surface within the tessellation's sagitta, covered by its length. */
     tb_dvec3 s[7] = {w[0], w[1], w[2], tb__mid(w[0], w[1]), tb__mid(w[1], w[2]), tb__mid(w[2], w[0]),

@@ -6,6 +6,7 @@
 #include "tb_test.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "host/object/object.h"
@@ -201,6 +202,46 @@ static void test_poly_csg_self_union(void **state)
     tb_object_free(lone);
 }
 
+/* A polygons object from a FED file whose face has a hole: the 4 x 4 square
+ * minus the 2 x 2 one, under a scale (2, 3, 1): area (16 - 4) * 6 = 72. The
+ * inline form the object keeps for param (outer loops only) would give 96. */
+static void test_poly_fed_hole(void **state)
+{
+    (void)state;
+    char path[4096];
+    snprintf(path, sizeof path, "%s/objgap_hole.fed", tb_test_tmpdir());
+    FILE *fp = fopen(path, "w");
+    assert_non_null(fp);
+    fputs("fed 1.0\nvertices 8\n0 0 0\n4 0 0\n4 4 0\n0 4 0\n1 1 0\n1 3 0\n3 3 0\n3 1 0\n"
+          "faces 1\n0 1 2 3 hole 4 5 6 7\n",
+          fp);
+    fclose(fp);
+    tb_transform s;
+    assert_int_equal(tb_transform_scale((tb_dvec3){2, 3, 1}, &s), TB_OK);
+    tb_mid_object m = tp_mid(TB_PRIM_POLYGONS, s);
+    m.geom.polygons.mesh.text = path;
+    m.geom.polygons.mesh.path = path;
+    tb_object *o = NULL;
+    if (tb_object_from_mid(&m, 0, NULL, NULL, &o))
+        fail_msg("tb_object_from_mid: %s", tb_last_error());
+    assert_non_null(o->fed);
+    tb_fed *f = tp_poly(o, 0.1, 0.5);
+    double a, v;
+    tp_measure(f, &a, &v);
+    print_message("FED face with a hole: area %.6f (exact 72)\n", a);
+    assert_true(fabs(a - 72.0) < 1e-5);
+    /* No triangle covers the hole (x in (2, 6), y in (3, 9) after scaling). */
+    for (uint32_t i = 0; i < f->nfaces; i++) {
+        uint32_t c = f->loop_corners[f->face_loops[i]];
+        tb_dvec3 g = tb_dvec3_scale(tb_dvec3_add(tb_dvec3_add(tp_v(f, c), tp_v(f, c + 1)), tp_v(f, c + 2)), 1.0 / 3);
+        assert_false(g.x > 2 && g.x < 6 && g.y > 3 && g.y < 9);
+        assert_int_equal(f->face_ids[i], 0);
+    }
+    tb_fed_free(f);
+    tb_object_free(o);
+    remove(path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -208,6 +249,7 @@ int main(void)
         cmocka_unit_test(test_poly_csg_cavity_flipped),
         cmocka_unit_test(test_poly_csg_lens_converges),
         cmocka_unit_test(test_poly_csg_self_union),
+        cmocka_unit_test(test_poly_fed_hole),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
