@@ -1,7 +1,8 @@
 /* The Whitted ray tracer (docs/raytrace.md): closest hits through the
  * scene's acceleration structure, direct lighting from point, spot and
  * directional lights (shadow rays) and from area lights (every emissive
- * object with an exact emitter form, stratified samples: soft shadows),
+ * object, curved and CSG ones through their tessellation; stratified
+ * samples: soft shadows),
  * Lambert + normalised Phong from the MID material, perfect mirror
  * reflection weighted by the specular colour, and refraction with exact
  * Fresnel reflectance and total internal reflection for materials with a

@@ -91,7 +91,7 @@ typedef struct tb_scene_emissive {
     double area;         /* world-space area of its emitting surface, scene units^2; NaN when
                             not computed (CSG objects: docs/rendering.md, "Emissive objects") */
     int first_emitter;   /* its emitters are emitters[first_emitter .. first_emitter + nemitters) */
-    int nemitters;       /* 0 when the shape has no exact emitter form (curved surfaces, CSG) */
+    int nemitters;       /* curved and CSG objects: the triangles of their tessellation (scene_emit.c) */
 } tb_scene_emissive;
 
 /* Figures about the load (also reported through util/stats, "Scene/..."). */
