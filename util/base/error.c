@@ -31,8 +31,18 @@ tb_status tb_error_context(tb_status st, const char *fmt, ...)
     va_start(ap, fmt);
     int n = vsnprintf(tb__message, sizeof tb__message, fmt, ap);
     va_end(ap);
-    if (n >= 0 && (size_t)n < sizeof tb__message)
-        snprintf(tb__message + n, sizeof tb__message - (size_t)n, ": %s", old);
+    /* Append ": old", truncated to fit (a capped message is intended; done by
+     * hand because gcc -Wformat-truncation rejects the snprintf spelling). */
+    if (n >= 0 && (size_t)n + 2 < sizeof tb__message) {
+        size_t used = (size_t)n;
+        memcpy(tb__message + used, ": ", 2);
+        used += 2;
+        size_t len = strnlen(old, sizeof old);
+        if (len > sizeof tb__message - 1 - used)
+            len = sizeof tb__message - 1 - used;
+        memcpy(tb__message + used, old, len);
+        tb__message[used + len] = '\0';
+    }
     return st;
 }
 
