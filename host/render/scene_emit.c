@@ -144,23 +144,32 @@ static bool tb__similarity(const tb_transform *t, double *s)
  * triangles lie up to a sagitta inside the exact surface, where shadow rays
  * aimed at them would be stopped by the exact surface itself; each is moved
  * out along its normal by a bound on that gap, half its longest edge times
- * tan(angle / 2). Writes the count to *count. */
+ * tan(angle / 2). Writes the count to *count (0 if the shape cannot be
+ * tessellated). TB_ERR_NOMEM. */
 static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_emitter *out, int *count)
 {
     *count = 0;
+    /* As for areas (scene.c), a shape that cannot be tessellated is not worth
+     * refusing the scene for: it gets no emitters (only memory is fatal). */
     tb_aabb box;
     tb_status st = tb__scene_object_bounds(o, &box);
-    if (st)
-        return st;
+    if (st) {
+        if (st != TB_ERR_NOMEM)
+            tb_clear_error();
+        return st == TB_ERR_NOMEM ? st : TB_OK;
+    }
     double diag = tb_dvec3_length(tb_dvec3_sub(tb_vec3_to_d(box.hi), tb_vec3_to_d(box.lo)));
     if (!(diag > 0.0) || !isfinite(diag))
-        return tb_error(TB_ERR_UNSUPPORTED, "scene: emissive object with an empty or unbounded box");
+        return TB_OK;
     tb_poly_options po = {0};
     po.max_angle = TB__EMIT_ANGLE;
     po.max_segments = TB_POLY_DEFAULT_SEGMENTS;
     tb_fed *fed;
-    if ((st = tb_polygonize_object(o, &po, TB__EMIT_CSG_EDGE * diag, &fed)))
-        return st;
+    if ((st = tb_polygonize_object(o, &po, TB__EMIT_CSG_EDGE * diag, &fed))) {
+        if (st != TB_ERR_NOMEM)
+            tb_clear_error();
+        return st == TB_ERR_NOMEM ? st : TB_OK;
+    }
     bool curved = !tb__tree_flat(o);
     double lift_k = curved ? 0.5 * tan(0.5 * TB__EMIT_ANGLE) : 0.0;
     tb_array tris, pts, sizes;

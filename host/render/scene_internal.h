@@ -50,7 +50,7 @@ tb_status tb__scene_leaf_area(const tb_object *leaf, double *area);
  * one triangle per triangle of a polygons object, one sphere for a sphere
  * under a similarity transform, otherwise the triangles of its world-space
  * tessellation (scene_emit.c). Writes them to out (when not NULL) and their
- * count to *n. Errors of the tessellation, TB_ERR_NOMEM. */
+ * count to *n (none if the tessellation fails). TB_ERR_NOMEM only. */
 tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out, int *n);
 
 #endif
