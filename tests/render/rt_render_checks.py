@@ -5,11 +5,13 @@
    zero reflectance, camera inside: every pixel is M / pi.
 2. Mirror: a mirror of specular colour ks fills the view and reflects an
    emitter facing it: every pixel is ks * M / pi (emitters seen through a
-   mirror are not lit by light sampling: the material has no diffuse part).
+   mirror are not lit by light sampling: the material has no diffuse part);
+   with uniform specular and emission textures ts, te: ks ts M te / pi.
 3. Glass slab at normal incidence (ior 1.5, transmission 1, R = 0.04), an
    emitter behind it, a 0.2-degree field of view: with max depth 2 only the
    straight path reaches the emitter, L = (1 - R)^2 M / pi; with max depth 64
-   every internal round trip is traced, L = (1 - R)^2 / (1 - R^2) M / pi.
+   every internal round trip is traced, L = (1 - R)^2 / (1 - R^2) M / pi;
+   a uniform transmission texture tt on both faces, depth 2: (1 - R)^2 tt^2.
 4. Direct lighting: a point light of intensity I at height h above a grey
    Lambertian floor, the camera looking straight down through a 0.2-degree
    field of view: L = rho / pi * I / h^2 at the centre.
@@ -163,6 +165,22 @@ expect = [k * m / math.pi for k, m in zip(ks, Me)]
 err = max_rel_err(rows, expect)
 check(err < 2e-6, "mirror: ks M / pi in every pixel (max relative error %.3g)" % err)
 
+# Specular and emission textures multiply those colours: uniform 2x2 PFM
+# textures ts on the mirror and te on the lamp give ks ts M te / pi.
+ts, te = (0.5, 0.25, 1.0), (1.0, 0.5, 0.75)
+for name, t in (("rt_tex_s.pfm", ts), ("rt_tex_e.pfm", te)):
+    with open(os.path.join(TMP, name), "wb") as f:
+        f.write(b"PF\n2 2\n-1.0\n" + struct.pack("<12f", *(t * 4)))
+scene_t = scene.replace("specular = [%g %g %g]" % ks, 'specular = [%g %g %g] specular_texture = file("rt_tex_s.pfm")' % ks)
+scene_t = scene_t.replace("emission = [%g %g %g]" % Me, 'emission = [%g %g %g] emission_texture = file("rt_tex_e.pfm")' % Me)
+mirror_t = write("rt_mirror_tex.mid", scene_t)
+out = os.path.join(TMP, "rt_mirror_tex.pfm")
+run([mirror_t, "-o", out, "--spp", "2"])
+w, h, rows = read_pfm(out)
+expect = [k * a * m * b / math.pi for k, a, m, b in zip(ks, ts, Me, te)]
+err = max_rel_err(rows, expect)
+check(err < 2e-6, "specular and emission textures: ks ts M te / pi in every pixel (max relative error %.3g)" % err)
+
 # --------------------------------------------------------------- 3. glass slab
 R = ((1.5 - 1) / (1.5 + 1)) ** 2
 scene = "mid 1\n"
@@ -181,6 +199,20 @@ for depth, expect_t in ((2, (1 - R) ** 2), (64, (1 - R) ** 2 / (1 - R * R))):
     got = centre[0] / (Me[0] / math.pi)
     check(abs(got - expect_t) < 2e-5,
           "slab, max depth %d: transmittance %.7f, expected %.7f" % (depth, got, expect_t))
+
+# A uniform transmission texture tt on both faces: the straight path (max
+# depth 2) passes both, T = (1 - R)^2 tt^2 per channel.
+tt = (0.5, 0.25, 0.8)
+with open(os.path.join(TMP, "rt_tex_t.pfm"), "wb") as f:
+    f.write(b"PF\n2 2\n-1.0\n" + struct.pack("<12f", *(tt * 4)))
+slab_t = write("rt_slab_tex.mid", scene.replace(glass, glass + ' transmission_texture = file("rt_tex_t.pfm")'))
+out = os.path.join(TMP, "rt_slab_tex.pfm")
+run([slab_t, "-o", out, "--max-depth", "2"])
+w, h, rows = read_pfm(out)
+got = [rows[1][3 + c] / (Me[c] / math.pi) for c in range(3)]
+exp = [(1 - R) ** 2 * t * t for t in tt]
+check(all(abs(g - e) < 2e-5 for g, e in zip(got, exp)),
+      "transmission texture on the slab: T = %r, expected (1 - R)^2 tt^2 = %r" % (got, exp))
 
 # ------------------------------------------------------------ 4. point light
 I, hgt, rho = 50.0, 2.0, 0.5
