@@ -470,10 +470,12 @@ static void test_errors(void **state)
     /* The object level's refusals, located at the object. */
     expect_error("mid 1\nsphere {}\n  union \"u\" {\n  cylinder { geometry = { caps = false } }\n}\n", TB_ERR_ARG,
                  "t.mid:3:3: error: union 'u': ", "closed");
-    /* A colour util/color cannot read, located at the rendering block that uses it. */
+    /* A colour util/color cannot read (a four-column CSV is not a spectrum
+     * file), located at the rendering block and at the file's own line. */
     expect_error("mid 1\nmaterial \"m\" { diffuse = spectrum(file(\"data/cornell-box-reflectance.csv\")) }\n"
                  "sphere { rendering = { material = \"m\" } }\n",
-                 TB_ERR_UNSUPPORTED, "t.mid:3:10: error: material 'm', diffuse: ", "spectrum file");
+                 TB_ERR_FORMAT, "t.mid:3:10: error: material 'm', diffuse: ",
+                 "cornell-box-reflectance.csv:3:10: error: unexpected text after the value");
     /* An IES file that does not parse, located at the light. */
     char ies[PATH_MAX + 32], dir[PATH_MAX];
     assert_non_null(realpath(tb_test_tmpdir(), dir)); /* file references resolve against the scenes folder */
