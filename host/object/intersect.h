@@ -44,4 +44,15 @@ bool tb_object_occluded(const tb_object *obj, const tb_ray *ray);
  * and perr untouched, if the ray does not give that hit again. */
 bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *hit, tb_vec3 *p, tb_vec3 *perr);
 
+/* Triangle `tri` of a polygons object's mesh (obj->mesh->tris) on its own, with
+ * exactly the watertight test and tie rules tb_object_intersect uses for the
+ * whole mesh, so an acceleration structure may hold a big mesh's triangles as
+ * separate references. True if the world ray's line crosses the triangle, with
+ * the line parameter in *t (double); the ray's [tmin, tmax] is NOT checked. */
+bool tb_object_triangle_crossing(const tb_object *obj, uint32_t tri, const tb_ray *ray, double *t);
+
+/* Unit world-space geometric normal of triangle `tri`, as tb_object_intersect
+ * reports it for a hit on that triangle. */
+tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t tri);
+
 #endif

@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "host/object/intersect.h"
 #include "host/object/intersect_internal.h"
 #include "util/container/array.h"
 #include "util/math/float.h"
@@ -649,4 +650,29 @@ void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out)
         }
     }
     tb__xbuf_free(&all);
+}
+
+/* ------------------------------------------------------------ one triangle */
+
+bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray *ray, double *t)
+{
+    const tb_object_mesh *m = o->mesh;
+    if (!m || tri >= m->ntris)
+        return false;
+    tb__oray r = tb__object_ray(o, ray);
+    tb__wray w;
+    tb__wray_init(&w, &r);
+    const uint32_t *tv = &m->tris[3 * (size_t)tri];
+    int dir;
+    return tb__tri(&w, m->vertices[tv[0]], m->vertices[tv[1]], m->vertices[tv[2]], t, &dir);
+}
+
+tb_vec3 tb_object_triangle_normal(const tb_object *o, uint32_t tri)
+{
+    tb_dvec3 nw = tb_transform_dnormal(&o->to_world, tb__tri_normal(o->mesh, tri));
+    double len = tb_dvec3_length(nw);
+    if (!(len > 0.0) || !isfinite(len))
+        return (tb_vec3){0.0f, 0.0f, 1.0f};
+    double s = (o->flip ? -1.0 : 1.0) / len;
+    return (tb_vec3){(float)(nw.x * s), (float)(nw.y * s), (float)(nw.z * s)};
 }
