@@ -3,6 +3,7 @@
  * floats with the BOTTOM row first. We write little-endian with scale -1.0.
  * The four-channel "PF4" variant is rejected (see docs/images.md). */
 #include "util/image/image.h"
+#include "util/base/stream.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -97,22 +98,6 @@ static tb_status tb__pfm_scale(const char *tok, const char *name, int *little_en
     return TB_OK;
 }
 
-/* Bytes left in `f` from its position, or -1 if the stream cannot seek. */
-static long long tb__pfm_remaining(FILE *f)
-{
-    off_t here = ftello(f);
-    if (here < 0 || fseeko(f, 0, SEEK_END) != 0) {
-        clearerr(f);
-        return -1;
-    }
-    off_t end = ftello(f);
-    if (fseeko(f, here, SEEK_SET) != 0 || end < here) {
-        clearerr(f);
-        return -1;
-    }
-    return (long long)(end - here);
-}
-
 /* Decodes `n` floats from `src` in the file's byte order. */
 static void tb__pfm_decode(float *dst, const unsigned char *src, size_t n, int little_endian)
 {
@@ -197,7 +182,7 @@ tb_status tb_pfm_read(FILE *f, const char *name, tb_image **out)
     size_t bytes = samples * 4;
     size_t row_floats = (size_t)width * (size_t)channels;
 
-    long long remaining = tb__pfm_remaining(f);
+    long long remaining = tb_stream_remaining(f);
     if (remaining >= 0 && (unsigned long long)remaining < bytes)
         return tb_error(TB_ERR_FORMAT,
                         "%s: PFM file truncated: %d x %d x %d floats need %zu bytes, only %lld follow "

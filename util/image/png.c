@@ -10,6 +10,7 @@
  * calls setjmp only reaches it through a pointer, so nothing is lost (or left
  * indeterminate) when libpng jumps back. */
 #include "util/image/image.h"
+#include "util/base/stream.h"
 
 #include <errno.h>
 #include <math.h>
@@ -93,22 +94,6 @@ static void tb__png_state_free(tb__png_state *s, int writing)
     free(s->strings);
     tb_image_free(s->img);
     s->img = NULL;
-}
-
-/* Bytes left in `f` from its position, or -1 if the stream cannot seek. */
-static long long tb__png_remaining(FILE *f)
-{
-    off_t here = ftello(f);
-    if (here < 0 || fseeko(f, 0, SEEK_END) != 0) {
-        clearerr(f);
-        return -1;
-    }
-    off_t end = ftello(f);
-    if (fseeko(f, here, SEEK_SET) != 0 || end < here) {
-        clearerr(f);
-        return -1;
-    }
-    return (long long)(end - here);
 }
 
 /* The part of a read that libpng may jump out of. */
@@ -221,7 +206,7 @@ tb_status tb_png_read(FILE *f, const char *name, const tb_image_read_options *op
             return tb_error(TB_ERR_FORMAT, "%s: PNG file truncated in its signature", name);
         return tb_error(TB_ERR_FORMAT, "%s: not a PNG file (bad signature)", name);
     }
-    long long remaining = tb__png_remaining(f);
+    long long remaining = tb_stream_remaining(f);
 
     tb__png_state s = {.name = name};
     s.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &s, tb__png_error, tb__png_warning);
