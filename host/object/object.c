@@ -1,6 +1,7 @@
 /* The persistent object: a deep copy of a streamed MID object, checked and
  * prepared once for intersection (docs/primitives.md). */
 #include "host/object/object.h"
+#include "util/base/str.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -16,17 +17,6 @@
 #define TB__PRISM_PROFILE_MAX 64
 
 /* ------------------------------------------------------------------ helpers */
-
-static char *tb__strdup(const char *s)
-{
-    if (!s)
-        return NULL;
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    if (d)
-        memcpy(d, s, n);
-    return d;
-}
 
 /* A copy of n elements of `size` bytes (NULL for n == 0 or src == NULL); *ok
  * is cleared when the allocation fails. */
@@ -116,8 +106,8 @@ static tb_status tb__load_fed(tb_object *o, const tb_geom_polygons *src)
 {
     tb_geom_polygons *g = &o->geom.polygons;
     const char *path = src->mesh.path ? src->mesh.path : src->mesh.text;
-    o->mesh_file.text = tb__strdup(src->mesh.text);
-    o->mesh_file.path = tb__strdup(src->mesh.path);
+    o->mesh_file.text = tb_strdup(src->mesh.text);
+    o->mesh_file.path = tb_strdup(src->mesh.path);
     if (!o->mesh_file.text || (src->mesh.path && !o->mesh_file.path))
         return tb_error(TB_ERR_NOMEM, "out of memory");
     tb_fed *fed = NULL;
@@ -371,7 +361,7 @@ static tb_status tb__build(tb_object *o, const tb_mid_object *m, uint32_t index,
         for (int j = 0; j < 3; j++)
             s2 += l.m[i][j] * l.m[i][j];
     o->scale = sqrt(s2);
-    if (m->name && !(o->name = tb__strdup(m->name)))
+    if (m->name && !(o->name = tb_strdup(m->name)))
         return tb_error(TB_ERR_NOMEM, "out of memory");
     if (material && (st = material(user, &m->material, &o->material)))
         return st;

@@ -7,6 +7,7 @@
  * them out one at a time. Until then the material table and the lights keep
  * copies of their MID colours. */
 #include "host/render/scene.h"
+#include "util/base/str.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -82,17 +83,6 @@ struct tb__scene_priv {
     int capemissive;
     const char *errname;   /* file name for messages */
 };
-
-static char *tb__strdup(const char *s)
-{
-    if (!s)
-        return NULL;
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    if (d)
-        memcpy(d, s, n);
-    return d;
-}
 
 /* Grows *p (elements of `size` bytes) to hold at least `need`. */
 static bool tb__grow(void **p, int *cap, int need, size_t size)
@@ -205,8 +195,8 @@ static bool tb__copy_color(tb_mid_color *dst, const tb_mid_color *src)
         dst->nm = nm;
         dst->values = v;
     } else if (src->type == TB_MID_COLOR_SPECTRUM_FILE) {
-        dst->file.text = tb__strdup(src->file.text);
-        dst->file.path = tb__strdup(src->file.path);
+        dst->file.text = tb_strdup(src->file.text);
+        dst->file.path = tb_strdup(src->file.path);
         if (!dst->file.text || !dst->file.path)
             return false;
     }
@@ -261,10 +251,10 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     for (int k = 0; k < 4; k++) {
         ok = tb__copy_color(&e->color[k], cols[k]) && ok;
         if (tex[k]->path)
-            ok = (e->texture[k] = tb__strdup(tex[k]->path)) != NULL && ok;
+            ok = (e->texture[k] = tb_strdup(tex[k]->path)) != NULL && ok;
     }
     if (m->base)
-        ok = (e->name = tb__strdup(m->base)) != NULL && ok;
+        ok = (e->name = tb_strdup(m->base)) != NULL && ok;
     e->exponent = m->exponent;
     e->ior = m->ior;
     e->loc = m->loc;
@@ -371,7 +361,7 @@ static tb_status tb__add_light(tb_scene *s, const tb_mid_light *m)
     e->ies = -1;
     bool ok = tb__copy_color(&e->l.intensity, &m->intensity);
     if (m->name)
-        ok = (e->l.name = tb__strdup(m->name)) != NULL && ok;
+        ok = (e->l.name = tb_strdup(m->name)) != NULL && ok;
     s->nlights++; /* counted even on failure, so tb_scene_free releases the copies */
     if (!ok)
         return tb_error(TB_ERR_NOMEM, "scene: out of memory for lights");
@@ -392,7 +382,7 @@ static tb_status tb__add_light(tb_scene *s, const tb_mid_light *m)
             if (st)
                 return tb__located(st, s, m->loc, tb_light_kind_name(m->kind));
             p->ies[k] = ies;
-            p->ies_paths[k] = tb__strdup(m->ies.path);
+            p->ies_paths[k] = tb_strdup(m->ies.path);
             p->nies++;
             if (!p->ies_paths[k])
                 return tb_error(TB_ERR_NOMEM, "scene: out of memory for IES files");
@@ -662,7 +652,7 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
     }
     s->priv = p;
     tb_htab_init(&p->mat_hash, TB_HTAB_U64);
-    s->name = tb__strdup(name);
+    s->name = tb_strdup(name);
     p->errname = s->name ? s->name : "";
     tb_status st = s->name ? TB_OK : tb_error(TB_ERR_NOMEM, "scene: out of memory");
     tb_mid_item it;

@@ -7,6 +7,7 @@
  * beside its final name, the FED files and textures into a fresh folder) and
  * is renamed into place only after the last write succeeded. */
 #include "host/scene/import.h"
+#include "util/base/str.h"
 
 #include <ctype.h>
 #include <dirent.h>
@@ -72,15 +73,6 @@ typedef struct tb__imp {
 
 /* ------------------------------------------------------------------- strings */
 
-static char *tb__strdup(const char *s)
-{
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    if (d)
-        memcpy(d, s, n);
-    return d;
-}
-
 static char *tb__printf(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 static char *tb__printf(const char *fmt, ...)
 {
@@ -136,7 +128,7 @@ static bool tb__utf8_valid(const char *s)
  * '?' (MID strings are UTF-8; names in older files are often Latin-1). */
 static char *tb__utf8_clean(const char *s)
 {
-    char *d = tb__strdup(s);
+    char *d = tb_strdup(s);
     if (!d)
         return NULL;
     unsigned char *p = (unsigned char *)d;
@@ -154,9 +146,9 @@ static char *tb__dirname(const char *path)
 {
     const char *slash = strrchr(path, '/');
     if (!slash)
-        return tb__strdup(".");
+        return tb_strdup(".");
     if (slash == path)
-        return tb__strdup("/");
+        return tb_strdup("/");
     size_t n = (size_t)(slash - path);
     char *d = malloc(n + 1);
     if (d) {
@@ -273,7 +265,7 @@ static bool tb__ends_with_ci(const char *s, const char *end)
 /* A file name in the data folder not used yet, from `want` ("a.png", "a-2.png", ...). */
 static char *tb__unique_file(tb__imp *im, const char *want)
 {
-    char *name = tb__strdup(want);
+    char *name = tb_strdup(want);
     const char *dot = strrchr(want, '.');
     size_t stem = dot && dot != want ? (size_t)(dot - want) : strlen(want);
     for (int k = 2; name && tb_htab_get_str(&im->tex_files, name, NULL); k++) {
@@ -322,13 +314,13 @@ static tb_status tb__texture(tb__imp *im, const char *src, const char *label, co
         hint[k] = '\0';
         want = tb__printf("texture-%lu.%s", i, k ? hint : "bin");
     } else {
-        char *p = tb__strdup(src);
+        char *p = tb_strdup(src);
         if (!p)
             return tb_error(TB_ERR_NOMEM, "out of memory");
         for (char *q = p; *q; q++)
             if (*q == '\\')
                 *q = '/'; /* Windows separators, common in MTL files */
-        from = p[0] == '/' ? tb__strdup(p) : tb__printf("%s/%s", im->model_dir, p);
+        from = p[0] == '/' ? tb_strdup(p) : tb__printf("%s/%s", im->model_dir, p);
         free(p);
         if (!from)
             return tb_error(TB_ERR_NOMEM, "out of memory");
@@ -421,7 +413,7 @@ static tb_status tb__material(tb__imp *im, unsigned idx, const char **name)
         char *label = tb__utf8_clean(raw);
         if (!label)
             return tb_error(TB_ERR_NOMEM, "out of memory");
-        char *unique = tb__strdup(label);
+        char *unique = tb_strdup(label);
         for (int k = 2; unique && tb_htab_get_str(&im->mat_names, unique, NULL); k++) {
             free(unique);
             unique = tb__printf("%s #%d", label, k);
@@ -691,7 +683,7 @@ static tb_status tb__node(tb__imp *im, const struct aiNode *n, int depth, tb_mid
             char *name = !mesh_name                                              ? NULL
                          : n->mNumMeshes > 1 && mesh_name[0] && strcmp(mesh_name, node_name) != 0
                              ? tb__printf("%s/%s", node_name, mesh_name)
-                             : tb__strdup(node_name[0] ? node_name : mesh_name);
+                             : tb_strdup(node_name[0] ? node_name : mesh_name);
             if (!name) {
                 free(mesh_name);
                 st = tb_error(TB_ERR_NOMEM, "out of memory");
@@ -834,7 +826,7 @@ static tb_status tb__run(tb__imp *im, const char *out_mid)
     im->data_final = tb_import_data_dir(out_mid);
     if (!im->model_dir || !im->out_dir || !im->data_final)
         return tb_error(TB_ERR_NOMEM, "out of memory");
-    im->data_rel = tb__strdup(tb__basename(im->data_final));
+    im->data_rel = tb_strdup(tb__basename(im->data_final));
     if (!im->data_rel)
         return tb_error(TB_ERR_NOMEM, "out of memory");
     if (!tb__utf8_valid(im->data_rel) || strpbrk(im->data_rel, "\"\\\n\r\t"))

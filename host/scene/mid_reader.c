@@ -2,6 +2,7 @@
  * call parses one top-level object (mid_parser.c) and interprets it
  * (mid_schema.c) in an arena that is reset for the next one. */
 #include "host/scene/mid_reader.h"
+#include "util/base/str.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -12,25 +13,16 @@
 
 #include "host/scene/mid_internal.h"
 
-static char *tb__strdup(const char *s)
-{
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    if (d)
-        memcpy(d, s, n);
-    return d;
-}
-
 /* The absolute form of folder `dir` (NULL or "": the current directory). */
 static char *tb__absolute_dir(const char *dir)
 {
     char cwd[PATH_MAX];
     if (dir && dir[0] == '/')
-        return tb__strdup(dir);
+        return tb_strdup(dir);
     if (!getcwd(cwd, sizeof cwd))
         return NULL;
     if (!dir || !dir[0] || strcmp(dir, ".") == 0)
-        return tb__strdup(cwd);
+        return tb_strdup(cwd);
     size_t n = strlen(cwd) + strlen(dir) + 2;
     char *p = malloc(n);
     if (p)
@@ -44,7 +36,7 @@ static tb_status tb__reader_new(tb_mid_reader **out, FILE *fp, const char *name,
     tb_mid_reader *r = calloc(1, sizeof *r);
     if (!r)
         return tb_error(TB_ERR_NOMEM, "%s: out of memory", name);
-    r->name = tb__strdup(name);
+    r->name = tb_strdup(name);
     r->base_dir = tb__absolute_dir(base_dir);
     if (!r->name || !r->base_dir) {
         tb_mid_reader_close(r);
@@ -92,7 +84,7 @@ tb_status tb_mid_reader_open(tb_mid_reader **out, const char *path)
         return tb_error(TB_ERR_IO, "%s: is a folder, not a MID file", path);
     }
     /* References resolve against the file's folder. */
-    char *dir = tb__strdup(path);
+    char *dir = tb_strdup(path);
     if (!dir) {
         fclose(fp);
         return tb_error(TB_ERR_NOMEM, "%s: out of memory", path);
@@ -177,7 +169,7 @@ static tb_status tb__fail(tb_mid_reader *r, tb_status st)
 {
     r->failed = st;
     free(r->failed_msg);
-    r->failed_msg = tb__strdup(tb_last_error());
+    r->failed_msg = tb_strdup(tb_last_error());
     return st;
 }
 

@@ -2,6 +2,7 @@
  * the integer quantisation shared by the 8- and 16-bit formats. Reading and
  * writing files by extension lives in image_io.c. */
 #include "util/image/image.h"
+#include "util/base/str.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -9,15 +10,6 @@
 #include <string.h>
 
 #include "util/color/srgb.h"
-
-static char *tb__strdup(const char *s)
-{
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    if (d)
-        memcpy(d, s, n);
-    return d;
-}
 
 /* Default name of channel `i` of an image with `n` channels (see image.h). */
 static void tb__default_name(char *dst, int i, int n)
@@ -127,7 +119,7 @@ tb_status tb_image_set_attr(tb_image *img, const char *key, const char *value)
         return tb_error(TB_ERR_ARG, "tb_image_set_attr: NULL argument");
     if (!key[0])
         return tb_error(TB_ERR_ARG, "image attribute with an empty key");
-    char *v = tb__strdup(value);
+    char *v = tb_strdup(value);
     if (!v)
         return tb_error(TB_ERR_NOMEM, "out of memory for attribute '%s'", key);
     for (int i = 0; i < img->nattrs; i++) {
@@ -137,7 +129,7 @@ tb_status tb_image_set_attr(tb_image *img, const char *key, const char *value)
             return TB_OK;
         }
     }
-    char *k = tb__strdup(key);
+    char *k = tb_strdup(key);
     tb_image_attr *a = realloc(img->attrs, ((size_t)img->nattrs + 1) * sizeof *a);
     if (!k || !a) {
         free(k);

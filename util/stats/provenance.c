@@ -1,4 +1,5 @@
 #include "util/stats/provenance.h"
+#include "util/base/str.h"
 
 #include <errno.h>
 #include <inttypes.h>
@@ -18,15 +19,6 @@
 static void tb__copy(char *dst, size_t n, const char *src)
 {
     snprintf(dst, n, "%s", src ? src : "");
-}
-
-static char *tb__strdup(const char *s)
-{
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    if (d)
-        memcpy(d, s, n);
-    return d;
 }
 
 /* Characters a shell leaves alone; anything else gets the argument quoted.
@@ -158,7 +150,7 @@ tb_status tb_provenance_set_options(tb_provenance *p, const char *options)
 {
     if (!p || !options)
         return tb_error(TB_ERR_ARG, "tb_provenance_set_options: NULL argument");
-    char *copy = tb__strdup(options);
+    char *copy = tb_strdup(options);
     if (!copy)
         return tb_error(TB_ERR_NOMEM, "provenance: out of memory");
     free(p->options);
@@ -265,7 +257,7 @@ tb_status tb_provenance_hash_file(tb_provenance *p, const char *path)
     tb_status st = tb_sha256_file(path, hex);
     if (st)
         return st;
-    char *copy = tb__strdup(path);
+    char *copy = tb_strdup(path);
     if (!copy)
         return tb_error(TB_ERR_NOMEM, "provenance: out of memory");
     free(p->scene);
