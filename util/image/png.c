@@ -97,6 +97,9 @@ static void tb__png_state_free(tb__png_state *s, int writing)
 }
 
 /* The part of a read that libpng may jump out of. */
+/* Largest ancillary chunk we read (text, iCCP, ...): far above any real one. */
+#define TB__PNG_CHUNK_MAX (16u << 20)
+
 static tb_status tb__png_read_body(tb__png_state *s, FILE *f, const tb_image_read_options *opts,
                                    long long remaining)
 {
@@ -109,6 +112,11 @@ static tb_status tb__png_read_body(tb__png_state *s, FILE *f, const tb_image_rea
     }
     png_init_io(s->png, f);
     png_set_sig_bytes(s->png, 8);
+    /* Ancillary chunks (text, ICC profiles) are read whole into memory, at
+     * the size their length field claims: cap it, so a damaged length cannot
+     * ask for gigabytes (found by fuzz_png). Pixel data is streamed and is
+     * bounded separately below. */
+    png_set_chunk_malloc_max(s->png, TB__PNG_CHUNK_MAX);
     png_read_info(s->png, s->info);
 
     png_uint_32 w, h;
