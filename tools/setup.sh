@@ -8,7 +8,7 @@ set -euo pipefail
 
 packages=(
   # toolchain
-  build-essential cmake pkg-config git clang libclang-rt-14-dev
+  build-essential cmake pkg-config git clang libclang-rt-14-dev libomp-dev
   # libraries linked into Testbed
   libpng-dev libopenexr-dev libssl-dev libassimp-dev libopenmpi-dev openmpi-bin
   # Vulkan: loader, Mesa's CPU driver (lavapipe), shader compiler and tools, validation layers
