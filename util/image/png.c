@@ -38,6 +38,7 @@ typedef struct tb__png_state {
     char **strings;      /* converted keys/values owned by the state */
     int nstrings;
     tb_image *img;       /* image being read */
+    size_t alloc_max;    /* largest block libpng may allocate while reading (0: no cap) */
 } tb__png_state;
 
 static void tb__png_error(png_structp png, png_const_charp msg)
@@ -99,6 +100,26 @@ static void tb__png_state_free(tb__png_state *s, int writing)
 /* The part of a read that libpng may jump out of. */
 /* Largest ancillary chunk we read (text, iCCP, ...): far above any real one. */
 #define TB__PNG_CHUNK_MAX (16u << 20)
+
+/* libpng's own blocks while reading are one row or one chunk. libpng 1.6
+ * allocates a text chunk at whatever size its length field claims (up to
+ * 2 GiB; png_set_chunk_malloc_max covers only compressed chunks), so a
+ * damaged length is refused here instead (found by fuzz_png): no block may
+ * exceed the bytes left in the file plus 1 MiB, and never less than 64 MiB
+ * so that rows of very wide images still fit. */
+static png_voidp tb__png_malloc(png_structp png, png_alloc_size_t size)
+{
+    const tb__png_state *s = png_get_mem_ptr(png);
+    if (s && s->alloc_max && size > s->alloc_max)
+        return NULL; /* libpng reports it: an error, or a warning and a skipped ancillary chunk */
+    return malloc(size);
+}
+
+static void tb__png_free(png_structp png, png_voidp p)
+{
+    (void)png;
+    free(p);
+}
 
 static tb_status tb__png_read_body(tb__png_state *s, FILE *f, const tb_image_read_options *opts,
                                    long long remaining)
@@ -217,7 +238,12 @@ tb_status tb_png_read(FILE *f, const char *name, const tb_image_read_options *op
     long long remaining = tb_stream_remaining(f);
 
     tb__png_state s = {.name = name};
-    s.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &s, tb__png_error, tb__png_warning);
+    size_t cap = (size_t)64 << 20;
+    if (remaining >= 0 && (unsigned long long)remaining + (1u << 20) > cap)
+        cap = (size_t)remaining + (1u << 20);
+    s.alloc_max = remaining >= 0 ? cap : (size_t)256 << 20;
+    s.png = png_create_read_struct_2(PNG_LIBPNG_VER_STRING, &s, tb__png_error, tb__png_warning, &s,
+                                     tb__png_malloc, tb__png_free);
     if (s.png)
         s.info = png_create_info_struct(s.png);
     if (!s.png || !s.info) {
