@@ -127,6 +127,22 @@ static void tb__key(tb__w *w, int level, const char *name)
     fprintf(w->fp, "%s = ", name);
 }
 
+/* A whole "name = number" line. */
+static void tb__line_double(tb__w *w, int level, const char *name, double x)
+{
+    tb__key(w, level, name);
+    tb__double(w, x);
+    fputc('\n', w->fp);
+}
+
+/* A whole "name = true|false" line. */
+static void tb__line_bool(tb__w *w, int level, const char *name, bool b)
+{
+    tb__key(w, level, name);
+    tb__bool(w, b);
+    fputc('\n', w->fp);
+}
+
 /* ------------------------------------------------------------ generic values */
 
 static void tb__attrs(tb__w *w, const tb_mid_attr *a, int n, int level);
@@ -330,25 +346,15 @@ static void tb__geometry(tb__w *w, const tb_mid_object *o, int level)
     int l = level + 1;
     switch (o->kind) {
     case TB_PRIM_CYLINDER:
-        tb__key(w, l, "caps");
-        tb__bool(w, g->cylinder.caps);
-        fputc('\n', w->fp);
+        tb__line_bool(w, l, "caps", g->cylinder.caps);
         break;
     case TB_PRIM_CONE:
-        tb__key(w, l, "top_radius");
-        tb__double(w, g->cone.top_radius);
-        fputc('\n', w->fp);
-        tb__key(w, l, "caps");
-        tb__bool(w, g->cone.caps);
-        fputc('\n', w->fp);
+        tb__line_double(w, l, "top_radius", g->cone.top_radius);
+        tb__line_bool(w, l, "caps", g->cone.caps);
         break;
     case TB_PRIM_PYRAMID:
-        tb__key(w, l, "top");
-        tb__double(w, g->pyramid.top);
-        fputc('\n', w->fp);
-        tb__key(w, l, "caps");
-        tb__bool(w, g->pyramid.caps);
-        fputc('\n', w->fp);
+        tb__line_double(w, l, "top", g->pyramid.top);
+        tb__line_bool(w, l, "caps", g->pyramid.caps);
         break;
     case TB_PRIM_PRISM:
         if (g->prism.nprofile > 0)
@@ -357,17 +363,11 @@ static void tb__geometry(tb__w *w, const tb_mid_object *o, int level)
             tb__key(w, l, "sides");
             fprintf(w->fp, "%d\n", g->prism.sides);
         }
-        tb__key(w, l, "caps");
-        tb__bool(w, g->prism.caps);
-        fputc('\n', w->fp);
+        tb__line_bool(w, l, "caps", g->prism.caps);
         break;
     case TB_PRIM_TORUS:
-        tb__key(w, l, "major");
-        tb__double(w, g->torus.major);
-        fputc('\n', w->fp);
-        tb__key(w, l, "minor");
-        tb__double(w, g->torus.minor);
-        fputc('\n', w->fp);
+        tb__line_double(w, l, "major", g->torus.major);
+        tb__line_double(w, l, "minor", g->torus.minor);
         break;
     case TB_PRIM_POLYGONS: {
         const tb_geom_polygons *p = &g->polygons;
@@ -405,19 +405,13 @@ static void tb__geometry(tb__w *w, const tb_mid_object *o, int level)
         tb__key(w, l, "z_range");
         tb__dvec(w, z, 2);
         fputc('\n', w->fp);
-        tb__key(w, l, "caps");
-        tb__bool(w, g->conic.caps);
-        fputc('\n', w->fp);
+        tb__line_bool(w, l, "caps", g->conic.caps);
         break;
     }
     case TB_PRIM_SQUARE_ARCH:
     case TB_PRIM_ROUND_ARCH:
-        tb__key(w, l, "width");
-        tb__double(w, g->arch.width);
-        fputc('\n', w->fp);
-        tb__key(w, l, "height");
-        tb__double(w, g->arch.height);
-        fputc('\n', w->fp);
+        tb__line_double(w, l, "width", g->arch.width);
+        tb__line_double(w, l, "height", g->arch.height);
         break;
     default: break;
     }
@@ -491,12 +485,8 @@ static void tb__light(tb__w *w, const tb_mid_light *li)
     tb__color(w, &li->intensity);
     fputc('\n', w->fp);
     if (li->kind == TB_LIGHT_SPOT) {
-        tb__key(w, 1, "cone_angle");
-        tb__double(w, li->cone_angle);
-        fputc('\n', w->fp);
-        tb__key(w, 1, "cone_delta");
-        tb__double(w, li->cone_delta);
-        fputc('\n', w->fp);
+        tb__line_double(w, 1, "cone_angle", li->cone_angle);
+        tb__line_double(w, 1, "cone_delta", li->cone_delta);
     }
     if (li->kind != TB_LIGHT_DIRECTIONAL && li->ies.text) {
         tb__key(w, 1, "ies");
@@ -532,12 +522,8 @@ static void tb__camera(tb__w *w, const tb_mid_camera *c)
     fputc('\n', w->fp);
     tb__key(w, 1, "resolution");
     fprintf(w->fp, "[%d %d]\n", c->width, c->height);
-    tb__key(w, 1, "aperture");
-    tb__double(w, c->aperture);
-    fputc('\n', w->fp);
-    tb__key(w, 1, "focus_distance");
-    tb__double(w, c->focus_distance);
-    fputc('\n', w->fp);
+    tb__line_double(w, 1, "aperture", c->aperture);
+    tb__line_double(w, 1, "focus_distance", c->focus_distance);
     tb__attrs(w, c->extra.items, c->extra.count, 1);
     tb__close(w, 0);
 }
