@@ -16,9 +16,9 @@ check() { # check FOLDER FORBIDDEN-REGEX
 }
 check util 'host/|tools/'
 for d in host/scene host/object; do
-  [[ -d $d ]] && check "$d" 'host/render|host/gpu|host/dist|tools/'
+  [[ -d $d ]] && check "$d" 'host/render|host/radiosity|host/gpu|host/dist|tools/'
 done
-for d in host/render host/gpu host/dist; do
+for d in host/render host/radiosity host/gpu host/dist; do
   [[ -d $d ]] && check "$d" 'tools/'
 done
 # The check itself must be able to fail: a planted violation must be found.

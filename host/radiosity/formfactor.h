@@ -1,0 +1,97 @@
+/* Form factors for the radiosity renderer (docs/radiosity.md, "Form factors"):
+ * the exact point-to-polygon form factor (the reference), ray-cast form
+ * factors (Wallace, Elmquist and Haines 1989) with visibility through an
+ * acceleration structure over the occluding polygons, and the hemicube
+ * (Cohen and Greenberg 1985) drawn into the item buffer (util/itembuf).
+ *
+ * Every element of a radiosity mesh is a planar convex triangle or quad
+ * (tb_ff_polygon); the same array describes the receivers, the occluders
+ * and what the hemicube draws.
+ *
+ *     tb_ff_occluders *occ;
+ *     tb_ff_occluders_build(polys, n, &occ);
+ *     tb_vec3 pts[16];
+ *     tb_ff_sample_polygon(&polys[shooter], 16, seed, pts);
+ *     double f = tb_ff_raycast(pts, 16, ns, area, p, np, tb_ff_occluders_visible, occ);
+ */
+#ifndef TB_HOST_RADIOSITY_FORMFACTOR_H
+#define TB_HOST_RADIOSITY_FORMFACTOR_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "util/base/error.h"
+#include "util/math/vec.h"
+
+/* Most corners of an element. */
+#define TB_FF_MAX_VERTS 4
+
+/* "No polygon" (e.g. nothing to skip in tb_hemicube_formfactors). */
+#define TB_FF_NONE UINT32_MAX
+
+/* Visibility is tested on the segment a + t (b - a) for t in
+ * [TB_FF_SEGMENT_EPS, 1 - TB_FF_SEGMENT_EPS]: the ends are on surfaces, so a
+ * relative margin keeps them from hitting their own polygons. The CPU path
+ * and the GPU kernel use this same rule. */
+#define TB_FF_SEGMENT_EPS 1e-4f
+
+/* A planar convex polygon (a radiosity element). */
+typedef struct tb_ff_polygon {
+    tb_vec3 v[TB_FF_MAX_VERTS]; /* corners, counter-clockwise seen from the front (the normal's side) */
+    int n;                      /* 3 or 4 */
+} tb_ff_polygon;
+
+/* True if nothing blocks the segment from a to b (see TB_FF_SEGMENT_EPS). */
+typedef bool (*tb_ff_visible_fn)(void *ctx, tb_vec3 a, tb_vec3 b);
+
+/* Unit normal (Newell) and area of a polygon. */
+void tb_ff_polygon_frame(const tb_ff_polygon *poly, tb_vec3 *normal, double *area);
+
+/* Exact unoccluded form factor from a differential area at p with unit
+ * normal n to the front of `poly` (the contour integral of Lambert/Nusselt,
+ * in double); the part of the polygon behind p's tangent plane is clipped
+ * away, and 0 is returned if p sees the polygon's back. */
+double tb_ff_point_polygon(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly);
+
+/* nsamples stratified jittered points on `poly`, each standing for
+ * area / nsamples; the same (poly, nsamples, seed) gives the same points.
+ * TB_ERR_ARG for nsamples < 1 or a degenerate polygon. */
+tb_status tb_ff_sample_polygon(const tb_ff_polygon *poly, int nsamples, uint64_t seed, tb_vec3 *out);
+
+/* Ray-cast form factor from a differential receiver at p (unit normal n) to
+ * a shooter of `area` and unit normal ns given by npts sample points:
+ * sum over visible k of cos_s cos_r (area / npts) / (pi r^2 + area / npts)
+ * (Wallace et al. 1989, eq. 5). `visible` NULL means no occlusion. */
+double tb_ff_raycast(const tb_vec3 *pts, int npts, tb_vec3 ns, double area, tb_vec3 p, tb_vec3 n,
+                     tb_ff_visible_fn visible, void *ctx);
+
+/* Occluders: an acceleration structure (host/render/accel.h) over polygons. */
+typedef struct tb_ff_occluders tb_ff_occluders;
+
+/* Builds the occluders of polys[0..n) (copied). */
+tb_status tb_ff_occluders_build(const tb_ff_polygon *polys, size_t n, tb_ff_occluders **out);
+
+/* A tb_ff_visible_fn: `ctx` is a tb_ff_occluders. Thread-safe. */
+bool tb_ff_occluders_visible(void *ctx, tb_vec3 a, tb_vec3 b);
+
+/* Frees the occluders; NULL is allowed. */
+void tb_ff_occluders_free(tb_ff_occluders *occ);
+
+/* A hemicube with its delta form factors and item buffers (opaque). */
+typedef struct tb_hemicube tb_hemicube;
+
+/* A hemicube of res x res pixels on the top face (res / 2 on the sides). */
+tb_hemicube *tb_hemicube_create(int res);
+
+/* Frees it; NULL is allowed. */
+void tb_hemicube_free(tb_hemicube *hc);
+
+/* ff[i] = form factor from a differential area at `center` (unit normal
+ * `normal`) to polygon i, nearest polygon winning each hemicube pixel;
+ * polygon `skip` (TB_FF_NONE: none) is not drawn. One hemicube is used by
+ * one thread at a time. */
+tb_status tb_hemicube_formfactors(tb_hemicube *hc, tb_vec3 center, tb_vec3 normal, const tb_ff_polygon *polys,
+                                  size_t n, uint32_t skip, double *ff);
+
+#endif
