@@ -78,6 +78,19 @@ bool tb_ff_occluders_visible(void *ctx, tb_vec3 a, tb_vec3 b);
 /* Frees the occluders; NULL is allowed. */
 void tb_ff_occluders_free(tb_ff_occluders *occ);
 
+/* Ray-cast form factors from one shooter to many receivers: ff[i] is
+ * tb_ff_raycast(pts, npts, ns, area, p[i], n[i], ...) with visibility
+ * through the occluders behind `ctx`. The solver calls whichever backend it
+ * was given: tb_ff_raycast_batch (CPU) or the Vulkan kernel's
+ * (host/gpu/formfactor.h). */
+typedef tb_status (*tb_ff_batch_fn)(void *ctx, const tb_vec3 *pts, int npts, tb_vec3 ns, double area,
+                                    const tb_vec3 *p, const tb_vec3 *n, size_t count, double *ff);
+
+/* The CPU tb_ff_batch_fn: `ctx` is a tb_ff_occluders (NULL: no occlusion);
+ * OpenMP over receivers, results independent of the thread count. */
+tb_status tb_ff_raycast_batch(void *ctx, const tb_vec3 *pts, int npts, tb_vec3 ns, double area, const tb_vec3 *p,
+                              const tb_vec3 *n, size_t count, double *ff);
+
 /* A hemicube with its delta form factors and item buffers (opaque). */
 typedef struct tb_hemicube tb_hemicube;
 
