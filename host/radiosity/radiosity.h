@@ -1,0 +1,240 @@
+/* Progressive-refinement radiosity (Cohen, Chen, Wallace and Greenberg 1988)
+ * over a mesh of planar elements (docs/radiosity.md):
+ *
+ *     tb_rad_mesh m;
+ *     tb_rad_mesh_from_scene(scene, NULL, &m);         // or build one yourself
+ *     tb_rad_solver *s;
+ *     tb_rad_solver_create(&m, NULL, &opt, &s);        // NULL state: nothing shot yet
+ *     tb_rad_stop stop = {.threshold = 3e-3};
+ *     tb_rad_solver_run(s, &stop, NULL, NULL);
+ *     tb_rad_element_radiosity(s, i, true, b);          // b[0..nchannels)
+ *     tb_rad_solver_free(s);
+ *
+ * Representation. Radiosity B and emission E are per unit area, in the
+ * scene's colour channels (RGB, or spectral render bands), in the unit of
+ * MID emission: W/m^2 per channel (W/m^2/nm per band); radiance is B / pi.
+ * The solver keeps
+ *   - per VERTEX, the gathered irradiance H_v (per channel): the sum over
+ *     shots of B_shooter F(v -> shooter), a vertex being a receiver point
+ *     with its own normal (Wallace, Elmquist and Haines 1989);
+ *   - per ELEMENT, the unshot radiosity dB_e (per channel).
+ * An element's radiosity is E_e + rho_e * H_e, H_e the mean of its corners'
+ * H_v; the value at corner k of element e (for Gouraud display) is
+ * E_e + rho_e * H_v. So vertices may be shared by elements of different
+ * materials, and refining an element (adaptive subdivision) only needs H at
+ * the new vertices and dB for the children (their parent's: dB is a
+ * density), given to tb_rad_solver_create as the initial state.
+ *
+ * With TB_RAD_FF_HEMICUBE the form factors are element to element, from a
+ * hemicube at the shooter's centroid; H is then kept per element and H_v is
+ * the area-weighted mean of the elements around v that face the same way.
+ *
+ * Determinism: the shooter is the element with the most unshot power
+ * (ties: the lower index, util/container/pqueue.h); sample points of shot k
+ * come from a PCG32 stream seeded by (seed, k); form-factor backends answer
+ * independently of the thread count. So the solution is bit-identical for
+ * any thread count. */
+#ifndef TB_HOST_RADIOSITY_RADIOSITY_H
+#define TB_HOST_RADIOSITY_RADIOSITY_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "host/radiosity/formfactor.h"
+#include "host/render/scene.h"
+#include "util/base/error.h"
+#include "util/math/vec.h"
+
+/* "No vertex / no element" in radiosity mesh indices. */
+#define TB_RAD_NONE UINT32_MAX
+
+/* Default stop threshold on the unshot fraction of emitted power. */
+#define TB_RAD_DEFAULT_THRESHOLD 3e-3
+
+/* Default samples per shooter for ray-cast form factors. */
+#define TB_RAD_DEFAULT_SAMPLES 16
+
+/* Default hemicube resolution (top face, pixels per side). */
+#define TB_RAD_DEFAULT_HEMICUBE_RES 128
+
+/* A receiver point: an element corner with the normal it receives with. */
+typedef struct tb_rad_vertex {
+    tb_vec3 p; /* world position */
+    tb_vec3 n; /* unit normal (the surface's, for curved objects; the element plane's at a crease) */
+} tb_rad_vertex;
+
+/* One element: a planar convex triangle or quad. */
+typedef struct tb_rad_element {
+    uint32_t v[4];     /* vertices, counter-clockwise seen from the front; v[3] == TB_RAD_NONE for a triangle */
+    uint32_t object;   /* top-level object index (MID order) */
+    uint32_t parent;   /* element it was split from, or TB_RAD_NONE (informative; the solver ignores it) */
+    double area;       /* filled by tb_rad_mesh_update_geometry */
+    tb_vec3 centroid;  /* filled by tb_rad_mesh_update_geometry (area centroid) */
+    tb_vec3 normal;    /* filled by tb_rad_mesh_update_geometry (unit, Newell) */
+} tb_rad_element;
+
+/* An element mesh with its materials. Arrays are owned (malloc) when made
+ * by this module; tb_rad_mesh_free frees them. */
+typedef struct tb_rad_mesh {
+    int nchannels;          /* channels per colour: 3 (RGB) or the number of bands */
+    bool spectral;          /* channels are bands (see `bands`) */
+    tb_bands bands;         /* the bands when spectral */
+    size_t nverts;
+    tb_rad_vertex *verts;
+    size_t nelems;
+    tb_rad_element *elems;
+    float *rho;             /* nelems * nchannels: diffuse reflectance, in [0, 1) */
+    float *emission;        /* nelems * nchannels: emitted radiosity (W/m^2 per channel) */
+} tb_rad_mesh;
+
+/* How to mesh a scene; zeroed means defaults. */
+typedef struct tb_rad_mesh_options {
+    double max_edge;  /* > 0: longest element edge (world units); 0: none */
+    double max_area;  /* > 0: largest element area (world units^2); 0: none */
+    double max_angle; /* curved surfaces: polygonization angle (radians); 0: the object level's default */
+} tb_rad_mesh_options;
+
+/* An empty mesh. */
+void tb_rad_mesh_init(tb_rad_mesh *m);
+
+/* Frees the arrays (the mesh stays a valid empty mesh). */
+void tb_rad_mesh_free(tb_rad_mesh *m);
+
+/* Every object of `scene` polygonized in world space, meshed into elements
+ * (util/mesh/mesh.h) and given its material's diffuse reflectance and
+ * emission. Vertices are shared within an object between elements that
+ * face the same way (within 30 degrees) and split at creases. TB_ERR_ARG
+ * for bad options, TB_ERR_UNSUPPORTED for a reflectance >= 1 (the solution
+ * would not converge), TB_ERR_NOMEM. */
+tb_status tb_rad_mesh_from_scene(const tb_scene *scene, const tb_rad_mesh_options *opt, tb_rad_mesh *out);
+
+/* Recomputes area, centroid and normal of every element from its vertices;
+ * TB_ERR_ARG for an out-of-range vertex index or a degenerate element. */
+tb_status tb_rad_mesh_update_geometry(tb_rad_mesh *m);
+
+/* Element i as a form-factor polygon. */
+void tb_rad_mesh_polygon(const tb_rad_mesh *m, size_t i, tb_ff_polygon *out);
+
+/* Form-factor method. */
+typedef enum tb_rad_ff_method {
+    TB_RAD_FF_RAYCAST = 0, /* shooter samples to receiver vertices, visibility by rays */
+    TB_RAD_FF_HEMICUBE,    /* hemicube at the shooter's centroid, element to element */
+} tb_rad_ff_method;
+
+/* Solver options; zeroed means defaults. */
+typedef struct tb_rad_options {
+    tb_rad_ff_method ff;  /* form-factor method */
+    int samples;          /* ray cast: sample points per shooter; 0: TB_RAD_DEFAULT_SAMPLES */
+    int hemicube_res;     /* hemicube: top-face resolution; 0: TB_RAD_DEFAULT_HEMICUBE_RES */
+    uint64_t seed;        /* seeds the shooters' sample points */
+    tb_ff_batch_fn batch; /* ray cast backend; NULL: tb_ff_raycast_batch over occluders the solver builds */
+    void *batch_ctx;      /* its context (occluders over tb_rad_mesh_polygon of every element, in order) */
+    bool no_occlusion;    /* ray cast with the CPU backend: no visibility test (convex enclosures, tests) */
+} tb_rad_options;
+
+/* Initial state (e.g. carried over a refinement); NULL arrays mean zero H
+ * and "everything still to shoot" (dB = E). */
+typedef struct tb_rad_state {
+    const double *gathered; /* nverts * nchannels: H_v (ray cast) -- or nelems * nchannels: H_e (hemicube) */
+    const double *unshot;   /* nelems * nchannels: dB_e */
+} tb_rad_state;
+
+/* A solver (opaque). */
+typedef struct tb_rad_solver tb_rad_solver;
+
+/* A solver for `mesh` (copied; geometry must be up to date), starting from
+ * `state` (NULL: nothing shot). TB_ERR_ARG for bad options, an empty mesh
+ * or reflectances outside [0, 1); TB_ERR_NOMEM; the backend's errors. */
+tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *state, const tb_rad_options *opt,
+                               tb_rad_solver **out);
+
+/* Frees a solver; NULL is allowed. */
+void tb_rad_solver_free(tb_rad_solver *s);
+
+/* The solver's copy of the mesh. */
+const tb_rad_mesh *tb_rad_solver_mesh(const tb_rad_solver *s);
+
+/* Shoots the element with the most unshot power once. *shot (may be NULL)
+ * is false if nothing was left to shoot. */
+tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot);
+
+/* When to stop tb_rad_solver_run (any condition that is set). */
+typedef struct tb_rad_stop {
+    double threshold;   /* unshot fraction of emitted power; <= 0: TB_RAD_DEFAULT_THRESHOLD */
+    double time_budget; /* > 0: seconds of wall time; 0: none */
+    uint64_t max_shots; /* > 0: shots in this call; 0: none */
+    bool progress;      /* draw a progress bar with ETA on a terminal (util/base/progress.h) */
+} tb_rad_stop;
+
+/* Called by tb_rad_solver_run after every `every` shots and at the end;
+ * a non-OK status stops the run and is returned. */
+typedef tb_status (*tb_rad_report_fn)(void *user, const tb_rad_solver *s);
+
+/* Shoots until a stop condition holds (or nothing is left to shoot). */
+tb_status tb_rad_solver_run(tb_rad_solver *s, const tb_rad_stop *stop, tb_rad_report_fn report, void *user,
+                            uint64_t every);
+
+/* Shots so far (this solver). */
+uint64_t tb_rad_solver_shots(const tb_rad_solver *s);
+
+/* Wall seconds spent shooting so far. */
+double tb_rad_solver_seconds(const tb_rad_solver *s);
+
+/* Unshot power over emitted power, summed over channels (1 before the first
+ * shot from a fresh start; 0 if nothing emits). */
+double tb_rad_unshot_fraction(const tb_rad_solver *s);
+
+/* Power bookkeeping, summed over channels (W, or W/nm per band, times the
+ * scene's units^2): emitted (sum E A), absorbed (sum over shots of the
+ * received power times 1 - rho), unshot (sum dB A) and escaped (shot power
+ * that reached no element: leaves an open scene, or form-factor error). */
+typedef struct tb_rad_energy {
+    double emitted, absorbed, unshot, escaped;
+} tb_rad_energy;
+
+/* The bookkeeping above. emitted == absorbed + unshot + escaped up to rounding. */
+tb_rad_energy tb_rad_solver_energy(const tb_rad_solver *s);
+
+/* The ambient term (Cohen et al. 1988): per channel, sum(dB A) / sum(A)
+ * times 1 / (1 - area-weighted mean rho). out[0..nchannels). */
+void tb_rad_ambient(const tb_rad_solver *s, double *out);
+
+/* Radiosity of element i, out[0..nchannels); with `ambient`, plus rho times
+ * the ambient term. */
+void tb_rad_element_radiosity(const tb_rad_solver *s, size_t i, bool ambient, double *out);
+
+/* Unshot radiosity of element i, out[0..nchannels). */
+void tb_rad_element_unshot(const tb_rad_solver *s, size_t i, double *out);
+
+/* Radiosity at corner k of element i (Gouraud display), out[0..nchannels). */
+void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambient, double *out);
+
+/* The current state (pointers into the solver, valid until the next step
+ * or free): what tb_rad_solver_create takes to continue elsewhere. */
+tb_rad_state tb_rad_solver_state(const tb_rad_solver *s);
+
+/* The element-to-element form factor F_ij (fraction of the power leaving i
+ * that reaches j) as the solver computes it with its method and shot-0
+ * samples: ray cast, the mean over j's corners of F(v -> i) times A_j / A_i;
+ * hemicube, the hemicube at i's centroid. For reciprocity checks. */
+tb_status tb_rad_formfactor(tb_rad_solver *s, size_t i, size_t j, double *f);
+
+/* --patches CSV: header `element,object,area,cx,cy,cz,nx,ny,nz,` then
+ * b_r,b_g,b_b (RGB) or b_<nm> per band (its wavelength, e.g. b_400), then
+ * the unshot columns likewise (u_r.. or u_<nm>); one row per element, no
+ * ambient term, radiosity in W/m^2 per channel. Written all-or-nothing. */
+tb_status tb_rad_write_patches(const tb_rad_solver *s, const char *path);
+
+/* Reads a --patches CSV written by tb_rad_write_patches: *nrows rows of
+ * *ncols radiosity values (the b_ columns), row-major, malloc'd into *b. */
+tb_status tb_rad_read_patches(const char *path, size_t *nrows, int *ncols, double **b);
+
+/* The solved mesh as binary PLY with per-vertex linear RGB colours (float
+ * r,g,b properties and 8-bit sRGB red,green,blue), one vertex per element
+ * corner (so colours can differ across materials), the ambient term
+ * included, radiosity scaled by `scale` before the 8-bit conversion.
+ * Written all-or-nothing. */
+tb_status tb_rad_write_ply(const tb_rad_solver *s, const char *path, double scale);
+
+#endif
