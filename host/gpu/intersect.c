@@ -248,6 +248,12 @@ void tb_gpu_scene_destroy(tb_gpu_scene *g)
 
 void tb_gpu_scene_get_info(const tb_gpu_scene *g, tb_gpu_scene_info *out) { *out = g->info; }
 
+void tb_gpu_scene_get_bindings(const tb_gpu_scene *g, tb_gpu_scene_bindings *out)
+{
+    *out = (tb_gpu_scene_bindings){g->nodes,  g->tris,       g->placed,       g->refs,      g->nnodes,
+                                   g->stack, g->ntris > 0, g->nspheres > 0, g->ncubes > 0};
+}
+
 bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object)
 {
     return object < g->scene->nobjects && g->on_gpu[object];

@@ -58,6 +58,23 @@ void tb_gpu_scene_destroy(tb_gpu_scene *g);
 /* What runs where. */
 void tb_gpu_scene_get_info(const tb_gpu_scene *g, tb_gpu_scene_info *out);
 
+/* What another kernel needs to traverse this scene's GPU geometry with
+ * shaders/lib/bvh_traverse.glsl: the four buffers to bind (named there
+ * TB_BVH_NODES, TB_BVH_TRIS, TB_BVH_PLACED, TB_BVH_REFS), the node count to
+ * pass to tb_bvh_closest / tb_bvh_occluded, and values for its optional
+ * TB_BVH_HAS_* / TB_BVH_STACK specialization. Objects not on the GPU
+ * (tb_gpu_scene_object_on_gpu) are not in these buffers. */
+typedef struct tb_gpu_scene_bindings {
+    tb_gpu_buffer *nodes, *tris, *placed, *refs; /* never NULL (1-element buffers when empty) */
+    uint32_t nnodes;                             /* 0: nothing on the GPU */
+    uint32_t stack;                              /* traversal stack entries enough for this BVH */
+    bool has_triangles, has_spheres, has_cubes;  /* kinds present */
+} tb_gpu_scene_bindings;
+
+/* Fills `out` with the scene's device buffers (owned by the scene: valid until
+ * tb_gpu_scene_destroy). */
+void tb_gpu_scene_get_bindings(const tb_gpu_scene *g, tb_gpu_scene_bindings *out);
+
 /* True if object `object` is intersected on the GPU, false if on the CPU. */
 bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object);
 

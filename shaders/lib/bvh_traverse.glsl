@@ -1,0 +1,238 @@
+// Closest-hit and any-hit (occlusion) traversal of the GPU scene that
+// host/gpu/intersect.c uploads (shaders/shared/bvh.h): a BVH converted from
+// the CPU BVH over world-space triangles and placed analytic objects
+// (spheres, cubes), usable by any kernel that binds those buffers
+// (tb_gpu_scene_bindings in host/gpu/intersect.h).
+//
+// GLSL has no buffer parameters, so the includer names its buffers by macros
+// before the #include (its own set/binding numbers):
+//
+//     layout(std430, binding = 5) readonly buffer Nodes { tb_gpu_bvh_node nodes[]; };
+//     layout(std430, binding = 6) readonly buffer Tris { tb_gpu_tri tris[]; };
+//     layout(std430, binding = 7) readonly buffer Placed { tb_gpu_placed placed[]; };
+//     layout(std430, binding = 8) readonly buffer Refs { uint refs[]; };
+//     #define TB_BVH_NODES nodes
+//     #define TB_BVH_TRIS tris
+//     #define TB_BVH_PLACED placed
+//     #define TB_BVH_REFS refs
+//     #include "lib/bvh_traverse.glsl"
+//
+// Optional, to compile out kinds the scene lacks (e.g. from specialization
+// constants the host sets from tb_gpu_scene_bindings): TB_BVH_HAS_TRIANGLES,
+// TB_BVH_HAS_SPHERES, TB_BVH_HAS_CUBES (each defaults to true: correct for
+// every scene, only slower), and TB_BVH_STACK, the traversal stack entries
+// (defaults to 96; the scene's depth, tb_gpu_scene_bindings.stack, is enough).
+// Kinds added later get their own TB_BVH_HAS_* defaulting to true, so an
+// includer never has to change for the kernel to stay correct.
+//
+// Then:
+//     tb_bvh_hit h;
+//     if (tb_bvh_closest(ray, nnodes, h)) ... h.t, h.object, h.face, tb_bvh_normal(ray, h)
+//     if (tb_bvh_occluded(ray, nnodes)) ...  // anything with tmin <= t <= tmax
+//
+// Ties in t are broken as on the CPU (docs/accel.md, "Tie rule"): lower
+// object, then face, then reference index, with ties up to TB_TIE_TOL.
+// (u, v) are not computed here (host/gpu/intersect.c does it on the host).
+#ifndef TB_LIB_BVH_TRAVERSE_GLSL
+#define TB_LIB_BVH_TRAVERSE_GLSL
+
+#include "shared/bvh.h"
+#include "shared/hit.h"
+#include "shared/ray.h"
+#include "aabb.glsl"
+#include "cube.glsl"
+#include "sphere.glsl"
+#include "triangle.glsl"
+
+#if !defined(TB_BVH_NODES) || !defined(TB_BVH_TRIS) || !defined(TB_BVH_PLACED) || !defined(TB_BVH_REFS)
+#error "define TB_BVH_NODES, TB_BVH_TRIS, TB_BVH_PLACED and TB_BVH_REFS (the includer's buffer arrays) first"
+#endif
+#ifndef TB_BVH_HAS_TRIANGLES
+#define TB_BVH_HAS_TRIANGLES true
+#endif
+#ifndef TB_BVH_HAS_SPHERES
+#define TB_BVH_HAS_SPHERES true
+#endif
+#ifndef TB_BVH_HAS_CUBES
+#define TB_BVH_HAS_CUBES true
+#endif
+#ifndef TB_BVH_STACK
+#define TB_BVH_STACK 96
+#endif
+
+// Traversal slack of the CPU BVH (TB__ACCEL_T_TOL = 2^-16): boxes are pruned
+// with [tmin, best t] widened by this relative amount on each side.
+const float TB_T_TOL = 1.52587890625e-5;
+
+// Relative difference in t below which two hits are a tie (2^-18, 64 ulps):
+// the float t of two coincident triangles (a light set into a ceiling)
+// differ by a few ulps, so the CPU tie rule (lower object, face, reference)
+// decides among hits this close, not the rounding. Must equal TB__TIE_TOL in
+// host/gpu/intersect.c.
+const float TB_TIE_TOL = 3.814697265625e-6;
+
+// A hit found by traversal.
+struct tb_bvh_hit {
+    float t;     // ray parameter
+    uint object; // top-level object index
+    uint face;   // face ID (host/object/param.h numbering, plus the object's face base)
+    uint sref;   // index of the primitive's reference in the CPU scene (tie rule's last key)
+    uint leaf;   // the GPU leaf reference (TB_GPU_REF_*), for tb_bvh_normal
+};
+
+// True if (t, object, face, ref) precedes the best so far (the CPU tie rule,
+// with ties up to TB_TIE_TOL).
+bool tb_better(float t, uint object, uint face, uint ref, bool have, float bt, uint bo, uint bf, uint br)
+{
+    if (!have)
+        return true;
+    if (abs(t - bt) > TB_TIE_TOL * abs(bt))
+        return t < bt;
+    if (object != bo)
+        return object < bo;
+    if (face != bf)
+        return face < bf;
+    return ref < br;
+}
+
+// The rays the CPU path accepts (tb_ray_is_valid): finite origin, direction
+// and tmin, a non-zero direction, tmin <= tmax. Others miss everything.
+bool tb_bvh_ray_valid(tb_gpu_ray r)
+{
+    return tb_isfinite(r.o.x) && tb_isfinite(r.o.y) && tb_isfinite(r.o.z) && tb_isfinite(r.d.x) &&
+           tb_isfinite(r.d.y) && tb_isfinite(r.d.z) && tb_isfinite(r.tmin) &&
+           !(r.d.x == 0.0 && r.d.y == 0.0 && r.d.z == 0.0) && r.tmin <= r.tmax;
+}
+
+// The traversal: with any_hit false the closest hit by the tie rule, with
+// any_hit true the first hit found (any t in [tmin, tmax]). nnodes is the
+// node count (0 for a scene with nothing on the GPU). False on a miss.
+bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
+{
+    bool have = false;
+    float bt = r.tmax;
+    uint bo = TB_GPU_NO_HIT, bf = 0u, br = 0u, bref = 0u;
+    if ((TB_BVH_HAS_TRIANGLES || TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES) && nnodes > 0u &&
+        tb_bvh_ray_valid(r)) {
+        vec3 inv = tb_ray_inv_dir(r.d);
+        tb_wray w = tb_wray_init(r.o, r.d);
+        float lo_t = r.tmin - abs(r.tmin) * TB_T_TOL;
+        uint stack[TB_BVH_STACK];
+        int sp = 0;
+        uint node = 0u;
+        for (;;) {
+            tb_gpu_bvh_node nd = TB_BVH_NODES[node];
+            float hi_t = bt + abs(bt) * TB_T_TOL;
+            float t0, t1;
+            bool enter = tb_aabb_slab(nd.lo, nd.hi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+            if (enter) {
+                uint count = nd.count & 0xffffu;
+                if (count == 0u) {
+                    // Inner: nearer child first (by the split axis and the ray's sign).
+                    uint axis = nd.count >> 16;
+                    uint first = node + 1u, second = nd.offset;
+                    if (r.d[axis] < 0.0) {
+                        uint s = first;
+                        first = second;
+                        second = s;
+                    }
+                    if (sp < TB_BVH_STACK)
+                        stack[sp++] = second;
+                    node = first;
+                    continue;
+                }
+                for (uint k = nd.offset; k < nd.offset + count; ++k) {
+                    uint ref = TB_BVH_REFS[k];
+                    float t;
+                    uint object, face, sref;
+                    if (TB_BVH_HAS_CUBES && (ref & TB_GPU_REF_CUBE) != 0u) {
+                        tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
+                        precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+                        precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+                        uint cf;
+                        if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
+                            continue;
+                        object = sp.object;
+                        face = sp.face + cf;
+                        sref = sp.ref;
+                    } else if (TB_BVH_HAS_SPHERES && (ref & TB_GPU_REF_SPHERE) != 0u) {
+                        tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
+                        precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+                        precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+                        if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
+                            continue;
+                        object = sp.object;
+                        face = sp.face;
+                        sref = sp.ref;
+                    } else if (TB_BVH_HAS_TRIANGLES && (ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) == 0u) {
+                        tb_gpu_tri tri = TB_BVH_TRIS[ref];
+                        if (!tb_tri_hit(w, tri.v0, tri.v1, tri.v2, t) || t < r.tmin || t > r.tmax)
+                            continue;
+                        object = tri.object;
+                        face = tri.face;
+                        sref = tri.ref;
+                    } else {
+                        continue;
+                    }
+                    if (tb_better(t, object, face, sref, have, bt, bo, bf, br)) {
+                        have = true;
+                        bt = t;
+                        bo = object;
+                        bf = face;
+                        br = sref;
+                        bref = ref;
+                    }
+                    if (any_hit)
+                        break;
+                }
+                if (have && any_hit)
+                    break;
+            }
+            if (sp == 0)
+                break;
+            node = stack[--sp];
+        }
+    }
+    h.t = bt;
+    h.object = bo;
+    h.face = bf;
+    h.sref = br;
+    h.leaf = bref;
+    return have;
+}
+
+// Closest hit of r (by the tie rule); false on a miss.
+bool tb_bvh_closest(tb_gpu_ray r, uint nnodes, out tb_bvh_hit h) { return tb_bvh_traverse(r, nnodes, false, h); }
+
+// True if anything on the GPU is hit with r.tmin <= t <= r.tmax (a shadow ray
+// or a segment between two points: set tmax just short of the far end).
+bool tb_bvh_occluded(tb_gpu_ray r, uint nnodes)
+{
+    tb_bvh_hit h;
+    return tb_bvh_traverse(r, nnodes, true, h);
+}
+
+// The unit geometric normal (world space, out of the solid, flipped for
+// objects with flipped normals) of a hit h of ray r found by tb_bvh_traverse.
+vec3 tb_bvh_normal(tb_gpu_ray r, tb_bvh_hit h)
+{
+    if (TB_BVH_HAS_CUBES && (h.leaf & TB_GPU_REF_CUBE) != 0u) {
+        // The face's object-space normal -> world by the inverse transpose.
+        tb_gpu_placed sp = TB_BVH_PLACED[h.leaf & TB_GPU_REF_INDEX];
+        uint f = h.face - sp.face;
+        float sg = (f & 1u) != 0u ? 1.0 : -1.0;
+        vec3 n = (f >> 1) == 0u ? sp.r0 : ((f >> 1) == 1u ? sp.r1 : sp.r2);
+        return sp.sign * normalize(sg * n);
+    }
+    if (TB_BVH_HAS_SPHERES && (h.leaf & TB_GPU_REF_SPHERE) != 0u) {
+        // Object-space point -> world normal by the inverse transpose.
+        tb_gpu_placed sp = TB_BVH_PLACED[h.leaf & TB_GPU_REF_INDEX];
+        vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+        vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+        vec3 p = so + h.t * sd;
+        return sp.sign * normalize(sp.r0 * p.x + sp.r1 * p.y + sp.r2 * p.z);
+    }
+    return TB_BVH_TRIS[h.leaf].ng;
+}
+
+#endif
