@@ -56,6 +56,11 @@ static void tb__bench_usage(FILE *out)
             "               --embree) Embree 3: Mrays/s, ratio, scaling, agreement (details:\n"
             "               testbed bench rays --help)\n"
             "\n"
+            "usage: testbed bench gpu SCENE.mid [--rays N] [--repeat R] [--seed S] [--device N]\n"
+            "\n"
+            "  gpu          the Vulkan intersect kernel vs the CPU path on primary, shadow and\n"
+            "               diffuse rays: Mrays/s, kernel device time, ratio (testbed bench gpu --help)\n"
+            "\n"
             "Exit status: 0 done, 1 an object could not be built, 2 usage error.\n");
 }
 
@@ -301,6 +306,7 @@ static const struct {
     {"accel", tb_cmd_bench_accel}, /* cmd_bench_accel.c */
     {"tessellate", tb_cmd_bench_tessellate}, /* cmd_bench_tessellate.c */
     {"rays", tb_cmd_bench_rays}, /* cmd_bench_rays.c */
+    {"gpu", tb_cmd_bench_gpu},   /* cmd_bench_gpu.c */
 };
 
 int tb_cmd_bench(int argc, char **argv)

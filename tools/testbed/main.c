@@ -7,7 +7,7 @@
 
 /* Add a subcommand here and in commands.h; keep the table in alphabetical order. */
 static const tb_command tb__commands[] = {
-    {"bench", "benchmarks: intersect, tessellate, accel, rays (vs Embree)", tb_cmd_bench},
+    {"bench", "benchmarks: intersect, tessellate, accel, rays (vs Embree), gpu (Vulkan kernel)", tb_cmd_bench},
     {"check", "validate a MID scene and summarise it", tb_cmd_check},
     {"compare", "error metrics (MSE, PSNR, SSIM, ...) of an image against a reference", tb_cmd_compare},
     {"convert", "convert an image between RLE, PNG, PFM and OpenEXR", tb_cmd_convert},

@@ -1,0 +1,289 @@
+/* `testbed bench gpu SCENE.mid [--rays N] [--repeat R] [--seed S] [--device N]`:
+ * the intersect kernel (host/gpu/intersect.h) against the CPU path on the
+ * three ray sets of `testbed bench rays` (primary, shadow, diffuse), in
+ * Mrays/s per set, with the kernel's device time apart (docs/performance.md,
+ * "Vulkan"). On a real GPU this is the entry that reports its Mrays/s. */
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "host/gpu/intersect.h"
+#include "host/object/hit.h"
+#include "host/object/intersect.h"
+#include "host/render/lights.h"
+#include "host/render/scene.h"
+#include "util/math/rng.h"
+#include "util/stats/stats.h"
+
+enum { TB__GSET_PRIMARY, TB__GSET_SHADOW, TB__GSET_DIFFUSE, TB__GSETS };
+static const char *const tb__gset_names[TB__GSETS] = {"primary", "shadow", "diffuse"};
+
+static void tb__gpu_usage(FILE *out)
+{
+    fprintf(out,
+            "usage: testbed bench gpu SCENE.mid [--rays N] [--repeat R] [--seed S] [--device N]\n"
+            "\n"
+            "Times the Vulkan intersect kernel (tb_gpu_intersect / tb_gpu_occluded) and the CPU path\n"
+            "(tb_scene_intersect / tb_scene_occluded, OpenMP over rays) on the same rays:\n"
+            "  primary  N camera rays in scanline order over a grid of the film (closest hit)\n"
+            "  shadow   from each primary hit toward a point on a light (any hit)\n"
+            "  diffuse  from each primary hit, cosine-distributed about the normal (closest hit)\n"
+            "Prints per set the median over R runs of Mrays/s (wall clock) of both paths, their ratio,\n"
+            "and the kernel's own rate from its device time (timestamp queries). Pipeline creation is\n"
+            "excluded (one untimed call first). The Vulkan path includes the upload, download and the\n"
+            "host's part (routed CPU objects, (u, v)). Rays on which the two paths disagree (object,\n"
+            "or occlusion) are counted as a sanity check; `testbed validate` gives the full figures.\n"
+            "\n"
+            "  --rays N    primary rays (default 500000)\n"
+            "  --repeat R  timed runs per set and path (default 3)\n"
+            "  --seed S    seed of the shadow and diffuse sampling (default 1)\n"
+            "  --device N  Vulkan device (testbed devices; default: the best one)\n");
+}
+
+static tb_vec3 tb__gcosine_dir(tb_vec3 n, float u1, float u2)
+{
+    tb_vec3 a = fabsf(n.x) > 0.9f ? (tb_vec3){0.0f, 1.0f, 0.0f} : (tb_vec3){1.0f, 0.0f, 0.0f};
+    tb_vec3 t = tb_vec3_normalize(tb_vec3_cross(a, n)), b = tb_vec3_cross(n, t);
+    float r = sqrtf(u1), phi = 6.28318530717958648f * u2, z = sqrtf(fmaxf(0.0f, 1.0f - u1));
+    float x = r * cosf(phi), y = r * sinf(phi);
+    return (tb_vec3){x * t.x + y * b.x + z * n.x, x * t.y + y * b.y + z * n.y, x * t.z + y * b.z + z * n.z};
+}
+
+/* The three sets (as `testbed bench rays` makes them, but primary rays in
+ * scanline order: a renderer's order, which keeps neighbouring rays, and
+ * so a SIMD group of the kernel, coherent). Returns false when out of memory. */
+static bool tb__gmake_sets(const tb_scene *s, size_t np, uint64_t seed, tb_ray *sets[TB__GSETS], size_t n[TB__GSETS])
+{
+    for (int k = 0; k < TB__GSETS; k++) {
+        sets[k] = malloc(sizeof(tb_ray) * (np ? np : 1));
+        n[k] = 0;
+        if (!sets[k])
+            return false;
+    }
+    const tb_camera *c = &s->camera;
+    double aspect = (double)c->width / (double)c->height;
+    size_t w = (size_t)ceil(sqrt((double)np * aspect)), h = (np + w - 1) / w;
+    for (size_t i = 0; i < np; i++) {
+        double x = ((double)(i % w) + 0.5) * c->width / (double)w, y = ((double)(i / w) + 0.5) * c->height / (double)h;
+        sets[TB__GSET_PRIMARY][n[TB__GSET_PRIMARY]++] = tb_camera_ray(c, x, y, 0.5f, 0.5f);
+    }
+    tb_area_light area = {0};
+    bool use_area = s->nemitters > 0 && tb_area_light_init(&area, s->emitters, s->nemitters) == TB_OK;
+    tb_rng rng;
+    tb_rng_seed(&rng, seed, 0);
+    for (size_t i = 0; i < np; i++) {
+        tb_ray r = sets[TB__GSET_PRIMARY][i];
+        tb_hit hit;
+        tb_vec3 p, perr;
+        if (!tb_scene_intersect(s, &r, &hit))
+            continue;
+        r.tmax = hit.t;
+        if (!tb_object_hit_point(s->objects[hit.object], &r, &hit, &p, &perr))
+            continue;
+        float u1 = tb_rng_float(&rng), u2 = tb_rng_float(&rng), u3 = tb_rng_float(&rng), u4 = tb_rng_float(&rng);
+        tb_light_sample ls;
+        bool ok = false;
+        if (use_area)
+            ok = tb_area_light_sample(&area, p, u1, u2, &ls);
+        else if (s->nlights > 0) {
+            int l = (int)(u1 * (float)s->nlights);
+            ok = tb_light_sample_li(&s->lights[l < s->nlights ? l : s->nlights - 1], p, &ls);
+        }
+        if (ok) {
+            tb_ray sh = ls.shadow;
+            sh.o = tb_spawn_ray_origin(p, perr, hit.ng, ls.wi);
+            sets[TB__GSET_SHADOW][n[TB__GSET_SHADOW]++] = sh;
+        }
+        tb_vec3 nn = tb_vec3_dot(hit.ng, r.d) > 0.0f ? tb_vec3_neg(hit.ng) : hit.ng;
+        tb_vec3 wd = tb__gcosine_dir(nn, u3, u4);
+        sets[TB__GSET_DIFFUSE][n[TB__GSET_DIFFUSE]++] =
+            tb_ray_make(tb_spawn_ray_origin(p, perr, hit.ng, wd), wd, 0.0f, INFINITY);
+    }
+    tb_area_light_release(&area);
+    return true;
+}
+
+static int tb__gcmp(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double tb__gmedian(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, tb__gcmp);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static bool tb__gcount(const char *s, long lo, long hi, long *out)
+{
+    errno = 0;
+    char *end;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi)
+        return false;
+    *out = v;
+    return true;
+}
+
+/* One timed pass of set k through the CPU path; seconds. */
+static double tb__gcpu(const tb_scene *s, int k, const tb_ray *rays, size_t n, tb_hit *hits, uint8_t *occ)
+{
+    int64_t t0 = tb_stats_now_ns();
+    if (k == TB__GSET_SHADOW) {
+#pragma omp parallel for schedule(dynamic, 256)
+        for (size_t i = 0; i < n; ++i)
+            occ[i] = tb_scene_occluded(s, &rays[i]) ? 1 : 0;
+    } else {
+#pragma omp parallel for schedule(dynamic, 256)
+        for (size_t i = 0; i < n; ++i) {
+            tb_hit h = {INFINITY, UINT32_MAX, UINT32_MAX, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
+            tb_scene_intersect(s, &rays[i], &h);
+            hits[i] = h;
+        }
+    }
+    return (double)(tb_stats_now_ns() - t0) * 1e-9;
+}
+
+/* One timed pass of set k through the Vulkan path; seconds (kernel device seconds in *ks), < 0 on failure. */
+static double tb__ggpu(tb_gpu_scene *g, int k, const tb_ray *rays, size_t n, tb_hit *hits, uint8_t *occ, double *ks)
+{
+    tb_gpu_intersect_timing tm = {0};
+    int64_t t0 = tb_stats_now_ns();
+    tb_status st = k == TB__GSET_SHADOW ? tb_gpu_occluded(g, rays, n, occ, &tm) : tb_gpu_intersect(g, rays, n, hits, &tm);
+    double sec = (double)(tb_stats_now_ns() - t0) * 1e-9;
+    *ks = tm.kernel_seconds;
+    return st ? -1.0 : sec;
+}
+
+int tb_cmd_bench_gpu(int argc, char **argv)
+{
+    const char *path = NULL;
+    long nrays = 500000, repeat = 3, seed = 1, device = -1;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            tb__gpu_usage(stdout);
+            return TB_EXIT_OK;
+        }
+        bool ok = true;
+        if (!strcmp(a, "--rays") || !strcmp(a, "--repeat") || !strcmp(a, "--seed") || !strcmp(a, "--device")) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "testbed bench gpu: error: %s needs a value\n", a);
+                return TB_EXIT_USAGE;
+            }
+            const char *v = argv[++i];
+            if (!strcmp(a, "--rays"))
+                ok = tb__gcount(v, 1, 1L << 28, &nrays);
+            else if (!strcmp(a, "--repeat"))
+                ok = tb__gcount(v, 1, 1000, &repeat);
+            else if (!strcmp(a, "--seed"))
+                ok = tb__gcount(v, 0, 1L << 62, &seed);
+            else
+                ok = tb__gcount(v, 0, 1000, &device);
+            if (!ok) {
+                fprintf(stderr, "testbed bench gpu: error: bad value '%s' for %s\n", v, a);
+                return TB_EXIT_USAGE;
+            }
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "testbed bench gpu: error: unknown option '%s'\n", a);
+            tb__gpu_usage(stderr);
+            return TB_EXIT_USAGE;
+        } else if (!path) {
+            path = a;
+        } else {
+            fprintf(stderr, "testbed bench gpu: error: more than one scene\n");
+            return TB_EXIT_USAGE;
+        }
+    }
+    if (!path) {
+        tb__gpu_usage(stderr);
+        return TB_EXIT_USAGE;
+    }
+    tb_scene *s = NULL;
+    if (tb_scene_load(path, NULL, &s)) {
+        fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
+        return TB_EXIT_FAIL;
+    }
+    tb_gpu_session sess;
+    if (tb_gpu_backend_choose(TB_GPU_MODE_VULKAN, (int)device, false, &sess)) {
+        fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
+        tb_scene_free(s);
+        return TB_EXIT_FAIL;
+    }
+    int rc = TB_EXIT_FAIL;
+    tb_ray *sets[TB__GSETS] = {NULL, NULL, NULL};
+    size_t n[TB__GSETS];
+    size_t np = (size_t)nrays;
+    tb_hit *ch = malloc(np * sizeof *ch), *gh = malloc(np * sizeof *gh);
+    uint8_t *co = malloc(np), *go = malloc(np);
+    tb_gpu_scene *g = NULL;
+    if (!ch || !gh || !co || !go || !tb__gmake_sets(s, np, (uint64_t)seed, sets, n)) {
+        fprintf(stderr, "testbed bench gpu: error: out of memory for %zu rays\n", np);
+        goto done;
+    }
+    if (!(g = tb_gpu_scene_create(sess.device, s))) {
+        fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
+        goto done;
+    }
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    printf("device: %s\nscene: %s: %u objects (%u on the GPU, %u routed), %llu triangles, %u spheres, %u cubes\n",
+           tb_gpu_device_info_of(sess.device)->name, path, s->nobjects, info.gpu_objects, info.cpu_objects,
+           (unsigned long long)info.gpu_triangles, info.gpu_spheres, info.gpu_cubes);
+    printf("threads: %d, runs per figure: %ld (median)\n", omp_get_max_threads(), repeat);
+    printf("%-8s %9s %12s %12s %14s %7s %9s\n", "set", "rays", "cpu Mrays/s", "vk Mrays/s", "kernel Mrays/s",
+           "ratio", "disagree");
+    double *tc = malloc((size_t)repeat * sizeof *tc), *tg = malloc((size_t)repeat * sizeof *tg),
+           *tk = malloc((size_t)repeat * sizeof *tk);
+    if (!tc || !tg || !tk) {
+        free(tc), free(tg), free(tk);
+        fprintf(stderr, "testbed bench gpu: error: out of memory\n");
+        goto done;
+    }
+    rc = TB_EXIT_OK;
+    for (int k = 0; k < TB__GSETS && rc == TB_EXIT_OK; ++k) {
+        size_t m = n[k];
+        if (m == 0) {
+            printf("%-8s %9s (no rays: no primary hits, or no lights for shadow rays)\n", tb__gset_names[k], "0");
+            continue;
+        }
+        double ks = 0.0;
+        if (tb__ggpu(g, k, sets[k], m < 4096 ? m : 4096, gh, go, &ks) < 0.0) { /* pipeline creation, untimed */
+            fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
+            rc = TB_EXIT_FAIL;
+            break;
+        }
+        for (long r = 0; r < repeat; ++r) {
+            tc[r] = tb__gcpu(s, k, sets[k], m, ch, co);
+            tg[r] = tb__ggpu(g, k, sets[k], m, gh, go, &tk[r]);
+            if (tg[r] < 0.0) {
+                fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
+                rc = TB_EXIT_FAIL;
+                break;
+            }
+        }
+        if (rc != TB_EXIT_OK)
+            break;
+        size_t bad = 0;
+        for (size_t i = 0; i < m; ++i)
+            bad += k == TB__GSET_SHADOW ? co[i] != go[i] : ch[i].object != gh[i].object;
+        double c = tb__gmedian(tc, (int)repeat), v = tb__gmedian(tg, (int)repeat), kk = tb__gmedian(tk, (int)repeat);
+        printf("%-8s %9zu %12.3f %12.3f %14.3f %7.3f %9zu\n", tb__gset_names[k], m, 1e-6 * (double)m / c,
+               1e-6 * (double)m / v, kk > 0.0 && isfinite(kk) ? 1e-6 * (double)m / kk : NAN, c / v, bad);
+    }
+    free(tc), free(tg), free(tk);
+done:
+    for (int k = 0; k < TB__GSETS; ++k)
+        free(sets[k]);
+    free(ch), free(gh), free(co), free(go);
+    tb_gpu_scene_destroy(g);
+    tb_gpu_session_close(&sess);
+    tb_scene_free(s);
+    return rc;
+}
