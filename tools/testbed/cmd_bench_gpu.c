@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 #include "commands.h"
 #include "host/gpu/intersect.h"
@@ -34,7 +35,9 @@ static void tb__gpu_usage(FILE *out)
             "  shadow   from each primary hit toward a point on a light (any hit)\n"
             "  diffuse  from each primary hit, cosine-distributed about the normal (closest hit)\n"
             "Prints per set the median over R runs of Mrays/s (wall clock) of both paths, their ratio,\n"
-            "and the kernel's own rate from its device time (timestamp queries). Pipeline creation is\n"
+            "and the kernel's own rate from its device time (timestamp queries), then Mrays per CPU\n"
+            "second of the process (all threads, the driver's included) and their ratio: on a shared\n"
+            "machine this ratio is steadier than the wall-clock one. Pipeline creation is\n"
             "excluded (one untimed call first). The Vulkan path includes the upload, download and the\n"
             "host's part (routed CPU objects, (u, v)). Rays on which the two paths disagree (object,\n"
             "or occlusion) are counted as a sanity check; `testbed validate` gives the full figures.\n"
@@ -108,6 +111,16 @@ static bool tb__gmake_sets(const tb_scene *s, size_t np, uint64_t seed, tb_ray *
     return true;
 }
 
+/* CPU seconds used so far by every thread of the process (OpenMP's and the
+ * Vulkan driver's: lavapipe runs kernels on its own threads in this process). */
+static double tb__gcpu_seconds(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec + (double)ru.ru_stime.tv_sec +
+           1e-6 * (double)ru.ru_stime.tv_usec;
+}
+
 static int tb__gcmp(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -131,9 +144,10 @@ static bool tb__gcount(const char *s, long lo, long hi, long *out)
     return true;
 }
 
-/* One timed pass of set k through the CPU path; seconds. */
-static double tb__gcpu(const tb_scene *s, int k, const tb_ray *rays, size_t n, tb_hit *hits, uint8_t *occ)
+/* One timed pass of set k through the CPU path; wall seconds (CPU seconds in *cs). */
+static double tb__gcpu(const tb_scene *s, int k, const tb_ray *rays, size_t n, tb_hit *hits, uint8_t *occ, double *cs)
 {
+    double c0 = tb__gcpu_seconds();
     int64_t t0 = tb_stats_now_ns();
     if (k == TB__GSET_SHADOW) {
 #pragma omp parallel for schedule(dynamic, 256)
@@ -147,16 +161,22 @@ static double tb__gcpu(const tb_scene *s, int k, const tb_ray *rays, size_t n, t
             hits[i] = h;
         }
     }
-    return (double)(tb_stats_now_ns() - t0) * 1e-9;
+    double sec = (double)(tb_stats_now_ns() - t0) * 1e-9;
+    *cs = tb__gcpu_seconds() - c0;
+    return sec;
 }
 
-/* One timed pass of set k through the Vulkan path; seconds (kernel device seconds in *ks), < 0 on failure. */
-static double tb__ggpu(tb_gpu_scene *g, int k, const tb_ray *rays, size_t n, tb_hit *hits, uint8_t *occ, double *ks)
+/* One timed pass of set k through the Vulkan path; wall seconds (kernel device
+ * seconds in *ks, CPU seconds of the process in *cs), < 0 on failure. */
+static double tb__ggpu(tb_gpu_scene *g, int k, const tb_ray *rays, size_t n, tb_hit *hits, uint8_t *occ, double *ks,
+                       double *cs)
 {
     tb_gpu_intersect_timing tm = {0};
+    double c0 = tb__gcpu_seconds();
     int64_t t0 = tb_stats_now_ns();
     tb_status st = k == TB__GSET_SHADOW ? tb_gpu_occluded(g, rays, n, occ, &tm) : tb_gpu_intersect(g, rays, n, hits, &tm);
     double sec = (double)(tb_stats_now_ns() - t0) * 1e-9;
+    *cs = tb__gcpu_seconds() - c0;
     *ks = tm.kernel_seconds;
     return st ? -1.0 : sec;
 }
@@ -237,12 +257,12 @@ int tb_cmd_bench_gpu(int argc, char **argv)
            tb_gpu_device_info_of(sess.device)->name, path, s->nobjects, info.gpu_objects, info.cpu_objects,
            (unsigned long long)info.gpu_triangles, info.gpu_spheres, info.gpu_cubes);
     printf("threads: %d, runs per figure: %ld (median)\n", omp_get_max_threads(), repeat);
-    printf("%-8s %9s %12s %12s %14s %7s %9s\n", "set", "rays", "cpu Mrays/s", "vk Mrays/s", "kernel Mrays/s",
-           "ratio", "disagree");
-    double *tc = malloc((size_t)repeat * sizeof *tc), *tg = malloc((size_t)repeat * sizeof *tg),
-           *tk = malloc((size_t)repeat * sizeof *tk);
-    if (!tc || !tg || !tk) {
-        free(tc), free(tg), free(tk);
+    printf("%-8s %9s %12s %12s %14s %7s %14s %7s %9s\n", "set", "rays", "cpu Mrays/s", "vk Mrays/s",
+           "kernel Mrays/s", "ratio", "cpu/vk Mr/cpu-s", "ratio", "disagree");
+    size_t rb = (size_t)repeat * sizeof(double);
+    double *tc = malloc(rb), *tg = malloc(rb), *tk = malloc(rb), *cc = malloc(rb), *cg = malloc(rb);
+    if (!tc || !tg || !tk || !cc || !cg) {
+        free(tc), free(tg), free(tk), free(cc), free(cg);
         fprintf(stderr, "testbed bench gpu: error: out of memory\n");
         goto done;
     }
@@ -253,15 +273,15 @@ int tb_cmd_bench_gpu(int argc, char **argv)
             printf("%-8s %9s (no rays: no primary hits, or no lights for shadow rays)\n", tb__gset_names[k], "0");
             continue;
         }
-        double ks = 0.0;
-        if (tb__ggpu(g, k, sets[k], m < 4096 ? m : 4096, gh, go, &ks) < 0.0) { /* pipeline creation, untimed */
+        double ks = 0.0, cs = 0.0;
+        if (tb__ggpu(g, k, sets[k], m < 4096 ? m : 4096, gh, go, &ks, &cs) < 0.0) { /* pipeline creation, untimed */
             fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
             rc = TB_EXIT_FAIL;
             break;
         }
         for (long r = 0; r < repeat; ++r) {
-            tc[r] = tb__gcpu(s, k, sets[k], m, ch, co);
-            tg[r] = tb__ggpu(g, k, sets[k], m, gh, go, &tk[r]);
+            tc[r] = tb__gcpu(s, k, sets[k], m, ch, co, &cc[r]);
+            tg[r] = tb__ggpu(g, k, sets[k], m, gh, go, &tk[r], &cg[r]);
             if (tg[r] < 0.0) {
                 fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
                 rc = TB_EXIT_FAIL;
@@ -274,10 +294,12 @@ int tb_cmd_bench_gpu(int argc, char **argv)
         for (size_t i = 0; i < m; ++i)
             bad += k == TB__GSET_SHADOW ? co[i] != go[i] : ch[i].object != gh[i].object;
         double c = tb__gmedian(tc, (int)repeat), v = tb__gmedian(tg, (int)repeat), kk = tb__gmedian(tk, (int)repeat);
-        printf("%-8s %9zu %12.3f %12.3f %14.3f %7.3f %9zu\n", tb__gset_names[k], m, 1e-6 * (double)m / c,
-               1e-6 * (double)m / v, kk > 0.0 && isfinite(kk) ? 1e-6 * (double)m / kk : NAN, c / v, bad);
+        double xc = tb__gmedian(cc, (int)repeat), xg = tb__gmedian(cg, (int)repeat);
+        printf("%-8s %9zu %12.3f %12.3f %14.3f %7.3f %6.3f/%-7.3f %7.3f %9zu\n", tb__gset_names[k], m,
+               1e-6 * (double)m / c, 1e-6 * (double)m / v, kk > 0.0 && isfinite(kk) ? 1e-6 * (double)m / kk : NAN,
+               c / v, 1e-6 * (double)m / xc, 1e-6 * (double)m / xg, xc / xg, bad);
     }
-    free(tc), free(tg), free(tk);
+    free(tc), free(tg), free(tk), free(cc), free(cg);
 done:
     for (int k = 0; k < TB__GSETS; ++k)
         free(sets[k]);
