@@ -23,7 +23,7 @@
 
 /* The MID version this code reads and writes (docs/mid.md, section 4). */
 #define TB_MID_VERSION_MAJOR 1
-#define TB_MID_VERSION_MINOR 0
+#define TB_MID_VERSION_MINOR 1
 
 /* Nesting limit for bodies, blocks, lists and calls together. */
 #define TB_MID_MAX_DEPTH 64
@@ -241,6 +241,40 @@ typedef struct tb_mid_color {
 /* The grey colour (v, v, v). */
 tb_mid_color tb_mid_color_grey(float v);
 
+/* The reflection model of a material's specular term (MID 1.1 `model`). */
+typedef enum tb_mid_model {
+    TB_MID_MODEL_PHONG = 0, /* normalised Phong highlight + mirror ray (MID 1.0's meaning; the default) */
+    TB_MID_MODEL_BLINN,     /* exactly normalised Blinn-Phong highlight + mirror ray */
+    TB_MID_MODEL_LAMBERT,   /* diffuse only: specular, exponent and the specular texture are ignored */
+    TB_MID_MODEL_GGX,       /* GGX microfacet lobe: F0 = specular (Schlick), alpha = roughness */
+} tb_mid_model;
+
+/* Number of tb_mid_model values. */
+#define TB_MID_MODEL_COUNT 4
+
+/* The MID symbol of a model ("phong", ...); "?" if out of range. */
+const char *tb_mid_model_name(tb_mid_model m);
+
+/* Kinds of procedural patterns and bump maps (MID 1.1, docs/mid.md 7.2). */
+typedef enum tb_mid_pattern_kind {
+    TB_MID_PATTERN_NONE = 0, /* no pattern */
+    TB_MID_PATTERN_CHECKER,  /* checker(scale, a, b [, space]) */
+    TB_MID_PATTERN_NOISE,    /* noise(scale, octaves, a, b [, space]); bump: noise(scale, octaves, height [, space]) */
+    TB_MID_PATTERN_IMAGE,    /* bump only: image(file("..."), height) */
+} tb_mid_pattern_kind;
+
+/* A procedural colour pattern (diffuse_pattern, specular_pattern) or a bump
+ * map (bump). */
+typedef struct tb_mid_pattern {
+    tb_mid_pattern_kind kind;
+    bool object_space;   /* of the object-space point (symbol `object`), else of (u, v) (`uv`, the default) */
+    double scale;        /* checks or noise cells per unit of u, v or object space, > 0 */
+    int octaves;         /* noise: 1 .. 16 */
+    tb_mid_color a, b;   /* colour patterns: checker even/odd squares; noise value at 0 and 1 */
+    double height;       /* bump: height of the unit value in scene units (may be negative) */
+    tb_mid_ref image;    /* bump image() */
+} tb_mid_pattern;
+
 /* Bits of tb_mid_material.set: the attributes a rendering block wrote itself. */
 enum {
     TB_MID_SET_DIFFUSE = 1u << 0,
@@ -253,6 +287,11 @@ enum {
     TB_MID_SET_SPECULAR_TEXTURE = 1u << 7,
     TB_MID_SET_TRANSMISSION_TEXTURE = 1u << 8,
     TB_MID_SET_EMISSION_TEXTURE = 1u << 9,
+    TB_MID_SET_MODEL = 1u << 10,            /* MID 1.1 */
+    TB_MID_SET_ROUGHNESS = 1u << 11,        /* MID 1.1 */
+    TB_MID_SET_DIFFUSE_PATTERN = 1u << 12,  /* MID 1.1 */
+    TB_MID_SET_SPECULAR_PATTERN = 1u << 13, /* MID 1.1 */
+    TB_MID_SET_BUMP = 1u << 14,             /* MID 1.1 */
 };
 
 /* A material, fully resolved (docs/mid.md, section 7), plus what its block
@@ -268,6 +307,11 @@ typedef struct tb_mid_material {
     float exponent;            /* Phong/Blinn exponent, >= 0 */
     float ior;                 /* index of refraction of the inside, > 0 */
     tb_mid_ref diffuse_texture, specular_texture, transmission_texture, emission_texture;
+    tb_mid_model model;        /* reflection model of the specular term (MID 1.1) */
+    float roughness;           /* GGX alpha, [0, 1] (MID 1.1) */
+    tb_mid_pattern diffuse_pattern;  /* replaces `diffuse` where set (MID 1.1) */
+    tb_mid_pattern specular_pattern; /* replaces `specular` where set (MID 1.1) */
+    tb_mid_pattern bump;             /* perturbs the shading normal (MID 1.1) */
     tb_mid_attrs extra;        /* unknown attributes of the block */
     int nrefs;
     const tb_mid_ref *refs;    /* every file() written in the block */

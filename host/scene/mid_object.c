@@ -109,7 +109,15 @@ const tb_mid_material tb__mid_default_material = {
     .emission = {.type = TB_MID_COLOR_RGB},
     .exponent = 20.0f,
     .ior = 1.0f,
+    .model = TB_MID_MODEL_PHONG,
+    .roughness = 0.2f,
 };
+
+const char *tb_mid_model_name(tb_mid_model m)
+{
+    static const char *const names[TB_MID_MODEL_COUNT] = {"phong", "blinn", "lambert", "ggx"};
+    return (unsigned)m < TB_MID_MODEL_COUNT ? names[m] : "?";
+}
 
 const tb_transform tb__mid_identity = {
     {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}},
@@ -309,8 +317,33 @@ static bool tb__color_eq(const tb_mid_color *a, const tb_mid_color *b)
     return false;
 }
 
+/* Patterns compare the fields their kind uses. */
+static bool tb__pattern_eq(const tb_mid_pattern *a, const tb_mid_pattern *b)
+{
+    if (a->kind != b->kind)
+        return false;
+    switch (a->kind) {
+    case TB_MID_PATTERN_NONE: return true;
+    case TB_MID_PATTERN_CHECKER:
+    case TB_MID_PATTERN_NOISE:
+        if (a->object_space != b->object_space || a->scale != b->scale)
+            return false;
+        if (a->kind == TB_MID_PATTERN_NOISE && a->octaves != b->octaves)
+            return false;
+        /* colour patterns carry colours, noise bumps a height */
+        if (a->kind == TB_MID_PATTERN_NOISE && a->height != b->height)
+            return false;
+        return tb__color_eq(&a->a, &b->a) && tb__color_eq(&a->b, &b->b);
+    case TB_MID_PATTERN_IMAGE: return a->height == b->height && tb__ref_eq(&a->image, &b->image);
+    }
+    return false;
+}
+
 static bool tb__material_eq(const tb_mid_material *a, const tb_mid_material *b)
 {
+    if (a->model != b->model || a->roughness != b->roughness || !tb__pattern_eq(&a->diffuse_pattern, &b->diffuse_pattern) ||
+        !tb__pattern_eq(&a->specular_pattern, &b->specular_pattern) || !tb__pattern_eq(&a->bump, &b->bump))
+        return false;
     return tb__str_eq(a->name, b->name) && tb__str_eq(a->base, b->base) && a->set == b->set &&
            tb__color_eq(&a->diffuse, &b->diffuse) && tb__color_eq(&a->specular, &b->specular) &&
            tb__color_eq(&a->transmission, &b->transmission) && tb__color_eq(&a->emission, &b->emission) &&

@@ -242,6 +242,19 @@ static tb_status tb__push_material_refs(tb_mid_reader *r, const tb_mid_material 
         return st;
     if ((m->set & TB_MID_SET_EMISSION_TEXTURE) && (st = tb__push_ref(r, &m->emission_texture)))
         return st;
+    const tb_mid_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+    const unsigned bits[3] = {TB_MID_SET_DIFFUSE_PATTERN, TB_MID_SET_SPECULAR_PATTERN, TB_MID_SET_BUMP};
+    for (int i = 0; i < 3; i++) {
+        if (!(m->set & bits[i]))
+            continue;
+        const tb_mid_pattern *pt = pats[i];
+        if (pt->kind == TB_MID_PATTERN_IMAGE) {
+            if ((st = tb__push_ref(r, &pt->image)))
+                return st;
+        } else if (i < 2 && ((st = tb__push_color_ref(r, &pt->a)) || (st = tb__push_color_ref(r, &pt->b)))) {
+            return st;
+        }
+    }
     return tb__push_attrs_refs(r, &m->extra);
 }
 
@@ -758,6 +771,74 @@ static void tb__material_unset(tb_mid_material *m, tb_mid_loc loc)
     m->loc = loc;
 }
 
+/* The optional space argument of a pattern: the symbol uv or object. */
+static tb_status tb__pattern_space(tb_mid_reader *r, const tb_mid_value *v, const char *fn, bool *object)
+{
+    char found[96];
+    if (v->type == TB_MID_SYMBOL && strcmp(v->text, "uv") == 0)
+        *object = false;
+    else if (v->type == TB_MID_SYMBOL && strcmp(v->text, "object") == 0)
+        *object = true;
+    else
+        return TB__ERR(r, v->loc, "expected uv or object for the space of %s(), found %s", fn, TB__DESC(v));
+    return TB_OK;
+}
+
+/* A procedural pattern (diffuse_pattern, specular_pattern) or, with `bump`,
+ * a bump map (docs/mid.md, 7.2). */
+static tb_status tb__pattern(tb_mid_reader *r, const tb_mid_value *v, const char *what, bool bump,
+                             tb_mid_pattern *out)
+{
+    char found[96];
+    tb_status st;
+    memset(out, 0, sizeof *out);
+    if (v->type != TB_MID_CALL)
+        return TB__ERR(r, v->loc, "expected %s for '%s', found %s",
+                       bump ? "noise(...) or image(...)" : "checker(...) or noise(...)", what, TB__DESC(v));
+    const tb_mid_value *a = v->items;
+    const int n = v->count;
+    if (!bump && strcmp(v->name, "checker") == 0) {
+        if (n != 3 && n != 4)
+            return TB__ERR(r, v->loc,
+                           "checker takes a scale, two colours and an optional space: checker(scale, a, b [, uv|object])");
+        out->kind = TB_MID_PATTERN_CHECKER;
+        if ((st = tb__param(r, &a[0], "scale", true, INFINITY, &out->scale)) ||
+            (st = tb__color(r, &a[1], what, 1.0, &out->a)) || (st = tb__color(r, &a[2], what, 1.0, &out->b)) ||
+            (n == 4 && (st = tb__pattern_space(r, &a[3], "checker", &out->object_space))))
+            return st;
+        return TB_OK;
+    }
+    if (strcmp(v->name, "noise") == 0) {
+        int k = bump ? 3 : 4;
+        if (n != k && n != k + 1)
+            return TB__ERR(r, v->loc, "%s",
+                           bump ? "noise takes a scale, an octave count, a height and an optional space: "
+                                  "noise(scale, octaves, height [, uv|object])"
+                                : "noise takes a scale, an octave count, two colours and an optional space: "
+                                  "noise(scale, octaves, a, b [, uv|object])");
+        out->kind = TB_MID_PATTERN_NOISE;
+        if ((st = tb__param(r, &a[0], "scale", true, INFINITY, &out->scale)) ||
+            (st = tb__int(r, &a[1], "octaves", 1, 16, &out->octaves)))
+            return st;
+        if (bump)
+            st = tb__number(r, &a[2], "height", &out->height);
+        else if (!(st = tb__color(r, &a[2], what, 1.0, &out->a)))
+            st = tb__color(r, &a[3], what, 1.0, &out->b);
+        if (!st && n == k + 1)
+            st = tb__pattern_space(r, &a[k], "noise", &out->object_space);
+        return st;
+    }
+    if (bump && strcmp(v->name, "image") == 0) {
+        if (n != 2 || a[0].type != TB_MID_FILE)
+            return TB__ERR(r, v->loc, "image takes a file and a height: image(file(\"heights.png\"), height)");
+        out->kind = TB_MID_PATTERN_IMAGE;
+        out->image = a[0].ref;
+        return tb__number(r, &a[1], "height", &out->height);
+    }
+    return TB__ERR(r, v->loc, "unknown pattern '%.40s' for '%s' (expected %s)", v->name, what,
+                   bump ? "noise or image" : "checker or noise");
+}
+
 /* A rendering block (or a material body): starts from `inherited`, or from
  * the material it names, and applies its attributes. */
 static tb_status tb__rendering(tb_mid_reader *r, const tb_mid_attr *attrs, int n, tb_mid_loc loc,
@@ -824,6 +905,29 @@ static tb_status tb__rendering(tb_mid_reader *r, const tb_mid_attr *attrs, int n
         } else if (strcmp(nm, "emission_texture") == 0) {
             st = tb__file(r, v, nm, &m->emission_texture);
             m->set |= TB_MID_SET_EMISSION_TEXTURE;
+        } else if (strcmp(nm, "model") == 0) {
+            int k = 0;
+            while (k < TB_MID_MODEL_COUNT &&
+                   !(v->type == TB_MID_SYMBOL && strcmp(v->text, tb_mid_model_name((tb_mid_model)k)) == 0))
+                k++;
+            if (k == TB_MID_MODEL_COUNT)
+                st = TB__ERR(r, v->loc, "expected phong, blinn, lambert or ggx for 'model', found %s", TB__DESC(v));
+            m->model = (tb_mid_model)k;
+            m->set |= TB_MID_SET_MODEL;
+        } else if (strcmp(nm, "roughness") == 0) {
+            if (!(st = tb__number(r, v, nm, &x)) && !(x >= 0.0 && x <= 1.0))
+                st = tb__range_error(r, v->loc, nm, "in [0, 1]", x);
+            m->roughness = (float)x;
+            m->set |= TB_MID_SET_ROUGHNESS;
+        } else if (strcmp(nm, "diffuse_pattern") == 0) {
+            st = tb__pattern(r, v, nm, false, &m->diffuse_pattern);
+            m->set |= TB_MID_SET_DIFFUSE_PATTERN;
+        } else if (strcmp(nm, "specular_pattern") == 0) {
+            st = tb__pattern(r, v, nm, false, &m->specular_pattern);
+            m->set |= TB_MID_SET_SPECULAR_PATTERN;
+        } else if (strcmp(nm, "bump") == 0) {
+            st = tb__pattern(r, v, nm, true, &m->bump);
+            m->set |= TB_MID_SET_BUMP;
         } else
             st = tb__extra_push(r, &extra, a);
         if (st)
@@ -937,6 +1041,13 @@ static bool tb__copy_color(tb_arena *a, const tb_mid_color *s, tb_mid_color *d)
     return tb__copy_ref(a, &s->file, &d->file);
 }
 
+static bool tb__copy_pattern(tb_arena *a, const tb_mid_pattern *s, tb_mid_pattern *d)
+{
+    *d = *s;
+    return tb__copy_color(a, &s->a, &d->a) && tb__copy_color(a, &s->b, &d->b) &&
+           tb__copy_ref(a, &s->image, &d->image);
+}
+
 static bool tb__copy_material(tb_arena *a, const tb_mid_material *s, tb_mid_material *d)
 {
     *d = *s;
@@ -948,6 +1059,9 @@ static bool tb__copy_material(tb_arena *a, const tb_mid_material *s, tb_mid_mate
            tb__copy_ref(a, &s->specular_texture, &d->specular_texture) &&
            tb__copy_ref(a, &s->transmission_texture, &d->transmission_texture) &&
            tb__copy_ref(a, &s->emission_texture, &d->emission_texture) &&
+           tb__copy_pattern(a, &s->diffuse_pattern, &d->diffuse_pattern) &&
+           tb__copy_pattern(a, &s->specular_pattern, &d->specular_pattern) &&
+           tb__copy_pattern(a, &s->bump, &d->bump) &&
            tb__copy_attrs(a, s->extra.items, s->extra.count, &d->extra.items) &&
            tb__copy_refs(a, s->refs, s->nrefs, &d->refs);
 }

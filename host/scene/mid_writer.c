@@ -14,6 +14,7 @@
 typedef struct tb__w {
     FILE *fp;
     tb_status st;
+    bool bump; /* writing the `bump` attribute (its noise() takes a height, not colours) */
 } tb__w;
 
 static void tb__bad(tb__w *w, const char *what)
@@ -277,6 +278,47 @@ static void tb__ops(tb__w *w, const tb_mid_op *ops, int n, int level)
     fputs("]\n", w->fp);
 }
 
+/* A pattern or bump map (docs/mid.md, 7.2): the space only when not uv. */
+static void tb__pattern(tb__w *w, const tb_mid_pattern *p)
+{
+    switch (p->kind) {
+    case TB_MID_PATTERN_CHECKER:
+        fputs("checker(", w->fp);
+        tb__double(w, p->scale);
+        fputs(", ", w->fp);
+        tb__color(w, &p->a);
+        fputs(", ", w->fp);
+        tb__color(w, &p->b);
+        break;
+    case TB_MID_PATTERN_NOISE:
+        fputs("noise(", w->fp);
+        tb__double(w, p->scale);
+        fprintf(w->fp, ", %d, ", p->octaves);
+        if (w->bump) {
+            tb__double(w, p->height); /* a bump map has a height, a colour pattern two colours */
+        } else {
+            tb__color(w, &p->a);
+            fputs(", ", w->fp);
+            tb__color(w, &p->b);
+        }
+        break;
+    case TB_MID_PATTERN_IMAGE:
+        fputs("image(", w->fp);
+        if (p->image.text)
+            tb__ref(w, &p->image);
+        else
+            tb__bad(w, "an image bump without a file");
+        fputs(", ", w->fp);
+        tb__double(w, p->height);
+        fputc(')', w->fp);
+        return;
+    default: tb__bad(w, "a pattern bit is set without a pattern"); return;
+    }
+    if (p->object_space)
+        fputs(", object", w->fp);
+    fputc(')', w->fp);
+}
+
 /* The attributes of a rendering block or material body, at `level`. */
 static void tb__material_body(tb__w *w, const tb_mid_material *m, int level)
 {
@@ -315,6 +357,34 @@ static void tb__material_body(tb__w *w, const tb_mid_material *m, int level)
             tb__ref(w, fields[i].ref);
         else
             tb__bad(w, "a texture bit is set without a file");
+        fputc('\n', w->fp);
+    }
+    /* MID 1.1 */
+    if (m->set & TB_MID_SET_MODEL) {
+        tb__key(w, level, "model");
+        fprintf(w->fp, "%s\n", tb_mid_model_name(m->model));
+    }
+    if (m->set & TB_MID_SET_ROUGHNESS) {
+        tb__key(w, level, "roughness");
+        tb__float(w, m->roughness);
+        fputc('\n', w->fp);
+    }
+    const struct {
+        unsigned bit;
+        const char *name;
+        const tb_mid_pattern *p;
+    } pats[] = {
+        {TB_MID_SET_DIFFUSE_PATTERN, "diffuse_pattern", &m->diffuse_pattern},
+        {TB_MID_SET_SPECULAR_PATTERN, "specular_pattern", &m->specular_pattern},
+        {TB_MID_SET_BUMP, "bump", &m->bump},
+    };
+    for (size_t i = 0; i < sizeof pats / sizeof pats[0]; i++) {
+        if (!(m->set & pats[i].bit))
+            continue;
+        tb__key(w, level, pats[i].name);
+        w->bump = pats[i].bit == TB_MID_SET_BUMP;
+        tb__pattern(w, pats[i].p);
+        w->bump = false;
         fputc('\n', w->fp);
     }
     tb__attrs(w, m->extra.items, m->extra.count, level);
@@ -539,7 +609,7 @@ static tb_status tb__finish(tb__w *w)
 
 tb_status tb_mid_write_header(FILE *fp)
 {
-    fprintf(fp, "mid %d\n", TB_MID_VERSION_MAJOR);
+    fprintf(fp, "mid %d.%d\n", TB_MID_VERSION_MAJOR, TB_MID_VERSION_MINOR);
     return ferror(fp) ? tb_error(TB_ERR_IO, "MID writer: write error") : TB_OK;
 }
 
@@ -558,7 +628,7 @@ tb_status tb_mid_write_item(FILE *fp, const tb_mid_item *item)
 
 static tb_status tb__write_item(FILE *fp, const tb_mid_item *item)
 {
-    tb__w w = {fp, TB_OK};
+    tb__w w = {fp, TB_OK, false};
     switch (item->type) {
     case TB_MID_ITEM_OBJECT: tb__object(&w, item->object, 0, 1); break;
     case TB_MID_ITEM_MATERIAL:

@@ -492,6 +492,71 @@ static void test_memory_is_flat(void **state)
     fclose(fp);
 }
 
+/* MID 1.1 material attributes: defaults, every form of model, roughness,
+ * patterns and bump maps, inheritance through a named material, and the
+ * file references they bring. */
+static void test_materials_11(void **state)
+{
+    (void)state;
+    src s = open_text("mid 1.1\n"
+                      "material \"d\" {}\n"
+                      "material \"metal\" { model = ggx roughness = 0.35 specular = [0.9 0.6 0.3]\n"
+                      "    diffuse_pattern = checker(8, 0.1, [1 0.5 0.25])\n"
+                      "    specular_pattern = noise(2.5, 4, 0, 1, object)\n"
+                      "    bump = noise(16, 3, -0.01, uv) }\n"
+                      "sphere { rendering = { material = \"metal\" model = blinn\n"
+                      "    bump = image(file(\"checker.png\"), 0.002) } }\n"
+                      "cube { rendering = { model = lambert diffuse_pattern = checker(1.5, 0, 1, object) } }\n"
+                      "cube { rendering = { model = phong } }\n");
+    tb_mid_item it = next(&s);
+    const tb_mid_material *d = it.material;
+    assert_int_equal(d->model, TB_MID_MODEL_PHONG);
+    assert_true(d->roughness == 0.2f);
+    assert_int_equal(d->diffuse_pattern.kind, TB_MID_PATTERN_NONE);
+    assert_int_equal(d->specular_pattern.kind, TB_MID_PATTERN_NONE);
+    assert_int_equal(d->bump.kind, TB_MID_PATTERN_NONE);
+    it = next(&s);
+    const tb_mid_material *m = it.material;
+    assert_int_equal(m->model, TB_MID_MODEL_GGX);
+    assert_true(m->roughness == 0.35f);
+    assert_int_equal(m->set & (TB_MID_SET_MODEL | TB_MID_SET_ROUGHNESS | TB_MID_SET_DIFFUSE_PATTERN |
+                               TB_MID_SET_SPECULAR_PATTERN | TB_MID_SET_BUMP),
+                     TB_MID_SET_MODEL | TB_MID_SET_ROUGHNESS | TB_MID_SET_DIFFUSE_PATTERN |
+                         TB_MID_SET_SPECULAR_PATTERN | TB_MID_SET_BUMP);
+    assert_int_equal(m->diffuse_pattern.kind, TB_MID_PATTERN_CHECKER);
+    assert_true(m->diffuse_pattern.scale == 8.0 && !m->diffuse_pattern.object_space);
+    assert_rgb(&m->diffuse_pattern.a, 0.1f, 0.1f, 0.1f);
+    assert_rgb(&m->diffuse_pattern.b, 1.0f, 0.5f, 0.25f);
+    assert_int_equal(m->specular_pattern.kind, TB_MID_PATTERN_NOISE);
+    assert_true(m->specular_pattern.scale == 2.5 && m->specular_pattern.octaves == 4 &&
+                m->specular_pattern.object_space);
+    assert_rgb(&m->specular_pattern.a, 0.0f, 0.0f, 0.0f);
+    assert_rgb(&m->specular_pattern.b, 1.0f, 1.0f, 1.0f);
+    assert_int_equal(m->bump.kind, TB_MID_PATTERN_NOISE);
+    assert_true(m->bump.scale == 16.0 && m->bump.octaves == 3 && m->bump.height == -0.01 && !m->bump.object_space);
+    /* an object starting from "metal" overrides the model and the bump, keeps the rest */
+    it = next(&s);
+    const tb_mid_material *o = &it.object->material;
+    assert_int_equal(o->model, TB_MID_MODEL_BLINN);
+    assert_true(o->roughness == 0.35f);
+    assert_int_equal(o->set, TB_MID_SET_MODEL | TB_MID_SET_BUMP);
+    assert_int_equal(o->diffuse_pattern.kind, TB_MID_PATTERN_CHECKER);
+    assert_int_equal(o->bump.kind, TB_MID_PATTERN_IMAGE);
+    assert_true(o->bump.height == 0.002);
+    assert_string_equal(o->bump.image.text, "checker.png");
+    assert_string_equal(o->bump.image.path, DATA "/checker.png");
+    assert_int_equal(it.object->nrefs, 1);
+    it = next(&s);
+    o = &it.object->material;
+    assert_int_equal(o->model, TB_MID_MODEL_LAMBERT);
+    assert_true(o->diffuse_pattern.object_space && o->diffuse_pattern.scale == 1.5);
+    it = next(&s);
+    assert_int_equal(it.object->material.model, TB_MID_MODEL_PHONG);
+    assert_int_equal(it.object->material.set, TB_MID_SET_MODEL);
+    expect_end(&s);
+    close_text(&s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -500,6 +565,7 @@ int main(void)
         cmocka_unit_test(test_transform_order),
         cmocka_unit_test(test_geometry),
         cmocka_unit_test(test_materials),
+        cmocka_unit_test(test_materials_11),
         cmocka_unit_test(test_unknown_attributes_and_refs),
         cmocka_unit_test(test_lights_and_camera),
         cmocka_unit_test(test_example_scene),

@@ -224,6 +224,18 @@ static void material_refs(refs *r, const tb_mid_material *m)
         add_ref(r, &m->transmission_texture);
     if (m->set & TB_MID_SET_EMISSION_TEXTURE)
         add_ref(r, &m->emission_texture);
+    const tb_mid_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+    const unsigned bits[3] = {TB_MID_SET_DIFFUSE_PATTERN, TB_MID_SET_SPECULAR_PATTERN, TB_MID_SET_BUMP};
+    for (int i = 0; i < 3; i++) {
+        if (!(m->set & bits[i]))
+            continue;
+        if (pats[i]->kind == TB_MID_PATTERN_IMAGE)
+            add_ref(r, &pats[i]->image);
+        else if (i < 2) {
+            color_ref(r, &pats[i]->a);
+            color_ref(r, &pats[i]->b);
+        }
+    }
     attrs_refs(r, &m->extra);
 }
 
@@ -268,6 +280,38 @@ static tb_mid_color any_color(gen *g, double hi)
     return c;
 }
 
+/* A procedural pattern (MID 1.1 diffuse_pattern, specular_pattern) or, with
+ * `bump`, a bump map: every form and optional argument. */
+static tb_mid_pattern any_pattern(gen *g, bool bump)
+{
+    tb_mid_pattern p;
+    memset(&p, 0, sizeof p);
+    p.scale = chance(g, 30) ? (double)(1 + below(g, 64)) : ldexp(uniform(g, 0.5, 1.0), (int)below(g, 40) - 20);
+    p.object_space = chance(g, 40);
+    if (bump) {
+        p.height = any_double(g);
+        if (chance(g, 40)) {
+            p.kind = TB_MID_PATTERN_IMAGE;
+            p.image = any_ref(g);
+            p.scale = 0.0;
+            p.object_space = false;
+        } else {
+            p.kind = TB_MID_PATTERN_NOISE;
+            p.octaves = 1 + (int)below(g, 16);
+        }
+        return p;
+    }
+    p.a = any_color(g, 1.0);
+    p.b = any_color(g, 1.0);
+    if (chance(g, 50)) {
+        p.kind = TB_MID_PATTERN_CHECKER;
+    } else {
+        p.kind = TB_MID_PATTERN_NOISE;
+        p.octaves = 1 + (int)below(g, 16);
+    }
+    return p;
+}
+
 /* Clears what describes a block, as the reader does for an inherited material. */
 static void unset(tb_mid_material *m)
 {
@@ -299,6 +343,11 @@ static tb_mid_material any_rendering(gen *g, const tb_mid_material *inherited)
     if (chance(g, 10)) { m.specular_texture = any_ref(g); m.set |= TB_MID_SET_SPECULAR_TEXTURE; }
     if (chance(g, 10)) { m.transmission_texture = any_ref(g); m.set |= TB_MID_SET_TRANSMISSION_TEXTURE; }
     if (chance(g, 10)) { m.emission_texture = any_ref(g); m.set |= TB_MID_SET_EMISSION_TEXTURE; }
+    if (chance(g, 20)) { m.model = (tb_mid_model)below(g, TB_MID_MODEL_COUNT); m.set |= TB_MID_SET_MODEL; }
+    if (chance(g, 20)) { m.roughness = any_float(g, 0.0, 1.0); m.set |= TB_MID_SET_ROUGHNESS; }
+    if (chance(g, 15)) { m.diffuse_pattern = any_pattern(g, false); m.set |= TB_MID_SET_DIFFUSE_PATTERN; }
+    if (chance(g, 15)) { m.specular_pattern = any_pattern(g, false); m.set |= TB_MID_SET_SPECULAR_PATTERN; }
+    if (chance(g, 15)) { m.bump = any_pattern(g, true); m.set |= TB_MID_SET_BUMP; }
     if (chance(g, 20))
         m.extra = any_attrs(g, 2, 1);
     refs r = {.n = 0};

@@ -36,7 +36,7 @@ for spec in grid:150 csg:60 mesh:6; do
     "$TESTBED" check "$tmp/$kind.d.mid" >/dev/null 2>"$tmp/err" || { fail "$kind: seed 43 invalid"; cat "$tmp/err"; }
 done
 # The first line is the header, the writer's canonical form.
-[[ "$(head -n1 "$tmp/grid.a.mid")" == "mid 1" ]] || fail "header"
+[[ "$(head -n1 "$tmp/grid.a.mid")" == "mid 1.1" ]] || fail "header"
 
 # Defaults: 100 objects; 0 objects is a valid (empty) scene.
 "$TESTBED" generate csg | "$TESTBED" check - >"$tmp/out" 2>"$tmp/err" || fail "default count: check failed"
