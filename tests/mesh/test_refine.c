@@ -87,6 +87,24 @@ static double shape_bound(const tb_mesh *m)
                 worst = fmin(worst, min_angle_pts(t, 3));
             }
         }
+        if (n == 4) {
+            tb_vec3 mid[4];
+            for (int s = 0; s < 4; s++)
+                mid[s] = (tb_vec3){(q[s].x + q[(s + 1) % 4].x) / 2, (q[s].y + q[(s + 1) % 4].y) / 2,
+                                   (q[s].z + q[(s + 1) % 4].z) / 2};
+            for (int s = 0; s < 2; s++) { /* opposite sides s, s+2: two quads */
+                tb_vec3 h1[4] = {q[s], mid[s], mid[s + 2], q[(s + 3) % 4]};
+                tb_vec3 h2[4] = {mid[s], q[s + 1], q[s + 2], mid[s + 2]};
+                worst = fmin(worst, fmin(min_angle_pts(h1, 4), min_angle_pts(h2, 4)));
+            }
+            for (int k = 0; k < 4; k++) { /* adjacent sides k, k+1: corner triangle + fan from k+3 */
+                tb_vec3 a = mid[k], b = mid[(k + 1) % 4], c0 = q[k], c1 = q[(k + 1) % 4], c2 = q[(k + 2) % 4],
+                        c3 = q[(k + 3) % 4];
+                tb_vec3 t[4][3] = {{a, c1, b}, {c3, c0, a}, {c3, a, b}, {c3, b, c2}};
+                for (int i = 0; i < 4; i++)
+                    worst = fmin(worst, min_angle_pts(t[i], 3));
+            }
+        }
     }
     return worst;
 }
@@ -577,17 +595,63 @@ static void test_grid_neighbours_green(void **state)
     assert_int_equal(green6, 0);
     /* 5 and 6 split (8), neighbours of both (2, 4, 9, 7, 10; 1... ) greened */
     assert_int_equal(tb_mesh_nelems(m), 8 + 6 * 3 + 8);
-    /* two cells with two split sides between them: marking cell 1's green
-     * splits 1 red; cell 2 (neighbour of 1 and 6) then has two split sides
-     * and is closed red too */
+    /* cell 1 split too: cell 2 (neighbour of 1 and 6) then has two
+     * adjacent split sides and is closed green (corner triangle + fan) */
     for (size_t i = 0; i < tb_mesh_nelems(m); i++)
         if (tb_mesh_refiner_is_green(r, i) && tb_mesh_refiner_base(r, i) == 1) {
             g = (uint32_t)i;
             break;
         }
     s = refine_checked(r, &base, &g, 1, true);
+    m = tb_mesh_refiner_mesh(r);
+    assert_int_equal(s.st.red, 1);
+    assert_int_equal(s.st.closure, 0);
+    size_t in2 = 0;
+    for (size_t i = 0; i < tb_mesh_nelems(m); i++)
+        if (tb_mesh_refiner_base(r, i) == 2) {
+            in2++;
+            assert_true(tb_mesh_refiner_is_green(r, i));
+            assert_int_equal(tb_mesh_elem_size(tb_mesh_elem_at(m, i)), 3);
+        }
+    assert_int_equal(in2, 4);
+    /* cell 3 split: cell 2 has three split sides and is split red (a
+     * closure split); cell 7 (3 below it, 6 to its left) has two adjacent
+     * split sides: green */
+    for (size_t i = 0; i < tb_mesh_nelems(m); i++)
+        if (tb_mesh_refiner_base(r, i) == 3) {
+            g = (uint32_t)i;
+            break;
+        }
+    s = refine_checked(r, &base, &g, 1, true);
+    m = tb_mesh_refiner_mesh(r);
     assert_int_equal(s.st.red, 2);
     assert_int_equal(s.st.closure, 1);
+    size_t in7 = 0;
+    for (size_t i = 0; i < tb_mesh_nelems(m); i++)
+        if (tb_mesh_refiner_base(r, i) == 7) {
+            in7++;
+            assert_true(tb_mesh_refiner_is_green(r, i));
+        }
+    assert_int_equal(in7, 4);
+    /* cell 13 split: cell 9 between 5 and 13 has two opposite split sides
+     * and becomes two quads of half its area */
+    for (size_t i = 0; i < tb_mesh_nelems(m); i++)
+        if (tb_mesh_refiner_base(r, i) == 13) {
+            g = (uint32_t)i;
+            break;
+        }
+    s = refine_checked(r, &base, &g, 1, true);
+    m = tb_mesh_refiner_mesh(r);
+    assert_int_equal(s.st.red, 1);
+    size_t in9 = 0;
+    for (size_t i = 0; i < tb_mesh_nelems(m); i++)
+        if (tb_mesh_refiner_base(r, i) == 9) {
+            in9++;
+            assert_true(tb_mesh_refiner_is_green(r, i));
+            assert_int_equal(tb_mesh_elem_size(tb_mesh_elem_at(m, i)), 4);
+            tb_assert_near(tb_mesh_elem_area(m, i), 0.5, 0);
+        }
+    assert_int_equal(in9, 2);
     tb_mesh_refiner_free(r);
     tb_mesh_free(&base);
 }

@@ -377,7 +377,7 @@ static void tb__emit(tb_mesh_refiner *r, tb__build *b, uint32_t x, bool green, u
 }
 
 /* The conforming mesh of the current tree: every leaf in tree order, as
- * itself or, with one split side, as its green closure. Replaces r->mesh's
+ * itself or, with split sides, as its green closure. Replaces r->mesh's
  * elements only on success. */
 static void tb__rebuild(tb_mesh_refiner *r, tb_array *old_of_new)
 {
@@ -420,6 +420,32 @@ static void tb__rebuild(tb_mesh_refiner *r, tb_array *old_of_new)
                     tb__emit(r, &b, x, true, m, e, a, X3);
                 }
                 r->st.green += (uint32_t)(ns - 1);
+            } else if (split == 2 && ns == 4) {
+                /* A quad with two split sides: opposite ones cut it into
+                 * two quads; adjacent ones (k and k+1, around corner
+                 * k+1) into the corner triangle and a fan from the
+                 * opposite corner k+3. */
+                uint32_t m[4];
+                for (int k = 0; k < 4; k++)
+                    m[k] = TB__EDGE(r, X.e[k]).mid;
+                if (m[0] != TB_MESH_NONE && m[2] != TB_MESH_NONE) {
+                    tb__emit(r, &b, x, true, v[0], m[0], m[2], v[3]);
+                    tb__emit(r, &b, x, true, m[0], v[1], v[2], m[2]);
+                    r->st.green += 2;
+                } else if (m[1] != TB_MESH_NONE && m[3] != TB_MESH_NONE) {
+                    tb__emit(r, &b, x, true, v[0], v[1], m[1], m[3]);
+                    tb__emit(r, &b, x, true, m[3], m[1], v[2], v[3]);
+                    r->st.green += 2;
+                } else {
+                    int k = m[side] != TB_MESH_NONE && m[(side + 3) % 4] != TB_MESH_NONE ? (side + 3) % 4 : side;
+                    uint32_t a = m[k], bm = m[(k + 1) % 4], X3 = TB_MESH_NONE;
+                    uint32_t c0 = v[k], c1 = v[(k + 1) % 4], c2 = v[(k + 2) % 4], c3 = v[(k + 3) % 4];
+                    tb__emit(r, &b, x, true, a, c1, bm, X3);
+                    tb__emit(r, &b, x, true, c3, c0, a, X3);
+                    tb__emit(r, &b, x, true, c3, a, bm, X3);
+                    tb__emit(r, &b, x, true, c3, bm, c2, X3);
+                    r->st.green += 4;
+                }
             } else {
                 tb__fail(r, tb_error(TB_ERR_NUMERIC, "mesh refinement: leaf %u has %d split sides after closure", x,
                                      split));
@@ -615,13 +641,14 @@ tb_status tb_mesh_refine(tb_mesh_refiner *r, const uint32_t *marked, size_t nmar
             tb__refine_graded(r, todo[i]);
     free(todo);
 
-    /* Closure: a leaf with two or more split sides is split red (which
-     * splits more edges and queues their leaves), until every leaf has at
-     * most one; those get green closures when the mesh is rebuilt. */
+    /* Closure: a leaf with more split sides than a green pattern handles
+     * (a triangle with 2, a quad with 3) is split red (which splits more
+     * edges and queues their leaves), until none is left; the rest get
+     * green closures when the mesh is rebuilt. */
     for (size_t q = 0; q < r->queue.len && !r->err; q++) {
         uint32_t x = TB_ARRAY_AT(&r->queue, uint32_t, q);
         int side;
-        if (TB__NODE(r, x).child == TB_MESH_NONE && tb__split_sides(r, x, &side) >= 2) {
+        if (TB__NODE(r, x).child == TB_MESH_NONE && tb__split_sides(r, x, &side) >= tb__nside(TB__NODE(r, x).v) - 1) {
             uint32_t before = r->st.red;
             tb__refine_graded(r, x);
             if (r->st.red > before)

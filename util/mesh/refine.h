@@ -7,10 +7,13 @@
  * parallelograms). The red elements form a 1-irregular mesh: an edge is
  * split at most once more than the edges around it, which is kept by
  * refining a coarser neighbour first when needed. Hanging midpoints are
- * then closed "green": a red leaf with one split side is cut into 2
- * (triangle) or 3 (quad) triangles fanning from the midpoint; a leaf with
- * two or more split sides is refined red instead. Green elements are never
- * refined themselves: marking one refines its red parent, which replaces
+ * then closed "green": a triangle with one split side is cut in 2 from the
+ * midpoint; a quad with one split side is fanned into 3 triangles from it,
+ * with two opposite ones cut into 2 quads, with two adjacent ones into the
+ * corner triangle and a fan of 3 from the opposite corner. A leaf with
+ * more split sides (a triangle with 2, a quad with 3 or 4) is refined red
+ * instead. Green elements are never refined themselves: marking one
+ * refines its red parent, which replaces
  * the closure (the green split is undone). So every element is a red
  * descendant of an input element, or one of its few green splits, and
  * element shapes stay bounded however often one spot is refined; no
@@ -41,7 +44,7 @@ typedef struct tb_mesh_refine_stats {
     uint32_t marked;   /* distinct marked elements */
     uint32_t red;      /* red splits, all causes */
     uint32_t graded;   /* of which splits of a coarser neighbour to keep the mesh 1-irregular */
-    uint32_t closure;  /* of which splits of a leaf with two or more split sides */
+    uint32_t closure;  /* of which splits of a leaf with too many split sides to close green */
     uint32_t green;    /* green (closure) elements in the resulting mesh */
     uint32_t new_vertices;
 } tb_mesh_refine_stats;
