@@ -11,6 +11,8 @@
 #include <omp.h>
 
 #include "commands.h"
+#include "host/gpu/gpu.h"
+#include "host/gpu/render.h"
 #include "host/render/render.h"
 #include "host/render/scene.h"
 #include "util/image/compare.h"
@@ -38,6 +40,13 @@ static void tb__render_usage(FILE *out)
             "  --filter K[:R[:S]]   box (default) | tent | gaussian | mitchell\n"
             "  --threads N          OpenMP threads (the image does not depend on it)\n"
             "  --seed N             sample seed (default 0)\n"
+            "  --backend B          cpu (the reference), vulkan or auto (default auto): vulkan runs the\n"
+            "                       wavefront tracer (intersect + shade kernels) on any Vulkan device,\n"
+            "                       lavapipe included, and fails if there is none; auto uses it only on a\n"
+            "                       real GPU and otherwise, or if the device fails, the CPU path (says why).\n"
+            "                       Same image as cpu within docs/accuracy.md's tolerance; hits the kernel\n"
+            "                       cannot shade (textures, IES lights) run on the CPU and are reported\n"
+            "  --device N           Vulkan device N (testbed devices lists them; implies Vulkan in auto)\n"
             "  --accel bvh|grid|list  acceleration structure (default bvh)\n"
             "  --max-depth N        deepest reflected/refracted ray (default %d)\n"
             "  --light-samples N    area-light samples per shading point (default %d)\n"
@@ -106,6 +115,8 @@ int tb_cmd_render(int argc, char **argv)
     tb_accel_kind accel = TB_ACCEL_BVH;
     double exposure = NAN;
     long v;
+    const char *backend = "auto";
+    int gdevice = -1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int r = tb_aa_parse_arg(argc, argv, &i, &ro.aa, &ro.filter);
@@ -161,6 +172,10 @@ int tb_cmd_render(int argc, char **argv)
                 return tb__render_fail("bad --exposure '%s'", argv[i]), TB_EXIT_USAGE;
         } else if (!strcmp(a, "--stats") && has)
             stats_path = argv[++i];
+        else if (!strcmp(a, "--backend") && has)
+            backend = argv[++i];
+        else if (!strcmp(a, "--device") && has && tb__parse_long(argv[i + 1], 0, 1024, &v))
+            gdevice = (int)v, i++;
         else if (!strcmp(a, "--report") && has)
             report_path = argv[++i];
         else if (!strcmp(a, "--reference") && has)
@@ -183,6 +198,9 @@ int tb_cmd_render(int argc, char **argv)
         return tb__render_fail("unknown image format of '%s' (.png, .exr, .pfm, .rle)", out_path), TB_EXIT_USAGE;
     if (!report_path != !ref_path)
         return tb__render_fail("%s", "--report and --reference go together"), TB_EXIT_USAGE;
+    tb_gpu_mode gmode;
+    if (tb_gpu_mode_parse(backend, &gmode))
+        return tb__render_fail("--backend must be cpu, vulkan or auto, not '%s'", backend), TB_EXIT_USAGE;
 
     int rc = TB_EXIT_FAIL;
     tb_scene *scene = NULL;
@@ -220,7 +238,33 @@ int tb_cmd_render(int argc, char **argv)
     fprintf(stderr, "testbed render: rendering %s (Ctrl-C writes the image so far)\n", scene_path);
     tb_render_stats rs;
     ro.rt.spp = ro.aa.spp; /* scales the texture footprints (docs/raytrace.md) */
-    tb_status st = tb_render_raytrace(scene, &ro, &img, &rs);
+    /* The Vulkan wavefront tracer (docs/gpu.md, "Shade kernel and wavefront
+     * renderer"); auto falls back to the CPU path on any Vulkan failure. */
+    tb_gpu_session gsess;
+    tb_gpu_render_stats gs = {0};
+    tb_status st = tb_gpu_backend_choose(gmode, gdevice, false, &gsess);
+    if (st) {
+        fprintf(stderr, "testbed render: %s\n", tb_last_error());
+        sigaction(SIGINT, &old_sa, NULL);
+        goto done;
+    }
+    fprintf(stderr, "testbed render: backend %s: %s\n", tb_gpu_backend_name(gsess.backend), gsess.reason);
+    bool on_gpu = gsess.backend == TB_GPU_BACKEND_VULKAN;
+    if (on_gpu) {
+        st = tb_gpu_render_raytrace(gsess.device, scene, &ro, &img, &rs, &gs);
+        if (st && gmode == TB_GPU_MODE_AUTO && gdevice < 0) {
+            fprintf(stderr, "testbed render: the Vulkan renderer failed (%s); using the CPU path\n", tb_last_error());
+            on_gpu = false;
+        } else if (st) {
+            fprintf(stderr, "testbed render: --backend %s: %s\n", tb_gpu_mode_name(gmode), tb_last_error());
+            tb_gpu_session_close(&gsess);
+            sigaction(SIGINT, &old_sa, NULL);
+            goto done;
+        }
+    }
+    tb_gpu_session_close(&gsess);
+    if (!on_gpu)
+        st = tb_render_raytrace(scene, &ro, &img, &rs);
     sigaction(SIGINT, &old_sa, NULL);
     bool sigint = atomic_load(&tb__render_interrupt) != 0;
     if (st || rep.failed) {
@@ -248,11 +292,11 @@ int tb_cmd_render(int argc, char **argv)
     int nthreads = ro.threads > 0 ? ro.threads : omp_get_max_threads();
     char opts[512];
     snprintf(opts, sizeof opts, "method=raytrace spp=%d passes=%d adaptive=%d filter=%s:%g accel=%s max_depth=%d "
-             "light_samples=%d threads=%d colour=%s",
+             "light_samples=%d threads=%d colour=%s backend=%s",
              ro.aa.spp, ro.passes, (int)ro.aa.adaptive, tb_filter_kind_name(ro.filter.kind), ro.filter.radius,
              tb_accel_kind_name(accel), ro.rt.max_depth == 0 ? TB_RT_DEFAULT_MAX_DEPTH : (ro.rt.max_depth < 0 ? 0 : ro.rt.max_depth),
              ro.rt.light_samples ? ro.rt.light_samples : TB_RT_DEFAULT_LIGHT_SAMPLES, nthreads,
-             scene->spectral ? "spectral" : "rgb");
+             scene->spectral ? "spectral" : "rgb", on_gpu ? "vulkan" : "cpu");
     tb_provenance_set_seed(&prov, ro.aa.seed);
     if (strcmp(scene_path, "-") != 0)
         st = tb_provenance_hash_file(&prov, scene_path);
@@ -270,6 +314,17 @@ int tb_cmd_render(int argc, char **argv)
             st = tb_stats_set_value("interrupted", rs.interrupted ? 1.0 : 0.0);
         if (!st)
             st = tb_stats_set_value("samples_per_second", rs.seconds > 0 ? (double)rs.aa.samples / rs.seconds : 0.0);
+        if (!st && on_gpu) {
+            st = tb_stats_set_value("gpu_shaded_hits", (double)gs.gpu_shaded);
+            if (!st)
+                st = tb_stats_set_value("cpu_routed_hits", (double)gs.cpu_shaded);
+            if (!st)
+                st = tb_stats_set_value("shadow_rays", (double)gs.shadow_rays);
+            if (!st)
+                st = tb_stats_set_value("waves", (double)gs.waves);
+            if (!st)
+                st = tb_stats_set_value("shade_kernel_seconds", gs.shade_seconds);
+        }
         if (!st)
             st = tb_stats_write_json_file(stats_path, &prov);
     }
@@ -307,6 +362,13 @@ int tb_cmd_render(int argc, char **argv)
     printf("testbed render: %s: %dx%d, %llu samples, %.3f s (%d threads, %s)%s; wrote %s\n", scene_path, img->width,
            img->height, (unsigned long long)rs.aa.samples, rs.seconds, nthreads, scene->spectral ? "spectral" : "rgb",
            rs.interrupted ? ", INTERRUPTED (partial image)" : "", out_path);
+    if (on_gpu)
+        printf("testbed render: vulkan: %llu hits shaded by the kernel, %llu routed to the CPU path%s%s%s, "
+               "%llu shadow rays, %llu waves, shade kernel %.3f s\n",
+               (unsigned long long)gs.gpu_shaded, (unsigned long long)gs.cpu_shaded,
+               gs.routed_materials ? " (" : "", gs.routed_reason,
+               gs.routed_materials ? (gs.routed_materials > 1 ? ", ...)" : ")") : "",
+               (unsigned long long)gs.shadow_rays, (unsigned long long)gs.waves, gs.shade_seconds);
     rc = sigint ? 130 : TB_EXIT_OK;
 done:
     if (rep.fp)

@@ -1,0 +1,720 @@
+/* The wavefront Vulkan ray tracer (render.h; docs/gpu.md, "Shade kernel and
+ * wavefront renderer"). */
+#include "host/gpu/render.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "host/render/raytrace.h"
+#include "host/render/sampling.h"
+#include "host/render/shading.h"
+#include "shaders/shared/hit.h"
+#include "shaders/shared/ray.h"
+#include "shaders/shared/shade.h"
+#include "util/base/progress.h"
+#include "util/stats/stats.h"
+
+TB_STAT_COUNTER(tb__gr_rays, "GPU render/rays intersected");
+TB_STAT_COUNTER(tb__gr_shadow, "GPU render/shadow rays");
+TB_STAT_COUNTER(tb__gr_gpu_shaded, "GPU render/hits shaded by the kernel");
+TB_STAT_COUNTER(tb__gr_cpu_shaded, "GPU render/hits routed to the CPU path");
+
+/* Most light samples per point (raytrace.c's stack array). */
+#define TB__GR_MAX_LIGHT_SAMPLES 1024
+/* Largest output of one shade dispatch, bytes (rays plus values). */
+#define TB__GR_CHUNK_BYTES (24u << 20)
+
+struct tb_gpu_renderer {
+    tb_gpu_device *dev;
+    const tb_scene *scene;
+    tb_gpu_scene *gscene;
+    tb_raytracer rt;      /* the CPU tracer: routed hits, light-sample strata, the area light's CDF */
+    int nch;              /* channels */
+    int nlights;          /* delta lights */
+    int nsamples;         /* area-light samples per point (0: no area light) */
+    int S;                /* shadow slots per item */
+    char **route;         /* per material: why it is routed, or NULL */
+    uint8_t *mflags;      /* per material: TB_GPU_MAT_* */
+    tb_gpu_spec_constant spec[9];
+    tb_gpu_buffer *b_items, *b_lightu, *b_emitters, *b_lights, *b_materials, *b_colours, *b_rays, *b_values;
+    size_t chunk;         /* items per shade dispatch */
+    uint32_t light_col, emitter_col;
+    /* host staging of one chunk */
+    tb_gpu_shade_item *items;
+    tb_gpu_light_u *lightu;
+    tb_ray *orays;
+    float *ovals;
+    tb_gpu_render_stats st;
+};
+
+static double tb__now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void tb_gpu_renderer_destroy(tb_gpu_renderer *r)
+{
+    if (!r)
+        return;
+    tb_gpu_buffer_destroy(r->b_items);
+    tb_gpu_buffer_destroy(r->b_lightu);
+    tb_gpu_buffer_destroy(r->b_emitters);
+    tb_gpu_buffer_destroy(r->b_lights);
+    tb_gpu_buffer_destroy(r->b_materials);
+    tb_gpu_buffer_destroy(r->b_colours);
+    tb_gpu_buffer_destroy(r->b_rays);
+    tb_gpu_buffer_destroy(r->b_values);
+    tb_gpu_scene_destroy(r->gscene);
+    tb_rt_release(&r->rt);
+    if (r->route)
+        for (int i = 0; i < r->scene->nmaterials; i++)
+            free(r->route[i]);
+    free(r->route);
+    free(r->mflags);
+    free(r->items);
+    free(r->lightu);
+    free(r->orays);
+    free(r->ovals);
+    free(r);
+}
+
+/* A zero-size-safe device buffer holding `n` bytes of `data`. */
+static tb_gpu_buffer *tb__upload(tb_gpu_device *dev, const void *data, size_t n)
+{
+    tb_gpu_buffer *b = tb_gpu_buffer_create(dev, n ? n : 16);
+    if (b && n && tb_gpu_buffer_upload(b, 0, data, n)) {
+        tb_gpu_buffer_destroy(b);
+        return NULL;
+    }
+    return b;
+}
+
+static char *tb__strdup(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d)
+        memcpy(d, s, n);
+    return d;
+}
+
+const char *tb_gpu_renderer_material_route(const tb_gpu_renderer *r, int m)
+{
+    return m >= 0 && m < r->scene->nmaterials ? r->route[m] : NULL;
+}
+
+tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb_rt_options *opt,
+                                 tb_gpu_renderer **out)
+{
+    *out = NULL;
+    tb_gpu_renderer *r = calloc(1, sizeof *r);
+    if (!r)
+        return tb_error(TB_ERR_NOMEM, "GPU render: out of memory");
+    r->dev = dev;
+    r->scene = s;
+    tb_status st = tb_rt_init(&r->rt, s, opt);
+    if (st) {
+        free(r);
+        return st;
+    }
+    const int nm = s->nmaterials, nch = s->nchannels;
+    r->nch = nch;
+    r->nlights = s->nlights;
+    r->nsamples = r->rt.has_area ? r->rt.light_samples : 0;
+    r->S = r->nlights + r->nsamples;
+    r->route = calloc((size_t)(nm > 0 ? nm : 1), sizeof *r->route);
+    r->mflags = calloc((size_t)(nm > 0 ? nm : 1), 1);
+    if (!r->route || !r->mflags)
+        goto nomem;
+
+    /* What the kernel cannot do, scene-wide. */
+    bool ies = false, bad_emitter = false, spot = false;
+    for (int i = 0; i < s->nlights; i++) {
+        ies = ies || s->lights[i].ies;
+        spot = spot || s->lights[i].kind == TB_LIGHT_SPOT;
+    }
+    uint32_t kinds = 0;
+    for (int i = 0; i < s->nemitters; i++) {
+        const tb_emitter *e = &s->emitters[i];
+        if (e->kind == TB_EMITTER_CUSTOM || (e->kind == TB_EMITTER_SPHERE && e->two_sided) ||
+            (int)e->kind > TB_EMITTER_SPHERE)
+            bad_emitter = true;
+        else
+            kinds |= 1u << e->kind;
+    }
+    bool any_phong = false, any_mirror = false, any_dielectric = false, any_emission = false;
+    for (int i = 0; i < nm; i++) {
+        const tb_material *m = &s->materials[i];
+        uint8_t f = 0;
+        if (!tb_channels_is_black(m->diffuse))
+            f |= TB_GPU_MAT_DIFFUSE;
+        if (!tb_channels_is_black(m->specular))
+            f |= TB_GPU_MAT_SPECULAR;
+        if (!tb_channels_is_black(m->transmission))
+            f |= TB_GPU_MAT_TRANSMISSION;
+        if (m->emits)
+            f |= TB_GPU_MAT_EMITS;
+        r->mflags[i] = f;
+        const char *why = NULL;
+        if (m->diffuse_texture || m->specular_texture || m->transmission_texture || m->emission_texture)
+            why = "image texture";
+        else if (ies && (f & (TB_GPU_MAT_DIFFUSE | TB_GPU_MAT_SPECULAR)))
+            why = "lit by an IES light";
+        else if (bad_emitter && (f & TB_GPU_MAT_DIFFUSE))
+            why = "lit by an emitter the kernel does not sample (custom or two-sided sphere)";
+        if (why) {
+            char buf[320];
+            snprintf(buf, sizeof buf, "material %d%s%s%s: %s", i, m->name ? " (" : "", m->name ? m->name : "",
+                     m->name ? ")" : "", why);
+            if (!(r->route[i] = tb__strdup(buf)))
+                goto nomem;
+            if (r->st.routed_materials++ == 0)
+                snprintf(r->st.routed_reason, sizeof r->st.routed_reason, "%s", buf);
+            continue;
+        }
+        any_phong = any_phong || ((f & TB_GPU_MAT_SPECULAR) && s->nlights > 0);
+        any_mirror = any_mirror || ((f & TB_GPU_MAT_SPECULAR) && !(f & TB_GPU_MAT_TRANSMISSION));
+        any_dielectric = any_dielectric || (f & TB_GPU_MAT_TRANSMISSION);
+        any_emission = any_emission || (f & TB_GPU_MAT_EMITS);
+    }
+    if (!kinds)
+        kinds = 1; /* no emitter: the constant only prunes code */
+    tb_gpu_spec_constant spec[9] = {{1, (uint32_t)nch},       {2, (uint32_t)r->nlights}, {3, (uint32_t)r->nsamples},
+                                    {4, spot},                {5, any_phong},            {6, any_mirror},
+                                    {7, any_dielectric},      {8, any_emission},         {9, kinds}};
+    memcpy(r->spec, spec, sizeof spec);
+
+    /* Tables: materials (scalars), colours (materials' 4 x nch, lights' and
+     * emitters' nch each), lights, emitters. */
+    size_t ncol = (size_t)nm * 4 * (size_t)nch + (size_t)s->nlights * (size_t)nch + (size_t)s->nemitters * (size_t)nch;
+    float *col = calloc(ncol ? ncol : 1, sizeof *col);
+    tb_gpu_shade_material *mats = calloc((size_t)(nm > 0 ? nm : 1), sizeof *mats);
+    tb_gpu_delta_light *lts = calloc((size_t)(s->nlights > 0 ? s->nlights : 1), sizeof *lts);
+    tb_gpu_emitter *ems = calloc((size_t)(s->nemitters > 0 ? s->nemitters : 1), sizeof *ems);
+    if (!col || !mats || !lts || !ems) {
+        free(col), free(mats), free(lts), free(ems);
+        goto nomem;
+    }
+    for (int i = 0; i < nm; i++) {
+        const tb_material *m = &s->materials[i];
+        mats[i] = (tb_gpu_shade_material){m->exponent, m->ior,
+                                           (float)tb_bsdf_lobe_norm(TB_BSDF_PHONG_NORMALIZED, m->exponent),
+                                           r->mflags[i]};
+        const tb_channels *c4[4] = {&m->diffuse, &m->specular, &m->transmission, &m->emission};
+        for (int k = 0; k < 4; k++)
+            for (int c = 0; c < nch; c++)
+                col[((size_t)i * 4 + (size_t)k) * (size_t)nch + (size_t)c] = c4[k]->v[c];
+    }
+    r->light_col = (uint32_t)((size_t)nm * 4 * (size_t)nch);
+    r->emitter_col = r->light_col + (uint32_t)((size_t)s->nlights * (size_t)nch);
+    for (int i = 0; i < s->nlights; i++) {
+        const tb_light *l = &s->lights[i];
+        uint32_t kind = l->kind == TB_LIGHT_SPOT          ? TB_GPU_LIGHT_SPOT
+                        : l->kind == TB_LIGHT_DIRECTIONAL ? TB_GPU_LIGHT_DIRECTIONAL
+                                                          : TB_GPU_LIGHT_POINT;
+        lts[i] = (tb_gpu_delta_light){.position = l->position, .kind = kind, .axis = l->axis,
+                                      .cos_total = (float)l->cos_total, .cos_falloff = (float)l->cos_falloff};
+        for (int c = 0; c < nch; c++)
+            col[r->light_col + (size_t)i * (size_t)nch + (size_t)c] = l->intensity.v[c];
+    }
+    for (int i = 0; i < s->nemitters; i++) {
+        const tb_emitter *e = &s->emitters[i];
+        tb_gpu_emitter g = {.v0 = e->v[0], .kind = (uint32_t)e->kind, .v1 = e->v[1], .radius = e->radius,
+                            .v2 = e->v[2], .two_sided = e->two_sided};
+        if (e->kind == TB_EMITTER_TRIANGLE || e->kind == TB_EMITTER_PARALLELOGRAM) {
+            tb_dvec3 e1 = tb_dvec3_sub(tb_vec3_to_d(e->v[1]), tb_vec3_to_d(e->v[0]));
+            tb_dvec3 e2 = tb_dvec3_sub(tb_vec3_to_d(e->v[2]), tb_vec3_to_d(e->v[0]));
+            g.normal = tb_dvec3_to_f(tb_dvec3_normalize(tb_dvec3_cross(e1, e2)));
+        }
+        double area = r->rt.has_area ? r->rt.area.areas[i] : tb_emitter_area(e);
+        g.inv_area = (float)(1.0 / area);
+        ems[i] = g;
+        for (int c = 0; c < nch; c++)
+            col[r->emitter_col + (size_t)i * (size_t)nch + (size_t)c] = e->radiance.v[c];
+    }
+    r->b_materials = tb__upload(dev, mats, (size_t)nm * sizeof *mats);
+    r->b_colours = r->b_materials ? tb__upload(dev, col, ncol * sizeof *col) : NULL;
+    r->b_lights = r->b_colours ? tb__upload(dev, lts, (size_t)s->nlights * sizeof *lts) : NULL;
+    r->b_emitters = r->b_lights ? tb__upload(dev, ems, (size_t)s->nemitters * sizeof *ems) : NULL;
+    free(col), free(mats), free(lts), free(ems);
+    if (!r->b_emitters)
+        goto fail;
+
+    /* Chunk buffers. */
+    size_t per = (size_t)TB_GPU_SHADE_RAYS((size_t)r->S) * sizeof(tb_gpu_ray) +
+                 (size_t)TB_GPU_SHADE_VALUES((size_t)r->S) * (size_t)(nch + 1) * sizeof(float) +
+                 sizeof(tb_gpu_shade_item) + (size_t)r->nsamples * sizeof(tb_gpu_light_u);
+    r->chunk = TB__GR_CHUNK_BYTES / per;
+    if (r->chunk > 65536)
+        r->chunk = 65536;
+    if (r->chunk < 64)
+        r->chunk = 64;
+    size_t nr = r->chunk * TB_GPU_SHADE_RAYS((size_t)r->S), nv = r->chunk * TB_GPU_SHADE_VALUES((size_t)r->S) * (size_t)(nch + 1);
+    size_t nlu = r->chunk * (size_t)(r->nsamples > 0 ? r->nsamples : 1);
+    r->items = malloc(r->chunk * sizeof *r->items);
+    r->lightu = malloc(nlu * sizeof *r->lightu);
+    r->orays = malloc(nr * sizeof *r->orays);
+    r->ovals = malloc(nv * sizeof *r->ovals);
+    if (!r->items || !r->lightu || !r->orays || !r->ovals)
+        goto nomem;
+    r->b_items = tb_gpu_buffer_create(dev, r->chunk * sizeof *r->items);
+    r->b_lightu = r->b_items ? tb_gpu_buffer_create(dev, nlu * sizeof *r->lightu) : NULL;
+    r->b_rays = r->b_lightu ? tb_gpu_buffer_create(dev, nr * sizeof(tb_gpu_ray)) : NULL;
+    r->b_values = r->b_rays ? tb_gpu_buffer_create(dev, nv * sizeof(float)) : NULL;
+    if (!r->b_values)
+        goto fail;
+    r->gscene = tb_gpu_scene_create(dev, s);
+    if (!r->gscene)
+        goto fail;
+    *out = r;
+    return TB_OK;
+nomem:
+    st = tb_error(TB_ERR_NOMEM, "GPU render: out of memory");
+    tb_gpu_renderer_destroy(r);
+    return st;
+fail:
+    tb_gpu_renderer_destroy(r);
+    return TB_ERR_DEVICE;
+}
+
+void tb_gpu_renderer_stats(const tb_gpu_renderer *r, tb_gpu_render_stats *out) { *out = r->st; }
+
+/* ------------------------------------------------------------ the wavefront */
+
+/* Per-path state of one tb__wavefront call. A path is one camera sample (or
+ * one ray of tb_gpu_radiance); its stack holds the rays still to trace, each
+ * with its depth and throughput. */
+typedef struct tb__paths {
+    size_t n;
+    int cap;            /* stack entries per path */
+    int nch;
+    tb_ray *ray;        /* [path * cap + k] */
+    int *depth;
+    float *thr;         /* [(path * cap + k) * nch + c] */
+    int *top;           /* entries on each stack */
+    tb_rng *rng;        /* the paths' streams (caller's) */
+    float *L;           /* [path * nch + c] (caller's) */
+    /* renderer: film positions and the streams before the lens draws, so a
+     * camera ray whose hit is routed is traced as tb_rt_sample traces it
+     * (with ray differentials for its textures) */
+    const double *xy;   /* NULL: plain rays */
+    const tb_rng *rng0;
+} tb__paths;
+
+static void tb__push(tb__paths *P, size_t p, const tb_ray *ray, int depth, const float *thr)
+{
+    int k = P->top[p]++;
+    size_t e = p * (size_t)P->cap + (size_t)k;
+    P->ray[e] = *ray;
+    P->depth[e] = depth;
+    memcpy(P->thr + e * (size_t)P->nch, thr, sizeof(float) * (size_t)P->nch);
+}
+
+/* One wave's active paths (popped entries). */
+typedef struct tb__wave {
+    size_t n;
+    size_t *path;
+    tb_ray *ray;
+    int *depth;
+    float *thr;       /* [a * nch + c] */
+    tb_hit *hit;
+    size_t *item_of;  /* items: index into the wave */
+    tb_ray *shadow;   /* shadow rays of one chunk */
+    size_t *shadow_src; /* value slot index (chunk-local) of each shadow ray */
+    uint8_t *occl;
+} tb__wave;
+
+/* Runs the shade kernel on r->items[0..ni) and handles its outputs for the
+ * wave entries w->item_of[base ..]. */
+static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, size_t base, size_t ni,
+                                 size_t nlu)
+{
+    const int nch = r->nch, S = r->S;
+    const size_t NR = TB_GPU_SHADE_RAYS((size_t)S), NV = TB_GPU_SHADE_VALUES((size_t)S), SL = (size_t)nch + 1;
+    tb_status st = tb_gpu_buffer_upload(r->b_items, 0, r->items, ni * sizeof *r->items);
+    if (!st && nlu)
+        st = tb_gpu_buffer_upload(r->b_lightu, 0, r->lightu, nlu * sizeof *r->lightu);
+    if (st)
+        return st;
+    tb_gpu_kernel *k = tb_gpu_kernel_get(r->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("shade"),
+                                                                        .buffers = 8,
+                                                                        .push_size = sizeof(tb_gpu_shade_push),
+                                                                        .spec = r->spec,
+                                                                        .spec_count = 9});
+    if (!k)
+        return TB_ERR_DEVICE;
+    tb_gpu_shade_push push = {(uint32_t)ni, r->light_col, r->emitter_col, 0};
+    tb_gpu_dispatch d = {k,
+                         {r->b_items, r->b_lightu, r->b_emitters, r->b_lights, r->b_materials, r->b_colours,
+                          r->b_rays, r->b_values},
+                         &push,
+                         ni,
+                         0.0};
+    if ((st = tb_gpu_run(r->dev, &d, 1)))
+        return st;
+    r->st.shade_seconds += d.seconds;
+    if ((st = tb_gpu_buffer_download(r->b_rays, 0, r->orays, ni * NR * sizeof(tb_gpu_ray))) ||
+        (st = tb_gpu_buffer_download(r->b_values, 0, r->ovals, ni * NV * SL * sizeof(float))))
+        return st;
+
+    /* Emission, secondary rays; shadow rays collected. */
+    size_t ns = 0;
+    float tmp[TB_CHANNELS_MAX];
+    for (size_t j = 0; j < ni; j++) {
+        size_t a = w->item_of[base + j], p = w->path[a];
+        const float *thr = w->thr + a * (size_t)nch;
+        const float *v = r->ovals + j * NV * SL;
+        float *L = P->L + p * (size_t)nch;
+        if (v[0] != 0.0f)
+            for (int c = 0; c < nch; c++)
+                L[c] += thr[c] * v[1 + c];
+        for (int s = 0; s < S; s++)
+            if (v[(size_t)(1 + s) * SL] != 0.0f) {
+                w->shadow[ns] = r->orays[j * NR + (size_t)s];
+                w->shadow_src[ns++] = j * NV + (size_t)(1 + s);
+            }
+        /* refracted first, so the mirror ray is on top (the CPU traces it first) */
+        for (int s = S + 1; s >= S; s--) {
+            const float *sv = v + (size_t)(1 + s) * SL;
+            if (sv[0] == 0.0f)
+                continue;
+            for (int c = 0; c < nch; c++)
+                tmp[c] = thr[c] * sv[1 + c];
+            tb__push(P, p, &r->orays[j * NR + (size_t)s], w->depth[a] + 1, tmp);
+        }
+    }
+    if (ns) {
+        double t0 = tb__now();
+        st = tb_gpu_occluded(r->gscene, w->shadow, ns, w->occl, NULL);
+        r->st.trace_seconds += tb__now() - t0;
+        if (st)
+            return st;
+        r->st.shadow_rays += ns;
+        tb_stat_add(&tb__gr_shadow, (int64_t)ns);
+        for (size_t q = 0; q < ns; q++) {
+            if (w->occl[q])
+                continue;
+            size_t j = w->shadow_src[q] / NV;
+            size_t a = w->item_of[base + j], p = w->path[a];
+            const float *thr = w->thr + a * (size_t)nch;
+            const float *sv = r->ovals + w->shadow_src[q] * SL;
+            float *L = P->L + p * (size_t)nch;
+            for (int c = 0; c < nch; c++)
+                L[c] += thr[c] * sv[1 + c];
+        }
+    }
+    return TB_OK;
+}
+
+/* Traces every path's stack empty. */
+static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
+{
+    const tb_scene *s = r->scene;
+    const int nch = r->nch;
+    const size_t n = P->n, S = (size_t)r->S;
+    tb__wave w = {0};
+    w.path = malloc(n * sizeof *w.path);
+    w.ray = malloc(n * sizeof *w.ray);
+    w.depth = malloc(n * sizeof *w.depth);
+    w.thr = malloc(n * (size_t)nch * sizeof *w.thr);
+    w.hit = malloc(n * sizeof *w.hit);
+    w.item_of = malloc(n * sizeof *w.item_of);
+    w.shadow = malloc(r->chunk * (S ? S : 1) * sizeof *w.shadow);
+    w.shadow_src = malloc(r->chunk * (S ? S : 1) * sizeof *w.shadow_src);
+    w.occl = malloc(r->chunk * (S ? S : 1));
+    tb_status st = TB_OK;
+    if (!w.path || !w.ray || !w.depth || !w.thr || !w.hit || !w.item_of || !w.shadow || !w.shadow_src || !w.occl)
+        st = tb_error(TB_ERR_NOMEM, "GPU render: out of memory for %zu paths", n);
+    float u[2 * TB__GR_MAX_LIGHT_SAMPLES], tmp[TB_CHANNELS_MAX];
+    while (!st) {
+        /* pop the top of every active path */
+        w.n = 0;
+        for (size_t p = 0; p < n; p++) {
+            if (P->top[p] == 0)
+                continue;
+            size_t e = p * (size_t)P->cap + (size_t)(--P->top[p]);
+            w.path[w.n] = p;
+            w.ray[w.n] = P->ray[e];
+            w.depth[w.n] = P->depth[e];
+            memcpy(w.thr + w.n * (size_t)nch, P->thr + e * (size_t)nch, sizeof(float) * (size_t)nch);
+            w.n++;
+        }
+        if (w.n == 0)
+            break;
+        r->st.waves++;
+        double t0 = tb__now();
+        st = tb_gpu_intersect(r->gscene, w.ray, w.n, w.hit, NULL);
+        r->st.trace_seconds += tb__now() - t0;
+        if (st)
+            break;
+        r->st.rays += w.n;
+        tb_stat_add(&tb__gr_rays, (int64_t)w.n);
+        /* items in chunks */
+        size_t ni = 0, nlu = 0, base = 0, it = 0;
+        for (size_t a = 0; a < w.n && !st; a++) {
+            const tb_hit *h = &w.hit[a];
+            if (h->object == TB_GPU_NO_HIT)
+                continue;
+            const tb_material *m = tb_scene_hit_material(s, h);
+            if (!m)
+                continue;
+            int mi = (int)(m - s->materials);
+            size_t p = w.path[a];
+            if (r->route[mi]) {
+                /* The CPU path for this ray and everything it spawns, with the same stream. */
+                double c0 = tb__now();
+                float *L = P->L + p * (size_t)nch;
+                const float *thr = w.thr + a * (size_t)nch;
+                if (w.depth[a] == 0 && P->xy) {
+                    tb_rng rng0 = P->rng0[p];
+                    tb_rt_sample(&r->rt, P->xy[2 * p], P->xy[2 * p + 1], &rng0, tmp);
+                    P->rng[p] = rng0;
+                } else {
+                    tb_raytracer sub = r->rt; /* shallow copy: only the depth limit differs */
+                    sub.max_depth = r->rt.max_depth - w.depth[a];
+                    tb_channels Lc = tb_rt_radiance(&sub, &w.ray[a], &P->rng[p]);
+                    memcpy(tmp, Lc.v, sizeof(float) * (size_t)nch);
+                }
+                for (int c = 0; c < nch; c++)
+                    L[c] += thr[c] * tmp[c];
+                r->st.cpu_seconds += tb__now() - c0;
+                r->st.cpu_shaded++;
+                TB_STAT_INC(tb__gr_cpu_shaded);
+                continue;
+            }
+            tb_gpu_shade_item *item = &r->items[ni];
+            *item = (tb_gpu_shade_item){.o = w.ray[a].o, .t = h->t, .d = w.ray[a].d, .material = (uint32_t)mi,
+                                        .ng = h->ng, .light_base = (uint32_t)nlu};
+            if (w.depth[a] < r->rt.max_depth)
+                item->flags |= TB_GPU_SHADE_SPAWN;
+            if (r->nsamples > 0 && (r->mflags[mi] & TB_GPU_MAT_DIFFUSE)) {
+                /* the CPU path's numbers: strata from the sample's stream, the
+                 * emitter by the double CDF (tb_area_light_sample) */
+                item->flags |= TB_GPU_SHADE_AREA;
+                tb_stratified_2d(&P->rng[p], r->rt.lsx, r->rt.lsy, u);
+                for (int k = 0; k < r->nsamples; k++) {
+                    double pmf, ur;
+                    int e = tb_distrib1d_sample_discrete(&r->rt.area.select, u[2 * k], &pmf, &ur);
+                    float u1r = (float)ur;
+                    if (u1r >= 1.0f)
+                        u1r = 0x1.fffffep-1f;
+                    r->lightu[nlu++] = (tb_gpu_light_u){(uint32_t)e, u1r, u[2 * k + 1], (float)pmf};
+                }
+            }
+            w.item_of[it++] = a;
+            ni++;
+            r->st.gpu_shaded++;
+            TB_STAT_INC(tb__gr_gpu_shaded);
+            if (ni == r->chunk) {
+                st = tb__shade_chunk(r, P, &w, base, ni, nlu);
+                base += ni;
+                ni = nlu = 0;
+            }
+        }
+        if (!st && ni)
+            st = tb__shade_chunk(r, P, &w, base, ni, nlu);
+    }
+    free(w.path), free(w.ray), free(w.depth), free(w.thr), free(w.hit), free(w.item_of), free(w.shadow),
+        free(w.shadow_src), free(w.occl);
+    return st;
+}
+
+/* Allocates the stacks of n paths. */
+static tb_status tb__paths_alloc(tb__paths *P, size_t n, int cap, int nch)
+{
+    memset(P, 0, sizeof *P);
+    P->n = n;
+    P->cap = cap;
+    P->nch = nch;
+    P->ray = malloc(n * (size_t)cap * sizeof *P->ray);
+    P->depth = malloc(n * (size_t)cap * sizeof *P->depth);
+    P->thr = malloc(n * (size_t)cap * (size_t)nch * sizeof *P->thr);
+    P->top = calloc(n ? n : 1, sizeof *P->top);
+    if (!P->ray || !P->depth || !P->thr || !P->top)
+        return tb_error(TB_ERR_NOMEM, "GPU render: out of memory for %zu paths", n);
+    return TB_OK;
+}
+
+static void tb__paths_free(tb__paths *P)
+{
+    free(P->ray), free(P->depth), free(P->thr), free(P->top);
+}
+
+tb_status tb_gpu_radiance(tb_gpu_renderer *r, const tb_ray *rays, tb_rng *rngs, size_t n, float *out)
+{
+    tb__paths P;
+    tb_status st = tb__paths_alloc(&P, n, r->rt.max_depth + 2, r->nch);
+    float one[TB_CHANNELS_MAX];
+    for (int c = 0; c < TB_CHANNELS_MAX; c++)
+        one[c] = 1.0f;
+    if (!st) {
+        P.rng = rngs;
+        P.L = out;
+        memset(out, 0, n * (size_t)r->nch * sizeof *out);
+        for (size_t i = 0; i < n; i++)
+            tb__push(&P, i, &rays[i], 0, one);
+        st = tb__wavefront(r, &P);
+    }
+    tb__paths_free(&P);
+    return st;
+}
+
+/* ------------------------------------------------------------ the render */
+
+/* Samples per wavefront batch: whole tiles until at least this many. */
+#define TB__GR_BATCH 65536
+
+tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb_render_options *o,
+                                 tb_image **out, tb_render_stats *stats, tb_gpu_render_stats *gstats)
+{
+    *out = NULL;
+    tb_render_stats rs;
+    memset(&rs, 0, sizeof rs);
+    if (o->passes < 1)
+        return tb_error(TB_ERR_ARG, "render: passes must be at least 1");
+    tb_status err = tb_aa_check(&o->aa);
+    if (err)
+        return err;
+    if (o->aa.adaptive)
+        return tb_error(TB_ERR_UNSUPPORTED, "--backend vulkan: adaptive antialiasing is not implemented on the "
+                                            "Vulkan renderer; use --backend cpu");
+    tb_gpu_renderer *r;
+    if ((err = tb_gpu_renderer_create(dev, s, &o->rt, &r)))
+        return err;
+    const int nch = s->nchannels;
+    tb_film_desc fd = {.width = s->camera.width, .height = s->camera.height, .channels = nch, .filter = &o->filter};
+    tb_film *film = tb_film_create(&fd);
+    int ntiles = film ? tb_film_tile_count(film) : 0;
+    int spp = o->aa.spp;
+    tb_tile_rect t0r = film ? tb_film_tile_rect(film, 0) : (tb_tile_rect){0};
+    size_t tile_samples = (size_t)(t0r.x1 - t0r.x0) * (size_t)(t0r.y1 - t0r.y0) * (size_t)spp;
+    int tiles_per_batch = (int)(TB__GR_BATCH / (tile_samples ? tile_samples : 1));
+    if (tiles_per_batch < 1)
+        tiles_per_batch = 1;
+    size_t cap = (size_t)tiles_per_batch * tile_samples;
+    tb__paths P = {0};
+    tb_film_tile **tiles = calloc((size_t)tiles_per_batch, sizeof *tiles);
+    double *xy = malloc(cap * 2 * sizeof *xy);
+    tb_rng *rng = malloc(cap * sizeof *rng), *rng0 = malloc(cap * sizeof *rng0);
+    float *L = malloc(cap * (size_t)nch * sizeof *L), *pxy = malloc((size_t)spp * 2 * sizeof *pxy);
+    if (!film || !tiles || !xy || !rng || !rng0 || !L || !pxy)
+        err = tb_error(TB_ERR_NOMEM, "GPU render: out of memory");
+    if (!err)
+        err = tb__paths_alloc(&P, cap, r->rt.max_depth + 2, nch);
+    P.rng = rng;
+    P.rng0 = rng0;
+    P.xy = xy;
+    P.L = L;
+    float one[TB_CHANNELS_MAX];
+    for (int c = 0; c < TB_CHANNELS_MAX; c++)
+        one[c] = 1.0f;
+    const tb_camera *cam = &s->camera;
+    double tstart = tb__now();
+    tb_progress prog;
+    bool use_prog = o->progress && film &&
+                    tb_progress_start(&prog, "render", (int64_t)fd.width * fd.height * o->passes, NULL, 0) == TB_OK;
+    tb_aa_options aa = o->aa;
+    bool stop = o->cancel && atomic_load(o->cancel);
+    for (int pass = 0; pass < o->passes && !err && !stop; pass++) {
+        aa.pass = o->aa.pass + (uint32_t)pass;
+        if (pass > 0 && (err = tb_film_begin_pass(film)))
+            break;
+        for (int t = 0; t < ntiles && !err; t += tiles_per_batch) {
+            int nt = ntiles - t < tiles_per_batch ? ntiles - t : tiles_per_batch;
+            stop = stop || (o->cancel && atomic_load(o->cancel)) ||
+                   (o->time_budget > 0.0 && tb__now() - tstart > o->time_budget);
+            if (stop) {
+                for (int k = t; k < ntiles; k++)
+                    tb_film_tile_skip(film, k);
+                rs.aa.tiles_skipped += ntiles - t;
+                rs.interrupted = true;
+                break;
+            }
+            /* camera rays of the batch, in the CPU path's order */
+            size_t np = 0;
+            for (int k = 0; k < nt && !err; k++) {
+                tiles[k] = tb_film_tile_create(film, t + k);
+                if (!tiles[k]) {
+                    err = TB_ERR_NOMEM;
+                    break;
+                }
+                tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
+                for (int py = rc.y0; py < rc.y1; py++)
+                    for (int px = rc.x0; px < rc.x1; px++) {
+                        tb_pixel_sampler ps;
+                        tb_pixel_sampler_init(&ps, &aa, px, py);
+                        int ns = tb_pixel_sampler_round(&ps, pxy);
+                        for (int j = 0; j < ns; j++, np++) {
+                            double x = (double)px + (double)pxy[2 * j], y = (double)py + (double)pxy[2 * j + 1];
+                            xy[2 * np] = x;
+                            xy[2 * np + 1] = y;
+                            tb_aa_sample_rng(&aa, px, py, (uint32_t)j, &rng[np]);
+                            rng0[np] = rng[np];
+                            float lu = 0.5f, lv = 0.5f;
+                            if (cam->lens_radius > 0.0) {
+                                lu = tb_rng_float(&rng[np]);
+                                lv = tb_rng_float(&rng[np]);
+                            }
+                            tb_ray ray = tb_camera_ray(cam, x, y, lu, lv);
+                            P.top[np] = 0;
+                            tb__push(&P, np, &ray, 0, one);
+                        }
+                    }
+            }
+            if (err)
+                break;
+            P.n = np;
+            memset(L, 0, np * (size_t)nch * sizeof *L);
+            if ((err = tb__wavefront(r, &P)))
+                break;
+            /* splat in the CPU path's order, tiles merged in index order */
+            size_t q = 0;
+            for (int k = 0; k < nt && !err; k++) {
+                tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
+                for (int py = rc.y0; py < rc.y1; py++)
+                    for (int px = rc.x0; px < rc.x1; px++) {
+                        double wt = 1.0 / (double)spp;
+                        for (int j = 0; j < spp; j++, q++)
+                            tb_film_tile_add(tiles[k], xy[2 * q], xy[2 * q + 1], L + q * (size_t)nch, wt);
+                        tb_film_tile_record_samples(tiles[k], px, py, (uint32_t)spp);
+                        rs.aa.pixels++;
+                    }
+                err = tb_film_tile_submit(film, tiles[k]);
+                tiles[k] = NULL;
+                if (use_prog)
+                    tb_progress_add(&prog, (int64_t)(rc.x1 - rc.x0) * (rc.y1 - rc.y0));
+            }
+            rs.aa.samples += np;
+        }
+        if (err || stop)
+            break;
+        rs.passes_done++;
+        if (o->on_pass && o->on_pass(o->on_pass_ctx, pass, spp * (pass + 1), tb__now() - tstart, film))
+            break;
+    }
+    for (int k = 0; k < tiles_per_batch && tiles; k++)
+        tb_film_tile_free(tiles[k]);
+    rs.aa.max_spp_used = spp;
+    rs.seconds = tb__now() - tstart;
+    if (use_prog)
+        tb_progress_finish(&prog);
+    if (!err) {
+        *out = tb_render_resolve(s, film);
+        if (!*out)
+            err = TB_ERR_NOMEM;
+    }
+    r->st.samples += rs.aa.samples;
+    if (gstats)
+        *gstats = r->st;
+    if (stats)
+        *stats = rs;
+    tb__paths_free(&P);
+    free(tiles), free(xy), free(rng), free(rng0), free(L), free(pxy);
+    tb_film_free(film);
+    tb_gpu_renderer_destroy(r);
+    return err;
+}

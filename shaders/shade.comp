@@ -1,0 +1,360 @@
+// The shade kernel of the wavefront ray tracer (host/gpu/render.c; docs/gpu.md,
+// "Shade kernel and wavefront renderer"): for each shading point (a ray and
+// its closest hit from the intersect kernel) it evaluates what the CPU ray
+// tracer's tb__trace evaluates (host/render/raytrace.c):
+//  - the emission M / pi of an emitter seen from its front side;
+//  - point, spot and directional lights: Lambert + the normalised Phong lobe,
+//    one shadow ray each;
+//  - the area light (every emitter of the scene): the light samples the host
+//    drew from the sample's own stream (emitter chosen by the double CDF),
+//    the point on the emitter, its solid-angle density and the Lambert
+//    estimate, one shadow ray each;
+//  - the secondary rays: Fresnel-weighted mirror and refracted rays of a
+//    smooth dielectric (total internal reflection: R = 1), or the perfect
+//    mirror weighted by the specular colour.
+// Shadow contributions are written unoccluded; the host traces the shadow
+// rays through the occlusion kernel and adds the unblocked ones. Everything
+// is in float (the CPU path works in double in places): docs/accuracy.md,
+// "Shade kernel", gives the resulting image tolerance.
+//
+// Specialization constants switch on only what the scene uses: the number of
+// channels (3 RGB or the spectral bands), delta lights, light samples, spot
+// cones, Phong highlights, mirrors, dielectrics, emission, emitter kinds.
+#version 450
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/ray.h"
+#include "shared/shade.h"
+
+layout(local_size_x_id = 0) in;
+layout(constant_id = 1) const int NCH = 3;              // channels (RGB or render bands)
+layout(constant_id = 2) const int NLIGHTS = 0;          // point, spot and directional lights
+layout(constant_id = 3) const int NSAMPLES = 0;         // area-light samples per point (0: no area light)
+layout(constant_id = 4) const bool HAS_SPOT = false;    // some light is a spot
+layout(constant_id = 5) const bool HAS_PHONG = false;   // some material has a specular colour (highlights)
+layout(constant_id = 6) const bool HAS_MIRROR = false;  // some material is a mirror (specular, no transmission)
+layout(constant_id = 7) const bool HAS_DIELECTRIC = false; // some material transmits
+layout(constant_id = 8) const bool HAS_EMISSION = false;   // some material emits
+layout(constant_id = 9) const uint EMITTER_KINDS = 1u;  // bit k: an emitter of kind k exists
+
+const int S = NLIGHTS + NSAMPLES;  // shadow rays per item
+const int NRAYS = S + 2;           // TB_GPU_SHADE_RAYS
+const int NVALS = S + 3;           // TB_GPU_SHADE_VALUES
+const int SLOT = NCH + 1;          // floats per value slot
+const float INV_PI = 0.318309886183790671537767526745028724;
+const float TWO_PI = 6.28318530717958647692528676655900576;
+const float PI_4 = 0.785398163397448309615660845819875721;
+const float PI_2 = 1.57079632679489661923132169163975144;
+const float SHADOW_EPSILON = 1e-4;  // TB_SHADOW_EPSILON
+
+layout(std430, binding = 0) readonly buffer Items { tb_gpu_shade_item items[]; };
+layout(std430, binding = 1) readonly buffer LightU { tb_gpu_light_u lightu[]; };
+layout(std430, binding = 2) readonly buffer Emitters { tb_gpu_emitter emitters[]; };
+layout(std430, binding = 3) readonly buffer Lights { tb_gpu_delta_light lights[]; };
+layout(std430, binding = 4) readonly buffer Materials { tb_gpu_shade_material materials[]; };
+layout(std430, binding = 5) readonly buffer Colours { float colours[]; };
+layout(std430, binding = 6) writeonly buffer OutRays { tb_gpu_ray out_rays[]; };
+layout(std430, binding = 7) writeonly buffer OutValues { float out_values[]; };
+
+layout(push_constant) uniform Push {
+    uint items;
+    uint light_col;
+    uint emitter_col;
+    uint pad0;
+} pc;
+
+// The next float above / below x (x finite).
+float next_up(float x)
+{
+    if (x == 0.0)
+        return uintBitsToFloat(1u);
+    uint b = floatBitsToUint(x);
+    return uintBitsToFloat(x > 0.0 ? b + 1u : b - 1u);
+}
+float next_down(float x) { return -next_up(-x); }
+
+// tb_spawn_ray_origin (host/object/hit.h): p moved off the surface along ng
+// to w's side by the error bound perr, then one float further.
+vec3 spawn_origin(vec3 p, vec3 perr, vec3 ng, vec3 w)
+{
+    float d = next_up(dot(abs(ng), perr));
+    float s = dot(w, ng) < 0.0 ? -d : d;
+    vec3 off = s * ng;
+    vec3 po = p + off;
+    for (int i = 0; i < 3; i++) {
+        if (off[i] > 0.0)
+            po[i] = next_up(po[i]);
+        else if (off[i] < 0.0)
+            po[i] = next_down(po[i]);
+    }
+    return po;
+}
+
+// tb_dvec3_basis (util/math/vec.h): Duff et al.'s orthonormal basis.
+void basis(vec3 n, out vec3 b1, out vec3 b2)
+{
+    float sgn = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (sgn + n.z);
+    float b = n.x * n.y * a;
+    b1 = vec3(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
+    b2 = vec3(b, sgn + n.y * n.y * a, -n.y);
+}
+
+// tb_spot_falloff (host/render/lights.c).
+float spot_falloff(float cos_total, float cos_falloff, float c)
+{
+    if (c <= cos_total)
+        return 0.0;
+    if (c >= cos_falloff)
+        return 1.0;
+    float t = (c - cos_total) / (cos_falloff - cos_total);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// tb_fresnel_dielectric (host/render/shading.c), in float.
+float fresnel_dielectric(float cos_i, float eta)
+{
+    if (eta == 1.0)
+        return 0.0;
+    cos_i = clamp(cos_i, -1.0, 1.0);
+    if (cos_i < 0.0) {
+        eta = 1.0 / eta;
+        cos_i = -cos_i;
+    }
+    float sin2_t = (1.0 - cos_i) * (1.0 + cos_i) / (eta * eta);
+    if (sin2_t >= 1.0)
+        return 1.0;
+    float cos_t = sqrt(1.0 - sin2_t);
+    float r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    float r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5 * (r_parl * r_parl + r_perp * r_perp);
+}
+
+void write_ray(uint slot, vec3 o, vec3 d, float tmax)
+{
+    out_rays[slot].o = o;
+    out_rays[slot].tmin = 0.0;
+    out_rays[slot].d = d;
+    out_rays[slot].tmax = tmax;
+}
+
+// A point on emitter e seen from p (tb__sample_emitter in host/render/lights.c):
+// false if it gives no light.
+bool sample_emitter(tb_gpu_emitter e, vec3 p, float u1, float u2, out vec3 q, out float pdf_sa)
+{
+    float pdf_a = e.inv_area;
+    vec3 nq;
+    if ((EMITTER_KINDS & (1u << TB_GPU_EMITTER_TRIANGLE)) != 0u && e.kind == TB_GPU_EMITTER_TRIANGLE) {
+        float su = sqrt(u1);
+        float b0 = 1.0 - su, b1 = u2 * su, b2 = 1.0 - b0 - b1;
+        q = e.v0 * b0 + e.v1 * b1 + e.v2 * b2;
+        nq = e.normal;
+    } else if ((EMITTER_KINDS & (1u << TB_GPU_EMITTER_PARALLELOGRAM)) != 0u &&
+               e.kind == TB_GPU_EMITTER_PARALLELOGRAM) {
+        q = e.v0 + (e.v1 - e.v0) * u1 + (e.v2 - e.v0) * u2;
+        nq = e.normal;
+    } else if ((EMITTER_KINDS & (1u << TB_GPU_EMITTER_DISC)) != 0u && e.kind == TB_GPU_EMITTER_DISC) {
+        float ox = 2.0 * u1 - 1.0, oy = 2.0 * u2 - 1.0;
+        vec2 dk = vec2(0.0);
+        if (ox != 0.0 || oy != 0.0) {
+            float r, th;
+            if (abs(ox) > abs(oy)) {
+                r = ox;
+                th = PI_4 * (oy / ox);
+            } else {
+                r = oy;
+                th = PI_2 - PI_4 * (ox / oy);
+            }
+            dk = vec2(r * cos(th), r * sin(th));
+        }
+        vec3 b1, b2;
+        basis(e.v1, b1, b2);
+        q = e.v0 + b1 * (e.radius * dk.x) + b2 * (e.radius * dk.y);
+        nq = e.v1;
+    } else if ((EMITTER_KINDS & (1u << TB_GPU_EMITTER_SPHERE)) != 0u && e.kind == TB_GPU_EMITTER_SPHERE) {
+        vec3 pc_ = p - e.v0;
+        float r = e.radius, dc = length(pc_);
+        if (!(dc > r * (1.0 + 1e-6)))
+            return false; // inside: the host routes scenes with two-sided spheres to the CPU
+        float s2max = (r / dc) * (r / dc);
+        float omc_max = s2max / (1.0 + sqrt(max(0.0, 1.0 - s2max)));
+        float omc = u1 * omc_max;
+        float ct = 1.0 - omc, s2 = omc * (2.0 - omc);
+        float cos_alpha = s2 / sqrt(s2max) + ct * sqrt(max(0.0, 1.0 - s2 / s2max));
+        float sin_alpha = sqrt(max(0.0, 1.0 - cos_alpha * cos_alpha));
+        float phi = TWO_PI * u2;
+        vec3 axis = pc_ / dc, b1, b2;
+        basis(axis, b1, b2);
+        nq = normalize(b1 * (sin_alpha * cos(phi)) + b2 * (sin_alpha * sin(phi)) + axis * cos_alpha);
+        q = e.v0 + nq * r;
+        pdf_sa = 1.0 / (TWO_PI * omc_max);
+        return pdf_sa > 0.0 && !isinf(pdf_sa);
+    } else {
+        return false;
+    }
+    vec3 d = q - p;
+    float d2 = dot(d, d);
+    float cq = -dot(nq, d) / sqrt(d2);
+    if (!(d2 > 0.0) || cq == 0.0 || (cq < 0.0 && e.two_sided == 0u))
+        return false;
+    pdf_sa = pdf_a * d2 / abs(cq);
+    return !isinf(pdf_sa) && !isnan(pdf_sa);
+}
+
+void main()
+{
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.items)
+        return;
+    tb_gpu_shade_item it = items[i];
+    uint rbase = i * uint(NRAYS);
+    uint vbase = i * uint(NVALS) * uint(SLOT);
+    for (int k = 0; k < NVALS; k++)
+        out_values[vbase + uint(k * SLOT)] = 0.0;
+    for (int k = 0; k < NRAYS; k++)
+        write_ray(rbase + uint(k), vec3(0.0), vec3(0.0), -1.0);
+
+    tb_gpu_shade_material m = materials[it.material];
+    uint mc = it.material * uint(4 * NCH); // diffuse, specular, transmission, emission
+    vec3 p = it.o + it.t * it.d;
+    // The float hit point's error: the kernel's t is within a few ulps and
+    // p = o + t d adds two roundings; 2^-17 of the magnitudes is a wide margin.
+    vec3 perr = (abs(it.o) + abs(it.t * it.d)) * (1.0 / 131072.0);
+    vec3 dir = normalize(it.d);
+    vec3 wo = -dir;
+    vec3 ng = it.ng;
+    bool front = dot(dir, ng) < 0.0;
+    vec3 n = front ? ng : -ng;
+    bool has_diffuse = (m.flags & TB_GPU_MAT_DIFFUSE) != 0u;
+    bool has_specular = (m.flags & TB_GPU_MAT_SPECULAR) != 0u;
+    bool has_transmission = (m.flags & TB_GPU_MAT_TRANSMISSION) != 0u;
+
+    // Emission: one-sided emitters, M / pi on the front.
+    if (HAS_EMISSION && (m.flags & TB_GPU_MAT_EMITS) != 0u && front) {
+        out_values[vbase] = 1.0;
+        for (int c = 0; c < NCH; c++)
+            out_values[vbase + uint(1 + c)] = colours[mc + uint(3 * NCH + c)] * INV_PI;
+    }
+
+    // Point, spot and directional lights.
+    if (NLIGHTS > 0 && (has_diffuse || has_specular)) {
+        vec3 wr = 2.0 * dot(wo, n) * n - wo;
+        for (int l = 0; l < NLIGHTS; l++) {
+            tb_gpu_delta_light lt = lights[l];
+            vec3 wi;
+            float scale, tmax;
+            vec3 target;
+            if (lt.kind == TB_GPU_LIGHT_DIRECTIONAL) {
+                wi = -lt.axis;
+                scale = 1.0;
+                tmax = 1.0 / 0.0;
+            } else {
+                vec3 dl = lt.position - p;
+                float dist = length(dl);
+                if (!(dist > 0.0) || isinf(dist))
+                    continue;
+                wi = dl / dist;
+                float k = 1.0;
+                if (HAS_SPOT && lt.kind == TB_GPU_LIGHT_SPOT)
+                    k = spot_falloff(lt.cos_total, lt.cos_falloff, dot(-wi, lt.axis));
+                if (!(k > 0.0))
+                    continue;
+                scale = k / (dist * dist);
+                tmax = 1.0 - SHADOW_EPSILON;
+            }
+            float cosi = dot(n, wi);
+            if (cosi <= 0.0)
+                continue;
+            float spec = 0.0;
+            if (HAS_PHONG && has_specular) {
+                float ca = dot(wr, wi);
+                if (ca > 0.0)
+                    spec = m.knorm * pow(ca, m.exponent);
+            }
+            uint lc = pc.light_col + uint(l * NCH);
+            uint vs = vbase + uint((1 + l) * SLOT);
+            bool any = false;
+            for (int c = 0; c < NCH; c++) {
+                float Lc = colours[lc + uint(c)] * scale;
+                float f = colours[mc + uint(c)] * INV_PI;
+                if (HAS_PHONG)
+                    f += colours[mc + uint(NCH + c)] * spec;
+                any = any || Lc != 0.0;
+                out_values[vs + uint(1 + c)] = f * Lc * cosi;
+            }
+            if (!any)
+                continue;
+            out_values[vs] = 1.0;
+            vec3 o = spawn_origin(p, perr, ng, wi);
+            write_ray(rbase + uint(l), o, lt.kind == TB_GPU_LIGHT_DIRECTIONAL ? wi : lt.position - o, tmax);
+        }
+    }
+
+    // The area light: the host's samples (tb_area_light_sample).
+    if (NSAMPLES > 0 && (it.flags & TB_GPU_SHADE_AREA) != 0u) {
+        float norm = 1.0 / (3.14159265358979323846 * float(NSAMPLES));
+        for (int k = 0; k < NSAMPLES; k++) {
+            tb_gpu_light_u lu = lightu[it.light_base + uint(k)];
+            tb_gpu_emitter e = emitters[lu.emitter];
+            vec3 q;
+            float pdf_sa;
+            if (!sample_emitter(e, p, lu.u1, lu.u2, q, pdf_sa))
+                continue;
+            vec3 dq = q - p;
+            float dist = length(dq);
+            float pdf = lu.pmf * pdf_sa;
+            if (!(dist > 0.0) || !(pdf > 0.0))
+                continue;
+            vec3 wi = dq / dist;
+            float cosi = dot(n, wi);
+            if (cosi <= 0.0)
+                continue;
+            float w = cosi / pdf;
+            uint ec = pc.emitter_col + lu.emitter * uint(NCH);
+            uint vs = vbase + uint((1 + NLIGHTS + k) * SLOT);
+            out_values[vs] = 1.0;
+            for (int c = 0; c < NCH; c++)
+                out_values[vs + uint(1 + c)] = colours[mc + uint(c)] * (colours[ec + uint(c)] * w) * norm;
+            vec3 o = spawn_origin(p, perr, ng, wi);
+            write_ray(rbase + uint(NLIGHTS + k), o, q - o, 1.0 - SHADOW_EPSILON);
+        }
+    }
+
+    // Secondary rays.
+    if ((it.flags & TB_GPU_SHADE_SPAWN) == 0u)
+        return;
+    uint vm = vbase + uint((1 + S) * SLOT), vt = vm + uint(SLOT);
+    if (HAS_DIELECTRIC && has_transmission) {
+        float cos_i = dot(wo, ng);
+        float R = fresnel_dielectric(cos_i, m.ior);
+        float etap = cos_i < 0.0 ? 1.0 / m.ior : m.ior;
+        vec3 nn = cos_i < 0.0 ? -ng : ng;
+        float c = abs(cos_i);
+        float sin2_t = (1.0 - c) * (1.0 + c) / (etap * etap);
+        bool refracts = sin2_t < 1.0;
+        if (!refracts)
+            R = 1.0;
+        float T = 1.0 - R;
+        if (R > 0.0) {
+            vec3 w = 2.0 * cos_i * ng - wo;
+            write_ray(rbase + uint(S), spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
+            out_values[vm] = 1.0;
+            for (int k = 0; k < NCH; k++)
+                out_values[vm + uint(1 + k)] = R;
+        }
+        if (refracts && T > 0.0) {
+            float cos_t = sqrt(1.0 - sin2_t);
+            vec3 w = normalize(-wo / etap + (c / etap - cos_t) * nn);
+            write_ray(rbase + uint(S + 1), spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
+            out_values[vt] = 1.0;
+            for (int k = 0; k < NCH; k++)
+                out_values[vt + uint(1 + k)] = colours[mc + uint(2 * NCH + k)] * T;
+        }
+    } else if (HAS_MIRROR && has_specular) {
+        vec3 w = normalize(2.0 * dot(wo, n) * n - wo);
+        write_ray(rbase + uint(S), spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
+        out_values[vm] = 1.0;
+        for (int k = 0; k < NCH; k++)
+            out_values[vm + uint(1 + k)] = colours[mc + uint(NCH + k)];
+    }
+}
