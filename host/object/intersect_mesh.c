@@ -654,17 +654,46 @@ void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out)
 
 /* ------------------------------------------------------------ one triangle */
 
+/* The last prepared ray of this thread. A scene query tests several
+ * triangles of one mesh with the same ray, and preparing it (the inverse
+ * transform in double, the shear constants) costs as much as the test
+ * itself. The key is everything the prepared ray depends on, compared bit
+ * for bit: the world ray's origin and direction and the object's inverse
+ * transform (not only the object's address, which a later object may
+ * reuse). So a memo hit gives exactly what recomputing gives. */
+typedef struct tb__wray_memo {
+    bool valid;
+    tb_vec3 o, d;
+    tb_mat4 inv;
+    tb__wray w;
+} tb__wray_memo;
+
+static _Thread_local tb__wray_memo tb__memo;
+
+static const tb__wray *tb__memo_ray(const tb_object *o, const tb_ray *ray)
+{
+    tb__wray_memo *c = &tb__memo;
+    if (c->valid && memcmp(&c->o, &ray->o, sizeof c->o) == 0 && memcmp(&c->d, &ray->d, sizeof c->d) == 0 &&
+        memcmp(&c->inv, &o->to_world.inv, sizeof c->inv) == 0)
+        return &c->w;
+    tb__oray r = tb__object_ray(o, ray);
+    tb__wray_init(&c->w, &r);
+    c->o = ray->o;
+    c->d = ray->d;
+    c->inv = o->to_world.inv;
+    c->valid = true;
+    return &c->w;
+}
+
 bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray *ray, double *t)
 {
     const tb_object_mesh *m = o->mesh;
     if (!m || tri >= m->ntris)
         return false;
-    tb__oray r = tb__object_ray(o, ray);
-    tb__wray w;
-    tb__wray_init(&w, &r);
+    const tb__wray *w = tb__memo_ray(o, ray);
     const uint32_t *tv = &m->tris[3 * (size_t)tri];
     int dir;
-    return tb__tri(&w, m->vertices[tv[0]], m->vertices[tv[1]], m->vertices[tv[2]], t, &dir);
+    return tb__tri(w, m->vertices[tv[0]], m->vertices[tv[1]], m->vertices[tv[2]], t, &dir);
 }
 
 tb_vec3 tb_object_triangle_normal(const tb_object *o, uint32_t tri)

@@ -67,10 +67,12 @@ static inline float tb__accel_widen_hi(float t)
  * picked with copysign instead of branching on the sign of t (branches that
  * mispredict when rays start among the boxes), and box `b` must not be empty
  * (BVH nodes never are). A NaN product (origin on a plane, direction 0)
- * leaves the interval unchanged, as there. True if [tmin, tmax] meets b. */
-static inline __attribute__((always_inline)) bool tb__accel_slab(const tb_aabb *b, tb_vec3 o, tb_vec3 inv,
-                                                                 const bool neg[3], float tmin,
-                                  float tmax)
+ * leaves the interval unchanged, as there. True if [tmin, tmax] meets b;
+ * *tnear is then where the (widened) ray enters b, clamped to tmin, so the
+ * same test with any smaller tmax passes exactly when *tnear <= tmax. */
+static inline __attribute__((always_inline)) bool tb__accel_slab_t(const tb_aabb *b, tb_vec3 o, tb_vec3 inv,
+                                                                   const bool neg[3], float tmin, float tmax,
+                                                                   float *tnear)
 {
     const float k = 2.0f * tb_gamma(3);
     float nx = neg[0] ? b->hi.x : b->lo.x, fx = neg[0] ? b->lo.x : b->hi.x;
@@ -94,7 +96,16 @@ static inline __attribute__((always_inline)) bool tb__accel_slab(const tb_aabb *
     tmax = tfx < tmax ? tfx : tmax;
     tmax = tfy < tmax ? tfy : tmax;
     tmax = tfz < tmax ? tfz : tmax;
+    *tnear = tmin;
     return tmin <= tmax;
+}
+
+/* The same test without the entry distance. */
+static inline __attribute__((always_inline)) bool tb__accel_slab(const tb_aabb *b, tb_vec3 o, tb_vec3 inv,
+                                                                 const bool neg[3], float tmin, float tmax)
+{
+    float tnear;
+    return tb__accel_slab_t(b, o, inv, neg, tmin, tmax, &tnear);
 }
 
 /* The tie rule: true if hit a (from stored reference with input index ia)

@@ -422,6 +422,15 @@ void tb__bvh_free(tb_accel *acc)
     acc->nnodes = 0;
 }
 
+/* Both traversals test the two children of an inner node together and
+ * descend only into those the ray meets, so a box that is missed is never
+ * pushed. The closest-hit query goes to the child the ray enters first and
+ * pushes the other with its entry distance; a popped node whose entry
+ * distance lies beyond the best hit found since is dropped without another
+ * test: its slab test with the shrunken range would fail exactly then
+ * (tb__accel_slab_t). The order changes only which boxes are tested, never
+ * the answer (the tie rule makes the closest hit order-independent).
+ * "BVH/nodes visited" counts the box tests. */
 bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best)
 {
     const tb_bvh_node *nodes = acc->nodes;
@@ -430,33 +439,48 @@ bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *b
     float lo_t = tb__accel_widen_lo(ray->tmin);
     float hi_t = tb__accel_widen_hi(ray->tmax);
     uint32_t stack[TB__BVH_STACK];
+    float stack_t[TB__BVH_STACK];
     int sp = 0;
     uint32_t node = 0;
-    int64_t visited = 0, tested = 0;
-    for (;;) {
-        const tb_bvh_node *nd = &nodes[node];
-        visited++;
-        if (tb__accel_slab(&nd->bounds, ray->o, inv, neg, lo_t, hi_t)) {
+    int64_t visited = 1, tested = 0;
+    float t0, t1;
+    if (tb__accel_slab_t(&nodes[0].bounds, ray->o, inv, neg, lo_t, hi_t, &t0)) {
+        for (;;) {
+            const tb_bvh_node *nd = &nodes[node];
             if (nd->count == 0) {
-                /* Near child first: the first child holds the lower centroids along the axis. */
-                if (neg[nd->axis]) {
-                    stack[sp++] = node + 1;
-                    node = nd->offset;
-                } else {
-                    stack[sp++] = nd->offset;
-                    node = node + 1;
+                uint32_t c0 = node + 1, c1 = nd->offset;
+                bool h0 = tb__accel_slab_t(&nodes[c0].bounds, ray->o, inv, neg, lo_t, hi_t, &t0);
+                bool h1 = tb__accel_slab_t(&nodes[c1].bounds, ray->o, inv, neg, lo_t, hi_t, &t1);
+                visited += 2;
+                if (h0 && h1) {
+                    if (t1 < t0) {
+                        stack[sp] = c0;
+                        stack_t[sp++] = t0;
+                        node = c1;
+                    } else {
+                        stack[sp] = c1;
+                        stack_t[sp++] = t1;
+                        node = c0;
+                    }
+                    continue;
                 }
-                continue;
+                if (h0 || h1) {
+                    node = h0 ? c0 : c1;
+                    continue;
+                }
+            } else {
+                for (uint32_t k = nd->offset, e = nd->offset + nd->count; k < e; k++) {
+                    tested++;
+                    if (tb__accel_test(acc, k, best))
+                        hi_t = tb__accel_widen_hi(best->ray.tmax);
+                }
             }
-            for (uint32_t k = nd->offset, e = nd->offset + nd->count; k < e; k++) {
-                tested++;
-                if (tb__accel_test(acc, k, best))
-                    hi_t = tb__accel_widen_hi(best->ray.tmax);
-            }
+            while (sp > 0 && stack_t[sp - 1] > hi_t)
+                sp--;
+            if (sp == 0)
+                break;
+            node = stack[--sp];
         }
-        if (sp == 0)
-            break;
-        node = stack[--sp];
     }
     TB_STAT_INC(tb__bvh_rays);
     tb_stat_add(&tb__bvh_nodes_visited, visited);
@@ -474,32 +498,44 @@ bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
     uint32_t stack[TB__BVH_STACK];
     int sp = 0;
     uint32_t node = 0;
-    int64_t visited = 0, tested = 0;
+    int64_t visited = 1, tested = 0;
     bool hit = false;
-    for (;;) {
-        const tb_bvh_node *nd = &nodes[node];
-        visited++;
-        if (tb__accel_slab(&nd->bounds, ray->o, inv, neg, lo_t, hi_t)) {
+    if (tb__accel_slab(&nodes[0].bounds, ray->o, inv, neg, lo_t, hi_t)) {
+        for (;;) {
+            const tb_bvh_node *nd = &nodes[node];
             if (nd->count == 0) {
+                /* Any order finds an occluder; near child first along the split axis finds it sooner. */
+                uint32_t c0 = node + 1, c1 = nd->offset;
                 if (neg[nd->axis]) {
-                    stack[sp++] = node + 1;
-                    node = nd->offset;
-                } else {
-                    stack[sp++] = nd->offset;
-                    node = node + 1;
+                    uint32_t c = c0;
+                    c0 = c1;
+                    c1 = c;
                 }
-                continue;
+                bool h0 = tb__accel_slab(&nodes[c0].bounds, ray->o, inv, neg, lo_t, hi_t);
+                bool h1 = tb__accel_slab(&nodes[c1].bounds, ray->o, inv, neg, lo_t, hi_t);
+                visited += 2;
+                if (h0) {
+                    if (h1)
+                        stack[sp++] = c1;
+                    node = c0;
+                    continue;
+                }
+                if (h1) {
+                    node = c1;
+                    continue;
+                }
+            } else {
+                for (uint32_t k = nd->offset, e = nd->offset + nd->count; k < e && !hit; k++) {
+                    tested++;
+                    hit = tb__accel_test_any(acc, k, ray);
+                }
+                if (hit)
+                    break;
             }
-            for (uint32_t k = nd->offset, e = nd->offset + nd->count; k < e && !hit; k++) {
-                tested++;
-                hit = tb__accel_test_any(acc, k, ray);
-            }
-            if (hit)
+            if (sp == 0)
                 break;
+            node = stack[--sp];
         }
-        if (sp == 0)
-            break;
-        node = stack[--sp];
     }
     TB_STAT_INC(tb__bvh_shadow_rays);
     tb_stat_add(&tb__bvh_nodes_visited, visited);

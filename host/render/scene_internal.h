@@ -17,10 +17,12 @@
  * polygons object `o` with the world ray, t in [ray->tmin, ray->tmax] on the
  * float t: the record tb_object_intersect gives when that triangle is the
  * object's closest (face ID, unit world normal out of the front side),
- * except (u, v), which are left 0: finding them (host/object/param.h) costs
- * as much as the test, and only the closest hit needs them. The candidate is
+ * except (u, v) and the normal, which are left 0: finding them
+ * (host/object/param.h) costs as much as the test, and only the closest hit
+ * needs them. The candidate is
  * remembered per thread (`index` is the reference's number, for the tie
- * rule) and tb__scene_tri_finish fills in the (u, v) of the winner. */
+ * rule) and tb__scene_tri_finish fills in the (u, v) and normal of the
+ * winner. */
 bool tb__scene_tri_intersect(const tb_object *o, uint32_t tri, uint32_t index, const tb_ray *ray, tb_hit *hit);
 
 /* Forgets this thread's triangle candidates: call before a closest-hit query. */
@@ -28,7 +30,7 @@ void tb__scene_tri_begin(void);
 
 /* If the closest hit `hit` of a query (tb_accel_intersect with the scene's
  * callbacks, `ray` as given to it) came from a triangle reference, computes
- * its (u, v) as tb_object_intersect does. */
+ * its (u, v) and normal as tb_object_intersect does. */
 void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit);
 
 /* True if triangle `tri` of `o` is hit with t in [ray->tmin, ray->tmax]. */

@@ -15,9 +15,9 @@
  * tb_object_triangle_normal), so a hit is the record tb_object_intersect gives
  * for the same triangle, and rays never leak between the triangles of a mesh.
  *
- * (u, v) are computed once per query, for the winning triangle only: the
- * callback keeps the best triangle candidate of the current query in
- * thread-local storage, ordered by the structure's own tie rule (t, object,
+ * (u, v) and the world normal are computed once per query, for the winning
+ * triangle only: the callback keeps the best triangle candidate of the
+ * current query in thread-local storage, ordered by the structure's own tie rule (t, object,
  * face, reference index), so the candidate kept is the one the structure
  * returns whenever it returns a triangle. */
 #include "host/render/scene_internal.h"
@@ -81,6 +81,7 @@ void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
         u = v = 0.0;
     hit->u = (float)u;
     hit->v = (float)v;
+    hit->ng = tb_object_triangle_normal(o, b->tri);
 }
 
 bool tb__scene_tri_intersect(const tb_object *o, uint32_t tri, uint32_t index, const tb_ray *ray, tb_hit *hit)
@@ -89,13 +90,13 @@ bool tb__scene_tri_intersect(const tb_object *o, uint32_t tri, uint32_t index, c
     if (!tb__hit_tri(o, tri, ray, &t))
         return false;
     const tb_object_mesh *m = o->mesh;
-    tb_vec3 ng = tb_object_triangle_normal(o, tri);
     uint32_t face = o->face_base + m->tri_face[tri];
     hit->t = (float)t;
     hit->object = o->index;
     hit->face = face;
-    hit->u = hit->v = 0.0f; /* tb__scene_tri_finish, for the winner */
-    hit->ng = ng;
+    /* (u, v) and the normal: tb__scene_tri_finish, for the winner only. */
+    hit->u = hit->v = 0.0f;
+    hit->ng = (tb_vec3){0.0f, 0.0f, 0.0f};
     if (tb__better(hit->t, o->index, face, index))
         tb__best = (tb__tri_best){true, o, tri, index, face, hit->t, t};
     return true;
