@@ -1,5 +1,5 @@
-/* `testbed validate SCENE.mid [--kernel intersect|all] [--rays N] [--seed S]
- * [--device N] [--bench]`: the same rays through the CPU path and the Vulkan
+/* `testbed validate SCENE.mid [--kernel intersect|formfactor|all] [--rays N]
+ * [--shooters N] [--samples N] [--receivers N] [--seed S] [--device N] [--bench]`: the same rays through the CPU path and the Vulkan
  * path, agreement figures against the tolerances of docs/accuracy.md, exit 1
  * beyond them (docs/gpu.md, "testbed validate"). */
 #include <errno.h>
@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "ff_elements.h"
 #include "host/gpu/intersect.h"
 #include "host/render/scene.h"
 #include "util/math/rng.h"
@@ -27,8 +28,8 @@
 static void tb__usage(FILE *out)
 {
     fprintf(out,
-            "usage: testbed validate SCENE.mid [--kernel intersect|all] [--rays N] [--seed S]\n"
-            "                        [--device N] [--bench]\n"
+            "usage: testbed validate SCENE.mid [--kernel intersect|formfactor|all] [--rays N] [--seed S]\n"
+            "                        [--shooters N] [--samples N] [--receivers N] [--device N] [--bench]\n"
             "\n"
             "Runs the same rays through the CPU path and the Vulkan kernels and prints, per kernel,\n"
             "the agreement against the tolerances of docs/accuracy.md; exit status 1 beyond them.\n"
@@ -37,11 +38,19 @@ static void tb__usage(FILE *out)
             "Objects of kinds the kernel does not implement are tested on the CPU (routed); the\n"
             "report lists which objects ran where. TB_VK_VALIDATION=1 enables the validation layer.\n"
             "\n"
-            "  --kernel K   intersect or all (the same today: shade and formfactor do not exist yet)\n"
+            "  --kernel K   intersect, formfactor or all (both)\n"
+            "               formfactor: the scene meshed into elements as for radiosity (edge: bounds\n"
+            "               diagonal / 24); receivers at element centroids and corners; shooters: emitting\n"
+            "               elements and random ones; every element occludes. Form factors of the CPU\n"
+            "               batch and the kernel per (receiver, shooter) and visibility per segment\n"
+            "  --shooters N formfactor: shooters (default 8)\n"
+            "  --samples N  formfactor: sample points per shooter (default 16)\n"
+            "  --receivers N formfactor: at most N receivers, a random subset (default 2048)\n"
             "  --rays N     rays (default 100000)\n"
             "  --seed S     random seed (default 1)\n"
             "  --device N   Vulkan device (default: the best, lavapipe included)\n"
-            "  --bench      also time both paths on the same rays (Mrays/s, excluding pipeline creation)\n");
+            "  --bench      intersect: also time both paths on the same rays (Mrays/s, excluding pipeline\n"
+            "               creation); form factors: testbed bench formfactor\n");
 }
 
 static bool tb__parse_long(const char *s, long lo, long hi, long *out)
@@ -111,7 +120,7 @@ static const char *tb__verdict(bool ok) { return ok ? "ok" : "BEYOND TOLERANCE";
 int tb_cmd_validate(int argc, char **argv)
 {
     const char *scene_path = NULL, *kernel = "intersect";
-    long nrays = 100000, seed = 1, device = -1;
+    long nrays = 100000, seed = 1, device = -1, shooters = 8, samples = 16, receivers = 2048;
     bool bench = false;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
@@ -119,15 +128,16 @@ int tb_cmd_validate(int argc, char **argv)
             tb__usage(stdout);
             return TB_EXIT_OK;
         }
-        bool takes = !strcmp(a, "--kernel") || !strcmp(a, "--rays") || !strcmp(a, "--seed") || !strcmp(a, "--device");
+        bool takes = !strcmp(a, "--kernel") || !strcmp(a, "--rays") || !strcmp(a, "--seed") || !strcmp(a, "--device") ||
+                     !strcmp(a, "--shooters") || !strcmp(a, "--samples") || !strcmp(a, "--receivers");
         if (takes && i + 1 >= argc) {
             fprintf(stderr, "testbed validate: error: %s needs a value\n", a);
             return TB_EXIT_USAGE;
         }
         if (!strcmp(a, "--kernel")) {
             kernel = argv[++i];
-            if (strcmp(kernel, "intersect") && strcmp(kernel, "all")) {
-                fprintf(stderr, "testbed validate: error: --kernel must be intersect or all, not '%s' (shade and formfactor are not implemented yet)\n", kernel);
+            if (strcmp(kernel, "intersect") && strcmp(kernel, "formfactor") && strcmp(kernel, "all")) {
+                fprintf(stderr, "testbed validate: error: --kernel must be intersect, formfactor or all, not '%s' (shade is not implemented yet)\n", kernel);
                 return TB_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--rays")) {
@@ -143,6 +153,16 @@ int tb_cmd_validate(int argc, char **argv)
         } else if (!strcmp(a, "--device")) {
             if (!tb__parse_long(argv[++i], 0, 1000, &device)) {
                 fprintf(stderr, "testbed validate: error: --device must be a device index\n");
+                return TB_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--receivers")) {
+            if (!tb__parse_long(argv[++i], 1, 1L << 26, &receivers)) {
+                fprintf(stderr, "testbed validate: error: --receivers must be a whole number in 1..2^26\n");
+                return TB_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--shooters") || !strcmp(a, "--samples")) {
+            if (!tb__parse_long(argv[++i], 1, 4096, a[3] == 'h' ? &shooters : &samples)) {
+                fprintf(stderr, "testbed validate: error: %s must be a whole number in 1..4096\n", a);
                 return TB_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--bench")) {
@@ -200,6 +220,9 @@ int tb_cmd_validate(int argc, char **argv)
     for (uint32_t i = 0; i < s->nobjects; ++i)
         printf("  object %u (%s): %s\n", i, tb_prim_kind_name(s->objects[i]->kind),
                tb_gpu_scene_object_on_gpu(g, i) ? "gpu" : "cpu (routed)");
+    bool ok = true;
+    if (!strcmp(kernel, "formfactor"))
+        goto formfactor; /* the intersect kernel is not compared */
 
     tb__make_rays(s, (uint64_t)seed, rays, n);
     tb_rng rng;
@@ -258,13 +281,20 @@ int tb_cmd_validate(int argc, char **argv)
     printf("  max normal angle       %9.3g rad (tolerance %g)  %s\n", max_angle, TB__TOL_ANGLE, tb__verdict(ok_an));
     printf("  occlusion agreement    %9.5f %%  (%zu differ; tolerance: at most %g of rays)  %s\n",
            100.0 * (1.0 - f_oc), occl, TB__TOL_OCCLUDED, tb__verdict(ok_oc));
-    bool ok = ok_hm && ok_of && ok_dt && ok_an && ok_oc;
+    ok = ok_hm && ok_of && ok_dt && ok_an && ok_oc;
+formfactor:
+    if (!strcmp(kernel, "formfactor") || !strcmp(kernel, "all")) { /* cmd_validate_formfactor.c */
+        bool ff_ok = false;
+        if (tb_validate_formfactor(s, &sess, shooters, samples, receivers, seed, &ff_ok))
+            goto done;
+        ok = ok && ff_ok;
+    }
     if (tb_gpu_validation_enabled(sess.instance)) {
         int ve = tb_gpu_validation_errors(sess.instance), vw = tb_gpu_validation_warnings(sess.instance);
         printf("  validation layer       %d errors, %d warnings  %s\n", ve, vw, tb__verdict(ve + vw == 0));
         ok = ok && ve + vw == 0;
     }
-    if (bench) {
+    if (bench && strcmp(kernel, "formfactor")) {
         /* Both paths once more on the same rays; the pipeline exists already (created above). */
         int64_t t0 = tb_stats_now_ns();
         tb__cpu_trace(s, rays, n, ch);

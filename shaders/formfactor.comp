@@ -1,0 +1,91 @@
+// Ray-cast form factors (Wallace, Elmquist and Haines 1989) from one shooter,
+// given by sample points, to many receivers (differential areas), with
+// visibility through a BVH over the occluder triangles (docs/gpu.md,
+// "Form-factor kernel"). The GPU twin of tb_ff_raycast_batch
+// (host/radiosity/formfactor.h); host side host/gpu/formfactor.c.
+//
+// One invocation per receiver: for each sample point s_k of the shooter
+// (unit normal ns, each standing for da = area / npts), with d = s_k - p,
+//     cos_r = n.d / r,  cos_s = -ns.d / r,  r^2 = d.d,
+//     F += cos_s cos_r da / (pi r^2 + da)      (the disk approximation, eq. 5)
+// over the samples in front of both surfaces whose segment is not blocked.
+// Visibility: any occluder hit on p + t d for t in
+// [TB_FF_SEGMENT_EPS, 1 - TB_FF_SEGMENT_EPS] (the CPU's rule), through the
+// intersect kernel's traversal (lib/bvh_traverse.glsl) over triangles only.
+#version 450
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/bvh.h"
+#include "shared/formfactor.h"
+#include "shared/ray.h"
+
+layout(local_size_x_id = 0) in;
+// Traversal stack entries: the BVH's depth rounded up to a multiple of 8.
+layout(constant_id = 1) const int TB_STACK = 128;
+// Occluders present: without them the traversal is compiled out.
+layout(constant_id = 2) const bool TB_FF_OCCLUSION = true;
+// Write one visibility bit per (receiver, sample) (testbed validate's
+// per-segment comparison); the solver's calls leave it off.
+layout(constant_id = 3) const bool TB_FF_VIS_BITS = false;
+
+layout(std430, binding = 0) readonly buffer Receivers { tb_gpu_ff_receiver receivers[]; };
+layout(std430, binding = 1) readonly buffer Samples { tb_gpu_ff_sample samples[]; };
+layout(std430, binding = 2) readonly buffer Nodes { tb_gpu_bvh_node nodes[]; };
+layout(std430, binding = 3) readonly buffer Tris { tb_gpu_tri tris[]; };
+layout(std430, binding = 4) readonly buffer Placed { tb_gpu_placed placed[]; };
+layout(std430, binding = 5) readonly buffer Refs { uint refs[]; };
+layout(std430, binding = 6) writeonly buffer Result { float ff[]; };
+layout(std430, binding = 7) writeonly buffer Visible { uint vis_bits[]; };
+
+layout(push_constant) uniform Push { tb_gpu_ff_push pc; };
+
+// Occluders are triangles only (quads arrive as two).
+#define TB_BVH_NODES nodes
+#define TB_BVH_TRIS tris
+#define TB_BVH_PLACED placed
+#define TB_BVH_REFS refs
+#define TB_BVH_HAS_TRIANGLES TB_FF_OCCLUSION
+#define TB_BVH_HAS_SPHERES false
+#define TB_BVH_HAS_CUBES false
+#define TB_BVH_STACK TB_STACK
+#include "lib/bvh_traverse.glsl"
+
+// TB_FF_SEGMENT_EPS (host/radiosity/formfactor.h): 1e-4 rounded to float.
+const float TB_FF_EPS = 1e-4;
+const float TB_PI = 3.14159265358979323846;
+
+void main()
+{
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count)
+        return;
+    vec3 p = receivers[i].p, n = receivers[i].n;
+    float sum = 0.0;
+    uint bits = 0u;
+    for (uint k = 0u; k < pc.npts; ++k) {
+        vec3 s = samples[k].p;
+        precise vec3 d = s - p; // receiver -> sample, the CPU's segment direction
+        precise float cr = n.x * d.x + n.y * d.y + n.z * d.z;        // r cos(receiver)
+        precise float cs = -(pc.ns.x * d.x + pc.ns.y * d.y + pc.ns.z * d.z); // r cos(shooter)
+        bool vis = cr > 0.0 && cs > 0.0;
+        if (vis && TB_FF_OCCLUSION && pc.nnodes > 0u) {
+            tb_gpu_ray r;
+            r.o = p;
+            r.d = d;
+            r.tmin = TB_FF_EPS;
+            r.tmax = 1.0 - TB_FF_EPS;
+            vis = !tb_bvh_occluded(r, pc.nnodes);
+        }
+        if (vis) {
+            precise float r2 = d.x * d.x + d.y * d.y + d.z * d.z;
+            precise float term = (cr * cs) / r2 * pc.da / (TB_PI * r2 + pc.da); // the CPU's order
+            sum += term;
+            bits |= 1u << (k & 31u);
+        }
+        if (TB_FF_VIS_BITS && ((k & 31u) == 31u || k + 1u == pc.npts)) {
+            vis_bits[i * pc.vis_words + (k >> 5)] = bits;
+            bits = 0u;
+        }
+    }
+    ff[i] = sum;
+}
