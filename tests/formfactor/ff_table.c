@@ -1,0 +1,206 @@
+/* Prints the form-factor accuracy and cost tables of docs/accuracy.md
+ * ("Radiosity form factors") and docs/performance.md ("Form factors").
+ *
+ *     build/<dir>/tests/formfactor/ff_table accuracy
+ *     build/<dir>/tests/formfactor/ff_table timing
+ *
+ * accuracy: relative error against Howell's closed forms (C-11, C-14, C-41)
+ * of the area-to-area form factor integrated over a grid of receiver points
+ * with the exact point form factor, ray casting (1, 4, 16, 64 samples per
+ * shooter polygon; mean and worst over 16 seeds) and hemicubes (32 .. 512).
+ * timing: nanoseconds per receiver per sample of tb_ff_raycast (with and
+ * without occluders) and milliseconds per hemicube, one thread. */
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "ff_cases.h"
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void build_cases(ff_case *c)
+{
+    ff_case_c11(&c[0], 1.0);
+    ff_case_c14(&c[1], 1.0);
+    ff_case_c41(&c[2], 1.0, 64);
+}
+
+static int accuracy(void)
+{
+    static ff_case cases[3];
+    build_cases(cases);
+    const int grid_exact = 64, grid_rc = 32, grid_hc = 16, nseeds = 16;
+    const int samples[] = {1, 4, 16, 64};
+    const int res[] = {32, 64, 128, 256, 512};
+
+    printf("Exact point form factor integrated over a %d x %d receiver grid (midpoints):\n\n", grid_exact,
+           grid_exact);
+    printf("| case | Howell F12 | integrated | relative error |\n|---|---|---|---|\n");
+    for (int c = 0; c < 3; c++) {
+        double f = ff_case_exact_grid(&cases[c], grid_exact);
+        printf("| %s | %.6f | %.6f | %+.2e |\n", cases[c].name, cases[c].exact, f,
+               (f - cases[c].exact) / cases[c].exact);
+    }
+
+    printf("\nRay casting, %d x %d receivers, samples per shooter polygon (C-41: per triangle of the "
+           "64-triangle fan); relative error mean over %d seeds (signed) / largest |error|:\n\n",
+           grid_rc, grid_rc, nseeds);
+    printf("| case |");
+    for (int s = 0; s < 4; s++)
+        printf(" %d sample%s |", samples[s], samples[s] > 1 ? "s" : "");
+    printf("\n|---|---|---|---|---|\n");
+    for (int c = 0; c < 3; c++) {
+        printf("| %s |", cases[c].name);
+        for (int s = 0; s < 4; s++) {
+            double mean = 0.0, worst = 0.0;
+            for (int seed = 1; seed <= nseeds; seed++) {
+                double f = ff_case_raycast(&cases[c], grid_rc, samples[s], (uint64_t)seed * 1000, NULL);
+                if (f < 0.0) {
+                    fprintf(stderr, "ff_table: %s\n", tb_last_error());
+                    return 1;
+                }
+                double e = (f - cases[c].exact) / cases[c].exact;
+                mean += e / nseeds;
+                worst = fmax(worst, fabs(e));
+            }
+            printf(" %+.2e / %.2e |", mean, worst);
+        }
+        printf("\n");
+    }
+
+    printf("\nHemicube, %d x %d receivers, relative error by resolution:\n\n", grid_hc, grid_hc);
+    printf("| case |");
+    for (int r = 0; r < 5; r++)
+        printf(" %d |", res[r]);
+    printf("\n|---|---|---|---|---|---|\n");
+    for (int c = 0; c < 3; c++) {
+        printf("| %s |", cases[c].name);
+        for (int r = 0; r < 5; r++) {
+            double f = ff_case_hemicube(&cases[c], grid_hc, res[r]);
+            if (f < 0.0) {
+                fprintf(stderr, "ff_table: %s\n", tb_last_error());
+                return 1;
+            }
+            printf(" %+.2e |", (f - cases[c].exact) / cases[c].exact);
+        }
+        printf("\n");
+    }
+    printf("\n(reference: the same %d x %d receiver grid with the exact point form factor gives", grid_hc,
+           grid_hc);
+    for (int c = 0; c < 3; c++) {
+        double f = ff_case_exact_grid(&cases[c], grid_hc);
+        printf("%s %s %+.2e", c ? "," : "", c == 0 ? "C-11" : c == 1 ? "C-14" : "C-41",
+               (f - cases[c].exact) / cases[c].exact);
+    }
+    printf(")\n");
+    return 0;
+}
+
+static int timing(void)
+{
+    /* A room of 6 x 16 x 16 quads (1536 occluders), receivers on the floor,
+     * the shooter a ceiling element. */
+    const int g = 16;
+    size_t np = 6 * (size_t)g * g;
+    tb_ff_polygon *polys = malloc(sizeof *polys * np);
+    if (!polys)
+        return 1;
+    size_t k = 0;
+    for (int face = 0; face < 6; face++) {
+        int axis = face / 2;
+        float side = (face % 2) ? 1.0f : 0.0f;
+        for (int j = 0; j < g; j++)
+            for (int i = 0; i < g; i++) {
+                float a0 = (float)i / g, a1 = (float)(i + 1) / g, b0 = (float)j / g, b1 = (float)(j + 1) / g;
+                float q[4][2] = {{a0, b0}, {a1, b0}, {a1, b1}, {a0, b1}};
+                tb_ff_polygon p = {.n = 4};
+                for (int v = 0; v < 4; v++) {
+                    int vv = (face % 2) ? 3 - v : v; /* inward-facing on both walls of the axis */
+                    float c3[3];
+                    c3[axis] = side;
+                    c3[(axis + 1) % 3] = q[vv][0];
+                    c3[(axis + 2) % 3] = q[vv][1];
+                    p.v[v] = (tb_vec3){c3[0], c3[1], c3[2]};
+                }
+                polys[k++] = p;
+            }
+    }
+    tb_ff_occluders *occ = NULL;
+    if (tb_ff_occluders_build(polys, np, &occ)) {
+        fprintf(stderr, "ff_table: %s\n", tb_last_error());
+        return 1;
+    }
+    const size_t nr = 4096;
+    tb_vec3 *p = malloc(sizeof *p * nr), *n = malloc(sizeof *n * nr), pts[64];
+    double *ff = malloc(sizeof *ff * nr);
+    for (size_t i = 0; i < nr; i++) {
+        p[i] = (tb_vec3){(float)((i % 64) + 0.5) / 64.0f, (float)((i / 64) + 0.5) / 64.0f, 0.0f};
+        n[i] = (tb_vec3){0, 0, 1};
+    }
+    const tb_ff_polygon *shooter = &polys[5 * (size_t)g * g + (size_t)g * g / 2 + g / 2]; /* z = 1 */
+    tb_vec3 ns;
+    double area;
+    tb_ff_polygon_frame(shooter, &ns, &area);
+    printf("Ray casting, one thread, %zu receivers, room of %zu quads:\n\n", nr, np);
+    printf("| samples | ns per receiver per sample, no occluders | with occluders (BVH) |\n|---|---|---|\n");
+    const int samples[] = {1, 4, 16, 64};
+    for (int s = 0; s < 4; s++) {
+        tb_ff_sample_polygon(shooter, samples[s], 7, pts);
+        double t[2];
+        for (int o = 0; o < 2; o++) {
+            double t0 = now();
+            int reps = 0;
+            do {
+                for (size_t i = 0; i < nr; i++)
+                    ff[i] = tb_ff_raycast(pts, samples[s], ns, area, p[i], n[i],
+                                          o ? tb_ff_occluders_visible : NULL, o ? occ : NULL);
+                reps++;
+            } while (now() - t0 < 0.5);
+            t[o] = (now() - t0) / ((double)reps * nr * samples[s]) * 1e9;
+        }
+        printf("| %d | %.1f | %.1f |\n", samples[s], t[0], t[1]);
+    }
+    printf("\nHemicube, one thread, the same %zu quads, centre on the floor:\n\n", np);
+    printf("| resolution | ms per hemicube |\n|---|---|\n");
+    double *hff = malloc(sizeof *hff * np);
+    const int res[] = {32, 64, 128, 256, 512};
+    for (int r = 0; r < 5; r++) {
+        tb_hemicube *hc = tb_hemicube_create(res[r]);
+        double t0 = now();
+        int reps = 0;
+        do {
+            tb_vec3 c = p[(size_t)reps * 97 % nr];
+            if (tb_hemicube_formfactors(hc, c, (tb_vec3){0, 0, 1}, polys, np, TB_FF_NONE, hff)) {
+                fprintf(stderr, "ff_table: %s\n", tb_last_error());
+                return 1;
+            }
+            reps++;
+        } while (now() - t0 < 0.5);
+        printf("| %d | %.3f |\n", res[r], (now() - t0) / reps * 1e3);
+        tb_hemicube_free(hc);
+    }
+    free(hff);
+    free(p);
+    free(n);
+    free(ff);
+    free(polys);
+    tb_ff_occluders_free(occ);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc == 2 && strcmp(argv[1], "accuracy") == 0)
+        return accuracy();
+    if (argc == 2 && strcmp(argv[1], "timing") == 0)
+        return timing();
+    fprintf(stderr, "usage: ff_table accuracy|timing\n"
+                    "  accuracy  relative errors of the form factors against Howell's catalogue (C-11, C-14, C-41)\n"
+                    "  timing    cost of a ray-cast form factor per receiver and sample, and of a hemicube\n");
+    return 2;
+}
