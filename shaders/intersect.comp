@@ -30,11 +30,14 @@ layout(constant_id = 4) const bool TB_HAS_CUBES = false;
 layout(constant_id = 2) const int TB_STACK = 128;
 
 layout(std430, binding = 0) readonly buffer Rays { tb_gpu_ray rays[]; };
-layout(std430, binding = 1) readonly buffer Nodes { tb_gpu_bvh_node nodes[]; };
-layout(std430, binding = 2) readonly buffer Tris { tb_gpu_tri tris[]; };
+// Nodes, triangles and references as texel buffers (RGBA32UI, RGBA32UI,
+// R32UI views of the tb_gpu_bvh_node, tb_gpu_tri and uint arrays): their
+// loads are branch-free gathers on lavapipe (lib/bvh_traverse.glsl).
+layout(binding = 1) uniform usamplerBuffer node_texels;
+layout(binding = 2) uniform usamplerBuffer tri_texels;
 layout(std430, binding = 3) writeonly buffer Hits { tb_gpu_hit hits[]; };
 layout(std430, binding = 4) readonly buffer Placed { tb_gpu_placed placed[]; };
-layout(std430, binding = 5) readonly buffer Refs { uint refs[]; };
+layout(binding = 5) uniform usamplerBuffer ref_texels;
 
 layout(push_constant) uniform Push {
     uint n;        // rays
@@ -43,10 +46,10 @@ layout(push_constant) uniform Push {
     uint pad;
 } pc;
 
-#define TB_BVH_NODES nodes
-#define TB_BVH_TRIS tris
+#define TB_BVH_NODE_TEXELS node_texels
+#define TB_BVH_TRI_TEXELS tri_texels
 #define TB_BVH_PLACED placed
-#define TB_BVH_REFS refs
+#define TB_BVH_REF_TEXELS ref_texels
 #define TB_BVH_HAS_TRIANGLES TB_HAS_TRIANGLES
 #define TB_BVH_HAS_SPHERES TB_HAS_SPHERES
 #define TB_BVH_HAS_CUBES TB_HAS_CUBES

@@ -138,8 +138,9 @@ tb_gpu_buffer *tb_gpu_buffer_create(tb_gpu_device *dev, size_t size)
                  "maxStorageBufferRange is %s", want, dev->index, dev->info->name, have);
         return NULL;
     }
-    VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
-                               VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    /* Any buffer may also be bound as a texel buffer (tb_gpu_binding_kind). */
+    VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT |
+                               VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     tb_gpu_buffer *b = tb__gpu_buffer_new(dev, size, usage, dev->mapped);
     if (!b)
         return NULL;
@@ -174,6 +175,9 @@ void tb_gpu_buffer_destroy(tb_gpu_buffer *b)
         dev->fn.vkDeviceWaitIdle(dev->vk);
     if (b->map)
         dev->fn.vkUnmapMemory(dev->vk, b->memory);
+    for (int k = 0; k < 3; k++)
+        if (b->views[k])
+            dev->fn.vkDestroyBufferView(dev->vk, b->views[k], NULL);
     dev->fn.vkDestroyBuffer(dev->vk, b->vk, NULL);
     dev->fn.vkFreeMemory(dev->vk, b->memory, NULL);
     tb_stat_add(&tb__gpu_buffer_bytes, -(int64_t)b->allocated);
@@ -182,6 +186,33 @@ void tb_gpu_buffer_destroy(tb_gpu_buffer *b)
 }
 
 size_t tb_gpu_buffer_size(const tb_gpu_buffer *b) { return b->size; }
+
+VkBufferView tb__gpu_buffer_view(tb_gpu_buffer *b, int kind)
+{
+    if (b->views[kind])
+        return b->views[kind];
+    tb_gpu_device *dev = b->dev;
+    bool rgba = kind == TB_GPU_BIND_TEXELS_RGBA32UI;
+    uint64_t texel = rgba ? 16u : 4u, n = (uint64_t)b->size / texel;
+    if (n == 0 || n > dev->info->max_texel_buffer_elements) {
+        tb_error(TB_ERR_DEVICE, "a texel buffer of %llu texels exceeds the limit of device %d (%s): "
+                 "maxTexelBufferElements is %llu", (unsigned long long)n, dev->index, dev->info->name,
+                 (unsigned long long)dev->info->max_texel_buffer_elements);
+        return VK_NULL_HANDLE;
+    }
+    VkBufferViewCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO,
+                                 .buffer = b->vk,
+                                 .format = rgba ? VK_FORMAT_R32G32B32A32_UINT : VK_FORMAT_R32_UINT,
+                                 .offset = 0,
+                                 .range = n * texel};
+    VkResult r = dev->fn.vkCreateBufferView(dev->vk, &ci, NULL, &b->views[kind]);
+    if (r != VK_SUCCESS) {
+        b->views[kind] = VK_NULL_HANDLE;
+        tb__gpu_fail(dev, r, "vkCreateBufferView");
+        return VK_NULL_HANDLE;
+    }
+    return b->views[kind];
+}
 
 static tb_status tb__range(const tb_gpu_buffer *b, size_t offset, size_t n, const void *p, const char *what)
 {

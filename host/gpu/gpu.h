@@ -95,6 +95,7 @@ typedef struct tb_gpu_device_info {
     uint32_t max_shared_memory;        /* bytes of shared memory per workgroup */
     uint32_t max_push_constants;       /* bytes */
     uint64_t max_storage_buffer_range; /* largest storage buffer a kernel can bind, bytes */
+    uint64_t max_texel_buffer_elements; /* most texels a texel-buffer binding can address */
     uint32_t max_storage_buffers;      /* storage buffers per shader stage */
     int heap_count;
     tb_gpu_heap heaps[TB_GPU_MAX_HEAPS];
@@ -236,6 +237,17 @@ tb_status tb_gpu_buffer_download(tb_gpu_buffer *buf, size_t offset, void *dst, s
 /* Workgroup width when the kernel description leaves it 0. */
 #define TB_GPU_DEFAULT_WORKGROUP 64
 
+/* How a kernel declares binding b (tb_gpu_kernel_desc.kinds[b]). A texel
+ * buffer binding views the same tb_gpu_buffer through a format, and its
+ * loads (texelFetch) are gathers without per-lane control flow on CPU
+ * drivers such as lavapipe, where storage-buffer loads with per-lane
+ * indices are scalar loops (docs/gpu.md, "Texel buffers"). */
+typedef enum tb_gpu_binding_kind {
+    TB_GPU_BIND_STORAGE = 0,     /* layout(std430) buffer { ... } */
+    TB_GPU_BIND_TEXELS_RGBA32UI, /* uniform usamplerBuffer, 16-byte texels (texelFetch gives a uvec4) */
+    TB_GPU_BIND_TEXELS_R32UI,    /* uniform usamplerBuffer, 4-byte texels (texelFetch(...).x) */
+} tb_gpu_binding_kind;
+
 /* A specialization constant: `layout(constant_id = id) const ...` in GLSL.
  * id 0 is reserved for the workgroup width (layout(local_size_x_id = 0)). */
 typedef struct tb_gpu_spec_constant {
@@ -247,7 +259,8 @@ typedef struct tb_gpu_spec_constant {
 typedef struct tb_gpu_kernel_desc {
     const tb_gpu_spirv *spirv;         /* the module; entry point "main" */
     const char *name;                  /* for messages and timings; NULL = spirv->name */
-    int buffers;                       /* storage buffers bound at set 0, bindings 0 .. buffers-1 */
+    int buffers;                       /* buffers bound at set 0, bindings 0 .. buffers-1 */
+    uint8_t kinds[TB_GPU_MAX_BUFFERS]; /* tb_gpu_binding_kind of each binding (0: storage buffer) */
     uint32_t push_size;                /* bytes of push constants, a multiple of 4 (0 = none) */
     uint32_t workgroup_size;           /* constant_id 0; 0 = TB_GPU_DEFAULT_WORKGROUP */
     const tb_gpu_spec_constant *spec;  /* other specialization constants (ids >= 1) */

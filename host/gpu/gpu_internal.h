@@ -41,6 +41,8 @@
     X(vkDeviceWaitIdle)                                                                    \
     X(vkCreateBuffer)                                                                      \
     X(vkDestroyBuffer)                                                                     \
+    X(vkCreateBufferView)                                                                  \
+    X(vkDestroyBufferView)                                                                 \
     X(vkGetBufferMemoryRequirements)                                                       \
     X(vkAllocateMemory)                                                                    \
     X(vkFreeMemory)                                                                        \
@@ -137,6 +139,7 @@ typedef struct tb__gpu_kernel_key {
     size_t size;
     const uint32_t *words;
     int buffers;
+    uint8_t kinds[TB_GPU_MAX_BUFFERS]; /* tb_gpu_binding_kind per binding */
     uint32_t push_size;
     uint32_t workgroup_size;
     int spec_count;
@@ -188,7 +191,12 @@ struct tb_gpu_buffer {
     size_t size;                      /* as requested (the VkBuffer is rounded up to whole words) */
     uint64_t allocated;               /* bytes of device memory behind it */
     void *map;                        /* host address when mapped, else NULL */
+    VkBufferView views[3];            /* per tb_gpu_binding_kind: texel view, made on first use */
 };
+
+/* The view of b for texel-buffer kind `kind` (created on first use, owned by
+ * b); VK_NULL_HANDLE with TB_ERR_DEVICE set on failure. */
+VkBufferView tb__gpu_buffer_view(tb_gpu_buffer *b, int kind);
 
 /* Turns a failed VkResult into TB_ERR_DEVICE with "what: <result text>",
  * marking the device lost on VK_ERROR_DEVICE_LOST (dev may be NULL). */

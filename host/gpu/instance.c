@@ -220,6 +220,7 @@ static void tb__describe_device(tb_gpu_instance *inst, int i)
     d->max_shared_memory = l->maxComputeSharedMemorySize;
     d->max_push_constants = l->maxPushConstantsSize;
     d->max_storage_buffer_range = l->maxStorageBufferRange;
+    d->max_texel_buffer_elements = l->maxTexelBufferElements;
     d->max_storage_buffers = l->maxPerStageDescriptorStorageBuffers;
     d->timestamp_period = l->timestampPeriod;
 

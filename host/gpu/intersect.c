@@ -272,6 +272,9 @@ static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t
     tb_gpu_spec_constant spec[4] = {{1, g->ntris > 0}, {2, g->stack}, {3, g->nspheres > 0}, {4, g->ncubes > 0}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("intersect"),
                                                                         .buffers = 6,
+                                                                        .kinds = {0, TB_GPU_BIND_TEXELS_RGBA32UI,
+                                                                                  TB_GPU_BIND_TEXELS_RGBA32UI, 0, 0,
+                                                                                  TB_GPU_BIND_TEXELS_R32UI},
                                                                         .push_size = 16,
                                                                         .spec = spec,
                                                                         .spec_count = 4});

@@ -74,11 +74,16 @@ static uint64_t tb__fnv1a(const uint32_t *words, size_t bytes)
     return h;
 }
 
+static VkDescriptorType tb__descriptor_type(int kind)
+{
+    return kind == TB_GPU_BIND_STORAGE ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER : VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+}
+
 static bool tb__key_equal(const tb__gpu_kernel_key *a, const tb__gpu_kernel_key *b)
 {
     if (a->hash != b->hash || a->size != b->size || a->buffers != b->buffers ||
         a->push_size != b->push_size || a->workgroup_size != b->workgroup_size ||
-        a->spec_count != b->spec_count)
+        a->spec_count != b->spec_count || memcmp(a->kinds, b->kinds, sizeof a->kinds) != 0)
         return false;
     for (int i = 0; i < a->spec_count; i++)
         if (a->spec[i].id != b->spec[i].id || a->spec[i].value != b->spec[i].value)
@@ -120,6 +125,9 @@ static tb_status tb__check_desc(const tb_gpu_device *dev, const tb_gpu_kernel_de
         return tb_error(TB_ERR_ARG, "kernel %s: %d storage buffers (at most %d here)", name, d->buffers,
                         (int)(info->max_storage_buffers < TB_GPU_MAX_BUFFERS ? info->max_storage_buffers
                                                                              : TB_GPU_MAX_BUFFERS));
+    for (int i = 0; i < d->buffers; i++)
+        if (d->kinds[i] > TB_GPU_BIND_TEXELS_R32UI)
+            return tb_error(TB_ERR_ARG, "kernel %s: binding %d has an unknown kind %d", name, i, d->kinds[i]);
     if (d->push_size % 4 != 0 || d->push_size > info->max_push_constants)
         return tb_error(TB_ERR_ARG, "kernel %s: %u bytes of push constants (a multiple of 4, at most %u "
                         "on device %d)", name, d->push_size, info->max_push_constants, dev->index);
@@ -175,6 +183,7 @@ tb_gpu_kernel *tb_gpu_kernel_get(tb_gpu_device *dev, const tb_gpu_kernel_desc *d
                               .push_size = d->push_size,
                               .workgroup_size = wg,
                               .spec_count = d->spec_count};
+    memcpy(key.kinds, d->kinds, sizeof key.kinds);
     for (int i = 0; i < d->spec_count; i++)
         key.spec[i] = d->spec[i];
     for (tb_gpu_kernel *k = dev->kernels; k; k = k->next)
@@ -198,7 +207,7 @@ tb_gpu_kernel *tb_gpu_kernel_get(tb_gpu_device *dev, const tb_gpu_kernel_desc *d
     VkDescriptorSetLayoutBinding bindings[TB_GPU_MAX_BUFFERS];
     for (int i = 0; i < d->buffers; i++)
         bindings[i] = (VkDescriptorSetLayoutBinding){.binding = (uint32_t)i,
-                                                     .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                                     .descriptorType = tb__descriptor_type(d->kinds[i]),
                                                      .descriptorCount = 1,
                                                      .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT};
     VkDescriptorSetLayoutCreateInfo dslci = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
@@ -296,12 +305,14 @@ static tb_status tb__reserve(tb_gpu_device *dev, uint32_t n)
             dev->fn.vkDestroyDescriptorPool(dev->vk, dev->descriptors, NULL);
         dev->descriptors = VK_NULL_HANDLE;
         dev->descriptor_cap = 0;
-        VkDescriptorPoolSize size = {.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                     .descriptorCount = cap * TB_GPU_MAX_BUFFERS};
+        VkDescriptorPoolSize size[2] = {{.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                         .descriptorCount = cap * TB_GPU_MAX_BUFFERS},
+                                        {.type = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
+                                         .descriptorCount = cap * TB_GPU_MAX_BUFFERS}};
         VkDescriptorPoolCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
                                          .maxSets = cap,
-                                         .poolSizeCount = 1,
-                                         .pPoolSizes = &size};
+                                         .poolSizeCount = 2,
+                                         .pPoolSizes = size};
         if ((r = dev->fn.vkCreateDescriptorPool(dev->vk, &ci, NULL, &dev->descriptors)) != VK_SUCCESS)
             return tb__gpu_fail(dev, r, "vkCreateDescriptorPool");
         dev->descriptor_cap = cap;
@@ -359,8 +370,9 @@ tb_status tb_gpu_run(tb_gpu_device *dev, tb_gpu_dispatch *d, int n)
     VkDescriptorSet *sets = malloc((size_t)n * sizeof *sets);
     VkDescriptorBufferInfo *bufs = malloc((size_t)n * TB_GPU_MAX_BUFFERS * sizeof *bufs);
     VkWriteDescriptorSet *writes = malloc((size_t)n * TB_GPU_MAX_BUFFERS * sizeof *writes);
+    VkBufferView *views = malloc((size_t)n * TB_GPU_MAX_BUFFERS * sizeof *views);
     uint64_t *stamps = malloc((size_t)n * 2 * sizeof *stamps);
-    if (!groups || !layouts || !sets || !bufs || !writes || !stamps) {
+    if (!groups || !layouts || !sets || !bufs || !writes || !views || !stamps) {
         st = tb_error(TB_ERR_NOMEM, "tb_gpu_run: out of memory for %d dispatches", n);
         goto done;
     }
@@ -388,13 +400,20 @@ tb_status tb_gpu_run(tb_gpu_device *dev, tb_gpu_dispatch *d, int n)
     uint32_t nw = 0;
     for (int i = 0; i < n; i++)
         for (int b = 0; b < d[i].kernel->key.buffers; b++) {
+            int kind = d[i].kernel->key.kinds[b];
             bufs[nw] = (VkDescriptorBufferInfo){.buffer = d[i].buffers[b]->vk, .offset = 0, .range = VK_WHOLE_SIZE};
+            views[nw] = VK_NULL_HANDLE;
+            if (kind != TB_GPU_BIND_STORAGE && !(views[nw] = tb__gpu_buffer_view(d[i].buffers[b], kind))) {
+                st = TB_ERR_DEVICE;
+                goto done;
+            }
             writes[nw] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
                                                 .dstSet = sets[i],
                                                 .dstBinding = (uint32_t)b,
                                                 .descriptorCount = 1,
-                                                .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                                .pBufferInfo = &bufs[nw]};
+                                                .descriptorType = tb__descriptor_type(kind),
+                                                .pBufferInfo = kind == TB_GPU_BIND_STORAGE ? &bufs[nw] : NULL,
+                                                .pTexelBufferView = kind == TB_GPU_BIND_STORAGE ? NULL : &views[nw]};
             nw++;
         }
     if (nw)
@@ -468,6 +487,7 @@ done:
     free(sets);
     free(bufs);
     free(writes);
+    free(views);
     free(stamps);
     return st;
 }

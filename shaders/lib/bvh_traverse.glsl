@@ -17,6 +17,23 @@
 //     #define TB_BVH_REFS refs
 //     #include "lib/bvh_traverse.glsl"
 //
+// Faster on CPU drivers (lavapipe), where a storage-buffer load with per-lane
+// indices is a scalar loop with a branch per lane and component, while a
+// texelFetch is a branch-free gather: bind the same buffers also (or
+// instead) as texel buffers, tb_gpu_binding_kind TB_GPU_BIND_TEXELS_RGBA32UI
+// for nodes and triangles, TB_GPU_BIND_TEXELS_R32UI for the references, and
+// name them instead of (or besides) the arrays:
+//
+//     layout(binding = 5) uniform usamplerBuffer node_texels;
+//     layout(binding = 6) uniform usamplerBuffer tri_texels;
+//     layout(binding = 8) uniform usamplerBuffer ref_texels;
+//     #define TB_BVH_NODE_TEXELS node_texels
+//     #define TB_BVH_TRI_TEXELS tri_texels
+//     #define TB_BVH_REF_TEXELS ref_texels
+//
+// Each of the three is independent (the array of a kind given as texels is
+// then not needed); TB_BVH_PLACED is always an array.
+//
 // Optional, to compile out kinds the scene lacks (e.g. from specialization
 // constants the host sets from tb_gpu_scene_bindings): TB_BVH_HAS_TRIANGLES,
 // TB_BVH_HAS_SPHERES, TB_BVH_HAS_CUBES (each defaults to true: correct for
@@ -44,8 +61,9 @@
 #include "sphere.glsl"
 #include "triangle.glsl"
 
-#if !defined(TB_BVH_NODES) || !defined(TB_BVH_TRIS) || !defined(TB_BVH_PLACED) || !defined(TB_BVH_REFS)
-#error "define TB_BVH_NODES, TB_BVH_TRIS, TB_BVH_PLACED and TB_BVH_REFS (the includer's buffer arrays) first"
+#if (!defined(TB_BVH_NODES) && !defined(TB_BVH_NODE_TEXELS)) || (!defined(TB_BVH_TRIS) && !defined(TB_BVH_TRI_TEXELS)) || \
+    !defined(TB_BVH_PLACED) || (!defined(TB_BVH_REFS) && !defined(TB_BVH_REF_TEXELS))
+#error "define TB_BVH_NODES, TB_BVH_TRIS, TB_BVH_PLACED and TB_BVH_REFS (or their _TEXELS) first"
 #endif
 #ifndef TB_BVH_HAS_TRIANGLES
 #define TB_BVH_HAS_TRIANGLES true
@@ -79,6 +97,70 @@ struct tb_bvh_hit {
     uint sref;   // index of the primitive's reference in the CPU scene (tie rule's last key)
     uint leaf;   // the GPU leaf reference (TB_GPU_REF_*), for tb_bvh_normal
 };
+
+// Node `i` of the BVH (tb_gpu_bvh_node: two 16-byte texels).
+void tb_bvh_fetch_node(uint i, out vec3 lo, out vec3 hi, out uint offset, out uint count)
+{
+#ifdef TB_BVH_NODE_TEXELS
+    uvec4 a = texelFetch(TB_BVH_NODE_TEXELS, int(2u * i));
+    uvec4 b = texelFetch(TB_BVH_NODE_TEXELS, int(2u * i + 1u));
+    lo = uintBitsToFloat(a.xyz);
+    offset = a.w;
+    hi = uintBitsToFloat(b.xyz);
+    count = b.w;
+#else
+    tb_gpu_bvh_node nd = TB_BVH_NODES[i];
+    lo = nd.lo;
+    offset = nd.offset;
+    hi = nd.hi;
+    count = nd.count;
+#endif
+}
+
+// Leaf reference k.
+uint tb_bvh_fetch_ref(uint k)
+{
+#ifdef TB_BVH_REF_TEXELS
+    return texelFetch(TB_BVH_REF_TEXELS, int(k)).x;
+#else
+    return TB_BVH_REFS[k];
+#endif
+}
+
+// Triangle i's vertices (tb_gpu_tri: four 16-byte texels).
+void tb_bvh_fetch_tri(uint i, out vec3 v0, out vec3 v1, out vec3 v2)
+{
+#ifdef TB_BVH_TRI_TEXELS
+    v0 = uintBitsToFloat(texelFetch(TB_BVH_TRI_TEXELS, int(4u * i)).xyz);
+    v1 = uintBitsToFloat(texelFetch(TB_BVH_TRI_TEXELS, int(4u * i + 1u)).xyz);
+    v2 = uintBitsToFloat(texelFetch(TB_BVH_TRI_TEXELS, int(4u * i + 2u)).xyz);
+#else
+    v0 = TB_BVH_TRIS[i].v0;
+    v1 = TB_BVH_TRIS[i].v1;
+    v2 = TB_BVH_TRIS[i].v2;
+#endif
+}
+
+// Triangle i's keys: object, face, reference index.
+uvec3 tb_bvh_fetch_tri_keys(uint i)
+{
+#ifdef TB_BVH_TRI_TEXELS
+    return uvec3(texelFetch(TB_BVH_TRI_TEXELS, int(4u * i)).w, texelFetch(TB_BVH_TRI_TEXELS, int(4u * i + 1u)).w,
+                 texelFetch(TB_BVH_TRI_TEXELS, int(4u * i + 2u)).w);
+#else
+    return uvec3(TB_BVH_TRIS[i].object, TB_BVH_TRIS[i].face, TB_BVH_TRIS[i].ref);
+#endif
+}
+
+// Triangle i's unit geometric normal.
+vec3 tb_bvh_fetch_tri_normal(uint i)
+{
+#ifdef TB_BVH_TRI_TEXELS
+    return uintBitsToFloat(texelFetch(TB_BVH_TRI_TEXELS, int(4u * i + 3u)).xyz);
+#else
+    return TB_BVH_TRIS[i].ng;
+#endif
+}
 
 // True if (t, object, face, ref) precedes the best so far (the CPU tie rule,
 // with ties up to TB_TIE_TOL).
@@ -121,16 +203,18 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
         int sp = 0;
         uint node = 0u;
         for (;;) {
-            tb_gpu_bvh_node nd = TB_BVH_NODES[node];
+            vec3 nlo, nhi;
+            uint noffset, ncount;
+            tb_bvh_fetch_node(node, nlo, nhi, noffset, ncount);
             float hi_t = bt + abs(bt) * TB_T_TOL;
             float t0, t1;
-            bool enter = tb_aabb_slab(nd.lo, nd.hi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+            bool enter = tb_aabb_slab(nlo, nhi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
             if (enter) {
-                uint count = nd.count & 0xffffu;
+                uint count = ncount & 0xffffu;
                 if (count == 0u) {
                     // Inner: nearer child first (by the split axis and the ray's sign).
-                    uint axis = nd.count >> 16;
-                    uint first = node + 1u, second = nd.offset;
+                    uint axis = ncount >> 16;
+                    uint first = node + 1u, second = noffset;
                     if (r.d[axis] < 0.0) {
                         uint s = first;
                         first = second;
@@ -141,8 +225,8 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     node = first;
                     continue;
                 }
-                for (uint k = nd.offset; k < nd.offset + count; ++k) {
-                    uint ref = TB_BVH_REFS[k];
+                for (uint k = noffset; k < noffset + count; ++k) {
+                    uint ref = tb_bvh_fetch_ref(k);
                     float t;
                     uint object, face, sref;
                     if (TB_BVH_HAS_CUBES && (ref & TB_GPU_REF_CUBE) != 0u) {
@@ -165,12 +249,14 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                         face = sp.face;
                         sref = sp.ref;
                     } else if (TB_BVH_HAS_TRIANGLES && (ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) == 0u) {
-                        tb_gpu_tri tri = TB_BVH_TRIS[ref];
-                        if (!tb_tri_hit(w, tri.v0, tri.v1, tri.v2, t) || t < r.tmin || t > r.tmax)
+                        vec3 v0, v1, v2;
+                        tb_bvh_fetch_tri(ref, v0, v1, v2);
+                        if (!tb_tri_hit(w, v0, v1, v2, t) || t < r.tmin || t > r.tmax)
                             continue;
-                        object = tri.object;
-                        face = tri.face;
-                        sref = tri.ref;
+                        uvec3 keys = tb_bvh_fetch_tri_keys(ref);
+                        object = keys.x;
+                        face = keys.y;
+                        sref = keys.z;
                     } else {
                         continue;
                     }
@@ -232,7 +318,7 @@ vec3 tb_bvh_normal(tb_gpu_ray r, tb_bvh_hit h)
         vec3 p = so + h.t * sd;
         return sp.sign * normalize(sp.r0 * p.x + sp.r1 * p.y + sp.r2 * p.z);
     }
-    return TB_BVH_TRIS[h.leaf].ng;
+    return tb_bvh_fetch_tri_normal(h.leaf);
 }
 
 #endif
