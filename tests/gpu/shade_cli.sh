@@ -1,0 +1,114 @@
+#!/bin/sh
+# `testbed render --backend vulkan` (the wavefront renderer with the shade
+# kernel, docs/gpu.md "Shade kernel and wavefront renderer") against
+# `--backend cpu` on the Cornell box (spectral) and its RGB twin at 64 x 64,
+# 4 spp, under the validation layer: image NMSE within docs/accuracy.md's
+# tolerance (1e-3), the kernel shading every hit; a textured scene whose hits
+# are routed to the CPU path (reported, same image); the backend choice and
+# its fallbacks (auto on lavapipe, no driver); usage errors.
+set -eu
+: "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
+t="$TB_TEST_TMPDIR"
+fail() { echo "FAIL: $*"; [ -f "$t/shade.err" ] && cat "$t/shade.err"; [ -f "$t/shade.out" ] && cat "$t/shade.out"; exit 1; }
+
+# Image NMSE = sum (a - b)^2 / sum b^2 of two PFM files (b the reference).
+nmse() {
+    python3 - "$1" "$2" <<'EOF'
+import struct, sys
+def rd(p):
+    with open(p, 'rb') as f:
+        assert f.readline().strip() == b'PF'
+        w, h = map(int, f.readline().split())
+        s = float(f.readline())
+        n = w * h * 3
+        return struct.unpack(('<' if s < 0 else '>') + '%df' % n, f.read(4 * n))
+a, b = rd(sys.argv[1]), rd(sys.argv[2])
+assert len(a) == len(b)
+num = sum((x - y) ** 2 for x, y in zip(a, b))
+den = sum(y * y for y in b)
+print('%.6g' % (num / den if den > 0 else float('inf')))
+EOF
+}
+
+small() { sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [64 64]/' "$1" >"$2"; }
+
+for name in cornell-box cornell-box-rgb; do
+    small "$TB_SOURCE_DIR/scenes/$name.mid" "$t/$name.mid"
+    "$TESTBED" render "$t/$name.mid" -o "$t/$name-cpu.pfm" --spp 4 --backend cpu >/dev/null 2>"$t/shade.err" ||
+        fail "cpu render of $name"
+    TB_VK_VALIDATION=1 "$TESTBED" render "$t/$name.mid" -o "$t/$name-vk.pfm" --spp 4 --backend vulkan \
+        --stats "$t/$name.json" >"$t/shade.out" 2>"$t/shade.err" || fail "vulkan render of $name"
+    if grep -q -i "validation error\|VUID" "$t/shade.err"; then fail "validation messages ($name)"; fi
+    grep -q "backend vulkan: " "$t/shade.err" || fail "no backend line ($name)"
+    grep -q "vulkan: [1-9][0-9]* hits shaded by the kernel, 0 routed to the CPU path" "$t/shade.out" ||
+        fail "the kernel should shade every hit of $name"
+    grep -q '"gpu_shaded_hits"' "$t/$name.json" || fail "no gpu_shaded_hits in --stats ($name)"
+    e=$(nmse "$t/$name-vk.pfm" "$t/$name-cpu.pfm")
+    echo "$name 64x64 4 spp: vulkan vs cpu NMSE $e"
+    python3 -c "import sys; sys.exit(0 if $e <= 1e-3 else 1)" || fail "$name: NMSE $e > 1e-3"
+    # Not trivially equal: another seed gives a different image (noise well above the tolerance).
+    "$TESTBED" render "$t/$name.mid" -o "$t/$name-seed.pfm" --spp 4 --seed 9 --backend cpu >/dev/null 2>&1
+    e2=$(nmse "$t/$name-seed.pfm" "$t/$name-cpu.pfm")
+    python3 -c "import sys; sys.exit(0 if $e2 > 10 * $e and $e2 > 1e-4 else 1)" ||
+        fail "$name: another seed should differ far more (NMSE $e2 vs $e)"
+done
+
+# Routed: a textured floor (the kernel has no image textures) is shaded by
+# the CPU path, reported, and the image is the CPU's.
+printf 'PF\n2 2\n-1.0\n' >"$t/shade_tex.pfm"
+python3 -c "import struct,sys; sys.stdout.buffer.write(struct.pack('<12f', .9,.2,.2, .2,.9,.2, .2,.2,.9, .8,.8,.8))" \
+    >>"$t/shade_tex.pfm"
+cat >"$t/shade_tex.mid" <<'EOF'
+mid 1
+camera "c" { eye = [0 -6 3] look_at = [0 0 0] up = [0 0 1] fov = 50 resolution = [48 32] }
+polygons "floor" { geometry = { vertices = [[-4 -4 0] [4 -4 0] [4 4 0] [-4 4 0]] faces = [[0 1 2 3]] }
+  rendering = { diffuse = 1 diffuse_texture = file("shade_tex.pfm") } }
+sphere "ball" { transform = [scale(0.5) translate([0 0 0.5])] rendering = { diffuse = [0.8 0.4 0.2] } }
+polygons "lamp" { geometry = { vertices = [[-0.5 -0.5 3] [-0.5 0.5 3] [0.5 0.5 3] [0.5 -0.5 3]] faces = [[0 1 2 3]] }
+  rendering = { diffuse = 0 emission = [10 8 6] } }
+point_light { position = [1 1 2] intensity = [5 4 3] }
+EOF
+"$TESTBED" render "$t/shade_tex.mid" -o "$t/tex-cpu.pfm" --spp 2 --backend cpu >/dev/null 2>&1 || fail "cpu textured"
+TB_VK_VALIDATION=1 "$TESTBED" render "$t/shade_tex.mid" -o "$t/tex-vk.pfm" --spp 2 --backend vulkan \
+    >"$t/shade.out" 2>"$t/shade.err" || fail "vulkan textured"
+if grep -q -i "validation error\|VUID" "$t/shade.err"; then fail "validation messages (textured)"; fi
+grep -q "[1-9][0-9]* routed to the CPU path (material [0-9]*: image texture)" "$t/shade.out" ||
+    fail "textured hits should be reported as routed"
+e=$(nmse "$t/tex-vk.pfm" "$t/tex-cpu.pfm")
+echo "textured (routed) 48x32: NMSE $e"
+python3 -c "import sys; sys.exit(0 if $e <= 1e-3 else 1)" || fail "textured: NMSE $e > 1e-3"
+
+# Backend choice: auto on a CPU driver uses the CPU path and says why.
+"$TESTBED" render "$t/cornell-box-rgb.mid" -o "$t/auto.pfm" --backend auto >"$t/shade.out" 2>"$t/shade.err" ||
+    fail "auto"
+if grep -q "(CPU)" "$t/shade.err" || ! grep -q "backend vulkan" "$t/shade.err"; then
+    grep -q "backend cpu: " "$t/shade.err" || fail "auto on lavapipe should say it uses the CPU path"
+    if grep -q "hits shaded by the kernel" "$t/shade.out"; then fail "auto on lavapipe ran the kernel"; fi
+fi
+# No Vulkan driver: auto falls back with the reason, vulkan fails with it.
+VK_ICD_FILENAMES=/nonexistent/tb-no-icd.json VK_DRIVER_FILES=/nonexistent/tb-no-icd.json \
+    "$TESTBED" render "$t/cornell-box-rgb.mid" -o "$t/noicd.pfm" >"$t/shade.out" 2>"$t/shade.err" ||
+    fail "auto without a driver should fall back to the CPU path"
+grep -q "backend cpu: .*driver" "$t/shade.err" || fail "no fallback reason without a driver"
+[ -f "$t/noicd.pfm" ] || fail "no image from the fallback"
+set +e
+VK_ICD_FILENAMES=/nonexistent/tb-no-icd.json VK_DRIVER_FILES=/nonexistent/tb-no-icd.json \
+    "$TESTBED" render "$t/cornell-box-rgb.mid" -o "$t/noicd2.pfm" --backend vulkan >"$t/shade.out" 2>"$t/shade.err"
+rc=$?
+set -e
+[ $rc -ne 0 ] || fail "--backend vulkan without a driver should fail"
+grep -q "backend vulkan" "$t/shade.err" || fail "no --backend vulkan message"
+[ ! -f "$t/noicd2.pfm" ] || fail "a failed vulkan render wrote an image"
+
+# Usage and unsupported options.
+set +e
+"$TESTBED" render "$t/cornell-box-rgb.mid" -o "$t/x.pfm" --backend metal >/dev/null 2>&1
+[ $? -eq 2 ] || fail "--backend metal should be a usage error"
+"$TESTBED" render "$t/cornell-box-rgb.mid" -o "$t/x.pfm" --backend vulkan --adaptive >/dev/null 2>"$t/shade.err"
+rc=$?
+set -e
+[ $rc -ne 0 ] || fail "--adaptive with --backend vulkan should fail (not implemented)"
+grep -q "adaptive" "$t/shade.err" || fail "no adaptive message"
+"$TESTBED" render --help | grep -q -- "--backend B" || fail "--backend not in --help"
+"$TESTBED" render --help | grep -q -- "--device N" || fail "--device not in --help"
+echo "ok"

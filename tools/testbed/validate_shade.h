@@ -1,0 +1,24 @@
+/* `testbed validate --kernel shade` (cmd_validate_shade.c; docs/gpu.md,
+ * "Shade kernel and wavefront renderer"). */
+#ifndef TB_TOOLS_TESTBED_VALIDATE_SHADE_H
+#define TB_TOOLS_TESTBED_VALIDATE_SHADE_H
+
+#include <stdbool.h>
+
+#include "host/gpu/gpu.h"
+#include "host/render/scene.h"
+
+/* Image NMSE = sum (vulkan - cpu)^2 / sum cpu^2 (linear sRGB, every pixel and
+ * channel) allowed by `testbed validate --kernel shade` (docs/accuracy.md,
+ * "Shade kernel"). */
+#define TB_VALIDATE_SHADE_TOL_NMSE 1e-3
+
+/* Renders `s` at a small resolution (width `width`, the file's aspect ratio)
+ * with `spp` samples per pixel and seed `seed` on the CPU path and with the
+ * Vulkan wavefront renderer on the session's device, prints the image NMSE,
+ * the largest pixel difference and the routing, and sets *ok when the NMSE
+ * is within TB_VALIDATE_SHADE_TOL_NMSE. Returns nonzero (message printed)
+ * when a render fails. */
+int tb_validate_shade(const tb_scene *s, tb_gpu_session *sess, int width, int spp, long seed, bool *ok);
+
+#endif
