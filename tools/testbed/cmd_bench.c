@@ -61,6 +61,11 @@ static void tb__bench_usage(FILE *out)
             "  gpu          the Vulkan intersect kernel vs the CPU path on primary, shadow and\n"
             "               diffuse rays: Mrays/s, kernel device time, ratio (testbed bench gpu --help)\n"
             "\n"
+            "usage: testbed bench formfactor SCENE.mid [--shooters N] [--samples N] [--repeat R] [--device N]\n"
+            "\n"
+            "  formfactor   ray-cast form factors per second, the Vulkan kernel vs the CPU batch, on the\n"
+            "               scene meshed as for radiosity (details: testbed bench formfactor --help)\n"
+            "\n"
             "Exit status: 0 done, 1 an object could not be built, 2 usage error.\n");
 }
 
@@ -307,6 +312,7 @@ static const struct {
     {"tessellate", tb_cmd_bench_tessellate}, /* cmd_bench_tessellate.c */
     {"rays", tb_cmd_bench_rays}, /* cmd_bench_rays.c */
     {"gpu", tb_cmd_bench_gpu},   /* cmd_bench_gpu.c */
+    {"formfactor", tb_cmd_bench_formfactor}, /* cmd_bench_formfactor.c */
 };
 
 int tb_cmd_bench(int argc, char **argv)

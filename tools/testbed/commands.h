@@ -18,6 +18,8 @@ int tb_cmd_bench_accel(int argc, char **argv);
 int tb_cmd_bench_tessellate(int argc, char **argv);
 /* `testbed bench rays`: scene rays through our BVH and Embree 3 (cmd_bench_rays.c; argv[0] is "rays"). */
 int tb_cmd_bench_rays(int argc, char **argv);
+/* `testbed bench formfactor`: form factors per second, Vulkan kernel vs CPU batch (cmd_bench_formfactor.c; argv[0] is "formfactor"). */
+int tb_cmd_bench_formfactor(int argc, char **argv);
 /* `testbed bench gpu`: the Vulkan intersect kernel vs the CPU path per ray set (cmd_bench_gpu.c; argv[0] is "gpu"). */
 int tb_cmd_bench_gpu(int argc, char **argv);
 /* `testbed check SCENE.mid`: validate and summarise a MID scene (cmd_check.c). */

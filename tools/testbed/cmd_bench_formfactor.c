@@ -1,0 +1,217 @@
+/* `testbed bench formfactor SCENE.mid [--shooters N] [--samples N]
+ * [--repeat R] [--seed S] [--device N]`: ray-cast form factors per second of
+ * the Vulkan kernel (tb_gpu_ff_batch, host/gpu/formfactor.h) and of the CPU
+ * batch (tb_ff_raycast_batch, OpenMP over receivers) on the same shooters and
+ * receivers of a scene meshed as for radiosity (ff_elements.h).
+ * docs/performance.md, "Form-factor kernel". */
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+
+#include "commands.h"
+#include "ff_elements.h"
+#include "host/gpu/formfactor.h"
+#include "util/stats/stats.h"
+
+static void tb__ffb_usage(FILE *out)
+{
+    fprintf(out,
+            "usage: testbed bench formfactor SCENE.mid [--shooters N] [--samples N] [--repeat R]\n"
+            "                                [--seed S] [--device N]\n"
+            "\n"
+            "Ray-cast form factors (Wallace et al. 1989) per second, the Vulkan kernel against the CPU\n"
+            "batch (OpenMP over receivers), on the same work: the scene (e.g. scenes/cornell-box.mid)\n"
+            "meshed into elements as `testbed validate --kernel formfactor`\n"
+            "does (edge: bounds diagonal / 24; every element occludes), every element centroid and\n"
+            "corner a receiver, N shooters (emitting elements first, then random ones), each with S\n"
+            "sample points. Prints, for the best of R runs, form factors (receiver-shooter pairs) per\n"
+            "second and sample segments per second by wall clock, the kernel's device time, the\n"
+            "process CPU seconds (the driver's threads included), the ratio vulkan/cpu, and the\n"
+            "largest relative difference between the two (floor 1e-6) as a sanity check. Pipeline\n"
+            "creation is excluded (one untimed shot first).\n"
+            "\n"
+            "  --shooters N  shooters (default 16)\n"
+            "  --samples N   sample points per shooter (default 16)\n"
+            "  --repeat R    timed runs per path (default 3)\n"
+            "  --seed S      seed of the shooter choice and the sample points (default 1)\n"
+            "  --device N    Vulkan device (testbed devices; default: the best one, lavapipe included)\n");
+}
+
+static bool tb__ffb_long(const char *s, long lo, long hi, long *out)
+{
+    errno = 0;
+    char *end;
+    long v = s ? strtol(s, &end, 10) : 0;
+    if (!s || errno || end == s || *end || v < lo || v > hi)
+        return false;
+    *out = v;
+    return true;
+}
+
+/* User + system CPU seconds of the whole process. */
+static double tb__ffb_cpu(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return (double)(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+           1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
+
+/* The work: shooters' sample points, normals and areas. */
+typedef struct tb__ffb_work {
+    const tb_ffe_set *e;
+    size_t nshoot;
+    int npts;
+    tb_vec3 *pts; /* nshoot * npts */
+    const uint32_t *shoot;
+} tb__ffb_work;
+
+/* Every shot through `fn`; results of shooter j in out[j * nrecv ..]. Wall seconds, or -1 on an error. */
+static double tb__ffb_run(const tb__ffb_work *w, tb_ff_batch_fn fn, void *ctx, double *out, double *cpu_s)
+{
+    double c0 = tb__ffb_cpu();
+    int64_t t0 = tb_stats_now_ns();
+    for (size_t j = 0; j < w->nshoot; ++j) {
+        uint32_t el = w->shoot[j];
+        if (fn(ctx, w->pts + j * (size_t)w->npts, w->npts, w->e->normal[el], w->e->area[el], w->e->rp, w->e->rn,
+               w->e->nrecv, out + j * w->e->nrecv))
+            return -1.0;
+    }
+    double s = (double)(tb_stats_now_ns() - t0) * 1e-9;
+    *cpu_s = tb__ffb_cpu() - c0;
+    return s;
+}
+
+int tb_cmd_bench_formfactor(int argc, char **argv)
+{
+    if (tb_wants_help(argc, argv)) {
+        tb__ffb_usage(stdout);
+        return TB_EXIT_OK;
+    }
+    const char *path = NULL;
+    long shooters = 16, samples = 16, repeat = 3, seed = 1, device = -1;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        long *dst = !strcmp(a, "--shooters") ? &shooters
+                    : !strcmp(a, "--samples") ? &samples
+                    : !strcmp(a, "--repeat")  ? &repeat
+                    : !strcmp(a, "--seed")    ? &seed
+                    : !strcmp(a, "--device")  ? &device
+                                              : NULL;
+        if (dst) {
+            long lo = dst == &seed || dst == &device ? 0 : 1, hi = dst == &seed ? 1L << 40 : 4096;
+            if (!tb__ffb_long(i + 1 < argc ? argv[++i] : NULL, lo, hi, dst)) {
+                fprintf(stderr, "testbed bench formfactor: %s needs a whole number in %ld..%ld\n", a, lo, hi);
+                return TB_EXIT_USAGE;
+            }
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "testbed bench formfactor: unknown option '%s' (see testbed bench formfactor --help)\n", a);
+            return TB_EXIT_USAGE;
+        } else if (!path) {
+            path = a;
+        } else {
+            fprintf(stderr, "testbed bench formfactor: more than one scene\n");
+            return TB_EXIT_USAGE;
+        }
+    }
+    if (!path) {
+        tb__ffb_usage(stderr);
+        return TB_EXIT_USAGE;
+    }
+    tb_scene *s = NULL;
+    if (tb_scene_load(path, NULL, &s)) {
+        fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
+        return TB_EXIT_FAIL;
+    }
+    tb_gpu_session sess;
+    if (tb_gpu_backend_choose(TB_GPU_MODE_VULKAN, (int)device, false, &sess)) {
+        fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
+        tb_scene_free(s);
+        return TB_EXIT_FAIL;
+    }
+    int rc = TB_EXIT_FAIL;
+    tb_aabb b = s->bounds;
+    double diag = sqrt(((double)b.hi.x - b.lo.x) * ((double)b.hi.x - b.lo.x) +
+                       ((double)b.hi.y - b.lo.y) * ((double)b.hi.y - b.lo.y) +
+                       ((double)b.hi.z - b.lo.z) * ((double)b.hi.z - b.lo.z));
+    tb_ffe_set e = {0};
+    tb_ff_occluders *occ = NULL;
+    tb_gpu_ff_scene *g = NULL;
+    uint32_t *shoot = NULL;
+    tb__ffb_work w = {0};
+    double *cf = NULL, *gf = NULL;
+    if (tb_ffe_build(s, diag > 0.0 && isfinite(diag) ? diag / TB_FFE_EDGE_DIVISOR : 1.0, &e) ||
+        tb_ff_occluders_build(e.polys, e.n, &occ) || !(g = tb_gpu_ff_scene_create(sess.device, e.polys, e.n))) {
+        fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
+        goto done;
+    }
+    shoot = malloc((size_t)shooters * sizeof *shoot);
+    w.pts = malloc((size_t)shooters * (size_t)samples * sizeof *w.pts);
+    cf = malloc((size_t)shooters * e.nrecv * sizeof *cf);
+    gf = malloc((size_t)shooters * e.nrecv * sizeof *gf);
+    if (!shoot || !w.pts || !cf || !gf) {
+        fprintf(stderr, "testbed bench formfactor: out of memory\n");
+        goto done;
+    }
+    w.e = &e;
+    w.npts = (int)samples;
+    w.shoot = shoot;
+    w.nshoot = tb_ffe_shooters(&e, s, (size_t)shooters, (uint64_t)seed, shoot);
+    for (size_t j = 0; j < w.nshoot; ++j)
+        if (tb_ff_sample_polygon(&e.polys[shoot[j]], w.npts, (uint64_t)seed * 1000003u + j, w.pts + j * (size_t)w.npts)) {
+            fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
+            goto done;
+        }
+    const tb_gpu_device_info *di = tb_gpu_device_info_of(sess.device);
+    printf("testbed bench formfactor: %s: %zu elements (occluders: %zu triangles), %zu receivers, %zu shooters x %ld "
+           "samples\n",
+           path, e.n, tb_gpu_ff_scene_triangles(g), e.nrecv, w.nshoot, samples);
+    printf("device %d (%s); CPU path: %d threads; best of %ld runs\n\n", sess.device_index, di->name,
+           omp_get_max_threads(), repeat);
+    /* One untimed shot: pipeline creation and the driver's first-dispatch compilation. */
+    double warm = 0.0;
+    if (tb_gpu_ff_batch(g, w.pts, w.npts, e.normal[shoot[0]], e.area[shoot[0]], e.rp, e.rn, 1, &warm)) {
+        fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
+        goto done;
+    }
+    double best[2] = {INFINITY, INFINITY}, cpu_at_best[2] = {0.0, 0.0};
+    for (long r = 0; r < repeat; ++r)
+        for (int path_k = 0; path_k < 2; ++path_k) {
+            double cs = 0.0;
+            double t = path_k == 0 ? tb__ffb_run(&w, tb_ff_raycast_batch, occ, cf, &cs)
+                                   : tb__ffb_run(&w, tb_gpu_ff_batch, g, gf, &cs);
+            if (t < 0.0) {
+                fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
+                goto done;
+            }
+            if (t < best[path_k]) {
+                best[path_k] = t;
+                cpu_at_best[path_k] = cs;
+            }
+        }
+    double pairs = (double)w.nshoot * (double)e.nrecv, segs = pairs * (double)samples, worst = 0.0;
+    for (size_t i = 0; i < w.nshoot * e.nrecv; ++i)
+        worst = fmax(worst, fabs(gf[i] - cf[i]) / fmax(fabs(cf[i]), 1e-6));
+    printf("%-8s %14s %14s %10s %12s\n", "path", "M FF/s", "M segments/s", "seconds", "CPU seconds");
+    const char *names[2] = {"cpu", "vulkan"};
+    for (int k = 0; k < 2; ++k)
+        printf("%-8s %14.4f %14.3f %10.3f %12.3f\n", names[k], pairs / best[k] * 1e-6, segs / best[k] * 1e-6, best[k],
+               cpu_at_best[k]);
+    printf("\nratio vulkan/cpu: %.3f (wall clock), %.3f (per CPU second)\n", best[0] / best[1],
+           cpu_at_best[0] / cpu_at_best[1]);
+    printf("largest relative difference vulkan vs cpu: %.3g (visibility flips of grazing segments: testbed validate)\n",
+           worst);
+    rc = TB_EXIT_OK;
+done:
+    tb_gpu_ff_scene_destroy(g);
+    tb_ff_occluders_free(occ);
+    tb_ffe_free(&e);
+    tb_gpu_session_close(&sess);
+    tb_scene_free(s);
+    free(shoot), free(w.pts), free(cf), free(gf);
+    return rc;
+}
