@@ -30,20 +30,23 @@ layout(constant_id = 3) const bool TB_FF_VIS_BITS = false;
 
 layout(std430, binding = 0) readonly buffer Receivers { tb_gpu_ff_receiver receivers[]; };
 layout(std430, binding = 1) readonly buffer Samples { tb_gpu_ff_sample samples[]; };
-layout(std430, binding = 2) readonly buffer Nodes { tb_gpu_bvh_node nodes[]; };
-layout(std430, binding = 3) readonly buffer Tris { tb_gpu_tri tris[]; };
+// Nodes, triangles and references as texel buffers (RGBA32UI, RGBA32UI and
+// R32UI views of the tb_gpu_bvh_node, tb_gpu_tri and uint arrays), as the
+// intersect kernel binds them: branch-free gathers on lavapipe.
+layout(binding = 2) uniform usamplerBuffer node_texels;
+layout(binding = 3) uniform usamplerBuffer tri_texels;
 layout(std430, binding = 4) readonly buffer Placed { tb_gpu_placed placed[]; };
-layout(std430, binding = 5) readonly buffer Refs { uint refs[]; };
+layout(binding = 5) uniform usamplerBuffer ref_texels;
 layout(std430, binding = 6) writeonly buffer Result { float ff[]; };
 layout(std430, binding = 7) writeonly buffer Visible { uint vis_bits[]; };
 
 layout(push_constant) uniform Push { tb_gpu_ff_push pc; };
 
 // Occluders are triangles only (quads arrive as two).
-#define TB_BVH_NODES nodes
-#define TB_BVH_TRIS tris
+#define TB_BVH_NODE_TEXELS node_texels
+#define TB_BVH_TRI_TEXELS tri_texels
 #define TB_BVH_PLACED placed
-#define TB_BVH_REFS refs
+#define TB_BVH_REF_TEXELS ref_texels
 #define TB_BVH_HAS_TRIANGLES TB_FF_OCCLUSION
 #define TB_BVH_HAS_SPHERES false
 #define TB_BVH_HAS_CUBES false

@@ -230,6 +230,9 @@ tb_status tb_gpu_ff_raycast(tb_gpu_ff_scene *g, const tb_vec3 *pts, int npts, tb
     tb_gpu_spec_constant spec[3] = {{1, g->stack}, {2, occl}, {3, visible != NULL}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("formfactor"),
                                                                         .buffers = 8,
+                                                                        .kinds = {0, 0, TB_GPU_BIND_TEXELS_RGBA32UI,
+                                                                                  TB_GPU_BIND_TEXELS_RGBA32UI, 0,
+                                                                                  TB_GPU_BIND_TEXELS_R32UI, 0, 0},
                                                                         .push_size = sizeof(tb_gpu_ff_push),
                                                                         .spec = spec,
                                                                         .spec_count = 3});
