@@ -57,6 +57,9 @@ typedef struct tb__mat_src {
     float exponent, ior;
     char *texture[4];      /* resolved paths (owned) or NULL: diffuse, specular, transmission, emission */
     char *name;            /* base material name (owned) or NULL */
+    tb_mid_model model;
+    float roughness;
+    tb_mid_pattern pat[3]; /* diffuse pattern, specular pattern, bump: colours and image path owned */
     tb_mid_loc loc;        /* where the block or definition is */
     bool emits;
     unsigned char *key;    /* the bytes that decide equality (owned) */
@@ -174,6 +177,22 @@ static void tb__material_key(tb__bytes *b, const tb_mid_material *m)
     tb__put_str(b, m->specular_texture.path);
     tb__put_str(b, m->transmission_texture.path);
     tb__put_str(b, m->emission_texture.path);
+    int32_t model = (int32_t)m->model;
+    tb__put(b, &model, sizeof model);
+    tb__put(b, &m->roughness, sizeof m->roughness);
+    const tb_mid_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+    for (int i = 0; i < 3; i++) {
+        const tb_mid_pattern *p = pats[i];
+        int32_t head[3] = {(int32_t)p->kind, p->object_space, p->octaves};
+        tb__put(b, head, sizeof head);
+        if (p->kind == TB_MID_PATTERN_NONE)
+            continue;
+        tb__put(b, &p->scale, sizeof p->scale);
+        tb__put(b, &p->height, sizeof p->height);
+        tb__put_color(b, &p->a);
+        tb__put_color(b, &p->b);
+        tb__put_str(b, p->image.path);
+    }
 }
 
 /* Deep copy of a colour; false when out of memory. */
@@ -255,6 +274,18 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     }
     if (m->base)
         ok = (e->name = tb_strdup(m->base)) != NULL && ok;
+    const tb_mid_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+    for (int k = 0; k < 3; k++) {
+        tb_mid_pattern *d = &e->pat[k];
+        *d = *pats[k];
+        d->image.text = d->image.path = NULL;
+        ok = tb__copy_color(&d->a, &pats[k]->a) && ok;
+        ok = tb__copy_color(&d->b, &pats[k]->b) && ok;
+        if (pats[k]->image.path)
+            ok = (d->image.path = tb_strdup(pats[k]->image.path)) != NULL && ok;
+    }
+    e->model = m->model;
+    e->roughness = m->roughness;
     e->exponent = m->exponent;
     e->ior = m->ior;
     e->loc = m->loc;
@@ -277,6 +308,11 @@ static void tb__free_mat_src(tb__mat_src *e)
     for (int k = 0; k < 4; k++) {
         tb__free_color(&e->color[k]);
         free(e->texture[k]);
+    }
+    for (int k = 0; k < 3; k++) {
+        tb__free_color(&e->pat[k].a);
+        tb__free_color(&e->pat[k].b);
+        free((void *)e->pat[k].image.path);
     }
     free(e->name);
     free(e->key);
@@ -440,7 +476,9 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
     bool spectral = false;
     for (int i = 0; i < p->nmats; i++)
         for (int k = 0; k < 4 && used[i]; k++)
-            spectral = spectral || tb__is_spectral(&p->mats[i].color[k]);
+            spectral = spectral || tb__is_spectral(&p->mats[i].color[k]) ||
+                       (k < 2 && p->mats[i].pat[k].kind != TB_MID_PATTERN_NONE &&
+                        (tb__is_spectral(&p->mats[i].pat[k].a) || tb__is_spectral(&p->mats[i].pat[k].b)));
     for (int i = 0; i < s->nlights; i++)
         spectral = spectral || tb__is_spectral(&p->lights[i].l.intensity);
     if (opt->color == TB_SCENE_COLOR_RGB)
@@ -491,6 +529,28 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
         m->specular_texture = e->texture[1];
         m->transmission_texture = e->texture[2];
         m->emission_texture = e->texture[3];
+        m->model = e->model;
+        m->roughness = e->roughness;
+        tb_material_pattern *mp[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+        for (int k = 0; k < 3 && !st; k++) {
+            const tb_mid_pattern *src = &e->pat[k];
+            tb_material_pattern *d = mp[k];
+            d->kind = src->kind;
+            d->object_space = src->object_space;
+            d->scale = (float)src->scale;
+            d->octaves = src->octaves;
+            d->height = (float)src->height;
+            d->image = src->image.path;
+            d->a = d->b = tb_channels_splat(s->nchannels, 0.0f);
+            if (k < 2 && src->kind != TB_MID_PATTERN_NONE &&
+                ((st = tb_channels_from_mid_color(&src->a, bands, TB_COLOR_REFLECTANCE, &d->a)) ||
+                 (st = tb_channels_from_mid_color(&src->b, bands, TB_COLOR_REFLECTANCE, &d->b)))) {
+                char what[160];
+                snprintf(what, sizeof what, "material%s%s%s, %s", e->name ? " '" : "", e->name ? e->name : "",
+                         e->name ? "'" : "", k == 0 ? "diffuse_pattern" : "specular_pattern");
+                st = tb__located(st, s, e->loc, what);
+            }
+        }
     }
     s->nmaterials = n;
     tb_stat_add(&tb__n_materials, n);

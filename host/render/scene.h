@@ -66,6 +66,18 @@ typedef struct tb_scene_options {
     bool no_accel;                /* build no acceleration structure (tb_scene_intersect then misses) */
 } tb_scene_options;
 
+/* A procedural pattern or bump map of a material (MID 1.1, docs/mid.md 7.2),
+ * colours in the scene's representation. */
+typedef struct tb_material_pattern {
+    tb_mid_pattern_kind kind; /* TB_MID_PATTERN_NONE: none */
+    bool object_space;        /* of the object-space point (else of (u, v)) */
+    float scale;              /* checks or noise cells per unit */
+    int octaves;              /* noise */
+    tb_channels a, b;         /* colour patterns: checker even/odd squares, noise at 0 and 1 */
+    float height;             /* bump: height of the unit value, scene units */
+    const char *image;        /* bump image(): resolved path */
+} tb_material_pattern;
+
 /* One entry of the material table: a MID material (docs/mid.md, section 7)
  * with its colours in the scene's representation. */
 typedef struct tb_material {
@@ -82,6 +94,11 @@ typedef struct tb_material {
     const char *specular_texture;     /* likewise */
     const char *transmission_texture; /* likewise */
     const char *emission_texture;     /* likewise */
+    tb_mid_model model;       /* reflection model of the specular term (MID 1.1) */
+    float roughness;          /* GGX alpha */
+    tb_material_pattern diffuse_pattern;  /* replaces `diffuse` when kind != NONE */
+    tb_material_pattern specular_pattern; /* replaces `specular` when kind != NONE */
+    tb_material_pattern bump;             /* perturbs the shading normal when kind != NONE */
 } tb_material;
 
 /* An emissive object: a top-level object one of whose surfaces emits. */
