@@ -45,31 +45,46 @@ typedef struct tb_ff_polygon {
 /* True if nothing blocks the segment from a to b (see TB_FF_SEGMENT_EPS). */
 typedef bool (*tb_ff_visible_fn)(void *ctx, tb_vec3 a, tb_vec3 b);
 
-/* Unit normal (Newell) and area of a polygon. */
+/* Unit normal (Newell) and area of a polygon (computed in double); a
+ * degenerate polygon (collinear corners, n not 3 or 4) gives a zero normal
+ * and area 0. Either output may be NULL. */
 void tb_ff_polygon_frame(const tb_ff_polygon *poly, tb_vec3 *normal, double *area);
 
 /* Exact unoccluded form factor from a differential area at p with unit
  * normal n to the front of `poly` (the contour integral of Lambert/Nusselt,
  * in double); the part of the polygon behind p's tangent plane is clipped
- * away, and 0 is returned if p sees the polygon's back. */
+ * away, and 0 is returned if p sees the polygon's back or lies in its plane
+ * (also on its edge: move such points into their element first), or for a
+ * degenerate polygon or a zero normal (never NaN). */
 double tb_ff_point_polygon(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly);
 
 /* nsamples stratified jittered points on `poly`, each standing for
- * area / nsamples; the same (poly, nsamples, seed) gives the same points.
- * TB_ERR_ARG for nsamples < 1 or a degenerate polygon. */
+ * area / nsamples: the unit square is cut into nsamples equal cells (rows of
+ * near-square cells) and mapped onto the polygon by a measure-preserving map
+ * (triangles: Heitz 2019; convex quads: the bilinear patch with its linear
+ * Jacobian inverted), so every cell becomes an equal-area stratum holding one
+ * uniform point. The same (poly, nsamples, seed) gives the same points.
+ * TB_ERR_ARG for nsamples < 1 or a degenerate polygon (zero area,
+ * non-finite corner, n not 3 or 4). */
 tb_status tb_ff_sample_polygon(const tb_ff_polygon *poly, int nsamples, uint64_t seed, tb_vec3 *out);
 
 /* Ray-cast form factor from a differential receiver at p (unit normal n) to
  * a shooter of `area` and unit normal ns given by npts sample points:
  * sum over visible k of cos_s cos_r (area / npts) / (pi r^2 + area / npts)
- * (Wallace et al. 1989, eq. 5). `visible` NULL means no occlusion. */
+ * (Wallace et al. 1989, eq. 5), in double. Samples behind either surface are
+ * skipped without a visibility test; the others call visible(ctx, p, pts[k]).
+ * `visible` NULL means no occlusion. The disk term biases the result low by
+ * about (area / npts) / (pi r^2) (docs/formfactors.md, "Accuracy"). */
 double tb_ff_raycast(const tb_vec3 *pts, int npts, tb_vec3 ns, double area, tb_vec3 p, tb_vec3 n,
                      tb_ff_visible_fn visible, void *ctx);
 
 /* Occluders: an acceleration structure (host/render/accel.h) over polygons. */
 typedef struct tb_ff_occluders tb_ff_occluders;
 
-/* Builds the occluders of polys[0..n) (copied). */
+/* Builds the occluders of polys[0..n) (copied; quads as two triangles split
+ * along v0-v2, tested with the object level's watertight triangle test).
+ * n == 0 gives occluders that block nothing. TB_ERR_ARG for a polygon with
+ * n not 3 or 4 or a non-finite corner; *out is NULL on failure. */
 tb_status tb_ff_occluders_build(const tb_ff_polygon *polys, size_t n, tb_ff_occluders **out);
 
 /* A tb_ff_visible_fn: `ctx` is a tb_ff_occluders. Thread-safe. */
@@ -94,7 +109,8 @@ tb_status tb_ff_raycast_batch(void *ctx, const tb_vec3 *pts, int npts, tb_vec3 n
 /* A hemicube with its delta form factors and item buffers (opaque). */
 typedef struct tb_hemicube tb_hemicube;
 
-/* A hemicube of res x res pixels on the top face (res / 2 on the sides). */
+/* A hemicube of res x res pixels on the top face (res x res / 2 on each
+ * side); res even, 2..4096. NULL (with tb_error) otherwise or out of memory. */
 tb_hemicube *tb_hemicube_create(int res);
 
 /* Frees it; NULL is allowed. */
@@ -102,8 +118,10 @@ void tb_hemicube_free(tb_hemicube *hc);
 
 /* ff[i] = form factor from a differential area at `center` (unit normal
  * `normal`) to polygon i, nearest polygon winning each hemicube pixel;
- * polygon `skip` (TB_FF_NONE: none) is not drawn. One hemicube is used by
- * one thread at a time. */
+ * polygon `skip` (TB_FF_NONE: none) is not drawn. Polygons seen from behind
+ * hide what is behind them but get ff 0. TB_ERR_ARG for a non-finite centre,
+ * a zero normal, or a polygon with n not 3 or 4 or a non-finite corner. One
+ * hemicube is used by one thread at a time. */
 tb_status tb_hemicube_formfactors(tb_hemicube *hc, tb_vec3 center, tb_vec3 normal, const tb_ff_polygon *polys,
                                   size_t n, uint32_t skip, double *ff);
 

@@ -417,6 +417,23 @@ static void test_blocker(void **state)
      * receiver's own plane. */
     assert_true(tb_ff_occluders_visible(occ, p, (tb_vec3){0.5f, 0.5f, 2.0f}));
     tb_ff_occluders_free(occ);
+    /* Segments between points on two tilted plates (boxes that hold the
+     * segment's ends) are not blocked by the plates themselves. */
+    tb_ff_polygon tilted[2] = {
+        facing(ff_quad((tb_vec3){-1, -1, -0.5f}, (tb_vec3){1, -1, 0.5f}, (tb_vec3){1, 1, 0.5f}, (tb_vec3){-1, 1, -0.5f}),
+               (tb_vec3){0, 0, 1}),
+        facing(ff_quad((tb_vec3){-1, -1, 3.5f}, (tb_vec3){1, -1, 2.5f}, (tb_vec3){1, 1, 2.5f}, (tb_vec3){-1, 1, 3.5f}),
+               (tb_vec3){0, 0, -1}),
+    };
+    assert_int_equal(tb_ff_occluders_build(tilted, 2, &occ), TB_OK);
+    tb_vec3 a0[64], b0[64];
+    assert_int_equal(tb_ff_sample_polygon(&tilted[0], 64, 1, a0), TB_OK);
+    assert_int_equal(tb_ff_sample_polygon(&tilted[1], 64, 2, b0), TB_OK);
+    for (int k = 0; k < 64; k++)
+        assert_true(tb_ff_occluders_visible(occ, a0[k], b0[63 - k]));
+    /* ... but a segment through a plate is. */
+    assert_false(tb_ff_occluders_visible(occ, (tb_vec3){0, 0, -2}, b0[5]));
+    tb_ff_occluders_free(occ);
 
     tb_hemicube *hc = tb_hemicube_create(256);
     double ff[2];
@@ -504,7 +521,7 @@ static void test_sample(void **state)
     tb_ff_polygon polys[3] = {
         ff_tri((tb_vec3){0, 0, 0}, (tb_vec3){3, 0.5f, 0}, (tb_vec3){0.5f, 2, 0}),
         ff_quad((tb_vec3){0, 0, 0}, (tb_vec3){4, 0, 0}, (tb_vec3){3, 1, 0}, (tb_vec3){0.5f, 1.5f, 0}),
-        ff_quad((tb_vec3){0, 0, 0}, (tb_vec3){2, 0, 0}, (tb_vec3){0.5f, 0.5f, 0}, (tb_vec3){0, 2, 0}),
+        ff_quad((tb_vec3){0, 0, 0}, (tb_vec3){3, 0, 0}, (tb_vec3){0.5f, 0.5f, 0}, (tb_vec3){0, 2, 0}), /* halves 0.75, 0.5 */
     };
     const int counts[] = {1, 7, 13, 30};
     for (int p = 0; p < 3; p++)
