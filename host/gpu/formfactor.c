@@ -24,7 +24,12 @@ struct tb_gpu_ff_scene {
     uint32_t nnodes, ntris, stack;
     tb_gpu_ff_receiver *recv_host;      /* one chunk, packed on the host */
     float *ff_host;
+    uint32_t *zeros;                    /* vis_cap zero words: the visibility bits' initial value */
 };
+
+/* Workgroup width and most invocations per receiver (shaders/formfactor.comp, TB_FF_LANES). */
+#define TB__FF_WORKGROUP 64u
+#define TB__FF_MAX_LANES 16u
 
 /* The build needs a callback; the BVH is only converted, never traversed here. */
 static bool tb__never(void *ctx, const tb_accel_prim *p, uint32_t i, const tb_ray *r, tb_hit *h)
@@ -168,6 +173,7 @@ void tb_gpu_ff_scene_destroy(tb_gpu_ff_scene *g)
     tb_gpu_buffer_destroy(g->samples);
     tb_gpu_buffer_destroy(g->vis);
     free(g->recv_host);
+    free(g->zeros);
     free(g->ff_host);
     free(g);
 }
@@ -213,8 +219,13 @@ tb_status tb_gpu_ff_raycast(tb_gpu_ff_scene *g, const tb_vec3 *pts, int npts, tb
     }
     uint32_t words = visible ? ((uint32_t)npts + 31u) / 32u : 0u;
     tb_status st = tb__reserve(g->dev, &g->samples, &g->samples_cap, (size_t)npts, sizeof(tb_gpu_ff_sample));
-    if (!st && visible)
+    if (!st && visible && g->vis_cap < TB_GPU_FF_CHUNK * words) {
         st = tb__reserve(g->dev, &g->vis, &g->vis_cap, TB_GPU_FF_CHUNK * words, sizeof(uint32_t));
+        free(g->zeros);
+        g->zeros = st ? NULL : calloc(TB_GPU_FF_CHUNK * words, sizeof *g->zeros);
+        if (!st && !g->zeros)
+            st = tb_error(TB_ERR_NOMEM, "out of memory for visibility bits");
+    }
     if (st)
         return st;
     tb_gpu_ff_sample *smp = malloc((size_t)npts * sizeof *smp);
@@ -227,7 +238,12 @@ tb_status tb_gpu_ff_raycast(tb_gpu_ff_scene *g, const tb_vec3 *pts, int npts, tb
     if (st)
         return st;
     bool occl = g->nnodes > 0;
-    tb_gpu_spec_constant spec[3] = {{1, g->stack}, {2, occl}, {3, visible != NULL}};
+    /* Lanes per receiver: the samples' count rounded up to a power of two, at
+     * most 16 (a quarter of the workgroup: 4 receivers per group). */
+    uint32_t lanes = 1;
+    while (lanes < (uint32_t)npts && lanes < TB__FF_MAX_LANES)
+        lanes *= 2;
+    tb_gpu_spec_constant spec[4] = {{1, g->stack}, {2, occl}, {3, visible != NULL}, {4, lanes}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("formfactor"),
                                                                         .buffers = 8,
                                                                         .kinds = {0, 0, TB_GPU_BIND_TEXELS_RGBA32UI,
@@ -235,7 +251,8 @@ tb_status tb_gpu_ff_raycast(tb_gpu_ff_scene *g, const tb_vec3 *pts, int npts, tb
                                                                                   TB_GPU_BIND_TEXELS_R32UI, 0, 0},
                                                                         .push_size = sizeof(tb_gpu_ff_push),
                                                                         .spec = spec,
-                                                                        .spec_count = 3});
+                                                                        .workgroup_size = TB__FF_WORKGROUP,
+                                                                        .spec_count = 4});
     if (!k)
         return TB_ERR_DEVICE;
     double da = area / npts, ks = 0.0;
@@ -247,7 +264,10 @@ tb_status tb_gpu_ff_raycast(tb_gpu_ff_scene *g, const tb_vec3 *pts, int npts, tb
         if ((st = tb_gpu_buffer_upload(g->recv, 0, g->recv_host, m * sizeof *g->recv_host)))
             return st;
         tb_gpu_ff_push push = {ns, (float)da, (uint32_t)m, (uint32_t)npts, g->nnodes, words};
-        tb_gpu_dispatch d = {k, {g->recv, g->samples, g->nodes, g->tris, g->placed, g->refs, g->result, g->vis}, &push, m, 0.0};
+        if (visible && (st = tb_gpu_buffer_upload(g->vis, 0, g->zeros, m * words * sizeof(uint32_t))))
+            return st; /* the kernel ORs the bits in */
+        tb_gpu_dispatch d = {k,    {g->recv, g->samples, g->nodes, g->tris, g->placed, g->refs, g->result, g->vis},
+                             &push, m * lanes, 0.0};
         if ((st = tb_gpu_run(g->dev, &d, 1)))
             return st;
         ks += d.seconds;
