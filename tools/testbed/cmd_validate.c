@@ -1,4 +1,4 @@
-/* `testbed validate SCENE.mid [--kernel intersect|formfactor|all] [--rays N]
+/* `testbed validate SCENE.mid [--kernel intersect|shade|formfactor|all] [--rays N]
  * [--shooters N] [--samples N] [--receivers N] [--seed S] [--device N] [--bench]`: the same rays through the CPU path and the Vulkan
  * path, agreement figures against the tolerances of docs/accuracy.md, exit 1
  * beyond them (docs/gpu.md, "testbed validate"). */
@@ -13,6 +13,7 @@
 
 #include "commands.h"
 #include "ff_elements.h"
+#include "validate_shade.h"
 #include "host/gpu/intersect.h"
 #include "host/render/scene.h"
 #include "util/math/rng.h"
@@ -28,7 +29,7 @@
 static void tb__usage(FILE *out)
 {
     fprintf(out,
-            "usage: testbed validate SCENE.mid [--kernel intersect|formfactor|all] [--rays N] [--seed S]\n"
+            "usage: testbed validate SCENE.mid [--kernel intersect|shade|formfactor|all] [--rays N] [--seed S]\n"
             "                        [--shooters N] [--samples N] [--receivers N] [--device N] [--bench]\n"
             "\n"
             "Runs the same rays through the CPU path and the Vulkan kernels and prints, per kernel,\n"
@@ -38,7 +39,10 @@ static void tb__usage(FILE *out)
             "Objects of kinds the kernel does not implement are tested on the CPU (routed); the\n"
             "report lists which objects ran where. TB_VK_VALIDATION=1 enables the validation layer.\n"
             "\n"
-            "  --kernel K   intersect, formfactor or all (both)\n"
+            "  --kernel K   intersect, shade, formfactor or all (every one)\n"
+            "               shade: the image rendered by the CPU ray tracer and by the Vulkan wavefront\n"
+            "               renderer (testbed render --backend vulkan) at 96 pixels wide, 4 spp, seed S;\n"
+            "               image NMSE against its tolerance, hits shaded by the kernel and routed\n"
             "               formfactor: the scene meshed into elements as for radiosity (edge: bounds\n"
             "               diagonal / 24); receivers at element centroids and corners; shooters: emitting\n"
             "               elements and random ones; every element occludes. Form factors of the CPU\n"
@@ -136,8 +140,9 @@ int tb_cmd_validate(int argc, char **argv)
         }
         if (!strcmp(a, "--kernel")) {
             kernel = argv[++i];
-            if (strcmp(kernel, "intersect") && strcmp(kernel, "formfactor") && strcmp(kernel, "all")) {
-                fprintf(stderr, "testbed validate: error: --kernel must be intersect, formfactor or all, not '%s' (shade is not implemented yet)\n", kernel);
+            if (strcmp(kernel, "intersect") && strcmp(kernel, "shade") && strcmp(kernel, "formfactor") &&
+                strcmp(kernel, "all")) {
+                fprintf(stderr, "testbed validate: error: --kernel must be intersect, shade, formfactor or all, not '%s'\n", kernel);
                 return TB_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--rays")) {
@@ -221,7 +226,7 @@ int tb_cmd_validate(int argc, char **argv)
         printf("  object %u (%s): %s\n", i, tb_prim_kind_name(s->objects[i]->kind),
                tb_gpu_scene_object_on_gpu(g, i) ? "gpu" : "cpu (routed)");
     bool ok = true;
-    if (!strcmp(kernel, "formfactor"))
+    if (!strcmp(kernel, "formfactor") || !strcmp(kernel, "shade"))
         goto formfactor; /* the intersect kernel is not compared */
 
     tb__make_rays(s, (uint64_t)seed, rays, n);
@@ -289,12 +294,18 @@ formfactor:
             goto done;
         ok = ok && ff_ok;
     }
+    if (!strcmp(kernel, "shade") || !strcmp(kernel, "all")) { /* cmd_validate_shade.c */
+        bool sh_ok = false;
+        if (tb_validate_shade(s, &sess, 96, 4, seed, &sh_ok))
+            goto done;
+        ok = ok && sh_ok;
+    }
     if (tb_gpu_validation_enabled(sess.instance)) {
         int ve = tb_gpu_validation_errors(sess.instance), vw = tb_gpu_validation_warnings(sess.instance);
         printf("  validation layer       %d errors, %d warnings  %s\n", ve, vw, tb__verdict(ve + vw == 0));
         ok = ok && ve + vw == 0;
     }
-    if (bench && strcmp(kernel, "formfactor")) {
+    if (bench && strcmp(kernel, "formfactor") && strcmp(kernel, "shade")) {
         /* Both paths once more on the same rays; the pipeline exists already (created above). */
         int64_t t0 = tb_stats_now_ns();
         tb__cpu_trace(s, rays, n, ch);

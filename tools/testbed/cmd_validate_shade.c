@@ -35,7 +35,7 @@ int tb_validate_shade(const tb_scene *s, tb_gpu_session *sess, int width, int sp
         tb_image_free(cpu);
         return 1;
     }
-    double num = 0.0, den = 0.0, maxd = 0.0;
+    double num = 0.0, den = 0.0, maxd = 0.0, sa = 0.0, sb = 0.0;
     size_t npx = (size_t)w * (size_t)h, differ = 0;
     int mx = 0, my = 0;
     for (size_t i = 0; i < npx; i++) {
@@ -43,6 +43,8 @@ int tb_validate_shade(const tb_scene *s, tb_gpu_session *sess, int width, int sp
         for (int c = 0; c < 3; c++) {
             double a = gpu->pixels[i * 3 + (size_t)c], b = cpu->pixels[i * 3 + (size_t)c];
             num += (a - b) * (a - b);
+            sa += a;
+            sb += b;
             den += b * b;
             pd = fmax(pd, fabs(a - b));
             pr = fmax(pr, fabs(b));
@@ -56,7 +58,9 @@ int tb_validate_shade(const tb_scene *s, tb_gpu_session *sess, int width, int sp
         }
     }
     double nmse = den > 0.0 ? num / den : (num > 0.0 ? INFINITY : 0.0);
-    *ok = nmse <= TB_VALIDATE_SHADE_TOL_NMSE;
+    double bias = sb != 0.0 ? (sa - sb) / sb : (sa != 0.0 ? INFINITY : 0.0);
+    bool ok_nmse = nmse <= TB_VALIDATE_SHADE_TOL_NMSE, ok_bias = fabs(bias) <= TB_VALIDATE_SHADE_TOL_BIAS;
+    *ok = ok_nmse && ok_bias;
     printf("kernel shade: %dx%d, %d spp, seed %ld: %llu hits shaded by the kernel, %llu routed to the CPU path%s%s\n",
            w, h, spp, seed, (unsigned long long)gs.gpu_shaded, (unsigned long long)gs.cpu_shaded,
            gs.routed_materials ? ": " : "", gs.routed_reason);
@@ -65,7 +69,10 @@ int tb_validate_shade(const tb_scene *s, tb_gpu_session *sess, int width, int sp
            rg.seconds, gs.shade_seconds);
     printf("  pixels differing by more than 0.1%%: %zu of %zu; largest |difference| %.4g at (%d, %d)\n", differ, npx,
            maxd, mx, my);
-    printf("  image NMSE        %.3g  (tolerance %.0e)  %s\n", nmse, TB_VALIDATE_SHADE_TOL_NMSE, *ok ? "ok" : "FAIL");
+    printf("  image NMSE        %9.3g  (tolerance %.0e)  %s\n", nmse, TB_VALIDATE_SHADE_TOL_NMSE,
+           ok_nmse ? "ok" : "FAIL");
+    printf("  mean bias         %9.3g  (sum (vulkan - cpu) / sum cpu; tolerance %.0e)  %s\n", bias,
+           TB_VALIDATE_SHADE_TOL_BIAS, ok_bias ? "ok" : "FAIL");
     tb_image_free(cpu);
     tb_image_free(gpu);
     return 0;
