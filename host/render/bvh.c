@@ -424,8 +424,8 @@ void tb__bvh_free(tb_accel *acc)
 
 /* Both traversals test the two children of an inner node together and
  * descend only into those the ray meets, so a box that is missed is never
- * pushed. The closest-hit query goes to the child the ray enters first and
- * pushes the other with its entry distance; a popped node whose entry
+ * pushed. The closest-hit query goes to the near child along the split axis
+ * and pushes the other with its entry distance; a popped node whose entry
  * distance lies beyond the best hit found since is dropped without another
  * test: its slab test with the shrunken range would fail exactly then
  * (tb__accel_slab_t). The order changes only which boxes are tested, never
@@ -453,7 +453,10 @@ bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *b
                 bool h1 = tb__accel_slab_t(&nodes[c1].bounds, ray->o, inv, neg, lo_t, hi_t, &t1);
                 visited += 2;
                 if (h0 && h1) {
-                    if (t1 < t0) {
+                    /* Near child first along the split axis (the first child holds the lower
+                     * centroids): rays that start inside both boxes (entry distances equal)
+                     * still go the right way, which ordering by entry distance does not. */
+                    if (neg[nd->axis]) {
                         stack[sp] = c0;
                         stack_t[sp++] = t0;
                         node = c1;
