@@ -49,6 +49,15 @@ tb_status tb_rt_init(tb_raytracer *rt, const tb_scene *scene, const tb_rt_option
         return tb_error(TB_ERR_ARG, "raytrace: unknown texture filter %d", o.texture_filter);
     rt->texture_filter = o.texture_filter == 0 ? TB__RT_TEX_EWA : o.texture_filter;
     rt->diff_scale = (float)fmax(0.125, 1.0 / sqrt(o.spp > 1 ? (double)o.spp : 1.0));
+    if (o.glossy_samples < 0 || o.glossy_samples > TB__RT_MAX_LIGHT_SAMPLES)
+        return tb_error(TB_ERR_ARG, "raytrace: glossy samples must be in 0..%d", TB__RT_MAX_LIGHT_SAMPLES);
+    rt->glossy_samples = o.glossy_samples == 0 ? TB_RT_DEFAULT_GLOSSY_SAMPLES : o.glossy_samples;
+    tb_stratified_dims(rt->glossy_samples, &rt->gsx, &rt->gsy);
+    tb_status pst = tb__rt_patterns_init(scene, rt->texture_filter, &rt->patterns);
+    if (pst) {
+        tb_rt_release(rt);
+        return pst;
+    }
     const int nm = scene->nmaterials;
     bool any_tex = false;
     for (int i = 0; i < nm; i++) {
@@ -89,6 +98,8 @@ void tb_rt_release(tb_raytracer *rt)
     rt->has_area = false;
     tb__rt_textures_free(rt->textures);
     rt->textures = NULL;
+    tb__rt_patterns_free(rt->patterns);
+    rt->patterns = NULL;
 }
 
 /* True if the shadow segment of light sample `s` from the surface point p
@@ -122,7 +133,8 @@ static tb_ray tb__spawn(tb_vec3 p, tb_vec3 perr, tb_vec3 ng, tb_vec3 w)
 
 /* World-space tangents dp/du, dp/dv at a hit: the CSG leaf holding the hit's
  * face, evaluated at (u, v). False if there is none. */
-static bool tb__hit_tangents(const tb_scene *s, const tb_hit *hit, tb_vec3 *dpdu, tb_vec3 *dpdv)
+static bool tb__hit_tangents(const tb_scene *s, const tb_hit *hit, tb_vec3 *dpdu, tb_vec3 *dpdv,
+                             const tb_object **leaf)
 {
     const tb_object *o = s->objects[hit->object];
     while (o && o->nchildren > 0) {
@@ -145,7 +157,42 @@ static bool tb__hit_tangents(const tb_scene *s, const tb_hit *hit, tb_vec3 *dpdu
     }
     *dpdu = (tb_vec3){(float)du.x, (float)du.y, (float)du.z};
     *dpdv = (tb_vec3){(float)dv.x, (float)dv.y, (float)dv.z};
+    if (leaf)
+        *leaf = o;
     return true;
+}
+
+/* The colour of material m's `slot` pattern (0 diffuse, 1 specular) at g, or
+ * `base` without one: a + f (b - a) per channel. */
+static tb_channels tb__patterned(const tb_raytracer *rt, const tb_material *m, int slot, tb_channels base,
+                                 const tb__rt_surface *g)
+{
+    double f;
+    if (!g || !tb__rt_pattern_factor(rt->patterns, (int)(m - rt->scene->materials), slot, g, &f))
+        return base;
+    const tb_material_pattern *p = slot == 0 ? &m->diffuse_pattern : &m->specular_pattern;
+    tb_channels c = p->a;
+    for (int k = 0; k < c.n; k++)
+        c.v[k] = (float)((double)p->a.v[k] + f * ((double)p->b.v[k] - (double)p->a.v[k]));
+    return c;
+}
+
+/* The specular lobe of a non-Lambert model, without the colour: f / ks of
+ * Phong (normalised) or Blinn-Phong (exactly normalised) for directions wo,
+ * wi (world, unit, pointing away) about the shading normal n. */
+static double tb__lobe(const tb_material *m, tb_vec3 n, tb_vec3 wo, tb_vec3 wi)
+{
+    double c;
+    if (m->model == TB_MID_MODEL_BLINN) {
+        tb_vec3 h = tb_vec3_add(wo, wi);
+        float len = tb_vec3_length(h);
+        if (!(len > 0.0f))
+            return 0.0;
+        c = (double)tb_vec3_dot(n, h) / len;
+        return c > 0.0 ? tb_bsdf_lobe_norm(TB_BSDF_BLINN_NORMALIZED_EXACT, m->exponent) * pow(c, m->exponent) : 0.0;
+    }
+    c = tb_vec3_dot(tb_reflect(wo, n), wi);
+    return c > 0.0 ? tb_bsdf_lobe_norm(TB_BSDF_PHONG_NORMALIZED, m->exponent) * pow(c, m->exponent) : 0.0;
 }
 
 /* `base` times texture `slot` of material m at the hit (footprint fp, NULL:
@@ -199,30 +246,66 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
     bool front = tb_vec3_dot(d, ng) < 0.0f;
     tb_vec3 n = front ? ng : tb_vec3_neg(ng); /* the normal on the viewer's side */
 
-    /* The pixel's footprint in (u, v) for the texture filters. */
+    /* The pixel's footprint in (u, v) for the texture filters, and the
+     * surface geometry of the patterns and bump maps. */
     float fpv[4];
     const float *fp = NULL;
     tb_vec3 dpdu, dpdv;
-    if (rt->textures && rd && tb__hit_tangents(s, &hit, &dpdu, &dpdv) &&
-        tb__rt_footprint(p, ng, dpdu, dpdv, rd, rt->diff_scale, fpv))
+    const tb_object *leaf = NULL;
+    const bool patterned = rt->patterns && (m->diffuse_pattern.kind || m->specular_pattern.kind || m->bump.kind);
+    bool tangents = (rt->textures || patterned) && tb__hit_tangents(s, &hit, &dpdu, &dpdv, &leaf);
+    tb_vec3 dpdxy[2] = {{0, 0, 0}, {0, 0, 0}};
+    if (tangents && rd && tb__rt_footprint(p, ng, dpdu, dpdv, rd, rt->diff_scale, fpv, dpdxy))
         fp = fpv;
+    tb__rt_surface surf, *g = NULL;
+    if (patterned && tangents) {
+        const tb_transform inv = tb_transform_inverse(&leaf->to_world);
+        surf = (tb__rt_surface){.u = hit.u, .v = hit.v, .has_fp = fp != NULL, .p = p, .n = n, .dpdu = dpdu,
+                                .dpdv = dpdv};
+        if (fp)
+            memcpy(surf.fp, fp, sizeof surf.fp);
+        surf.po = tb_transform_point(&inv, p);
+        surf.po_du = tb_transform_vector(&inv, dpdu);
+        surf.po_dv = tb_transform_vector(&inv, dpdv);
+        if (fp) {
+            surf.po_dx = tb_transform_vector(&inv, dpdxy[0]);
+            surf.po_dy = tb_transform_vector(&inv, dpdxy[1]);
+        }
+        g = &surf;
+        tb_vec3 nb;
+        if (m->bump.kind && tb__rt_bump(rt->patterns, m, (int)(m - s->materials), g, &nb))
+            n = nb; /* the shading normal; rays still leave by the geometric one */
+    }
 
     /* Emitters are one-sided: M / pi on the front side only. */
     if (m->emits && front)
         L = tb_channels_add(L, tb_radiance_from_exitance(
                                    tb__textured(rt, m, TB__RT_SLOT_EMISSION, m->emission, &hit, fp)));
 
-    tb_channels diffuse = tb__textured(rt, m, TB__RT_SLOT_DIFFUSE, m->diffuse, &hit, fp);
-    tb_channels specular = tb__textured(rt, m, TB__RT_SLOT_SPECULAR, m->specular, &hit, fp);
+    tb_channels diffuse =
+        tb__textured(rt, m, TB__RT_SLOT_DIFFUSE, tb__patterned(rt, m, 0, m->diffuse, g), &hit, fp);
+    tb_channels specular =
+        m->model == TB_MID_MODEL_LAMBERT
+            ? tb_channels_splat(nch, 0.0f)
+            : tb__textured(rt, m, TB__RT_SLOT_SPECULAR, tb__patterned(rt, m, 1, m->specular, g), &hit, fp);
     tb_channels transmission = tb__textured(rt, m, TB__RT_SLOT_TRANSMISSION, m->transmission, &hit, fp);
     bool has_diffuse = !tb_channels_is_black(diffuse);
     bool has_specular = !tb_channels_is_black(specular);
     bool has_transmission = !tb_channels_is_black(transmission);
 
-    /* Point, spot and directional lights: Lambert + normalised Phong highlight. */
+    /* The GGX lobe of model ggx: Schlick Fresnel with F0 = specular. */
+    const bool ggx = has_specular && m->model == TB_MID_MODEL_GGX;
+    tb_bsdf lobe = {0};
+    tb_frame frame = {0};
+    tb_vec3 wo_local = {0, 0, 1};
+    if (ggx) {
+        lobe = tb_bsdf_ggx(specular, m->roughness, TB_FRESNEL_SCHLICK, 1.0);
+        frame = tb_frame_from_normal(n);
+        wo_local = tb_frame_to_local(&frame, wo);
+    }
+
+    /* Point, spot and directional lights: Lambert + the model's specular lobe. */
     if ((has_diffuse || has_specular) && s->nlights > 0) {
-        double knorm = tb_bsdf_lobe_norm(TB_BSDF_PHONG_NORMALIZED, m->exponent);
-        tb_vec3 wr = tb_reflect(wo, n);
         for (int i = 0; i < s->nlights; i++) {
             tb_light_sample ls;
             if (!tb_light_sample_li(&s->lights[i], p, &ls))
@@ -233,11 +316,10 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             if (tb__shadowed(s, p, perr, ng, &ls))
                 continue;
             tb_channels f = tb_channels_scale(diffuse, (float)(1.0 / TB_PI));
-            if (has_specular) {
-                double ca = tb_vec3_dot(wr, ls.wi);
-                if (ca > 0.0)
-                    f = tb_channels_add_scaled(f, specular, (float)(knorm * pow(ca, m->exponent)));
-            }
+            if (ggx)
+                f = tb_channels_add(f, tb_bsdf_eval(&lobe, wo_local, tb_frame_to_local(&frame, ls.wi)));
+            else if (has_specular)
+                f = tb_channels_add_scaled(f, specular, (float)tb__lobe(m, n, wo, ls.wi));
             L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(f, ls.L), cosi));
         }
     }
@@ -282,11 +364,34 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             tb_channels Lt = tb__trace(rt, &r, NULL, rng, depth + 1);
             L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(transmission, Lt), (float)sp.T));
         }
+    } else if (ggx) {
+        /* Glossy reflection (distributed ray tracing): rays sampled from the
+         * GGX lobe's visible normals, each weighted by F G2 / G1; the split
+         * into several rays is done only at the camera ray's hit. */
+        int ns = depth == 0 ? rt->glossy_samples : 1, nx = depth == 0 ? rt->gsx : 1, ny = depth == 0 ? rt->gsy : 1;
+        float u[2 * TB__RT_MAX_LIGHT_SAMPLES];
+        tb_stratified_2d(rng, nx, ny, u);
+        tb_channels Lg = tb_channels_splat(nch, 0.0f);
+        for (int k = 0; k < ns; k++) {
+            tb_bsdf_sampled bs;
+            if (!tb_bsdf_sample(&lobe, wo_local, 0.5f, u[2 * k], u[2 * k + 1], &bs))
+                continue;
+            tb_vec3 wi = tb_vec3_normalize(tb_frame_to_world(&frame, bs.wi));
+            if ((tb_vec3_dot(wi, ng) > 0.0f) != front)
+                continue; /* a bumped normal can send the ray into the surface: no light there */
+            tb_ray r = tb__spawn(p, perr, ng, wi);
+            TB_STAT_INC(tb__rt_secondary_rays);
+            Lg = tb_channels_add(Lg, tb_channels_mul(bs.weight, tb__trace(rt, &r, NULL, rng, depth + 1)));
+        }
+        L = tb_channels_add_scaled(L, Lg, 1.0f / (float)ns);
     } else if (has_specular) {
         /* Perfect mirror weighted by the specular colour (Whitted's k_s S). */
-        tb_ray r = tb__spawn(p, perr, ng, tb_vec3_normalize(tb_reflect(wo, n)));
-        TB_STAT_INC(tb__rt_secondary_rays);
-        L = tb_channels_add(L, tb_channels_mul(specular, tb__trace(rt, &r, NULL, rng, depth + 1)));
+        tb_vec3 wr = tb_vec3_normalize(tb_reflect(wo, n));
+        if ((tb_vec3_dot(wr, ng) > 0.0f) == front) { /* a bumped normal can mirror into the surface */
+            tb_ray r = tb__spawn(p, perr, ng, wr);
+            TB_STAT_INC(tb__rt_secondary_rays);
+            L = tb_channels_add(L, tb_channels_mul(specular, tb__trace(rt, &r, NULL, rng, depth + 1)));
+        }
     }
     return L;
 }
@@ -307,7 +412,7 @@ void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
     }
     TB_STAT_INC(tb__rt_camera_rays);
     tb_channels L;
-    if (rt->textures) {
+    if (rt->textures || rt->patterns) {
         tb_camera_ray_diff cd;
         tb_camera_ray_differential(cam, x, y, lu, lv, &cd);
         const tb_vec3 rd[4] = {cd.rx_o, cd.rx_d, cd.ry_o, cd.ry_d};

@@ -35,6 +35,8 @@
 #define TB_RT_DEFAULT_MAX_DEPTH 5
 /* Default area-light samples per shading point. */
 #define TB_RT_DEFAULT_LIGHT_SAMPLES 4
+/* Default glossy (GGX) rays at a camera ray's hit (one at deeper hits). */
+#define TB_RT_DEFAULT_GLOSSY_SAMPLES 4
 
 /* Ray tracer options; a zeroed struct (or NULL) means the defaults. */
 typedef struct tb_rt_options {
@@ -42,11 +44,14 @@ typedef struct tb_rt_options {
     int light_samples; /* area-light samples per shading point, stratified (0: the default) */
     int texture_filter; /* image texture filter, a tb_tex_filter value of host/render/texture.h (0: EWA) */
     int spp;           /* camera samples per pixel: differentials are scaled by max(1/8, 1/sqrt(spp)) (0: 1) */
+    int glossy_samples; /* rays sampled from a GGX lobe at a camera ray's hit, stratified (0: the default) */
 } tb_rt_options;
 
 /* A ray tracer over a loaded scene (read-only after init, shareable by threads). */
 /* Private: the images of the materials' textures (raytrace_texture.c). */
 typedef struct tb__rt_textures tb__rt_textures;
+/* Private: the materials' procedural patterns and bump maps (raytrace_pattern.c). */
+typedef struct tb__rt_patterns tb__rt_patterns;
 
 typedef struct tb_raytracer {
     const tb_scene *scene;  /* not owned */
@@ -58,6 +63,9 @@ typedef struct tb_raytracer {
     tb__rt_textures *textures; /* owned; NULL when no material has a texture */
     int texture_filter;     /* tb_tex_filter value in effect */
     float diff_scale;       /* scale of the camera ray differentials, max(1/8, 1/sqrt(spp)) */
+    tb__rt_patterns *patterns; /* owned; NULL when no material has a pattern or bump map */
+    int glossy_samples;     /* in effect */
+    int gsx, gsy;           /* strata of the glossy samples */
 } tb_raytracer;
 
 /* Prepares a tracer for `scene` (which must stay alive). TB_ERR_ARG for bad
@@ -89,6 +97,31 @@ bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, int filter, float u, fl
  * dpdu, dpdv, of the offset rays rd = {rx_o, rx_d, ry_o, ry_d}, scaled by
  * `scale`; false (fp zeroed) if it cannot be computed. */
 bool tb__rt_footprint(tb_vec3 p, tb_vec3 n, tb_vec3 dpdu, tb_vec3 dpdv, const tb_vec3 rd[4], float scale,
-                      float fp[4]);
+                      float fp[4], tb_vec3 dpdxy[2]);
+
+/* Private: the geometry of a hit that patterns and bump maps need. */
+typedef struct tb__rt_surface {
+    float u, v;           /* parametric coordinates */
+    bool has_fp;          /* fp holds the (u, v) footprint (du/dx, dv/dx, du/dy, dv/dy) */
+    float fp[4];
+    tb_vec3 p, n;         /* world point, unit shading normal on the viewer's side */
+    tb_vec3 dpdu, dpdv;   /* world tangents */
+    tb_vec3 po;           /* the point in the object space of the primitive hit */
+    tb_vec3 po_du, po_dv; /* its change per unit u and v */
+    tb_vec3 po_dx, po_dy; /* its change per pixel (zero: unknown) */
+} tb__rt_surface;
+/* Private: builds the pattern textures of every material of s (bump images
+ * through `filter`); *out stays NULL when no material has one. */
+tb_status tb__rt_patterns_init(const tb_scene *s, int filter, tb__rt_patterns **out);
+/* Private: frees them; NULL is allowed. */
+void tb__rt_patterns_free(tb__rt_patterns *p);
+/* Private: the blend factor in [0, 1] of pattern `slot` (0 diffuse, 1
+ * specular) of material `material` at g; false if it has none. */
+bool tb__rt_pattern_factor(const tb__rt_patterns *p, int material, int slot, const tb__rt_surface *g, double *f);
+/* Private: the bump-mapped shading normal of material m (index `material`)
+ * at g, on the side of g->n; false (n untouched) without a bump map or for
+ * degenerate tangents. */
+bool tb__rt_bump(const tb__rt_patterns *p, const tb_material *m, int material, const tb__rt_surface *g,
+                 tb_vec3 *n);
 
 #endif

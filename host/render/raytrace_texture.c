@@ -15,7 +15,7 @@ void tb__rt_textures_free(tb__rt_textures *t);
 bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, int filter, float u, float v, const float fp[4],
                         double rgb[3]);
 bool tb__rt_footprint(tb_vec3 p, tb_vec3 n, tb_vec3 dpdu, tb_vec3 dpdv, const tb_vec3 rd[4], float scale,
-                      float fp[4]);
+                      float fp[4], tb_vec3 dpdxy[2]);
 
 struct tb__rt_textures {
     tb_texture_cache *cache;
@@ -75,7 +75,7 @@ bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, int filter, float u, fl
 }
 
 bool tb__rt_footprint(tb_vec3 p, tb_vec3 n, tb_vec3 dpdu, tb_vec3 dpdv, const tb_vec3 rd[4], float scale,
-                      float fp[4])
+                      float fp[4], tb_vec3 dpdxy[2])
 {
     /* pbrt-v4 scales the camera ray differentials by max(1/8, 1/sqrt(spp)):
      * with more samples per pixel each one stands for a smaller area. The
@@ -87,7 +87,12 @@ bool tb__rt_footprint(tb_vec3 p, tb_vec3 n, tb_vec3 dpdu, tb_vec3 dpdv, const tb
     d.ry_o = rd[2];
     d.ry_d = rd[3];
     tb_tex_footprint f;
-    bool ok = tb_tex_footprint_from_rays(p, n, dpdu, dpdv, &d, &f, NULL, NULL);
+    tb_vec3 dx, dy;
+    bool ok = tb_tex_footprint_from_rays(p, n, dpdu, dpdv, &d, &f, &dx, &dy);
+    if (dpdxy) {
+        dpdxy[0] = tb_vec3_scale(dx, scale);
+        dpdxy[1] = tb_vec3_scale(dy, scale);
+    }
     fp[0] = f.dudx * scale;
     fp[1] = f.dvdx * scale;
     fp[2] = f.dudy * scale;

@@ -156,6 +156,10 @@ double tb_turbulence3(tb_dvec3 p, tb_dvec3 dpdx, tb_dvec3 dpdy, double omega, in
  * a degenerate box is a point sample. */
 double tb_checker_box_average(double s0, double s1, double t0, double t1);
 
+/* The 3D checkerboard (1 in cells where floor(x) + floor(y) + floor(z) is
+ * odd) averaged over the box [x0, x1] x [y0, y1] x [z0, z1] in closed form. */
+double tb_checker3_box_average(double x0, double x1, double y0, double y1, double z0, double z1);
+
 /* ---------------------------------------------------------------- textures */
 
 /* Texture kinds. */
@@ -189,7 +193,7 @@ typedef struct tb_texture {
     tb_noise_kind noise;           /* noise */
     int octaves;                   /* noise: most octaves */
     float omega;                   /* noise: amplitude ratio between octaves */
-    bool solid;                    /* noise: of the 3D point p * su (else of the mapped (u, v), z = 0) */
+    bool solid;                    /* noise, checker: of the 3D point p * su (else of the mapped (u, v), z = 0) */
 } tb_texture;
 
 /* A constant of `channels` values. */
@@ -231,6 +235,12 @@ typedef struct tb_bump_geom {
     tb_vec3 dndu, dndv; /* normal derivatives (zero for flat faces) */
     float u, v;         /* parametric coordinates */
     tb_tex_footprint fp;/* for the difference steps and the height lookups */
+    /* Solid height textures are looked up at p; when the texture's space is
+     * not the world (e.g. object space), tp_du, tp_dv give the change of that
+     * point per unit u and v (zero: dpdu, dpdv) and dpdx, dpdy its change
+     * per pixel (zero: no octave limit). */
+    tb_vec3 tp_du, tp_dv;
+    tb_vec3 dpdx, dpdy;
 } tb_bump_geom;
 
 /* pbrt's bump mapping: the surface displaced by scale * h(u, v) along n has

@@ -169,6 +169,17 @@ double tb_checker_box_average(double s0, double s1, double t0, double t1)
     return fs + ft - 2.0 * fs * ft;
 }
 
+double tb_checker3_box_average(double x0, double x1, double y0, double y1, double z0, double z1)
+{
+    /* odd cells have an odd number of odd coordinates: with e = 1 - 2 f per
+     * axis (f the odd fraction, independent over the separable box), the
+     * average of (-1)^(sum) is ex ey ez, so the odd share is (1 - ex ey ez) / 2 */
+    double ex = 1.0 - 2.0 * tb__odd_fraction(fmin(x0, x1), fmax(x0, x1));
+    double ey = 1.0 - 2.0 * tb__odd_fraction(fmin(y0, y1), fmax(y0, y1));
+    double ez = 1.0 - 2.0 * tb__odd_fraction(fmin(z0, z1), fmax(z0, z1));
+    return 0.5 * (1.0 - ex * ey * ez);
+}
+
 /* ---------------------------------------------------------------- textures */
 
 static int tb__clamp_channels(int n)
@@ -256,7 +267,15 @@ void tb_texture_eval(const tb_texture *t, const tb_tex_query *q, float *out)
         return;
     case TB_TEXTURE_CHECKER: {
         double f;
-        if (t->filtered) {
+        if (t->solid) {
+            /* the box spanned by the pixel's change of the point, in cells */
+            tb_dvec3 c = tb_dvec3_scale(tb_vec3_to_d(q->p), t->su);
+            tb_dvec3 h = {0.0, 0.0, 0.0};
+            if (t->filtered)
+                h = tb_dvec3_scale(tb_dvec3_add(tb_dvec3_abs(tb_vec3_to_d(q->dpdx)), tb_dvec3_abs(tb_vec3_to_d(q->dpdy))),
+                                   0.5 * fabs((double)t->su));
+            f = tb_checker3_box_average(c.x - h.x, c.x + h.x, c.y - h.y, c.y + h.y, c.z - h.z, c.z + h.z);
+        } else if (t->filtered) {
             /* the bounding box of the pixel's footprint parallelogram */
             double hs = 0.5 * (fabs((double)fp.dudx) + fabs((double)fp.dudy));
             double ht = 0.5 * (fabs((double)fp.dvdx) + fabs((double)fp.dvdy));
@@ -312,13 +331,16 @@ bool tb_bump_map(const tb_texture *height, float scale, const tb_bump_geom *g, t
         dv = TB__BUMP_DEFAULT_STEP;
     /* the three height lookups share the footprint; the shifted ones move the
      * point along the tangent as well (for solid textures) */
-    tb_tex_query q = {.u = g->u, .v = g->v, .fp = g->fp, .p = g->p};
+    tb_tex_query q = {.u = g->u, .v = g->v, .fp = g->fp, .p = g->p, .dpdx = g->dpdx, .dpdy = g->dpdy};
     double h = (double)scale * tb_texture_eval1(height, &q);
     tb_tex_query qu = q, qv = q;
+    bool tsp = g->tp_du.x != 0.0f || g->tp_du.y != 0.0f || g->tp_du.z != 0.0f || g->tp_dv.x != 0.0f ||
+               g->tp_dv.y != 0.0f || g->tp_dv.z != 0.0f;
+    tb_dvec3 tdu = tsp ? tb_vec3_to_d(g->tp_du) : dpdu, tdv = tsp ? tb_vec3_to_d(g->tp_dv) : dpdv;
     qu.u = (float)((double)g->u + du);
-    qu.p = tb_dvec3_to_f(tb_dvec3_add(tb_vec3_to_d(g->p), tb_dvec3_scale(dpdu, du)));
+    qu.p = tb_dvec3_to_f(tb_dvec3_add(tb_vec3_to_d(g->p), tb_dvec3_scale(tdu, du)));
     qv.v = (float)((double)g->v + dv);
-    qv.p = tb_dvec3_to_f(tb_dvec3_add(tb_vec3_to_d(g->p), tb_dvec3_scale(dpdv, dv)));
+    qv.p = tb_dvec3_to_f(tb_dvec3_add(tb_vec3_to_d(g->p), tb_dvec3_scale(tdv, dv)));
     /* the actual steps after rounding to float, so a linear height field
      * gives its exact slope */
     double du_eff = (double)qu.u - (double)g->u, dv_eff = (double)qv.v - (double)g->v;

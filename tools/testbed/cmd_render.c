@@ -50,6 +50,7 @@ static void tb__render_usage(FILE *out)
             "  --accel bvh|grid|list  acceleration structure (default bvh)\n"
             "  --max-depth N        deepest reflected/refracted ray (default %d)\n"
             "  --light-samples N    area-light samples per shading point (default %d)\n"
+            "  --glossy-samples N   rays sampled from a GGX lobe at a camera ray's hit (default %d; one deeper)\n"
             "  --texture-filter bilinear|trilinear|ewa  image texture filter over the pixel footprint (default ewa)\n"
             "  --passes N           progressive passes of --spp samples each (default 1)\n"
             "  --time-budget S      stop starting new tiles after S seconds\n"
@@ -57,7 +58,7 @@ static void tb__render_usage(FILE *out)
             "  --stats FILE.json    counters, times and provenance\n"
             "  --report FILE.csv    a row per pass: seconds, spp, relMSE against --reference IMG\n"
             "Ctrl-C writes the image rendered so far and exits with status 130.\n",
-            TB_RT_DEFAULT_MAX_DEPTH, TB_RT_DEFAULT_LIGHT_SAMPLES);
+            TB_RT_DEFAULT_MAX_DEPTH, TB_RT_DEFAULT_LIGHT_SAMPLES, TB_RT_DEFAULT_GLOSSY_SAMPLES);
 }
 
 static int tb__render_fail(const char *fmt, const char *arg)
@@ -147,6 +148,8 @@ int tb_cmd_render(int argc, char **argv)
             ro.rt.max_depth = v == 0 ? -1 : (int)v, i++;
         else if (!strcmp(a, "--light-samples") && has && tb__parse_long(argv[i + 1], 1, 1024, &v))
             ro.rt.light_samples = (int)v, i++;
+        else if (!strcmp(a, "--glossy-samples") && has && tb__parse_long(argv[i + 1], 1, 1024, &v))
+            ro.rt.glossy_samples = (int)v, i++;
         else if (!strcmp(a, "--texture-filter") && has) {
             const char *f = argv[++i];
             if (!strcmp(f, "bilinear"))
@@ -292,10 +295,11 @@ int tb_cmd_render(int argc, char **argv)
     int nthreads = ro.threads > 0 ? ro.threads : omp_get_max_threads();
     char opts[512];
     snprintf(opts, sizeof opts, "method=raytrace spp=%d passes=%d adaptive=%d filter=%s:%g accel=%s max_depth=%d "
-             "light_samples=%d threads=%d colour=%s backend=%s",
+             "light_samples=%d glossy_samples=%d threads=%d colour=%s backend=%s",
              ro.aa.spp, ro.passes, (int)ro.aa.adaptive, tb_filter_kind_name(ro.filter.kind), ro.filter.radius,
              tb_accel_kind_name(accel), ro.rt.max_depth == 0 ? TB_RT_DEFAULT_MAX_DEPTH : (ro.rt.max_depth < 0 ? 0 : ro.rt.max_depth),
-             ro.rt.light_samples ? ro.rt.light_samples : TB_RT_DEFAULT_LIGHT_SAMPLES, nthreads,
+             ro.rt.light_samples ? ro.rt.light_samples : TB_RT_DEFAULT_LIGHT_SAMPLES,
+             ro.rt.glossy_samples ? ro.rt.glossy_samples : TB_RT_DEFAULT_GLOSSY_SAMPLES, nthreads,
              scene->spectral ? "spectral" : "rgb", on_gpu ? "vulkan" : "cpu");
     tb_provenance_set_seed(&prov, ro.aa.seed);
     if (strcmp(scene_path, "-") != 0)
@@ -364,11 +368,13 @@ int tb_cmd_render(int argc, char **argv)
            rs.interrupted ? ", INTERRUPTED (partial image)" : "", out_path);
     if (on_gpu)
         printf("testbed render: vulkan: %llu hits shaded by the kernel, %llu routed to the CPU path%s%s%s, "
-               "%llu shadow rays, %llu waves, shade kernel %.3f s\n",
+               "%llu shadow rays, %llu waves; wavefront %.3f s: intersect + occlusion %.3f s, shade %.3f s "
+               "(kernel %.3f s), routed %.3f s\n",
                (unsigned long long)gs.gpu_shaded, (unsigned long long)gs.cpu_shaded,
                gs.routed_materials ? " (" : "", gs.routed_reason,
                gs.routed_materials ? (gs.routed_materials > 1 ? ", ...)" : ")") : "",
-               (unsigned long long)gs.shadow_rays, (unsigned long long)gs.waves, gs.shade_seconds);
+               (unsigned long long)gs.shadow_rays, (unsigned long long)gs.waves, gs.wave_seconds, gs.trace_seconds,
+               gs.shade_wall_seconds, gs.shade_seconds, gs.cpu_seconds);
     rc = sigint ? 130 : TB_EXIT_OK;
 done:
     if (rep.fp)
