@@ -96,21 +96,42 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     g->stack = ((uint32_t)(ast.bvh_depth > 0 ? ast.bvh_depth : 1) + 7u) / 8u * 8u;
     const tb_bvh_node *nodes = tb_accel_bvh_nodes(acc, &nn);
     const uint32_t *order = tb_accel_bvh_refs(acc, &nr);
-    tb_gpu_bvh_node *gn = calloc(nn ? nn : 1, sizeof *gn);
+    /* GPU node i: the child records 2i, 2i + 1 of the CPU's inner node number i
+     * (shared/bvh.h); a lone leaf root gets one node of its own. */
+    size_t ni = 0;
+    uint32_t *inner = calloc(nn ? nn : 1, sizeof *inner);
+    for (size_t i = 0; inner && i < nn; ++i)
+        inner[i] = nodes[i].count == 0 ? (uint32_t)ni++ : UINT32_MAX;
+    size_t ngn = ni ? ni : 1;
+    tb_gpu_bvh_node *gn = calloc(2 * ngn, sizeof *gn);
     tb_gpu_tri *gt = calloc(nr ? nr : 1, sizeof *gt);
     tb_gpu_placed *gs = calloc(nr ? nr : 1, sizeof *gs);
     uint32_t *gr = calloc(nr ? nr : 1, sizeof *gr);
-    if (!gn || !gt || !gs || !gr) {
-        free(gn), free(gt), free(gs), free(gr), tb_accel_free(acc);
+    if (!inner || !gn || !gt || !gs || !gr) {
+        free(inner), free(gn), free(gt), free(gs), free(gr), tb_accel_free(acc);
         return tb_error(TB_ERR_NOMEM, "out of memory for the GPU scene");
+    }
+    /* The record of CPU node c as a child of a node split along `axis`. */
+#define TB__CHILD(rec, c, axis)                                                                               \
+    do {                                                                                                      \
+        (rec)->lo = (c)->bounds.lo;                                                                           \
+        (rec)->hi = (c)->bounds.hi;                                                                           \
+        (rec)->offset = (c)->count ? (c)->offset : inner[(c) - nodes];                                        \
+        (rec)->count = (uint32_t)(c)->count | (uint32_t)(axis) << 16;                                         \
+    } while (0)
+    if (nn > 0 && ni == 0) { /* the root is a leaf: it and an empty box */
+        TB__CHILD(&gn[0], &nodes[0], 0u);
+        gn[1] = (tb_gpu_bvh_node){{1.0f, 1.0f, 1.0f}, 0u, {-1.0f, -1.0f, -1.0f}, 1u};
     }
     for (size_t i = 0; i < nn; ++i) {
         const tb_bvh_node *c = &nodes[i];
-        gn[i].lo = c->bounds.lo;
-        gn[i].hi = c->bounds.hi;
-        gn[i].offset = c->offset;
-        gn[i].count = (uint32_t)c->count | (c->count == 0 ? (uint32_t)c->axis << 16 : 0u);
+        if (c->count != 0)
+            continue;
+        TB__CHILD(&gn[2 * (size_t)inner[i]], &nodes[i + 1], c->axis);
+        TB__CHILD(&gn[2 * (size_t)inner[i] + 1], &nodes[c->offset], c->axis);
     }
+#undef TB__CHILD
+    free(inner);
     uint32_t nt = 0, ns = 0, nc = 0; /* triangles, placed primitives, of which cubes */
     for (size_t k = 0; k < nr; ++k) {
         const tb_accel_prim *p = &refs[order[k]];
@@ -147,19 +168,19 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
         q->pad0 = 0;
         gr[k] = nt++;
     }
-    g->nnodes = (uint32_t)nn;
+    g->nnodes = nn ? (uint32_t)ngn : 0u;
     g->ntris = nt;
     g->nspheres = ns - nc;
     g->ncubes = nc;
-    g->info.gpu_nodes = nn;
-    g->info.gpu_bytes = nn * sizeof *gn + nt * sizeof *gt + ns * sizeof *gs + nr * sizeof *gr;
-    g->nodes = tb_gpu_buffer_create(g->dev, (nn ? nn : 1) * sizeof *gn);
+    g->info.gpu_nodes = nn ? ngn : 0;
+    g->info.gpu_bytes = 2 * ngn * sizeof *gn + nt * sizeof *gt + ns * sizeof *gs + nr * sizeof *gr;
+    g->nodes = tb_gpu_buffer_create(g->dev, 2 * ngn * sizeof *gn);
     g->tris = g->nodes ? tb_gpu_buffer_create(g->dev, (nt ? nt : 1) * sizeof *gt) : NULL;
     g->placed = g->tris ? tb_gpu_buffer_create(g->dev, (ns ? ns : 1) * sizeof *gs) : NULL;
     g->refs = g->placed ? tb_gpu_buffer_create(g->dev, (nr ? nr : 1) * sizeof *gr) : NULL;
     st = !g->refs ? TB_ERR_DEVICE : TB_OK;
     if (!st && nn)
-        st = tb_gpu_buffer_upload(g->nodes, 0, gn, nn * sizeof *gn);
+        st = tb_gpu_buffer_upload(g->nodes, 0, gn, 2 * ngn * sizeof *gn);
     if (!st && nt)
         st = tb_gpu_buffer_upload(g->tris, 0, gt, nt * sizeof *gt);
     if (!st && ns)

@@ -98,7 +98,8 @@ struct tb_bvh_hit {
     uint leaf;   // the GPU leaf reference (TB_GPU_REF_*), for tb_bvh_normal
 };
 
-// Node `i` of the BVH (tb_gpu_bvh_node: two 16-byte texels).
+// Child record `i` (tb_gpu_bvh_node: two 16-byte texels); records 2n and
+// 2n + 1 are the children of inner node n.
 void tb_bvh_fetch_node(uint i, out vec3 lo, out vec3 hi, out uint offset, out uint count)
 {
 #ifdef TB_BVH_NODE_TEXELS
@@ -199,84 +200,97 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
         vec3 inv = tb_ray_inv_dir(r.d);
         tb_wray w = tb_wray_init(r.o, r.d);
         float lo_t = r.tmin - abs(r.tmin) * TB_T_TOL;
+        // Each step expands one inner node: both children's boxes are tested
+        // (one 64-byte fetch); the nearer hit child (by the split axis and
+        // the ray's sign, as on the CPU) is taken next and the other pushed.
+        // A popped child is tested again against the best t so far. The
+        // current child is (cur_off, cur_count): cur_count 0 an inner node.
         uint stack[TB_BVH_STACK];
         int sp = 0;
-        uint node = 0u;
+        bool live = true;
+        uint cur_off = 0u, cur_count = 0u;
         for (;;) {
-            vec3 nlo, nhi;
-            uint noffset, ncount;
-            tb_bvh_fetch_node(node, nlo, nhi, noffset, ncount);
-            float hi_t = bt + abs(bt) * TB_T_TOL;
-            float t0, t1;
-            bool enter = tb_aabb_slab(nlo, nhi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
-            if (enter) {
-                uint count = ncount & 0xffffu;
-                if (count == 0u) {
-                    // Inner: nearer child first (by the split axis and the ray's sign).
-                    uint axis = ncount >> 16;
-                    uint first = node + 1u, second = noffset;
-                    if (r.d[axis] < 0.0) {
-                        uint s = first;
-                        first = second;
-                        second = s;
-                    }
-                    if (sp < TB_BVH_STACK)
-                        stack[sp++] = second;
-                    node = first;
-                    continue;
-                }
-                for (uint k = noffset; k < noffset + count; ++k) {
-                    uint ref = tb_bvh_fetch_ref(k);
-                    float t;
-                    uint object, face, sref;
-                    if (TB_BVH_HAS_CUBES && (ref & TB_GPU_REF_CUBE) != 0u) {
-                        tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
-                        precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
-                        precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
-                        uint cf;
-                        if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
-                            continue;
-                        object = sp.object;
-                        face = sp.face + cf;
-                        sref = sp.ref;
-                    } else if (TB_BVH_HAS_SPHERES && (ref & TB_GPU_REF_SPHERE) != 0u) {
-                        tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
-                        precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
-                        precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
-                        if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
-                            continue;
-                        object = sp.object;
-                        face = sp.face;
-                        sref = sp.ref;
-                    } else if (TB_BVH_HAS_TRIANGLES && (ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) == 0u) {
-                        vec3 v0, v1, v2;
-                        tb_bvh_fetch_tri(ref, v0, v1, v2);
-                        if (!tb_tri_hit(w, v0, v1, v2, t) || t < r.tmin || t > r.tmax)
-                            continue;
-                        uvec3 keys = tb_bvh_fetch_tri_keys(ref);
-                        object = keys.x;
-                        face = keys.y;
-                        sref = keys.z;
-                    } else {
+            if (live) {
+                if (cur_count == 0u) {
+                    vec3 lo0, hi0, lo1, hi1;
+                    uint off0, cnt0, off1, cnt1;
+                    tb_bvh_fetch_node(2u * cur_off, lo0, hi0, off0, cnt0);
+                    tb_bvh_fetch_node(2u * cur_off + 1u, lo1, hi1, off1, cnt1);
+                    float hi_t = bt + abs(bt) * TB_T_TOL;
+                    float t0, t1;
+                    bool h0 = tb_aabb_slab(lo0, hi0, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+                    bool h1 = tb_aabb_slab(lo1, hi1, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+                    bool swap = r.d[cnt0 >> 16] < 0.0; // the second child first
+                    bool hn = swap ? h1 : h0, hf = swap ? h0 : h1;
+                    if (hn || hf) {
+                        if (hn && hf && sp < TB_BVH_STACK)
+                            stack[sp++] = 2u * cur_off + (swap ? 0u : 1u);
+                        bool take1 = hn ? swap : !swap;
+                        cur_off = take1 ? off1 : off0;
+                        cur_count = (take1 ? cnt1 : cnt0) & 0xffffu;
                         continue;
                     }
-                    if (tb_better(t, object, face, sref, have, bt, bo, bf, br)) {
-                        have = true;
-                        bt = t;
-                        bo = object;
-                        bf = face;
-                        br = sref;
-                        bref = ref;
+                } else {
+                    for (uint k = cur_off; k < cur_off + cur_count; ++k) {
+                        uint ref = tb_bvh_fetch_ref(k);
+                        float t;
+                        uint object, face, sref;
+                        if (TB_BVH_HAS_CUBES && (ref & TB_GPU_REF_CUBE) != 0u) {
+                            tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
+                            precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+                            precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+                            uint cf;
+                            if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
+                                continue;
+                            object = sp.object;
+                            face = sp.face + cf;
+                            sref = sp.ref;
+                        } else if (TB_BVH_HAS_SPHERES && (ref & TB_GPU_REF_SPHERE) != 0u) {
+                            tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
+                            precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+                            precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+                            if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
+                                continue;
+                            object = sp.object;
+                            face = sp.face;
+                            sref = sp.ref;
+                        } else if (TB_BVH_HAS_TRIANGLES && (ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) == 0u) {
+                            vec3 v0, v1, v2;
+                            tb_bvh_fetch_tri(ref, v0, v1, v2);
+                            if (!tb_tri_hit(w, v0, v1, v2, t) || t < r.tmin || t > r.tmax)
+                                continue;
+                            uvec3 keys = tb_bvh_fetch_tri_keys(ref);
+                            object = keys.x;
+                            face = keys.y;
+                            sref = keys.z;
+                        } else {
+                            continue;
+                        }
+                        if (tb_better(t, object, face, sref, have, bt, bo, bf, br)) {
+                            have = true;
+                            bt = t;
+                            bo = object;
+                            bf = face;
+                            br = sref;
+                            bref = ref;
+                        }
+                        if (any_hit)
+                            break;
                     }
-                    if (any_hit)
+                    if (have && any_hit)
                         break;
                 }
-                if (have && any_hit)
-                    break;
             }
             if (sp == 0)
                 break;
-            node = stack[--sp];
+            // Pop a child; it is taken only if its box is still within reach.
+            uint slot = stack[--sp];
+            vec3 plo, phi;
+            tb_bvh_fetch_node(slot, plo, phi, cur_off, cur_count);
+            cur_count &= 0xffffu;
+            float hi_t = bt + abs(bt) * TB_T_TOL;
+            float t0, t1;
+            live = tb_aabb_slab(plo, phi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
         }
     }
     h.t = bt;

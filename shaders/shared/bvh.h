@@ -19,15 +19,20 @@ typedef struct tb_gpu_placed tb_gpu_placed;
 #define TB_GPU_REF_CUBE 0x40000000u
 #define TB_GPU_REF_INDEX 0x3fffffffu
 
-/* One BVH node, 32 bytes: the CPU node's box with the two words moved next to
- * the vec3s so that std430 and C agree. Depth-first order, node 0 the root;
- * an inner node's first child is the next node. */
+/* One child record, 32 bytes; an inner node of the GPU BVH is two of them
+ * (its children, records 2i and 2i + 1 of inner node i), so one fetch of 64
+ * bytes gives both children's boxes and a traversal step tests both (Aila
+ * and Laine, "Understanding the Efficiency of Ray Traversal on GPUs", 2009).
+ * Converted from the CPU BVH (host/gpu/intersect.c): inner node 0 holds the
+ * root's children (or, when the root is a leaf, the root and an empty box);
+ * record 2i is the CPU's first child, 2i + 1 its second. The box words are
+ * next to the vec3s so that std430 and C agree. */
 struct tb_gpu_bvh_node {
-    TB_GPU_VEC3 lo;     /* box, low corner (offset 0) */
-    TB_GPU_UINT offset; /* inner: index of the second child; leaf: first leaf reference (offset 12) */
+    TB_GPU_VEC3 lo;     /* the child's box, low corner (offset 0); lo > hi: an empty box, never hit */
+    TB_GPU_UINT offset; /* child inner: its inner-node index; child leaf: its first leaf reference (offset 12) */
     TB_GPU_VEC3 hi;     /* box, high corner (offset 16) */
-    TB_GPU_UINT count;  /* low 16 bits: leaf references (>= 1), 0 for an inner node; bits 16-17: an
-                           inner node's split axis (offset 28) */
+    TB_GPU_UINT count;  /* low 16 bits: the child leaf's references (>= 1), 0 for an inner child; bits
+                           16-17: the parent's split axis, which orders the two (offset 28) */
 };
 
 /* One triangle, 64 bytes: world-space vertices (the object's float vertices
