@@ -130,13 +130,20 @@ float fresnel_dielectric(float cos_i, float eta)
     return 0.5 * (r_parl * r_parl + r_perp * r_perp);
 }
 
-void write_ray(uint slot, vec3 o, vec3 d, float tmax)
+// Outputs are stored slot-major (slot k of item i at k * items + i), so that
+// neighbouring invocations write neighbouring words: contiguous stores on a
+// SIMD CPU driver such as lavapipe instead of scatters 1 KiB apart.
+uint g_item;
+void write_ray(int k, vec3 o, vec3 d, float tmax)
 {
-    out_rays[slot].o = o;
-    out_rays[slot].tmin = 0.0;
-    out_rays[slot].d = d;
-    out_rays[slot].tmax = tmax;
+    uint at = uint(k) * pc.items + g_item;
+    out_rays[at].o = o;
+    out_rays[at].tmin = 0.0;
+    out_rays[at].d = d;
+    out_rays[at].tmax = tmax;
 }
+// Word c of value slot k (c = 0: the validity flag, 1 + channel: the values).
+void put(int k, int c, float x) { out_values[uint(k * SLOT + c) * pc.items + g_item] = x; }
 
 // A point on emitter e seen from p (tb__sample_emitter in host/render/lights.c):
 // false if it gives no light.
@@ -206,13 +213,10 @@ void main()
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.items)
         return;
+    g_item = i;
     tb_gpu_shade_item it = items[i];
-    uint rbase = i * uint(NRAYS);
-    uint vbase = i * uint(NVALS) * uint(SLOT);
     for (int k = 0; k < NVALS; k++)
-        out_values[vbase + uint(k * SLOT)] = 0.0;
-    for (int k = 0; k < NRAYS; k++)
-        write_ray(rbase + uint(k), vec3(0.0), vec3(0.0), -1.0);
+        put(k, 0, 0.0);
 
     tb_gpu_shade_material m = materials[it.material];
     uint mc = it.material * uint(4 * NCH); // diffuse, specular, transmission, emission
@@ -231,9 +235,9 @@ void main()
 
     // Emission: one-sided emitters, M / pi on the front.
     if (HAS_EMISSION && (m.flags & TB_GPU_MAT_EMITS) != 0u && front) {
-        out_values[vbase] = 1.0;
+        put(0, 0, 1.0);
         for (int c = 0; c < NCH; c++)
-            out_values[vbase + uint(1 + c)] = colours[mc + uint(3 * NCH + c)] * INV_PI;
+            put(0, 1 + c, colours[mc + uint(3 * NCH + c)] * INV_PI);
     }
 
     // Point, spot and directional lights.
@@ -272,7 +276,6 @@ void main()
                     spec = m.knorm * pow(ca, m.exponent);
             }
             uint lc = pc.light_col + uint(l * NCH);
-            uint vs = vbase + uint((1 + l) * SLOT);
             bool any = false;
             for (int c = 0; c < NCH; c++) {
                 float Lc = colours[lc + uint(c)] * scale;
@@ -280,13 +283,13 @@ void main()
                 if (HAS_PHONG)
                     f += colours[mc + uint(NCH + c)] * spec;
                 any = any || Lc != 0.0;
-                out_values[vs + uint(1 + c)] = f * Lc * cosi;
+                put(1 + l, 1 + c, f * Lc * cosi);
             }
             if (!any)
                 continue;
-            out_values[vs] = 1.0;
+            put(1 + l, 0, 1.0);
             vec3 o = spawn_origin(p, perr, ng, wi);
-            write_ray(rbase + uint(l), o, lt.kind == TB_GPU_LIGHT_DIRECTIONAL ? wi : lt.position - o, tmax);
+            write_ray(l, o, lt.kind == TB_GPU_LIGHT_DIRECTIONAL ? wi : lt.position - o, tmax);
         }
     }
 
@@ -311,19 +314,19 @@ void main()
                 continue;
             float w = cosi / pdf;
             uint ec = pc.emitter_col + lu.emitter * uint(NCH);
-            uint vs = vbase + uint((1 + NLIGHTS + k) * SLOT);
-            out_values[vs] = 1.0;
+            int slot = 1 + NLIGHTS + k;
+            put(slot, 0, 1.0);
             for (int c = 0; c < NCH; c++)
-                out_values[vs + uint(1 + c)] = colours[mc + uint(c)] * (colours[ec + uint(c)] * w) * norm;
+                put(slot, 1 + c, colours[mc + uint(c)] * (colours[ec + uint(c)] * w) * norm);
             vec3 o = spawn_origin(p, perr, ng, wi);
-            write_ray(rbase + uint(NLIGHTS + k), o, q - o, 1.0 - SHADOW_EPSILON);
+            write_ray(NLIGHTS + k, o, q - o, 1.0 - SHADOW_EPSILON);
         }
     }
 
     // Secondary rays.
     if ((it.flags & TB_GPU_SHADE_SPAWN) == 0u)
         return;
-    uint vm = vbase + uint((1 + S) * SLOT), vt = vm + uint(SLOT);
+    const int vm = 1 + S, vt = 2 + S; // value slots of the mirror and the refracted ray
     if (HAS_DIELECTRIC && has_transmission) {
         float cos_i = dot(wo, ng);
         float R = fresnel_dielectric(cos_i, m.ior);
@@ -337,24 +340,24 @@ void main()
         float T = 1.0 - R;
         if (R > 0.0) {
             vec3 w = 2.0 * cos_i * ng - wo;
-            write_ray(rbase + uint(S), spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
-            out_values[vm] = 1.0;
+            write_ray(S, spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
+            put(vm, 0, 1.0);
             for (int k = 0; k < NCH; k++)
-                out_values[vm + uint(1 + k)] = R;
+                put(vm, 1 + k, R);
         }
         if (refracts && T > 0.0) {
             float cos_t = sqrt(1.0 - sin2_t);
             vec3 w = normalize(-wo / etap + (c / etap - cos_t) * nn);
-            write_ray(rbase + uint(S + 1), spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
-            out_values[vt] = 1.0;
+            write_ray(S + 1, spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
+            put(vt, 0, 1.0);
             for (int k = 0; k < NCH; k++)
-                out_values[vt + uint(1 + k)] = colours[mc + uint(2 * NCH + k)] * T;
+                put(vt, 1 + k, colours[mc + uint(2 * NCH + k)] * T);
         }
     } else if (HAS_MIRROR && has_specular) {
         vec3 w = normalize(2.0 * dot(wo, n) * n - wo);
-        write_ray(rbase + uint(S), spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
-        out_values[vm] = 1.0;
+        write_ray(S, spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
+        put(vm, 0, 1.0);
         for (int k = 0; k < NCH; k++)
-            out_values[vm + uint(1 + k)] = colours[mc + uint(NCH + k)];
+            put(vm, 1 + k, colours[mc + uint(NCH + k)]);
     }
 }

@@ -335,6 +335,7 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
 {
     const int nch = r->nch, S = r->S;
     const size_t NR = TB_GPU_SHADE_RAYS((size_t)S), NV = TB_GPU_SHADE_VALUES((size_t)S), SL = (size_t)nch + 1;
+    double w0 = tb__now();
     tb_status st = tb_gpu_buffer_upload(r->b_items, 0, r->items, ni * sizeof *r->items);
     if (!st && nlu)
         st = tb_gpu_buffer_upload(r->b_lightu, 0, r->lightu, nlu * sizeof *r->lightu);
@@ -360,31 +361,33 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
     if ((st = tb_gpu_buffer_download(r->b_rays, 0, r->orays, ni * NR * sizeof(tb_gpu_ray))) ||
         (st = tb_gpu_buffer_download(r->b_values, 0, r->ovals, ni * NV * SL * sizeof(float))))
         return st;
+    r->st.shade_wall_seconds += tb__now() - w0;
 
-    /* Emission, secondary rays; shadow rays collected. */
+    /* Emission, secondary rays; shadow rays collected. The outputs are
+     * slot-major: word c of value slot k of item j at (k SL + c) ni + j, ray
+     * slot k at k ni + j. */
+#define TB__V(j, k, c) r->ovals[((size_t)(k) * SL + (size_t)(c)) * ni + (j)]
     size_t ns = 0;
     float tmp[TB_CHANNELS_MAX];
     for (size_t j = 0; j < ni; j++) {
         size_t a = w->item_of[base + j], p = w->path[a];
         const float *thr = w->thr + a * (size_t)nch;
-        const float *v = r->ovals + j * NV * SL;
         float *L = P->L + p * (size_t)nch;
-        if (v[0] != 0.0f)
+        if (TB__V(j, 0, 0) != 0.0f)
             for (int c = 0; c < nch; c++)
-                L[c] += thr[c] * v[1 + c];
+                L[c] += thr[c] * TB__V(j, 0, 1 + c);
         for (int s = 0; s < S; s++)
-            if (v[(size_t)(1 + s) * SL] != 0.0f) {
-                w->shadow[ns] = r->orays[j * NR + (size_t)s];
+            if (TB__V(j, 1 + s, 0) != 0.0f) {
+                w->shadow[ns] = r->orays[(size_t)s * ni + j];
                 w->shadow_src[ns++] = j * NV + (size_t)(1 + s);
             }
         /* refracted first, so the mirror ray is on top (the CPU traces it first) */
         for (int s = S + 1; s >= S; s--) {
-            const float *sv = v + (size_t)(1 + s) * SL;
-            if (sv[0] == 0.0f)
+            if (TB__V(j, 1 + s, 0) == 0.0f)
                 continue;
             for (int c = 0; c < nch; c++)
-                tmp[c] = thr[c] * sv[1 + c];
-            tb__push(P, p, &r->orays[j * NR + (size_t)s], w->depth[a] + 1, tmp);
+                tmp[c] = thr[c] * TB__V(j, 1 + s, 1 + c);
+            tb__push(P, p, &r->orays[(size_t)s * ni + j], w->depth[a] + 1, tmp);
         }
     }
     if (ns) {
@@ -398,15 +401,15 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
         for (size_t q = 0; q < ns; q++) {
             if (w->occl[q])
                 continue;
-            size_t j = w->shadow_src[q] / NV;
+            size_t j = w->shadow_src[q] / NV, k = w->shadow_src[q] % NV;
             size_t a = w->item_of[base + j], p = w->path[a];
             const float *thr = w->thr + a * (size_t)nch;
-            const float *sv = r->ovals + w->shadow_src[q] * SL;
             float *L = P->L + p * (size_t)nch;
             for (int c = 0; c < nch; c++)
-                L[c] += thr[c] * sv[1 + c];
+                L[c] += thr[c] * TB__V(j, k, 1 + c);
         }
     }
+#undef TB__V
     return TB_OK;
 }
 
@@ -430,6 +433,7 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
     if (!w.path || !w.ray || !w.depth || !w.thr || !w.hit || !w.item_of || !w.shadow || !w.shadow_src || !w.occl)
         st = tb_error(TB_ERR_NOMEM, "GPU render: out of memory for %zu paths", n);
     float u[2 * TB__GR_MAX_LIGHT_SAMPLES], tmp[TB_CHANNELS_MAX];
+    double wave0 = tb__now();
     while (!st) {
         /* pop the top of every active path */
         w.n = 0;
@@ -518,6 +522,7 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
         if (!st && ni)
             st = tb__shade_chunk(r, P, &w, base, ni, nlu);
     }
+    r->st.wave_seconds += tb__now() - wave0;
     free(w.path), free(w.ray), free(w.depth), free(w.thr), free(w.hit), free(w.item_of), free(w.shadow),
         free(w.shadow_src), free(w.occl);
     return st;

@@ -52,6 +52,8 @@ typedef struct tb_gpu_render_stats {
     double shade_seconds;  /* device time of the shade kernel (NaN without timestamps) */
     double trace_seconds;  /* host wall time in tb_gpu_intersect and tb_gpu_occluded */
     double cpu_seconds;    /* host wall time shading routed hits */
+    double shade_wall_seconds; /* host wall time of the shade dispatches with their uploads and downloads */
+    double wave_seconds;   /* host wall time of the whole wavefront (all of the above and the host's own work) */
     int routed_materials;  /* materials the kernel does not shade */
     char routed_reason[256]; /* the first routed material and why ("" if none) */
 } tb_gpu_render_stats;

@@ -6,10 +6,13 @@
  * and the material) and, when the point samples the area light, light
  * samples (tb_gpu_light_u: the emitter chosen and the remapped numbers, drawn
  * on the host from the sample's own stream so that the GPU uses exactly the
- * CPU path's numbers). The kernel writes, per item, TB_GPU_SHADE_SLOTS(S)
- * output rays (S shadow rays, then the mirror and the refracted ray) and as
- * many value slots plus one for the emission, each slot (1 + channels)
- * floats: a validity flag (1 or 0) and the channel values. */
+ * CPU path's numbers). The kernel writes, per item, TB_GPU_SHADE_RAYS(S)
+ * output rays (S shadow rays, then the mirror and the refracted ray) and
+ * TB_GPU_SHADE_VALUES(S) value slots (the emission, then one per output
+ * ray), each slot (1 + channels) floats: a validity flag (1 or 0) and the
+ * channel values. Both are stored slot-major for n items: ray slot k of
+ * item j at k n + j, word c of value slot k at (k (1 + channels) + c) n + j
+ * (neighbouring invocations write neighbouring words). */
 #ifndef TB_SHADERS_SHARED_SHADE_H
 #define TB_SHADERS_SHARED_SHADE_H
 
