@@ -237,12 +237,11 @@ static void test_ff_occluded(void **state)
  * apart, F = 0.199824. Receivers: the 32 x 32 cell centres of the bottom
  * square (the area-to-area factor is their mean, midpoint rule); shooter:
  * 64 jittered stratified samples of the top square (tb_ff_sample_polygon),
- * four seeds. Error budget (docs/accuracy.md, "Form-factor kernel"): the
- * estimate's own sampling error (one sample set serves every receiver, so it
- * does not average out: 0.03-0.6 % over these seeds, the same on the CPU),
- * the disk term da / (pi r^2 + da) (r >= 1, da = 1/64: below 0.5 %), the
- * midpoint rule over the receivers (below 0.05 %): 1 % in all. The kernel
- * itself is held to float rounding against the CPU batch on the same samples. */
+ * seeds 1-4. The estimator's own error is the CPU's (docs/accuracy.md,
+ * "Radiosity form factors": with 64 samples a mean of -0.35 % over 16 seeds
+ * and at most 1.16 %, mostly the bias of eq. 5's disk term): 1.5 % bounds it,
+ * and the kernel is held to float rounding (2e-5) against the CPU batch on
+ * the same samples. Measured: 0.03-0.58 % on these seeds. */
 static void test_ff_howell_parallel_squares(void **state)
 {
     (void)state;
@@ -277,7 +276,7 @@ static void test_ff_howell_parallel_squares(void **state)
                       rel);
         worst = fmax(worst, rel);
     }
-    assert_true(worst <= 1e-2);
+    assert_true(worst <= 1.5e-2);
     tb_gpu_ff_scene_destroy(g);
     tb__close(&e);
 }
