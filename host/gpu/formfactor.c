@@ -38,6 +38,15 @@ static bool tb__never(void *ctx, const tb_accel_prim *p, uint32_t i, const tb_ra
     return false;
 }
 
+/* CPU node c as the child record of a node split along `axis` (shared/bvh.h):
+ * a leaf keeps its first reference and count, an inner node gets its pair number. */
+static tb_gpu_bvh_node tb__child(const tb_bvh_node *nodes, size_t c, const uint32_t *pair, uint32_t axis)
+{
+    const tb_bvh_node *n = &nodes[c];
+    return (tb_gpu_bvh_node){n->bounds.lo, n->count ? n->offset : pair[c], n->bounds.hi,
+                             (uint32_t)n->count | axis << 16};
+}
+
 /* Triangles of the occluders and a BVH over them, uploaded in leaf order. */
 static tb_status tb__upload_occluders(tb_gpu_ff_scene *g, const tb_ff_polygon *polys, size_t n)
 {
@@ -71,6 +80,7 @@ static tb_status tb__upload_occluders(tb_gpu_ff_scene *g, const tb_ff_polygon *p
     }
     tb_gpu_bvh_node *gn = NULL;
     tb_gpu_tri *gt = NULL;
+    uint32_t *pair = NULL, npairs = 0;
     uint32_t *gr = NULL;
     size_t nn = 0, nr = 0;
     tb_accel *acc = NULL;
@@ -86,37 +96,48 @@ static tb_status tb__upload_occluders(tb_gpu_ff_scene *g, const tb_ff_polygon *p
         g->stack = ((uint32_t)(ast.bvh_depth > 0 ? ast.bvh_depth : 1) + 7u) / 8u * 8u;
         const tb_bvh_node *nodes = tb_accel_bvh_nodes(acc, &nn);
         const uint32_t *order = tb_accel_bvh_refs(acc, &nr);
-        gn = calloc(nn ? nn : 1, sizeof *gn);
+        /* The child-pair layout of shared/bvh.h: the k-th inner node of the
+         * CPU's depth-first order becomes records 2k and 2k + 1, its two
+         * children; a root that is a leaf pairs with an empty box. */
+        pair = calloc(nn ? nn : 1, sizeof *pair);
+        for (size_t i = 0; pair && i < nn; ++i)
+            pair[i] = nodes[i].count ? UINT32_MAX : npairs++;
+        if (nn && !npairs)
+            npairs = 1;
+        gn = calloc(2 * (npairs ? npairs : 1), sizeof *gn);
         gt = calloc(nr ? nr : 1, sizeof *gt);
         gr = calloc(nr ? nr : 1, sizeof *gr);
-        if (!gn || !gt || !gr) {
+        if (!pair || !gn || !gt || !gr) {
             st = tb_error(TB_ERR_NOMEM, "out of memory for the occluder BVH");
         } else {
-            for (size_t i = 0; i < nn; ++i) { /* the layout of shared/bvh.h, as the intersect kernel's */
-                gn[i].lo = nodes[i].bounds.lo;
-                gn[i].hi = nodes[i].bounds.hi;
-                gn[i].offset = nodes[i].offset;
-                gn[i].count = (uint32_t)nodes[i].count | (nodes[i].count == 0 ? (uint32_t)nodes[i].axis << 16 : 0u);
+            if (nn && nodes[0].count) { /* a lone leaf: it, and a box no segment meets */
+                gn[0] = tb__child(nodes, 0, pair, 0);
+                gn[1] = (tb_gpu_bvh_node){{1.0f, 1.0f, 1.0f}, 0u, {-1.0f, -1.0f, -1.0f}, 1u};
             }
+            for (size_t i = 0; i < nn; ++i)
+                if (!nodes[i].count) {
+                    gn[2 * (size_t)pair[i]] = tb__child(nodes, i + 1, pair, nodes[i].axis);
+                    gn[2 * (size_t)pair[i] + 1] = tb__child(nodes, nodes[i].offset, pair, nodes[i].axis);
+                }
             for (size_t i = 0; i < nr; ++i) { /* triangles in leaf order: reference i is triangle i */
                 gt[i] = tri[order[i]];
                 gr[i] = (uint32_t)i;
             }
         }
     }
-    free(tri), free(prims);
-    g->nnodes = (uint32_t)nn;
+    free(tri), free(prims), free(pair);
+    g->nnodes = npairs;
     g->ntris = (uint32_t)nr;
     if (!st) {
-        g->nodes = tb_gpu_buffer_create(g->dev, (nn ? nn : 1) * sizeof(tb_gpu_bvh_node));
+        g->nodes = tb_gpu_buffer_create(g->dev, 2 * (npairs ? npairs : 1) * sizeof(tb_gpu_bvh_node));
         g->tris = g->nodes ? tb_gpu_buffer_create(g->dev, (nr ? nr : 1) * sizeof(tb_gpu_tri)) : NULL;
         g->refs = g->tris ? tb_gpu_buffer_create(g->dev, (nr ? nr : 1) * sizeof(uint32_t)) : NULL;
         g->placed = g->refs ? tb_gpu_buffer_create(g->dev, sizeof(tb_gpu_placed)) : NULL;
         if (!g->placed)
             st = TB_ERR_DEVICE;
     }
-    if (!st && nn)
-        st = tb_gpu_buffer_upload(g->nodes, 0, gn, nn * sizeof *gn);
+    if (!st && npairs)
+        st = tb_gpu_buffer_upload(g->nodes, 0, gn, 2 * (size_t)npairs * sizeof *gn);
     if (!st && nr)
         st = tb_gpu_buffer_upload(g->tris, 0, gt, nr * sizeof *gt);
     if (!st && nr)

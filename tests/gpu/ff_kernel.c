@@ -233,6 +233,38 @@ static void test_ff_occluded(void **state)
     tb__close(&e);
 }
 
+/* One occluder (the BVH's root is a leaf): a square covering every segment
+ * blocks them all; the same square moved above the shooter blocks none. */
+static void test_ff_single_occluder(void **state)
+{
+    (void)state;
+    tb__env e;
+    tb__open(&e, false);
+    tb_vec3 s[64], p[576], n[576];
+    tb__grid_samples(s);
+    size_t m = tb__grid_receivers(p, n);
+    double ff[576];
+    uint32_t vis[576 * 2];
+    tb_vec3 ns = {0, 0, -1};
+    for (int above = 0; above < 2; ++above) {
+        float z = above ? 2.0f : 0.5f;
+        tb_ff_polygon q = {{{-4, -4, z}, {4, -4, z}, {4, 4, z}, {-4, 4, z}}, 4};
+        tb_gpu_ff_scene *g = tb_gpu_ff_scene_create(e.dev, &q, 1);
+        assert_non_null(g);
+        assert_int_equal(tb_gpu_ff_scene_triangles(g), 2);
+        assert_int_equal(tb_gpu_ff_raycast(g, s, 64, ns, 1.0, p, n, m, ff, vis, NULL), TB_OK);
+        for (size_t i = 0; i < m; ++i) {
+            uint32_t bits[2] = {0, 0};
+            double r = above ? tb__ref(s, 64, ns, 1.0, p[i], n[i], NULL, bits) : 0.0;
+            tb_assert_near(ff[i], r, 2e-5 * r);
+            assert_int_equal(vis[2 * i], bits[0]);
+            assert_int_equal(vis[2 * i + 1], bits[1]);
+        }
+        tb_gpu_ff_scene_destroy(g);
+    }
+    tb__close(&e);
+}
+
 /* Howell's catalogue (C-11): directly opposed parallel unit squares one unit
  * apart, F = 0.199824. Receivers: the 32 x 32 cell centres of the bottom
  * square (the area-to-area factor is their mean, midpoint rule); shooter:
@@ -352,6 +384,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_ff_unoccluded),
         cmocka_unit_test(test_ff_unoccluded_staging),
         cmocka_unit_test(test_ff_occluded),
+        cmocka_unit_test(test_ff_single_occluder),
         cmocka_unit_test(test_ff_howell_parallel_squares),
         cmocka_unit_test(test_ff_chunks),
         cmocka_unit_test(test_ff_errors),
