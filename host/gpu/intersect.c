@@ -168,6 +168,29 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
         q->pad0 = 0;
         gr[k] = nt++;
     }
+    /* Each leaf lists its triangles first (stable), so the kernel tests them
+     * in one loop and the placed objects in another (lib/bvh_traverse.glsl). */
+    for (size_t i = 0; i < nn; ++i) {
+        const tb_bvh_node *c = &nodes[i];
+        if (c->count < 2)
+            continue;
+        uint32_t tmp[64], *buf = c->count <= 64 ? tmp : malloc(c->count * sizeof *buf);
+        if (!buf) {
+            free(gn), free(gt), free(gs), free(gr), tb_accel_free(acc);
+            return tb_error(TB_ERR_NOMEM, "out of memory for the GPU scene");
+        }
+        uint32_t m = 0;
+        for (int pass = 0; pass < 2; ++pass)
+            for (uint32_t j = 0; j < c->count; ++j) {
+                uint32_t ref = gr[c->offset + j];
+                bool placed = (ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) != 0;
+                if (placed == (pass == 1))
+                    buf[m++] = ref;
+            }
+        memcpy(&gr[c->offset], buf, c->count * sizeof *buf);
+        if (buf != tmp)
+            free(buf);
+    }
     g->nnodes = nn ? (uint32_t)ngn : 0u;
     g->ntris = nt;
     g->nspheres = ns - nc;

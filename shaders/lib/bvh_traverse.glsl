@@ -200,97 +200,133 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
         vec3 inv = tb_ray_inv_dir(r.d);
         tb_wray w = tb_wray_init(r.o, r.d);
         float lo_t = r.tmin - abs(r.tmin) * TB_T_TOL;
-        // Each step expands one inner node: both children's boxes are tested
-        // (one 64-byte fetch); the nearer hit child (by the split axis and
-        // the ray's sign, as on the CPU) is taken next and the other pushed.
-        // A popped child is tested again against the best t so far. The
-        // current child is (cur_off, cur_count): cur_count 0 an inner node.
+        // Aila and Laine's while-while traversal: a SIMD group (8 lanes on
+        // lavapipe, which executes both sides of every branch under a mask)
+        // first walks inner nodes until each lane stands at a leaf or is
+        // done, then tests the leaves' primitives together, so the costly
+        // primitive code runs with most lanes active. Each inner step tests
+        // both children's boxes (one 64-byte fetch); the nearer hit child (by
+        // the split axis and the ray's sign, as on the CPU) is taken and the
+        // other pushed. A popped child is tested again against the best t so
+        // far. The lane's child is (cur_off, cur_count): cur_count 0 an
+        // inner node. Leaves list triangles before placed objects, so each
+        // kind's code runs in its own loop.
         uint stack[TB_BVH_STACK];
         int sp = 0;
-        bool live = true;
+        bool done = false;
         uint cur_off = 0u, cur_count = 0u;
         for (;;) {
-            if (live) {
-                if (cur_count == 0u) {
-                    vec3 lo0, hi0, lo1, hi1;
-                    uint off0, cnt0, off1, cnt1;
-                    tb_bvh_fetch_node(2u * cur_off, lo0, hi0, off0, cnt0);
-                    tb_bvh_fetch_node(2u * cur_off + 1u, lo1, hi1, off1, cnt1);
-                    float hi_t = bt + abs(bt) * TB_T_TOL;
-                    float t0, t1;
-                    bool h0 = tb_aabb_slab(lo0, hi0, r.o, r.d, inv, lo_t, hi_t, t0, t1);
-                    bool h1 = tb_aabb_slab(lo1, hi1, r.o, r.d, inv, lo_t, hi_t, t0, t1);
-                    bool swap = r.d[cnt0 >> 16] < 0.0; // the second child first
-                    bool hn = swap ? h1 : h0, hf = swap ? h0 : h1;
-                    if (hn || hf) {
-                        if (hn && hf && sp < TB_BVH_STACK)
-                            stack[sp++] = 2u * cur_off + (swap ? 0u : 1u);
-                        bool take1 = hn ? swap : !swap;
-                        cur_off = take1 ? off1 : off0;
-                        cur_count = (take1 ? cnt1 : cnt0) & 0xffffu;
-                        continue;
-                    }
+            // Inner nodes until a leaf (or the end).
+            while (!done && cur_count == 0u) {
+                vec3 lo0, hi0, lo1, hi1;
+                uint off0, cnt0, off1, cnt1;
+                tb_bvh_fetch_node(2u * cur_off, lo0, hi0, off0, cnt0);
+                tb_bvh_fetch_node(2u * cur_off + 1u, lo1, hi1, off1, cnt1);
+                float hi_t = bt + abs(bt) * TB_T_TOL;
+                float t0, t1;
+                bool h0 = tb_aabb_slab(lo0, hi0, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+                bool h1 = tb_aabb_slab(lo1, hi1, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+                bool swap = r.d[cnt0 >> 16] < 0.0; // the second child first
+                bool hn = swap ? h1 : h0, hf = swap ? h0 : h1;
+                if (hn || hf) {
+                    if (hn && hf && sp < TB_BVH_STACK)
+                        stack[sp++] = 2u * cur_off + (swap ? 0u : 1u);
+                    bool take1 = hn ? swap : !swap;
+                    cur_off = take1 ? off1 : off0;
+                    cur_count = (take1 ? cnt1 : cnt0) & 0xffffu;
                 } else {
-                    for (uint k = cur_off; k < cur_off + cur_count; ++k) {
-                        uint ref = tb_bvh_fetch_ref(k);
-                        float t;
-                        uint object, face, sref;
-                        if (TB_BVH_HAS_CUBES && (ref & TB_GPU_REF_CUBE) != 0u) {
-                            tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
-                            precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
-                            precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
-                            uint cf;
-                            if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
-                                continue;
-                            object = sp.object;
-                            face = sp.face + cf;
-                            sref = sp.ref;
-                        } else if (TB_BVH_HAS_SPHERES && (ref & TB_GPU_REF_SPHERE) != 0u) {
-                            tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
-                            precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
-                            precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
-                            if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
-                                continue;
-                            object = sp.object;
-                            face = sp.face;
-                            sref = sp.ref;
-                        } else if (TB_BVH_HAS_TRIANGLES && (ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) == 0u) {
-                            vec3 v0, v1, v2;
-                            tb_bvh_fetch_tri(ref, v0, v1, v2);
-                            if (!tb_tri_hit(w, v0, v1, v2, t) || t < r.tmin || t > r.tmax)
-                                continue;
-                            uvec3 keys = tb_bvh_fetch_tri_keys(ref);
-                            object = keys.x;
-                            face = keys.y;
-                            sref = keys.z;
-                        } else {
-                            continue;
-                        }
-                        if (tb_better(t, object, face, sref, have, bt, bo, bf, br)) {
-                            have = true;
-                            bt = t;
-                            bo = object;
-                            bf = face;
-                            br = sref;
-                            bref = ref;
-                        }
-                        if (any_hit)
-                            break;
+                    // Pop children until one is still within reach.
+                    bool found = false;
+                    while (sp > 0 && !found) {
+                        vec3 plo, phi;
+                        uint slot = stack[--sp];
+                        tb_bvh_fetch_node(slot, plo, phi, cur_off, cur_count);
+                        cur_count &= 0xffffu;
+                        found = tb_aabb_slab(plo, phi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
                     }
-                    if (have && any_hit)
-                        break;
+                    done = !found;
                 }
             }
-            if (sp == 0)
+            if (done)
                 break;
-            // Pop a child; it is taken only if its box is still within reach.
-            uint slot = stack[--sp];
-            vec3 plo, phi;
-            tb_bvh_fetch_node(slot, plo, phi, cur_off, cur_count);
-            cur_count &= 0xffffu;
+            // The leaf: triangles, then placed objects.
+            uint k = cur_off, end = cur_off + cur_count;
+            bool stop = false;
+            if (TB_BVH_HAS_TRIANGLES) {
+                for (; k < end; ++k) {
+                    uint ref = tb_bvh_fetch_ref(k);
+                    if ((ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) != 0u)
+                        break;
+                    vec3 v0, v1, v2;
+                    float t;
+                    tb_bvh_fetch_tri(ref, v0, v1, v2);
+                    if (!tb_tri_hit(w, v0, v1, v2, t) || t < r.tmin || t > r.tmax)
+                        continue;
+                    uvec3 keys = tb_bvh_fetch_tri_keys(ref);
+                    if (tb_better(t, keys.x, keys.y, keys.z, have, bt, bo, bf, br)) {
+                        have = true;
+                        bt = t;
+                        bo = keys.x;
+                        bf = keys.y;
+                        br = keys.z;
+                        bref = ref;
+                    }
+                    if (any_hit) {
+                        stop = true;
+                        break;
+                    }
+                }
+            }
+            if ((TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES) && !stop) {
+                for (; k < end; ++k) {
+                    uint ref = tb_bvh_fetch_ref(k);
+                    tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
+                    precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+                    precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+                    float t;
+                    uint face = sp.face;
+                    if (TB_BVH_HAS_CUBES && (ref & TB_GPU_REF_CUBE) != 0u) {
+                        uint cf;
+                        if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
+                            continue;
+                        face += cf;
+                    } else if (TB_BVH_HAS_SPHERES && (ref & TB_GPU_REF_SPHERE) != 0u) {
+                        if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
+                            continue;
+                    } else {
+                        continue;
+                    }
+                    if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
+                        have = true;
+                        bt = t;
+                        bo = sp.object;
+                        bf = face;
+                        br = sp.ref;
+                        bref = ref;
+                    }
+                    if (any_hit) {
+                        stop = true;
+                        break;
+                    }
+                }
+            }
+            if (stop)
+                break;
+            // Leaf done: back to the stack.
+            cur_count = 0u;
+            bool found = false;
             float hi_t = bt + abs(bt) * TB_T_TOL;
             float t0, t1;
-            live = tb_aabb_slab(plo, phi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+            while (sp > 0 && !found) {
+                vec3 plo, phi;
+                uint slot = stack[--sp];
+                tb_bvh_fetch_node(slot, plo, phi, cur_off, cur_count);
+                cur_count &= 0xffffu;
+                found = tb_aabb_slab(plo, phi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+            }
+            done = !found;
+            if (done)
+                break;
         }
     }
     h.t = bt;
