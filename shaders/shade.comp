@@ -3,7 +3,8 @@
 // its closest hit from the intersect kernel) it evaluates what the CPU ray
 // tracer's tb__trace evaluates (host/render/raytrace.c):
 //  - the emission M / pi of an emitter seen from its front side;
-//  - point, spot and directional lights: Lambert + the normalised Phong lobe,
+//  - point, spot and directional lights: Lambert + the normalised Phong or the
+//    exactly normalised Blinn-Phong lobe,
 //    one shadow ray each;
 //  - the area light (every emitter of the scene): the light samples the host
 //    drew from the sample's own stream (emitter chosen by the double CDF),
@@ -271,7 +272,15 @@ void main()
                 continue;
             float spec = 0.0;
             if (HAS_PHONG && has_specular) {
-                float ca = dot(wr, wi);
+                float ca;
+                if ((m.flags & TB_GPU_MAT_BLINN) != 0u) {
+                    // exactly normalised Blinn-Phong: the half vector (raytrace.c's tb__lobe)
+                    vec3 h = wo + wi;
+                    float len = length(h);
+                    ca = len > 0.0 ? dot(n, h) / len : 0.0;
+                } else {
+                    ca = dot(wr, wi);
+                }
                 if (ca > 0.0)
                     spec = m.knorm * pow(ca, m.exponent);
             }

@@ -152,8 +152,11 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         uint8_t f = 0;
         if (!tb_channels_is_black(m->diffuse))
             f |= TB_GPU_MAT_DIFFUSE;
-        if (!tb_channels_is_black(m->specular))
+        /* model lambert: the specular colour is ignored (raytrace.c) */
+        if (!tb_channels_is_black(m->specular) && m->model != TB_MID_MODEL_LAMBERT)
             f |= TB_GPU_MAT_SPECULAR;
+        if (m->model == TB_MID_MODEL_BLINN)
+            f |= TB_GPU_MAT_BLINN;
         if (!tb_channels_is_black(m->transmission))
             f |= TB_GPU_MAT_TRANSMISSION;
         if (m->emits)
@@ -162,6 +165,14 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         const char *why = NULL;
         if (m->diffuse_texture || m->specular_texture || m->transmission_texture || m->emission_texture)
             why = "image texture";
+        else if (m->diffuse_pattern.kind || m->specular_pattern.kind)
+            why = "procedural pattern";
+        else if (m->bump.kind)
+            why = "bump map";
+        else if (m->model == TB_MID_MODEL_GGX && (f & TB_GPU_MAT_SPECULAR))
+            why = "GGX lobe (glossy rays)";
+        else if (m->model != TB_MID_MODEL_PHONG && m->model != TB_MID_MODEL_BLINN && m->model != TB_MID_MODEL_LAMBERT)
+            why = "reflection model";
         else if (ies && (f & (TB_GPU_MAT_DIFFUSE | TB_GPU_MAT_SPECULAR)))
             why = "lit by an IES light";
         else if (bad_emitter && (f & TB_GPU_MAT_DIFFUSE))
@@ -201,13 +212,14 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
     }
     for (int i = 0; i < nm; i++) {
         const tb_material *m = &s->materials[i];
-        mats[i] = (tb_gpu_shade_material){m->exponent, m->ior,
-                                           (float)tb_bsdf_lobe_norm(TB_BSDF_PHONG_NORMALIZED, m->exponent),
+        tb_bsdf_kind lobe = m->model == TB_MID_MODEL_BLINN ? TB_BSDF_BLINN_NORMALIZED_EXACT : TB_BSDF_PHONG_NORMALIZED;
+        mats[i] = (tb_gpu_shade_material){m->exponent, m->ior, (float)tb_bsdf_lobe_norm(lobe, m->exponent),
                                            r->mflags[i]};
         const tb_channels *c4[4] = {&m->diffuse, &m->specular, &m->transmission, &m->emission};
         for (int k = 0; k < 4; k++)
             for (int c = 0; c < nch; c++)
-                col[((size_t)i * 4 + (size_t)k) * (size_t)nch + (size_t)c] = c4[k]->v[c];
+                col[((size_t)i * 4 + (size_t)k) * (size_t)nch + (size_t)c] =
+                    k == 1 && !(r->mflags[i] & TB_GPU_MAT_SPECULAR) ? 0.0f : c4[k]->v[c];
     }
     r->light_col = (uint32_t)((size_t)nm * 4 * (size_t)nch);
     r->emitter_col = r->light_col + (uint32_t)((size_t)s->nlights * (size_t)nch);

@@ -28,6 +28,8 @@
 #define TB_GPU_MAT_SPECULAR 2u
 #define TB_GPU_MAT_TRANSMISSION 4u
 #define TB_GPU_MAT_EMITS 8u
+/* tb_gpu_shade_material.flags: the highlight is Blinn-Phong (half vector), else Phong. */
+#define TB_GPU_MAT_BLINN 16u
 
 /* Emitter kinds (the order of host/render/lights.h's tb_emitter_kind). */
 #define TB_GPU_EMITTER_TRIANGLE 0u
@@ -96,7 +98,7 @@ struct tb_gpu_delta_light {
 struct tb_gpu_shade_material {
     float exponent; /* Phong exponent */
     float ior;      /* index of refraction of the inside (offset 4) */
-    float knorm;    /* normalised Phong factor (n + 2) / (2 pi), from the host's double (offset 8) */
+    float knorm;    /* lobe normalisation: Phong (n + 2) / (2 pi), or Blinn's exact one, from the host's double (offset 8) */
     TB_GPU_UINT flags; /* TB_GPU_MAT_* (offset 12) */
 };
 

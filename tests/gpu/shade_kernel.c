@@ -27,12 +27,14 @@ static tb_scene *tb__load(const char *mat, const char *extra, bool lamp, const c
 {
     char text[4096];
     snprintf(text, sizeof text,
-             "mid 1\n"
+             "mid %s\n"
              "material \"m\" { %s }\n"
              "polygons \"floor\" { geometry = { vertices = [[-4 -4 0] [4 -4 0] [4 4 0] [-4 4 0]] faces = [[0 1 2 3]] }"
              " rendering = { material = \"m\" } }\n"
              "sphere \"blocker\" { transform = [scale(0.3) translate([0.5 0 1])] }\n"
              "%s%s",
+             /* models, patterns and bump maps are MID 1.1 */
+             strstr(mat, "model") || strstr(mat, "pattern") || strstr(mat, "bump") ? "1.1" : "1",
              mat,
              lamp ? "polygons \"lamp\" { geometry = { vertices = [[-0.5 -0.5 3] [-0.5 0.5 3] [0.5 0.5 3] [0.5 -0.5 3]]"
                     " faces = [[0 1 2 3]] } rendering = { diffuse = 0 emission = [10 8 6] } }\n"
@@ -88,7 +90,8 @@ static void tb__rays(tb_ray *rays)
 
 /* What a case expects of the run. */
 typedef struct tb__want {
-    bool routed;        /* floor hits are routed to the CPU */
+    const char *routed; /* floor hits are routed to the CPU, for this reason (NULL: shaded by the kernel) */
+    bool no_secondary;  /* no mirror or refracted ray may occur */
     bool secondary;     /* mirror or refracted rays must occur */
     int channels;       /* scene channels */
     double tol;         /* relative difference beyond which a ray counts as differing (0: 1e-4) */
@@ -158,7 +161,8 @@ static void tb__compare(tb__env *e, tb_scene *s, const char *name, tb__want want
     if (want.routed) {
         assert_true(gs.cpu_shaded > 0 && routed_rays > TB__N / 2);
         assert_true(gs.routed_materials > 0);
-        assert_non_null(strstr(gs.routed_reason, "image texture"));
+        if (!strstr(gs.routed_reason, want.routed))
+            fail_msg("%s: routed because \"%s\", expected \"%s\"", name, gs.routed_reason, want.routed);
     } else {
         assert_int_equal(gs.cpu_shaded, 0);
         assert_true(gs.gpu_shaded >= TB__N);
@@ -166,6 +170,8 @@ static void tb__compare(tb__env *e, tb_scene *s, const char *name, tb__want want
     }
     if (want.secondary)
         assert_true(gs.rays > TB__N);
+    if (want.no_secondary)
+        assert_int_equal(gs.rays, TB__N);
     tb_gpu_renderer_destroy(r);
     tb_rt_release(&rt);
     free(rays), free(rg), free(rc), free(lg);
@@ -184,6 +190,32 @@ static void test_phong_mirror(void **state)
 {
     tb__compare(*state, tb__load("diffuse = 0.3 specular = [0.4 0.3 0.2] exponent = 30", tb__point, true, NULL),
                 "phong+mirror", (tb__want){.channels = 3, .secondary = true});
+}
+
+static void test_blinn(void **state)
+{
+    tb__compare(*state,
+                tb__load("diffuse = 0.3 specular = [0.4 0.3 0.2] exponent = 30 model = blinn", tb__point, true, NULL),
+                "blinn+mirror", (tb__want){.channels = 3, .secondary = true});
+}
+
+/* model lambert ignores the specular colour: no highlight, no mirror ray */
+static void test_lambert_model(void **state)
+{
+    tb__compare(*state, tb__load("diffuse = 0.5 specular = 0.5 model = lambert", tb__point, true, NULL),
+                "model lamb.", (tb__want){.channels = 3, .no_secondary = true});
+}
+
+/* What the kernel does not do runs on the CPU path: GGX (glossy rays),
+ * procedural patterns, bump maps. */
+static void test_routed_models(void **state)
+{
+    tb__compare(*state, tb__load("diffuse = 0.2 specular = 0.6 model = ggx roughness = 0.3", tb__point, true, NULL),
+                "ggx", (tb__want){.channels = 3, .routed = "GGX"});
+    tb__compare(*state, tb__load("diffuse = 1 diffuse_pattern = checker(1, 0.2, 0.8)", tb__point, true, NULL),
+                "checker", (tb__want){.channels = 3, .routed = "procedural pattern"});
+    tb__compare(*state, tb__load("diffuse = 0.7 bump = noise(3, 2, 0.05)", tb__point, true, NULL), "bump",
+                (tb__want){.channels = 3, .routed = "bump map"});
 }
 
 static void test_spot(void **state)
@@ -247,7 +279,7 @@ static void test_routed_texture(void **state)
     assert_int_equal(fwrite(px, sizeof px, 1, fp), 1);
     fclose(fp);
     tb__compare(*state, tb__load("diffuse = 1 diffuse_texture = file(\"shade_kernel_tex.pfm\")", tb__point, true, dir),
-                "texture", (tb__want){.channels = 3, .routed = true});
+                "texture", (tb__want){.channels = 3, .routed = "image texture"});
 }
 
 int main(void)
@@ -255,7 +287,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lambert),     cmocka_unit_test(test_phong_mirror),   cmocka_unit_test(test_spot),
         cmocka_unit_test(test_directional), cmocka_unit_test(test_glass),          cmocka_unit_test(test_spectral),
-        cmocka_unit_test(test_sphere_emitter), cmocka_unit_test(test_routed_texture),
+        cmocka_unit_test(test_sphere_emitter), cmocka_unit_test(test_routed_texture), cmocka_unit_test(test_blinn),
+        cmocka_unit_test(test_lambert_model),  cmocka_unit_test(test_routed_models),
     };
     return cmocka_run_group_tests(tests, tb__setup, tb__teardown);
 }
