@@ -82,6 +82,54 @@ static void test_checker_box(void **state)
 
 /* ---------------------------------------------------------------- noise */
 
+/* The 3D checker: by hand, against a brute-force grid for random boxes, and
+ * through a solid texture (point sample, object-space scale, filtered box
+ * from the point's change per pixel). */
+static void test_checker3_box(void **state)
+{
+    (void)state;
+    tb_assert_near(tb_checker3_box_average(0, 1, 0, 1, 0, 1), 0.0, 1e-15);
+    tb_assert_near(tb_checker3_box_average(1, 2, 0, 1, 0, 1), 1.0, 1e-15);
+    tb_assert_near(tb_checker3_box_average(1, 2, 1, 2, 1, 2), 1.0, 1e-15);
+    tb_assert_near(tb_checker3_box_average(0, 2, 0, 1, 0, 1), 0.5, 1e-15);
+    tb_assert_near(tb_checker3_box_average(-0.5, -0.5, 0.5, 0.5, 0.5, 0.5), 1.0, 0.0);
+    tb_assert_near(tb_checker3_box_average(-0.5, -0.5, -0.5, -0.5, 0.5, 0.5), 0.0, 0.0);
+    tb_rng rng;
+    tb_rng_seed(&rng, tb_test_seed("checker3 box", 13), 0);
+    for (int k = 0; k < 40; k++) {
+        double o[3], w[3];
+        for (int a = 0; a < 3; a++) {
+            o[a] = 20.0 * tb_rng_double(&rng) - 10.0;
+            w[a] = 3.0 * tb_rng_double(&rng);
+        }
+        int n = 60, hits = 0;
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < n; j++)
+                for (int l = 0; l < n; l++) {
+                    double x = o[0] + (i + 0.5) * w[0] / n, y = o[1] + (j + 0.5) * w[1] / n,
+                           z = o[2] + (l + 0.5) * w[2] / n;
+                    hits += ((long)floor(x) + (long)floor(y) + (long)floor(z)) & 1;
+                }
+        double grid = (double)hits / ((double)n * n * n);
+        double tol = (ceil(w[0]) + ceil(w[1]) + ceil(w[2]) + 3.0) / n;
+        tb_assert_near(tb_checker3_box_average(o[0], o[0] + w[0], o[1], o[1] + w[1], o[2], o[2] + w[2]), grid, tol);
+    }
+    const float zero = 0.0f, one = 1.0f;
+    tb_texture t = tb_texture_checker(1, &zero, &one, true);
+    t.solid = true;
+    t.su = 2.0f;
+    tb_tex_query q = {.p = {0.6f, 0.1f, 0.1f}}; /* cells (1, 0, 0): odd */
+    tb_assert_near(tb_texture_eval1(&t, &q), 1.0, 0.0);
+    q.p = (tb_vec3){0.6f, 0.6f, 0.1f}; /* (1, 1, 0): even */
+    tb_assert_near(tb_texture_eval1(&t, &q), 0.0, 0.0);
+    /* a pixel spanning 4 cells in x and 3 in z: the closed form of that box */
+    q.p = (tb_vec3){0.3f, 0.2f, 0.7f};
+    q.dpdx = (tb_vec3){1.0f, 0.0f, 0.0f};
+    q.dpdy = (tb_vec3){0.5f, 0.0f, 1.5f};
+    double want = tb_checker3_box_average(0.6 - 1.5, 0.6 + 1.5, 0.4, 0.4, 1.4 - 1.5, 1.4 + 1.5);
+    tb_assert_near(tb_texture_eval1(&t, &q), want, 1e-6);
+}
+
 static void test_noise(void **state)
 {
     (void)state;
@@ -429,6 +477,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_checker_box),
+        cmocka_unit_test(test_checker3_box),
         cmocka_unit_test(test_noise),
         cmocka_unit_test(test_bump_plane),
         cmocka_unit_test(test_bump_curved),
