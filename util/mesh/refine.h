@@ -25,6 +25,7 @@
 #ifndef TB_UTIL_MESH_REFINE_H
 #define TB_UTIL_MESH_REFINE_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
