@@ -273,6 +273,89 @@ static void test_closed_cube(void **state)
     tb_ff_occluders_free(occ);
 }
 
+/* The hemicube covers every pixel exactly once when elements share edges
+ * that its frustum planes clip: from random centres and normals, a room of
+ * 6 x 7 x 7 elements and the same room as 6 whole walls both give the sum of
+ * all delta form factors, to rounding. */
+static void test_hemicube_watertight(void **state)
+{
+    (void)state;
+    enum { G = 7, NP = 6 * G * G };
+    static tb_ff_polygon fine[NP], walls[6];
+    for (int pass = 0; pass < 2; pass++) {
+        int g = pass ? 1 : G, k = 0;
+        tb_ff_polygon *out = pass ? walls : fine;
+        for (int face = 0; face < 6; face++) {
+            int axis = face / 2;
+            float side = (float)(face % 2);
+            tb_vec3 in = {0, 0, 0};
+            if (axis == 0) in.x = side ? -1.0f : 1.0f;
+            if (axis == 1) in.y = side ? -1.0f : 1.0f;
+            if (axis == 2) in.z = side ? -1.0f : 1.0f;
+            for (int j = 0; j < g; j++)
+                for (int i = 0; i < g; i++) {
+                    /* Uneven spacing (edges at irrational-looking places), the
+                     * same along every axis so that walls meeting at a cube
+                     * edge share their vertices there (no T-junctions). */
+                    float c[4][2];
+                    float a0 = (float)pow((double)i / g, 1.1), a1 = (float)pow((double)(i + 1) / g, 1.1);
+                    float b0 = (float)pow((double)j / g, 1.1), b1 = (float)pow((double)(j + 1) / g, 1.1);
+                    c[0][0] = a0; c[0][1] = b0; c[1][0] = a1; c[1][1] = b0;
+                    c[2][0] = a1; c[2][1] = b1; c[3][0] = a0; c[3][1] = b1;
+                    tb_ff_polygon p = {.n = 4};
+                    for (int v = 0; v < 4; v++) {
+                        float q[3];
+                        q[axis] = side;
+                        q[(axis + 1) % 3] = c[v][0];
+                        q[(axis + 2) % 3] = c[v][1];
+                        p.v[v] = (tb_vec3){q[0], q[1], q[2]};
+                    }
+                    out[k++] = facing(p, in);
+                }
+        }
+    }
+    tb_hemicube *hc = tb_hemicube_create(64);
+    tb_rng rng;
+    tb_rng_seed(&rng, tb_test_seed("hemicube_watertight", 3), 0);
+    static double ff[NP];
+    for (int trial = 0; trial < 20; trial++) {
+        tb_vec3 p = {0.1f + 0.8f * tb_rng_float(&rng), 0.1f + 0.8f * tb_rng_float(&rng),
+                     0.1f + 0.8f * tb_rng_float(&rng)};
+        tb_vec3 nrm = tb_vec3_normalize((tb_vec3){2 * tb_rng_float(&rng) - 1, 2 * tb_rng_float(&rng) - 1,
+                                                  2 * tb_rng_float(&rng) - 1});
+        assert_int_equal(tb_hemicube_formfactors(hc, p, nrm, fine, NP, TB_FF_NONE, ff), TB_OK);
+        double s1 = 0.0, s2 = 0.0;
+        for (int i = 0; i < NP; i++)
+            s1 += ff[i];
+        assert_int_equal(tb_hemicube_formfactors(hc, p, nrm, walls, 6, TB_FF_NONE, ff), TB_OK);
+        for (int i = 0; i < 6; i++)
+            s2 += ff[i];
+        tb_assert_near(s1, s2, 1e-9);
+        tb_assert_near(s2, 1.0, 2e-4); /* the delta form factors' own sum at 64 */
+    }
+    tb_hemicube_free(hc);
+}
+
+/* A wall 10^-4 from the centre, with a polygon 10^2 away in the same call:
+ * the near plane is relative to the farthest corner, so the wall is kept. */
+static void test_hemicube_close(void **state)
+{
+    (void)state;
+    tb_ff_polygon scene[2] = {
+        facing(ff_quad((tb_vec3){0, 0, 0}, (tb_vec3){0, 1, 0}, (tb_vec3){0, 1, 1}, (tb_vec3){0, 0, 1}),
+               (tb_vec3){1, 0, 0}),
+        rect_z(-100, 100, -100, 100, 100, (tb_vec3){0, 0, -1}),
+    };
+    tb_vec3 p = {1e-4f, 0.5f, 0}, up = {0, 0, 1};
+    tb_hemicube *hc = tb_hemicube_create(256);
+    double ff[2];
+    assert_int_equal(tb_hemicube_formfactors(hc, p, up, scene, 2, TB_FF_NONE, ff), TB_OK);
+    double exact = tb_ff_point_polygon(p, up, &scene[0]);
+    assert_true(exact > 0.4);
+    tb_assert_near(ff[0], exact, 5e-3);
+    tb_hemicube_free(hc);
+}
+
 /* ------------------------------------------------------------ Howell, area to area */
 
 /* Integrating the exact point form factor over a receiver grid reproduces
@@ -656,7 +739,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_frame),          cmocka_unit_test(test_point_b3),
         cmocka_unit_test(test_point_offcenter), cmocka_unit_test(test_point_zero_cases),
-        cmocka_unit_test(test_point_straddle), cmocka_unit_test(test_closed_cube),
+        cmocka_unit_test(test_point_straddle), cmocka_unit_test(test_closed_cube), cmocka_unit_test(test_hemicube_watertight), cmocka_unit_test(test_hemicube_close),
         cmocka_unit_test(test_howell_exact),   cmocka_unit_test(test_howell_raycast),
         cmocka_unit_test(test_howell_hemicube), cmocka_unit_test(test_reciprocity),
         cmocka_unit_test(test_blocker),        cmocka_unit_test(test_sample),
