@@ -1,7 +1,8 @@
 /* The Vulkan intersect kernel (host/gpu/intersect.h) against the CPU path
  * (tb_scene_intersect / tb_scene_occluded) on scenes mixing triangles and a
  * sphere and a cube (on the GPU) with a torus and a cylinder (routed to the
- * CPU per object).
+ * CPU per object), a lone cube (the BVH's root a leaf) and a deep BVH with
+ * kinds mixed in its leaves.
  * Runs with the validation layer and fails on any message. */
 #include "gpu_test.h"
 
@@ -268,12 +269,148 @@ static void test_all_routed(void **state)
     tb__close(&e);
 }
 
+/* A lone cube: the BVH's root is a leaf (the GPU BVH then has one node of
+ * its own, the root and an empty box), and a scene with cubes but no
+ * triangles or spheres must still be traversed. Exact rays: axis-aligned,
+ * through dyadic points, so t and the normal equal the CPU's bit for bit. */
+static void test_lone_cube(void **state)
+{
+    (void)state;
+    tb__env e;
+    tb__open(&e);
+    tb_scene *s = tb__load("mid 1\ncube \"box\" { transform = [scale(0.5) translate([1 2 3])] }\n");
+    tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
+    assert_non_null(g);
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    assert_int_equal(info.gpu_cubes, 1);
+    assert_int_equal(info.cpu_objects, 0);
+    enum { N = 16 * 16 };
+    tb_ray rays[N];
+    tb_hit hits[N];
+    uint8_t occ[N];
+    for (int i = 0; i < N; ++i) { /* down onto the top face z = 3.5, half of them missing the cube */
+        float x = 0.0625f + 0.125f * (float)(i % 16), y = 1.0625f + 0.125f * (float)(i / 16);
+        rays[i] = (tb_ray){{x, y, 10.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY};
+    }
+    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
+    assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
+    int hit = 0;
+    for (int i = 0; i < N; ++i) {
+        tb_hit c = tb__cpu(s, &rays[i]);
+        if (!tb__same(&c, &hits[i], 1e-6))
+            fail_msg("ray %d: cpu t %.9g object %u face %u, gpu t %.9g object %u face %u", i, c.t, c.object,
+                     c.face, hits[i].t, hits[i].object, hits[i].face);
+        assert_int_equal(occ[i], c.object != UINT32_MAX);
+        if (c.object == 0) {
+            assert_true(hits[i].t == 6.5f && hits[i].ng.z == 1.0f);
+            ++hit;
+        }
+    }
+    assert_true(hit == 8 * 8); /* x in [0.5, 1.5], y in [1.5, 2.5]: columns and rows 4..11 of 16 */
+    tb_gpu_scene_destroy(g);
+    tb_scene_free(s);
+    tb__close(&e);
+}
+
+/* A deep BVH mixing kinds in its leaves: a 48 x 48 height field of
+ * triangles with spheres and cubes standing in it, random rays (closest and
+ * any hit) against the CPU path. Covers the two-children-per-step traversal
+ * with its stack (tens of levels), the while-while order and the leaves'
+ * triangles-then-placed loops. Tolerance as test_random_mixed. */
+static void test_deep_mixed(void **state)
+{
+    (void)state;
+    enum { G = 48 };
+    size_t cap = 1u << 20;
+    char *text = malloc(cap);
+    assert_non_null(text);
+    size_t at = (size_t)snprintf(text, cap, "mid 1\npolygons \"field\" { geometry = { vertices = [");
+    for (int j = 0; j <= G; ++j)
+        for (int i = 0; i <= G; ++i) {
+            double x = -4.0 + 8.0 * i / G, y = -4.0 + 8.0 * j / G, z = 0.3 * sin(1.7 * x) * cos(1.3 * y);
+            at += (size_t)snprintf(text + at, cap - at, "[%.6f %.6f %.6f] ", x, y, z);
+        }
+    at += (size_t)snprintf(text + at, cap - at, "] faces = [");
+    for (int j = 0; j < G; ++j)
+        for (int i = 0; i < G; ++i) {
+            int a = j * (G + 1) + i;
+            at += (size_t)snprintf(text + at, cap - at, "[%d %d %d] [%d %d %d] ", a, a + 1, a + G + 2, a, a + G + 2,
+                                   a + G + 1);
+        }
+    at += (size_t)snprintf(text + at, cap - at, "] } }\n");
+    for (int k = 0; k < 12; ++k) {
+        double x = -3.5 + 0.6 * k, y = 3.0 * sin(1.1 * k);
+        at += (size_t)snprintf(text + at, cap - at, "%s \"p%d\" { transform = [scale(0.2) translate([%.3f %.3f 0.1])] }\n",
+                               k % 2 ? "cube" : "sphere", k, x, y);
+    }
+    assert_true(at < cap);
+    tb__env e;
+    tb__open(&e);
+    tb_scene *s = tb__load(text);
+    free(text);
+    tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
+    assert_non_null(g);
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    assert_int_equal(info.gpu_triangles, 2 * G * G);
+    assert_int_equal(info.gpu_spheres + info.gpu_cubes, 12);
+    uint64_t seed = tb_test_seed("test_deep_mixed", 3);
+    tb_rng rng;
+    tb_rng_seed(&rng, seed, 2);
+    enum { N = 20000 };
+    tb_ray *rays = malloc(N * sizeof *rays);
+    tb_hit *hits = malloc(N * sizeof *hits);
+    uint8_t *occ = malloc(N);
+    assert_true(rays && hits && occ);
+    for (int i = 0; i < N; ++i) {
+        float o[3], p[3];
+        for (int k = 0; k < 3; ++k) {
+            o[k] = (float)(tb_rng_double(&rng) * 10.0 - 5.0);
+            p[k] = (float)(tb_rng_double(&rng) * 8.0 - 4.0);
+        }
+        o[2] = (float)(tb_rng_double(&rng) * 3.0 + 0.5);
+        p[2] = (float)(tb_rng_double(&rng) * 0.8 - 0.4);
+        float tmax = i % 3 == 0 ? (float)tb_rng_double(&rng) : INFINITY;
+        rays[i] = (tb_ray){{o[0], o[1], o[2]}, 0.0f, {p[0] - o[0], p[1] - o[1], p[2] - o[2]}, tmax};
+    }
+    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
+    assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
+    int differ = 0, occ_differ = 0, field = 0, placed = 0;
+    for (int i = 0; i < N; ++i) {
+        tb_hit c = tb__cpu(s, &rays[i]);
+        occ_differ += occ[i] != tb_scene_occluded(s, &rays[i]);
+        if (c.object != hits[i].object || c.face != hits[i].face) {
+            ++differ;
+            continue;
+        }
+        if (c.object == UINT32_MAX)
+            continue;
+        tb_assert_near(hits[i].t, c.t, 1e-5 * fabs(c.t));
+        if (c.object == 0)
+            ++field;
+        else
+            ++placed;
+    }
+    print_message("[ info     ] %d field hits, %d sphere and cube hits, %d differ, %d occlusion differ\n", field, placed,
+                  differ, occ_differ);
+    assert_true(field > N / 4 && placed > 50);
+    assert_true(differ <= N / 1000);
+    assert_true(occ_differ <= N / 1000);
+    free(rays), free(hits), free(occ);
+    tb_gpu_scene_destroy(g);
+    tb_scene_free(s);
+    tb__close(&e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exact_grid),
         cmocka_unit_test(test_random_mixed),
         cmocka_unit_test(test_all_routed),
+        cmocka_unit_test(test_lone_cube),
+        cmocka_unit_test(test_deep_mixed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
