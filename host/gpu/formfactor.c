@@ -31,10 +31,15 @@ struct tb_gpu_ff_scene {
 #define TB__FF_WORKGROUP 64u
 #define TB__FF_MAX_LANES 16u
 
-/* The build needs a callback; the BVH is only converted, never traversed here. */
-static bool tb__never(void *ctx, const tb_accel_prim *p, uint32_t i, const tb_ray *r, tb_hit *h)
+/* tb_accel_build wants an intersect callback; this BVH is converted for the
+ * kernel and never traversed on the host. */
+static bool tb__ff_no_intersect(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {
-    (void)ctx, (void)p, (void)i, (void)r, (void)h;
+    (void)ctx;
+    (void)prim;
+    (void)index;
+    (void)ray;
+    (void)hit;
     return false;
 }
 
@@ -86,7 +91,7 @@ static tb_status tb__upload_occluders(tb_gpu_ff_scene *g, const tb_ff_polygon *p
     tb_accel *acc = NULL;
     tb_status st = TB_OK;
     if (nt) {
-        tb_accel_callbacks cb = {tb__never, NULL, NULL};
+        tb_accel_callbacks cb = {tb__ff_no_intersect, NULL, NULL};
         st = tb_accel_build(TB_ACCEL_BVH, prims, nt, &cb, NULL, &acc);
     }
     if (!st && acc) {

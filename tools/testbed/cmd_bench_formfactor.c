@@ -149,6 +149,10 @@ int tb_cmd_bench_formfactor(int argc, char **argv)
         fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
         goto done;
     }
+    if (e.n == 0) {
+        fprintf(stderr, "testbed bench formfactor: %s gives no elements\n", path);
+        goto done;
+    }
     shoot = malloc((size_t)shooters * sizeof *shoot);
     w.pts = malloc((size_t)shooters * (size_t)samples * sizeof *w.pts);
     cf = malloc((size_t)shooters * e.nrecv * sizeof *cf);

@@ -64,6 +64,13 @@ int tb_validate_formfactor(const tb_scene *s, tb_gpu_session *sess, long shooter
         fprintf(stderr, "testbed validate: error: formfactor: %s\n", tb_last_error());
         return TB_EXIT_FAIL;
     }
+    if (e.n == 0) { /* e.g. only lights, or nothing polygonizable: nothing to compare */
+        printf("kernel formfactor: no elements (%u objects could not be polygonized): nothing to compare\n",
+               e.skipped);
+        tb_ffe_free(&e);
+        *ok_out = true;
+        return TB_EXIT_OK;
+    }
     int rc = TB_EXIT_FAIL;
     size_t all_recv = e.nrecv;
     tb_ffe_subsample(&e, (size_t)receivers, (uint64_t)seed);

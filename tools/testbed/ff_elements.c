@@ -176,9 +176,6 @@ tb_status tb_ffe_build(const tb_scene *s, double max_edge, tb_ffe_set *out)
         memcpy(out->rp + out->nrecv, cp.data, cp.len * sizeof(tb_vec3));
         memcpy(out->rn + out->nrecv, cn.data, cn.len * sizeof(tb_vec3));
         out->nrecv += cp.len;
-        if (out->n == 0)
-            st = tb_error(TB_ERR_ARG, "the scene gives no elements (%u objects could not be polygonized)",
-                          out->skipped);
     }
     tb_array_free(&cp);
     tb_array_free(&cn);

@@ -31,8 +31,9 @@ typedef struct tb_ffe_set {
 #define TB_FFE_EDGE_DIVISOR 24.0
 
 /* Meshes every object of `s` with elements no longer than max_edge (world
- * units, > 0) along any edge. TB_ERR_NOMEM, or TB_ERR_ARG when no object
- * gives an element. Free with tb_ffe_free. */
+ * units, > 0) along any edge; objects that cannot be polygonized are
+ * counted in `skipped`, and a scene may give no element (n = 0).
+ * TB_ERR_ARG for a bad max_edge, TB_ERR_NOMEM. Free with tb_ffe_free. */
 tb_status tb_ffe_build(const tb_scene *s, double max_edge, tb_ffe_set *out);
 
 /* Frees the arrays. */
