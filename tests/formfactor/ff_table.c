@@ -201,6 +201,33 @@ static int timing(void)
         }
         printf("| %d | %.1f | %.1f |\n", samples[s], t[0], t[1]);
     }
+    /* The exact point form factor and the sample points. */
+    {
+        double t0 = now(), acc = 0.0;
+        int reps = 0;
+        do {
+            for (size_t i = 0; i < nr; i++)
+                acc += tb_ff_point_polygon(p[i], n[i], shooter);
+            reps++;
+        } while (now() - t0 < 0.5);
+        double ns_pp = (now() - t0) / ((double)reps * nr) * 1e9;
+        tb_ff_polygon tri = {{shooter->v[0], shooter->v[1], shooter->v[2]}, 3};
+        double ns_s[2];
+        for (int w = 0; w < 2; w++) {
+            t0 = now();
+            reps = 0;
+            do {
+                tb_ff_sample_polygon(w ? &tri : shooter, 64, (uint64_t)reps, pts);
+                acc += pts[0].x;
+                reps++;
+            } while (now() - t0 < 0.5);
+            ns_s[w] = (now() - t0) / ((double)reps * 64) * 1e9;
+        }
+        printf("\nExact point form factor (tb_ff_point_polygon, quad): %.1f ns per call; sample points "
+               "(tb_ff_sample_polygon, 64 per call): %.1f ns per point on a quad, %.1f on a triangle "
+               "(checksum %.3g)\n",
+               ns_pp, ns_s[0], ns_s[1], acc);
+    }
     printf("\nHemicube, one thread, centre on the floor: the room's %zu quads / the room's 6 walls as one "
            "quad each:\n\n", np);
     printf("| resolution | ms per hemicube, %zu quads | 6 quads |\n|---|---|---|\n", np);
