@@ -13,8 +13,11 @@
 //  - the secondary rays: Fresnel-weighted mirror and refracted rays of a
 //    smooth dielectric (total internal reflection: R = 1), or the perfect
 //    mirror weighted by the specular colour.
-// Shadow contributions are written unoccluded; the host traces the shadow
-// rays through the occlusion kernel and adds the unblocked ones. Everything
+// Shadow contributions are written unoccluded as two scalars a, b per shadow
+// ray (the contribution is (diffuse a + specular b) x the light's colour):
+// the host traces the shadow rays through the occlusion kernel and applies
+// the colours of the unblocked ones, so the kernel writes 3 words per shadow
+// ray instead of one per channel (31 bands: the kernel ran 4x slower). Everything
 // is in float (the CPU path works in double in places): docs/accuracy.md,
 // "Shade kernel", gives the resulting image tolerance.
 //
@@ -40,8 +43,7 @@ layout(constant_id = 9) const uint EMITTER_KINDS = 1u;  // bit k: an emitter of 
 
 const int S = NLIGHTS + NSAMPLES;  // shadow rays per item
 const int NRAYS = S + 2;           // TB_GPU_SHADE_RAYS
-const int NVALS = S + 3;           // TB_GPU_SHADE_VALUES
-const int SLOT = NCH + 1;          // floats per value slot
+const int SLOT = NCH + 1;          // floats per colour slot (flag and channels)
 const float INV_PI = 0.318309886183790671537767526745028724;
 const float TWO_PI = 6.28318530717958647692528676655900576;
 const float PI_4 = 0.785398163397448309615660845819875721;
@@ -143,8 +145,13 @@ void write_ray(int k, vec3 o, vec3 d, float tmax)
     out_rays[at].d = d;
     out_rays[at].tmax = tmax;
 }
-// Word c of value slot k (c = 0: the validity flag, 1 + channel: the values).
-void put(int k, int c, float x) { out_values[uint(k * SLOT + c) * pc.items + g_item] = x; }
+// Word c of shadow slot s (c = 0: the validity flag, 1: a, 2: b; the
+// contribution is (diffuse a + specular b) times the light's colour, applied
+// by the host when the shadow ray is unblocked).
+void sput(int s, int c, float x) { out_values[uint(s * 3 + c) * pc.items + g_item] = x; }
+// Word c of colour slot k (0 emission, 1 mirror, 2 refracted; c = 0: the
+// validity flag, 1 + channel: the values), after the shadow slots.
+void put(int k, int c, float x) { out_values[uint(3 * S + k * SLOT + c) * pc.items + g_item] = x; }
 
 // A point on emitter e seen from p (tb__sample_emitter in host/render/lights.c):
 // false if it gives no light.
@@ -216,7 +223,9 @@ void main()
         return;
     g_item = i;
     tb_gpu_shade_item it = items[i];
-    for (int k = 0; k < NVALS; k++)
+    for (int k = 0; k < S; k++)
+        sput(k, 0, 0.0);
+    for (int k = 0; k < 3; k++)
         put(k, 0, 0.0);
 
     tb_gpu_shade_material m = materials[it.material];
@@ -284,19 +293,11 @@ void main()
                 if (ca > 0.0)
                     spec = m.knorm * pow(ca, m.exponent);
             }
-            uint lc = pc.light_col + uint(l * NCH);
-            bool any = false;
-            for (int c = 0; c < NCH; c++) {
-                float Lc = colours[lc + uint(c)] * scale;
-                float f = colours[mc + uint(c)] * INV_PI;
-                if (HAS_PHONG)
-                    f += colours[mc + uint(NCH + c)] * spec;
-                any = any || Lc != 0.0;
-                put(1 + l, 1 + c, f * Lc * cosi);
-            }
-            if (!any)
-                continue;
-            put(1 + l, 0, 1.0);
+            if (lt.black != 0u || !(scale > 0.0))
+                continue; // no light (tb_light_sample_li is false)
+            sput(l, 0, 1.0);
+            sput(l, 1, INV_PI * scale * cosi);
+            sput(l, 2, spec * scale * cosi);
             vec3 o = spawn_origin(p, perr, ng, wi);
             write_ray(l, o, lt.kind == TB_GPU_LIGHT_DIRECTIONAL ? wi : lt.position - o, tmax);
         }
@@ -322,11 +323,9 @@ void main()
             if (cosi <= 0.0)
                 continue;
             float w = cosi / pdf;
-            uint ec = pc.emitter_col + lu.emitter * uint(NCH);
-            int slot = 1 + NLIGHTS + k;
-            put(slot, 0, 1.0);
-            for (int c = 0; c < NCH; c++)
-                put(slot, 1 + c, colours[mc + uint(c)] * (colours[ec + uint(c)] * w) * norm);
+            sput(NLIGHTS + k, 0, 1.0);
+            sput(NLIGHTS + k, 1, w * norm);
+            sput(NLIGHTS + k, 2, 0.0);
             vec3 o = spawn_origin(p, perr, ng, wi);
             write_ray(NLIGHTS + k, o, q - o, 1.0 - SHADOW_EPSILON);
         }
@@ -335,7 +334,7 @@ void main()
     // Secondary rays.
     if ((it.flags & TB_GPU_SHADE_SPAWN) == 0u)
         return;
-    const int vm = 1 + S, vt = 2 + S; // value slots of the mirror and the refracted ray
+    const int vm = 1, vt = 2; // colour slots of the mirror and the refracted ray
     if (HAS_DIELECTRIC && has_transmission) {
         float cos_i = dot(wo, ng);
         float R = fresnel_dielectric(cos_i, m.ior);

@@ -41,6 +41,7 @@ struct tb_gpu_renderer {
     tb_gpu_buffer *b_items, *b_lightu, *b_emitters, *b_lights, *b_materials, *b_colours, *b_rays, *b_values;
     size_t chunk;         /* items per shade dispatch */
     uint32_t light_col, emitter_col;
+    float *col;           /* the colour table (as uploaded): the host applies the shadow rays' colours */
     /* host staging of one chunk */
     tb_gpu_shade_item *items;
     tb_gpu_light_u *lightu;
@@ -75,6 +76,7 @@ void tb_gpu_renderer_destroy(tb_gpu_renderer *r)
             free(r->route[i]);
     free(r->route);
     free(r->mflags);
+    free(r->col);
     free(r->items);
     free(r->lightu);
     free(r->orays);
@@ -229,7 +231,8 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
                         : l->kind == TB_LIGHT_DIRECTIONAL ? TB_GPU_LIGHT_DIRECTIONAL
                                                           : TB_GPU_LIGHT_POINT;
         lts[i] = (tb_gpu_delta_light){.position = l->position, .kind = kind, .axis = l->axis,
-                                      .cos_total = (float)l->cos_total, .cos_falloff = (float)l->cos_falloff};
+                                      .cos_total = (float)l->cos_total, .cos_falloff = (float)l->cos_falloff,
+                                      .black = tb_channels_is_black(l->intensity)};
         for (int c = 0; c < nch; c++)
             col[r->light_col + (size_t)i * (size_t)nch + (size_t)c] = l->intensity.v[c];
     }
@@ -252,20 +255,21 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
     r->b_colours = r->b_materials ? tb__upload(dev, col, ncol * sizeof *col) : NULL;
     r->b_lights = r->b_colours ? tb__upload(dev, lts, (size_t)s->nlights * sizeof *lts) : NULL;
     r->b_emitters = r->b_lights ? tb__upload(dev, ems, (size_t)s->nemitters * sizeof *ems) : NULL;
-    free(col), free(mats), free(lts), free(ems);
+    r->col = col;
+    free(mats), free(lts), free(ems);
     if (!r->b_emitters)
         goto fail;
 
     /* Chunk buffers. */
     size_t per = (size_t)TB_GPU_SHADE_RAYS((size_t)r->S) * sizeof(tb_gpu_ray) +
-                 (size_t)TB_GPU_SHADE_VALUES((size_t)r->S) * (size_t)(nch + 1) * sizeof(float) +
+                 (size_t)TB_GPU_SHADE_VALUES((size_t)r->S, (size_t)nch) * sizeof(float) +
                  sizeof(tb_gpu_shade_item) + (size_t)r->nsamples * sizeof(tb_gpu_light_u);
     r->chunk = TB__GR_CHUNK_BYTES / per;
     if (r->chunk > 65536)
         r->chunk = 65536;
     if (r->chunk < 64)
         r->chunk = 64;
-    size_t nr = r->chunk * TB_GPU_SHADE_RAYS((size_t)r->S), nv = r->chunk * TB_GPU_SHADE_VALUES((size_t)r->S) * (size_t)(nch + 1);
+    size_t nr = r->chunk * TB_GPU_SHADE_RAYS((size_t)r->S), nv = r->chunk * TB_GPU_SHADE_VALUES((size_t)r->S, (size_t)nch);
     size_t nlu = r->chunk * (size_t)(r->nsamples > 0 ? r->nsamples : 1);
     r->items = malloc(r->chunk * sizeof *r->items);
     r->lightu = malloc(nlu * sizeof *r->lightu);
@@ -346,7 +350,8 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
                                  size_t nlu)
 {
     const int nch = r->nch, S = r->S;
-    const size_t NR = TB_GPU_SHADE_RAYS((size_t)S), NV = TB_GPU_SHADE_VALUES((size_t)S), SL = (size_t)nch + 1;
+    const size_t NR = TB_GPU_SHADE_RAYS((size_t)S), NV = TB_GPU_SHADE_VALUES((size_t)S, (size_t)nch),
+                 SL = (size_t)nch + 1;
     double w0 = tb__now();
     tb_status st = tb_gpu_buffer_upload(r->b_items, 0, r->items, ni * sizeof *r->items);
     if (!st && nlu)
@@ -371,35 +376,37 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
         return st;
     r->st.shade_seconds += d.seconds;
     if ((st = tb_gpu_buffer_download(r->b_rays, 0, r->orays, ni * NR * sizeof(tb_gpu_ray))) ||
-        (st = tb_gpu_buffer_download(r->b_values, 0, r->ovals, ni * NV * SL * sizeof(float))))
+        (st = tb_gpu_buffer_download(r->b_values, 0, r->ovals, ni * NV * sizeof(float))))
         return st;
     r->st.shade_wall_seconds += tb__now() - w0;
 
     /* Emission, secondary rays; shadow rays collected. The outputs are
-     * slot-major: word c of value slot k of item j at (k SL + c) ni + j, ray
-     * slot k at k ni + j. */
-#define TB__V(j, k, c) r->ovals[((size_t)(k) * SL + (size_t)(c)) * ni + (j)]
+     * word-major (shared/shade.h): word w of item j at w ni + j; shadow slot
+     * s's words (flag, a, b) are 3 s .. 3 s + 2, colour slot k's (flag,
+     * channels) follow from 3 S + k SL; ray slot k at k ni + j. */
+#define TB__W(j, w) r->ovals[(size_t)(w) * ni + (j)]
+#define TB__C(j, k, c) TB__W(j, 3 * (size_t)S + (size_t)(k) * SL + (size_t)(c))
     size_t ns = 0;
     float tmp[TB_CHANNELS_MAX];
     for (size_t j = 0; j < ni; j++) {
         size_t a = w->item_of[base + j], p = w->path[a];
         const float *thr = w->thr + a * (size_t)nch;
         float *L = P->L + p * (size_t)nch;
-        if (TB__V(j, 0, 0) != 0.0f)
+        if (TB__C(j, 0, 0) != 0.0f)
             for (int c = 0; c < nch; c++)
-                L[c] += thr[c] * TB__V(j, 0, 1 + c);
+                L[c] += thr[c] * TB__C(j, 0, 1 + c);
         for (int s = 0; s < S; s++)
-            if (TB__V(j, 1 + s, 0) != 0.0f) {
+            if (TB__W(j, 3 * s) != 0.0f) {
                 w->shadow[ns] = r->orays[(size_t)s * ni + j];
-                w->shadow_src[ns++] = j * NV + (size_t)(1 + s);
+                w->shadow_src[ns++] = j * (size_t)S + (size_t)s;
             }
         /* refracted first, so the mirror ray is on top (the CPU traces it first) */
-        for (int s = S + 1; s >= S; s--) {
-            if (TB__V(j, 1 + s, 0) == 0.0f)
+        for (int k = 2; k >= 1; k--) {
+            if (TB__C(j, k, 0) == 0.0f)
                 continue;
             for (int c = 0; c < nch; c++)
-                tmp[c] = thr[c] * TB__V(j, 1 + s, 1 + c);
-            tb__push(P, p, &r->orays[(size_t)s * ni + j], w->depth[a] + 1, tmp);
+                tmp[c] = thr[c] * TB__C(j, k, 1 + c);
+            tb__push(P, p, &r->orays[(size_t)(S + k - 1) * ni + j], w->depth[a] + 1, tmp);
         }
     }
     if (ns) {
@@ -410,18 +417,28 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
             return st;
         r->st.shadow_rays += ns;
         tb_stat_add(&tb__gr_shadow, (int64_t)ns);
+        /* An unblocked shadow ray adds (diffuse a + specular b) x its light's
+         * colour (the light's intensity, or the sampled emitter's radiance). */
         for (size_t q = 0; q < ns; q++) {
             if (w->occl[q])
                 continue;
-            size_t j = w->shadow_src[q] / NV, k = w->shadow_src[q] % NV;
+            size_t j = w->shadow_src[q] / (size_t)S, k = w->shadow_src[q] % (size_t)S;
             size_t a = w->item_of[base + j], p = w->path[a];
+            const tb_gpu_shade_item *it = &r->items[j];
             const float *thr = w->thr + a * (size_t)nch;
+            const float *dif = r->col + (size_t)it->material * 4 * (size_t)nch, *spec = dif + nch;
+            const float *lc = k < (size_t)r->nlights
+                                  ? r->col + r->light_col + k * (size_t)nch
+                                  : r->col + r->emitter_col +
+                                        (size_t)r->lightu[it->light_base + (k - (size_t)r->nlights)].emitter * (size_t)nch;
+            float ca = TB__W(j, 3 * k + 1), cb = TB__W(j, 3 * k + 2);
             float *L = P->L + p * (size_t)nch;
             for (int c = 0; c < nch; c++)
-                L[c] += thr[c] * TB__V(j, k, 1 + c);
+                L[c] += thr[c] * ((dif[c] * ca + spec[c] * cb) * lc[c]);
         }
     }
-#undef TB__V
+#undef TB__C
+#undef TB__W
     return TB_OK;
 }
 

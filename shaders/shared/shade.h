@@ -8,11 +8,13 @@
  * on the host from the sample's own stream so that the GPU uses exactly the
  * CPU path's numbers). The kernel writes, per item, TB_GPU_SHADE_RAYS(S)
  * output rays (S shadow rays, then the mirror and the refracted ray) and
- * TB_GPU_SHADE_VALUES(S) value slots (the emission, then one per output
- * ray), each slot (1 + channels) floats: a validity flag (1 or 0) and the
- * channel values. Both are stored slot-major for n items: ray slot k of
- * item j at k n + j, word c of value slot k at (k (1 + channels) + c) n + j
- * (neighbouring invocations write neighbouring words). */
+ * TB_GPU_SHADE_VALUES(S, channels) floats: per shadow ray a validity flag
+ * and two scalars a, b (its unblocked contribution is (diffuse a +
+ * specular b) times the light's or emitter's colour), then three colour
+ * slots (emission, mirror weight, refraction weight) of a validity flag and
+ * the channel values. Everything is stored word-major for n items (word w
+ * of item j at w n + j; ray slot k at k n + j), so neighbouring invocations
+ * write neighbouring words. */
 #ifndef TB_SHADERS_SHARED_SHADE_H
 #define TB_SHADERS_SHARED_SHADE_H
 
@@ -91,7 +93,8 @@ struct tb_gpu_delta_light {
     TB_GPU_VEC3 axis;      /* spot: beam axis; directional: direction light travels (offset 16) */
     float cos_total;       /* spot (offset 28) */
     float cos_falloff;     /* spot (offset 32) */
-    TB_GPU_UINT pad0, pad1, pad2;
+    TB_GPU_UINT black;     /* 1 if the intensity is 0 in every channel: no light (offset 36) */
+    TB_GPU_UINT pad0, pad1;
 };
 
 /* The scalar part of a material (its colours are in the colour table); size 16. */
@@ -114,8 +117,10 @@ typedef struct tb_gpu_shade_push {
 
 /* Output slots per item for S shadow rays: S, a mirror and a refracted ray. */
 #define TB_GPU_SHADE_RAYS(S) ((S) + 2u)
-/* Value slots per item: the emission, then one per output ray. */
-#define TB_GPU_SHADE_VALUES(S) ((S) + 3u)
+/* Output floats per item for S shadow rays and `ch` channels: 3 per shadow
+ * ray (flag, a, b), then 3 colour slots (emission, mirror, refracted) of a
+ * flag and the channels. */
+#define TB_GPU_SHADE_VALUES(S, ch) (3u * (S) + 3u * ((ch) + 1u))
 
 #ifndef TB_GPU_GLSL
 _Static_assert(sizeof(tb_gpu_shade_item) == 64, "tb_gpu_shade_item is 64 bytes");
@@ -133,7 +138,7 @@ _Static_assert(sizeof(tb_gpu_emitter) == 64 && offsetof(tb_gpu_emitter, kind) ==
                "tb_gpu_emitter follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_delta_light) == 48 && offsetof(tb_gpu_delta_light, kind) == 12 &&
                    offsetof(tb_gpu_delta_light, axis) == 16 && offsetof(tb_gpu_delta_light, cos_total) == 28 &&
-                   offsetof(tb_gpu_delta_light, cos_falloff) == 32,
+                   offsetof(tb_gpu_delta_light, cos_falloff) == 32 && offsetof(tb_gpu_delta_light, black) == 36,
                "tb_gpu_delta_light follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_shade_material) == 16 && offsetof(tb_gpu_shade_material, ior) == 4 &&
                    offsetof(tb_gpu_shade_material, knorm) == 8 && offsetof(tb_gpu_shade_material, flags) == 12,
