@@ -10,6 +10,7 @@
  * shooter polygon; mean and worst over 16 seeds) and hemicubes (32 .. 512).
  * timing: CPU nanoseconds per receiver per sample of tb_ff_raycast (with and
  * without occluders) and CPU milliseconds per hemicube, one thread. */
+#include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -279,8 +280,13 @@ int main(int argc, char **argv)
         return accuracy();
     if (argc == 2 && strcmp(argv[1], "timing") == 0)
         return timing();
-    fprintf(stderr, "usage: ff_table accuracy|timing\n"
-                    "  accuracy  relative errors of the form factors against Howell's catalogue (C-11, C-14, C-41)\n"
-                    "  timing    cost of a ray-cast form factor per receiver and sample, and of a hemicube\n");
-    return 2;
+    bool help = argc == 2 && (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0);
+    fprintf(help ? stdout : stderr,
+            "usage: ff_table accuracy|timing\n"
+            "  accuracy  relative errors of the form factors against Howell's catalogue (C-11, C-14, C-41):\n"
+            "            exact point form factor, ray casting (1-64 samples), hemicube (32-512)\n"
+            "  timing    CPU cost, one thread (run with OMP_NUM_THREADS=1): ray casting per receiver and\n"
+            "            sample with and without occluders, exact point form factor, sample points, hemicube\n"
+            "Tables for docs/accuracy.md and docs/performance.md, printed as Markdown.\n");
+    return help ? 0 : 2;
 }
