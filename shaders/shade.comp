@@ -61,9 +61,7 @@ layout(std430, binding = 7) writeonly buffer OutValues { float out_values[]; };
 
 layout(push_constant) uniform Push {
     uint items;
-    uint light_col;
-    uint emitter_col;
-    uint pad0;
+    uint pad0, pad1, pad2;
 } pc;
 
 // The next float above / below x (x finite).

@@ -365,7 +365,7 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
                                                                         .spec_count = 9});
     if (!k)
         return TB_ERR_DEVICE;
-    tb_gpu_shade_push push = {(uint32_t)ni, r->light_col, r->emitter_col, 0};
+    tb_gpu_shade_push push = {(uint32_t)ni, 0, 0, 0};
     tb_gpu_dispatch d = {k,
                          {r->b_items, r->b_lightu, r->b_emitters, r->b_lights, r->b_materials, r->b_colours,
                           r->b_rays, r->b_values},

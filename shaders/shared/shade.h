@@ -109,9 +109,7 @@ struct tb_gpu_shade_material {
 #ifndef TB_GPU_GLSL
 typedef struct tb_gpu_shade_push {
     uint32_t items;       /* shading points */
-    uint32_t light_col;   /* first float of the lights' colours in the colour table */
-    uint32_t emitter_col; /* first float of the emitters' radiances in the colour table */
-    uint32_t pad0;
+    uint32_t pad0, pad1, pad2;
 } tb_gpu_shade_push;
 #endif
 
