@@ -187,15 +187,15 @@ static tb_dvec3 tb__warp_quad(const tb__quad_map *q, double u1, double u2)
     return tb_dvec3_add(p, tb_dvec3_scale(q->v[3], w3));
 }
 
-tb_status tb_ff_sample_polygon(const tb_ff_polygon *poly, int nsamples, uint64_t seed, tb_vec3 *out)
+/* The points of both sample calls: jittered (rng) or at the cells' centres (rng NULL). */
+static tb_status tb__sample(const tb_ff_polygon *poly, int nsamples, tb_rng *rng, tb_vec3 *out)
 {
     if (!poly || !out)
-        return tb_error(TB_ERR_ARG, "tb_ff_sample_polygon: NULL argument");
+        return tb_error(TB_ERR_ARG, "NULL argument");
     if (nsamples < 1)
-        return tb_error(TB_ERR_ARG, "tb_ff_sample_polygon: nsamples %d < 1", nsamples);
+        return tb_error(TB_ERR_ARG, "nsamples %d < 1", nsamples);
     if (!tb__ff_polygon_ok(poly))
-        return tb_error(TB_ERR_ARG, "tb_ff_sample_polygon: degenerate polygon (%d corners, zero area or not finite)",
-                        poly->n);
+        return tb_error(TB_ERR_ARG, "degenerate polygon (%d corners, zero area or not finite)", poly->n);
     tb_dvec3 v[TB_FF_MAX_VERTS];
     for (int k = 0; k < poly->n; k++)
         v[k] = tb__ff_d(poly->v[k]);
@@ -236,7 +236,7 @@ tb_status tb_ff_sample_polygon(const tb_ff_polygon *poly, int nsamples, uint64_t
                 a2 = tb_dvec3_dot(tb_dvec3_cross(tb_dvec3_sub(v[2], v[0]), tb_dvec3_sub(v[3], v[0])), nn);
             }
             if (!(a1 >= 0.0 && a2 >= 0.0 && a1 + a2 > 0.0))
-                return tb_error(TB_ERR_ARG, "tb_ff_sample_polygon: self-intersecting quad");
+                return tb_error(TB_ERR_ARG, "self-intersecting quad");
             two_tris = true;
             split = a1 / (a1 + a2);
         }
@@ -252,16 +252,15 @@ tb_status tb_ff_sample_polygon(const tb_ff_polygon *poly, int nsamples, uint64_t
         ny = 1;
     if (ny > nsamples)
         ny = nsamples;
-    tb_rng rng;
-    tb_rng_seed(&rng, seed, 0x666f726d66616374ull); /* stream "formfact" */
     int idx = 0;
     for (int row = 0; row < ny; row++) {
         long long c0 = (long long)row * nsamples / ny, c1 = (long long)(row + 1) * nsamples / ny;
         int cells = (int)(c1 - c0);
         double y0 = (double)c0 / nsamples, h = (double)cells / nsamples;
         for (int col = 0; col < cells; col++) {
-            double u2 = y0 + h * tb_rng_double(&rng);
-            double u1 = (col + tb_rng_double(&rng)) / cells;
+            double j2 = rng ? tb_rng_double(rng) : 0.5, j1 = rng ? tb_rng_double(rng) : 0.5;
+            double u2 = y0 + h * j2;
+            double u1 = (col + j1) / cells;
             if (u1 >= 1.0)
                 u1 = nextafter(1.0, 0.0);
             if (u2 >= 1.0)
@@ -281,4 +280,18 @@ tb_status tb_ff_sample_polygon(const tb_ff_polygon *poly, int nsamples, uint64_t
         }
     }
     return TB_OK;
+}
+
+tb_status tb_ff_sample_polygon(const tb_ff_polygon *poly, int nsamples, uint64_t seed, tb_vec3 *out)
+{
+    tb_rng rng;
+    tb_rng_seed(&rng, seed, 0x666f726d66616374ull); /* stream "formfact" */
+    tb_status st = tb__sample(poly, nsamples, &rng, out);
+    return st ? tb_error_context(st, "tb_ff_sample_polygon") : TB_OK;
+}
+
+tb_status tb_ff_sample_polygon_centres(const tb_ff_polygon *poly, int nsamples, tb_vec3 *out)
+{
+    tb_status st = tb__sample(poly, nsamples, NULL, out);
+    return st ? tb_error_context(st, "tb_ff_sample_polygon_centres") : TB_OK;
 }

@@ -68,6 +68,13 @@ double tb_ff_point_polygon(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly);
  * non-finite corner, n not 3 or 4). */
 tb_status tb_ff_sample_polygon(const tb_ff_polygon *poly, int nsamples, uint64_t seed, tb_vec3 *out);
 
+/* The same strata as tb_ff_sample_polygon, each point the image of its
+ * cell's centre instead of a random point (no seed): eq. 5's disk term
+ * assumes the sample sits in the middle of its area, so these points give
+ * ray casting about a third of the jittered points' bias, at the price of
+ * a fixed pattern (docs/formfactors.md, "Accuracy"). Same errors. */
+tb_status tb_ff_sample_polygon_centres(const tb_ff_polygon *poly, int nsamples, tb_vec3 *out);
+
 /* Ray-cast form factor from a differential receiver at p (unit normal n) to
  * a shooter of `area` and unit normal ns given by npts sample points:
  * sum over visible k of cos_s cos_r (area / npts) / (pi r^2 + area / npts)

@@ -163,9 +163,10 @@ static inline double ff_case_exact_grid(const ff_case *c, int m)
 }
 
 /* Area-to-area F12 by ray casting: each shooter polygon sampled with
- * `nsamples` points (seed + polygon index), an m x m receiver grid, through
+ * `nsamples` points (jittered with seed + polygon index, or the strata's
+ * centres if `centres`), an m x m receiver grid, through
  * tb_ff_raycast_batch (occluders `occ`, may be NULL). -1 on failure. */
-static inline double ff_case_raycast(const ff_case *c, int m, int nsamples, uint64_t seed, void *occ)
+static inline double ff_case_raycast_ex(const ff_case *c, int m, int nsamples, uint64_t seed, int centres, void *occ)
 {
     size_t nr = (size_t)m * (size_t)m;
     tb_vec3 *p = malloc(sizeof *p * nr), *n = malloc(sizeof *n * nr), *pts = malloc(sizeof *pts * (size_t)nsamples);
@@ -181,7 +182,9 @@ static inline double ff_case_raycast(const ff_case *c, int m, int nsamples, uint
             tb_vec3 ns;
             double area;
             tb_ff_polygon_frame(&c->shooter[k], &ns, &area);
-            if (tb_ff_sample_polygon(&c->shooter[k], nsamples, seed + (uint64_t)k, pts) ||
+            tb_status st = centres ? tb_ff_sample_polygon_centres(&c->shooter[k], nsamples, pts)
+                                   : tb_ff_sample_polygon(&c->shooter[k], nsamples, seed + (uint64_t)k, pts);
+            if (st ||
                 tb_ff_raycast_batch(occ, pts, nsamples, ns, area, p, n, nr, ff)) {
                 sum = -1.0;
                 break;
@@ -197,6 +200,12 @@ static inline double ff_case_raycast(const ff_case *c, int m, int nsamples, uint
     free(pts);
     free(ff);
     return sum;
+}
+
+/* Jittered ray casting (ff_case_raycast_ex). */
+static inline double ff_case_raycast(const ff_case *c, int m, int nsamples, uint64_t seed, void *occ)
+{
+    return ff_case_raycast_ex(c, m, nsamples, seed, 0, occ);
 }
 
 /* Area-to-area F12 by hemicubes of resolution res at an m x m receiver grid.

@@ -73,6 +73,23 @@ static int accuracy(void)
         }
         printf("\n");
     }
+    printf("\nThe same with the strata's centres (tb_ff_sample_polygon_centres; one fixed pattern):\n\n");
+    printf("| case |");
+    for (int s = 0; s < 4; s++)
+        printf(" %d sample%s |", samples[s], samples[s] > 1 ? "s" : "");
+    printf("\n|---|---|---|---|---|\n");
+    for (int c = 0; c < 3; c++) {
+        printf("| %s |", cases[c].name);
+        for (int s = 0; s < 4; s++) {
+            double f = ff_case_raycast_ex(&cases[c], grid_rc, samples[s], 0, 1, NULL);
+            if (f < 0.0) {
+                fprintf(stderr, "ff_table: %s\n", tb_last_error());
+                return 1;
+            }
+            printf(" %+.2e |", (f - cases[c].exact) / cases[c].exact);
+        }
+        printf("\n");
+    }
 
     printf("\nHemicube, %d x %d receivers, relative error by resolution against Howell / against the exact "
            "point form factor at the same receivers (the hemicube's own error):\n\n",
