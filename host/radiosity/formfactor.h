@@ -70,9 +70,11 @@ tb_status tb_ff_sample_polygon(const tb_ff_polygon *poly, int nsamples, uint64_t
 
 /* The same strata as tb_ff_sample_polygon, each point the image of its
  * cell's centre instead of a random point (no seed): eq. 5's disk term
- * assumes the sample sits in the middle of its area, so these points give
- * ray casting about a third of the jittered points' bias, at the price of
- * a fixed pattern (docs/formfactors.md, "Accuracy"). Same errors. */
+ * assumes the sample sits in the middle of its area, so on compact elements
+ * these points give ray casting less bias (a third of it on unit squares),
+ * at the price of one fixed pattern; on thin triangles the mapped centres
+ * are off the strata's centroids and can be worse (docs/formfactors.md,
+ * "Ray casting"). Same errors as tb_ff_sample_polygon. */
 tb_status tb_ff_sample_polygon_centres(const tb_ff_polygon *poly, int nsamples, tb_vec3 *out);
 
 /* Ray-cast form factor from a differential receiver at p (unit normal n) to
