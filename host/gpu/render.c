@@ -3,6 +3,7 @@
 #include "host/gpu/render.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -42,6 +43,7 @@ struct tb_gpu_renderer {
     size_t chunk;         /* items per shade dispatch */
     uint32_t light_col, emitter_col;
     float *col;           /* the colour table (as uploaded): the host applies the shadow rays' colours */
+    int threads;          /* OpenMP threads of the host's loops (0: OpenMP's default) */
     /* host staging of one chunk */
     tb_gpu_shade_item *items;
     tb_gpu_light_u *lightu;
@@ -272,7 +274,7 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
     size_t nr = r->chunk * TB_GPU_SHADE_RAYS((size_t)r->S), nv = r->chunk * TB_GPU_SHADE_VALUES((size_t)r->S, (size_t)nch);
     size_t nlu = r->chunk * (size_t)(r->nsamples > 0 ? r->nsamples : 1);
     r->items = malloc(r->chunk * sizeof *r->items);
-    r->lightu = malloc(nlu * sizeof *r->lightu);
+    r->lightu = calloc(nlu, sizeof *r->lightu); /* items without area samples leave theirs unset */
     r->orays = malloc(nr * sizeof *r->orays);
     r->ovals = malloc(nv * sizeof *r->ovals);
     if (!r->items || !r->lightu || !r->orays || !r->ovals)
@@ -339,6 +341,9 @@ typedef struct tb__wave {
     float *thr;       /* [a * nch + c] */
     tb_hit *hit;
     size_t *item_of;  /* items: index into the wave */
+    size_t *routed;   /* routed hits: index into the wave */
+    int *mat;         /* material of each hit */
+    size_t *sstart;   /* item j's shadow rays are shadow[sstart[j] .. sstart[j + 1]) */
     tb_ray *shadow;   /* shadow rays of one chunk */
     size_t *shadow_src; /* value slot index (chunk-local) of each shadow ray */
     uint8_t *occl;
@@ -386,20 +391,28 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
      * channels) follow from 3 S + k SL; ray slot k at k ni + j. */
 #define TB__W(j, w) r->ovals[(size_t)(w) * ni + (j)]
 #define TB__C(j, k, c) TB__W(j, 3 * (size_t)S + (size_t)(k) * SL + (size_t)(c))
+    /* shadow rays of the chunk in item order (sequential: it compacts) */
     size_t ns = 0;
-    float tmp[TB_CHANNELS_MAX];
     for (size_t j = 0; j < ni; j++) {
-        size_t a = w->item_of[base + j], p = w->path[a];
-        const float *thr = w->thr + a * (size_t)nch;
-        float *L = P->L + p * (size_t)nch;
-        if (TB__C(j, 0, 0) != 0.0f)
-            for (int c = 0; c < nch; c++)
-                L[c] += thr[c] * TB__C(j, 0, 1 + c);
+        w->sstart[j] = ns;
         for (int s = 0; s < S; s++)
             if (TB__W(j, 3 * s) != 0.0f) {
                 w->shadow[ns] = r->orays[(size_t)s * ni + j];
                 w->shadow_src[ns++] = j * (size_t)S + (size_t)s;
             }
+    }
+    w->sstart[ni] = ns;
+    const int nthreads = r->threads > 0 ? r->threads : omp_get_max_threads();
+    /* items belong to distinct paths: any thread order gives the same sums */
+#pragma omp parallel for schedule(static) num_threads(nthreads)
+    for (size_t j = 0; j < ni; j++) {
+        size_t a = w->item_of[base + j], p = w->path[a];
+        const float *thr = w->thr + a * (size_t)nch;
+        float *L = P->L + p * (size_t)nch;
+        float tmp[TB_CHANNELS_MAX];
+        if (TB__C(j, 0, 0) != 0.0f)
+            for (int c = 0; c < nch; c++)
+                L[c] += thr[c] * TB__C(j, 0, 1 + c);
         /* refracted first, so the mirror ray is on top (the CPU traces it first) */
         for (int k = 2; k >= 1; k--) {
             if (TB__C(j, k, 0) == 0.0f)
@@ -419,22 +432,26 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
         tb_stat_add(&tb__gr_shadow, (int64_t)ns);
         /* An unblocked shadow ray adds (diffuse a + specular b) x its light's
          * colour (the light's intensity, or the sampled emitter's radiance). */
-        for (size_t q = 0; q < ns; q++) {
-            if (w->occl[q])
-                continue;
-            size_t j = w->shadow_src[q] / (size_t)S, k = w->shadow_src[q] % (size_t)S;
+#pragma omp parallel for schedule(static) num_threads(nthreads)
+        for (size_t j = 0; j < ni; j++) {
             size_t a = w->item_of[base + j], p = w->path[a];
             const tb_gpu_shade_item *it = &r->items[j];
             const float *thr = w->thr + a * (size_t)nch;
             const float *dif = r->col + (size_t)it->material * 4 * (size_t)nch, *spec = dif + nch;
-            const float *lc = k < (size_t)r->nlights
-                                  ? r->col + r->light_col + k * (size_t)nch
-                                  : r->col + r->emitter_col +
-                                        (size_t)r->lightu[it->light_base + (k - (size_t)r->nlights)].emitter * (size_t)nch;
-            float ca = TB__W(j, 3 * k + 1), cb = TB__W(j, 3 * k + 2);
             float *L = P->L + p * (size_t)nch;
-            for (int c = 0; c < nch; c++)
-                L[c] += thr[c] * ((dif[c] * ca + spec[c] * cb) * lc[c]);
+            for (size_t q = w->sstart[j]; q < w->sstart[j + 1]; q++) {
+                if (w->occl[q])
+                    continue;
+                size_t k = w->shadow_src[q] % (size_t)S;
+                const float *lc =
+                    k < (size_t)r->nlights
+                        ? r->col + r->light_col + k * (size_t)nch
+                        : r->col + r->emitter_col +
+                              (size_t)r->lightu[it->light_base + (k - (size_t)r->nlights)].emitter * (size_t)nch;
+                float ca = TB__W(j, 3 * k + 1), cb = TB__W(j, 3 * k + 2);
+                for (int c = 0; c < nch; c++)
+                    L[c] += thr[c] * ((dif[c] * ca + spec[c] * cb) * lc[c]);
+            }
         }
     }
 #undef TB__C
@@ -455,13 +472,17 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
     w.thr = malloc(n * (size_t)nch * sizeof *w.thr);
     w.hit = malloc(n * sizeof *w.hit);
     w.item_of = malloc(n * sizeof *w.item_of);
+    w.routed = malloc(n * sizeof *w.routed);
+    w.mat = malloc(n * sizeof *w.mat);
+    w.sstart = malloc((r->chunk + 1) * sizeof *w.sstart);
     w.shadow = malloc(r->chunk * (S ? S : 1) * sizeof *w.shadow);
     w.shadow_src = malloc(r->chunk * (S ? S : 1) * sizeof *w.shadow_src);
     w.occl = malloc(r->chunk * (S ? S : 1));
     tb_status st = TB_OK;
-    if (!w.path || !w.ray || !w.depth || !w.thr || !w.hit || !w.item_of || !w.shadow || !w.shadow_src || !w.occl)
+    if (!w.path || !w.ray || !w.depth || !w.thr || !w.hit || !w.item_of || !w.routed || !w.mat || !w.sstart ||
+        !w.shadow || !w.shadow_src || !w.occl)
         st = tb_error(TB_ERR_NOMEM, "GPU render: out of memory for %zu paths", n);
-    float u[2 * TB__GR_MAX_LIGHT_SAMPLES], tmp[TB_CHANNELS_MAX];
+    const int nthreads = r->threads > 0 ? r->threads : omp_get_max_threads();
     double wave0 = tb__now();
     while (!st) {
         /* pop the top of every active path */
@@ -486,74 +507,85 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
             break;
         r->st.rays += w.n;
         tb_stat_add(&tb__gr_rays, (int64_t)w.n);
-        /* items in chunks */
-        size_t ni = 0, nlu = 0, base = 0, it = 0;
-        for (size_t a = 0; a < w.n && !st; a++) {
+        /* Classify the hits: kernel items and routed hits (wave indices). */
+        size_t nit = 0, nrt = 0;
+        for (size_t a = 0; a < w.n; a++) {
             const tb_hit *h = &w.hit[a];
             if (h->object == TB_GPU_NO_HIT)
                 continue;
             const tb_material *m = tb_scene_hit_material(s, h);
             if (!m)
                 continue;
-            int mi = (int)(m - s->materials);
-            size_t p = w.path[a];
-            if (r->route[mi]) {
-                /* The CPU path for this ray and everything it spawns, with the same stream. */
-                double c0 = tb__now();
-                float *L = P->L + p * (size_t)nch;
-                const float *thr = w.thr + a * (size_t)nch;
-                if (w.depth[a] == 0 && P->xy) {
-                    tb_rng rng0 = P->rng0[p];
-                    tb_rt_sample(&r->rt, P->xy[2 * p], P->xy[2 * p + 1], &rng0, tmp);
-                    P->rng[p] = rng0;
-                } else {
-                    tb_raytracer sub = r->rt; /* shallow copy: only the depth limit differs */
-                    sub.max_depth = r->rt.max_depth - w.depth[a];
-                    tb_channels Lc = tb_rt_radiance(&sub, &w.ray[a], &P->rng[p]);
-                    memcpy(tmp, Lc.v, sizeof(float) * (size_t)nch);
-                }
-                for (int c = 0; c < nch; c++)
-                    L[c] += thr[c] * tmp[c];
-                r->st.cpu_seconds += tb__now() - c0;
-                r->st.cpu_shaded++;
-                TB_STAT_INC(tb__gr_cpu_shaded);
-                continue;
-            }
-            tb_gpu_shade_item *item = &r->items[ni];
-            *item = (tb_gpu_shade_item){.o = w.ray[a].o, .t = h->t, .d = w.ray[a].d, .material = (uint32_t)mi,
-                                        .ng = h->ng, .light_base = (uint32_t)nlu};
-            if (w.depth[a] < r->rt.max_depth)
-                item->flags |= TB_GPU_SHADE_SPAWN;
-            if (r->nsamples > 0 && (r->mflags[mi] & TB_GPU_MAT_DIFFUSE)) {
-                /* the CPU path's numbers: strata from the sample's stream, the
-                 * emitter by the double CDF (tb_area_light_sample) */
-                item->flags |= TB_GPU_SHADE_AREA;
-                tb_stratified_2d(&P->rng[p], r->rt.lsx, r->rt.lsy, u);
-                for (int k = 0; k < r->nsamples; k++) {
-                    double pmf, ur;
-                    int e = tb_distrib1d_sample_discrete(&r->rt.area.select, u[2 * k], &pmf, &ur);
-                    float u1r = (float)ur;
-                    if (u1r >= 1.0f)
-                        u1r = 0x1.fffffep-1f;
-                    r->lightu[nlu++] = (tb_gpu_light_u){(uint32_t)e, u1r, u[2 * k + 1], (float)pmf};
-                }
-            }
-            w.item_of[it++] = a;
-            ni++;
-            r->st.gpu_shaded++;
-            TB_STAT_INC(tb__gr_gpu_shaded);
-            if (ni == r->chunk) {
-                st = tb__shade_chunk(r, P, &w, base, ni, nlu);
-                base += ni;
-                ni = nlu = 0;
-            }
+            w.mat[a] = (int)(m - s->materials);
+            if (r->route[w.mat[a]])
+                w.routed[nrt++] = a;
+            else
+                w.item_of[nit++] = a;
         }
-        if (!st && ni)
-            st = tb__shade_chunk(r, P, &w, base, ni, nlu);
+        /* Routed hits: the CPU path for the ray and everything it spawns, with
+         * the path's stream (paths are distinct: any thread order gives the
+         * same sums). */
+        double c0 = tb__now();
+#pragma omp parallel for schedule(dynamic, 16) num_threads(nthreads)
+        for (size_t q = 0; q < nrt; q++) {
+            size_t a = w.routed[q], p = w.path[a];
+            float tmp[TB_CHANNELS_MAX];
+            if (w.depth[a] == 0 && P->xy) {
+                tb_rng rng0 = P->rng0[p];
+                tb_rt_sample(&r->rt, P->xy[2 * p], P->xy[2 * p + 1], &rng0, tmp);
+                P->rng[p] = rng0;
+            } else {
+                tb_raytracer sub = r->rt; /* shallow copy: only the depth limit differs */
+                sub.max_depth = r->rt.max_depth - w.depth[a];
+                tb_channels Lc = tb_rt_radiance(&sub, &w.ray[a], &P->rng[p]);
+                memcpy(tmp, Lc.v, sizeof(float) * (size_t)nch);
+            }
+            float *L = P->L + p * (size_t)nch;
+            const float *thr = w.thr + a * (size_t)nch;
+            for (int c = 0; c < nch; c++)
+                L[c] += thr[c] * tmp[c];
+        }
+        r->st.cpu_seconds += tb__now() - c0;
+        r->st.cpu_shaded += nrt;
+        tb_stat_add(&tb__gr_cpu_shaded, (int64_t)nrt);
+        r->st.gpu_shaded += nit;
+        tb_stat_add(&tb__gr_gpu_shaded, (int64_t)nit);
+        /* Kernel items in chunks; item j's light samples at j * nsamples. */
+        for (size_t base = 0; base < nit && !st; base += r->chunk) {
+            size_t ni = nit - base < r->chunk ? nit - base : r->chunk;
+#pragma omp parallel for schedule(static) num_threads(nthreads)
+            for (size_t j = 0; j < ni; j++) {
+                size_t a = w.item_of[base + j], p = w.path[a];
+                const tb_hit *h = &w.hit[a];
+                int mi = w.mat[a];
+                tb_gpu_shade_item *item = &r->items[j];
+                *item = (tb_gpu_shade_item){.o = w.ray[a].o, .t = h->t, .d = w.ray[a].d, .material = (uint32_t)mi,
+                                            .ng = h->ng, .light_base = (uint32_t)(j * (size_t)r->nsamples)};
+                if (w.depth[a] < r->rt.max_depth)
+                    item->flags |= TB_GPU_SHADE_SPAWN;
+                if (r->nsamples > 0 && (r->mflags[mi] & TB_GPU_MAT_DIFFUSE)) {
+                    /* the CPU path's numbers: strata from the sample's stream, the
+                     * emitter by the double CDF (tb_area_light_sample) */
+                    float u[2 * TB__GR_MAX_LIGHT_SAMPLES];
+                    item->flags |= TB_GPU_SHADE_AREA;
+                    tb_stratified_2d(&P->rng[p], r->rt.lsx, r->rt.lsy, u);
+                    for (int k = 0; k < r->nsamples; k++) {
+                        double pmf, ur;
+                        int e = tb_distrib1d_sample_discrete(&r->rt.area.select, u[2 * k], &pmf, &ur);
+                        float u1r = (float)ur;
+                        if (u1r >= 1.0f)
+                            u1r = 0x1.fffffep-1f;
+                        r->lightu[item->light_base + (uint32_t)k] =
+                            (tb_gpu_light_u){(uint32_t)e, u1r, u[2 * k + 1], (float)pmf};
+                    }
+                }
+            }
+            st = tb__shade_chunk(r, P, &w, base, ni, ni * (size_t)r->nsamples);
+        }
     }
     r->st.wave_seconds += tb__now() - wave0;
     free(w.path), free(w.ray), free(w.depth), free(w.thr), free(w.hit), free(w.item_of), free(w.shadow),
-        free(w.shadow_src), free(w.occl);
+        free(w.shadow_src), free(w.occl), free(w.routed), free(w.mat), free(w.sstart);
     return st;
 }
 
@@ -619,6 +651,7 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
     tb_gpu_renderer *r;
     if ((err = tb_gpu_renderer_create(dev, s, &o->rt, &r)))
         return err;
+    r->threads = o->threads;
     const int nch = s->nchannels;
     tb_film_desc fd = {.width = s->camera.width, .height = s->camera.height, .channels = nch, .filter = &o->filter};
     tb_film *film = tb_film_create(&fd);

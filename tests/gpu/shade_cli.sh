@@ -5,7 +5,8 @@
 # 4 spp, under the validation layer: image NMSE within docs/accuracy.md's
 # tolerance (1e-4), the kernel shading every hit; a textured scene whose hits
 # are routed to the CPU path (reported, same image); the backend choice and
-# its fallbacks (auto on lavapipe, no driver); usage errors.
+# its fallbacks (auto on lavapipe, no driver); the same image for any thread
+# count; usage errors.
 set -eu
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
 t="$TB_TEST_TMPDIR"
@@ -77,6 +78,14 @@ grep -q "[1-9][0-9]* routed to the CPU path (material [0-9]*: image texture)" "$
 e=$(nmse "$t/tex-vk.pfm" "$t/tex-cpu.pfm")
 echo "textured (routed) 48x32: NMSE $e"
 python3 -c "import sys; sys.exit(0 if $e <= 1e-4 else 1)" || fail "textured: NMSE $e > 1e-4"
+
+# The host's loops run on OpenMP threads over distinct paths: the image does
+# not depend on the thread count (routed hits included).
+for f in cornell-box shade_tex; do
+    "$TESTBED" render "$t/$f.mid" -o "$t/thr1.pfm" --spp 2 --backend vulkan --threads 1 >/dev/null 2>&1 || fail "threads 1"
+    "$TESTBED" render "$t/$f.mid" -o "$t/thr2.pfm" --spp 2 --backend vulkan --threads 2 >/dev/null 2>&1 || fail "threads 2"
+    cmp -s "$t/thr1.pfm" "$t/thr2.pfm" || fail "$f: --threads 1 and 2 give different images"
+done
 
 # Backend choice: auto on a CPU driver uses the CPU path and says why.
 "$TESTBED" render "$t/cornell-box-rgb.mid" -o "$t/auto.pfm" --backend auto >"$t/shade.out" 2>"$t/shade.err" ||
