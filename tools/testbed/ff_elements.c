@@ -172,7 +172,7 @@ tb_status tb_ffe_build(const tb_scene *s, double max_edge, tb_ffe_set *out)
     }
     if (!st && !tb__grow(out, out->n, &cap, out->nrecv + cp.len, &cap_r))
         st = tb_error(TB_ERR_NOMEM, "out of memory for the receivers");
-    if (!st) {
+    if (!st && cp.len) {
         memcpy(out->rp + out->nrecv, cp.data, cp.len * sizeof(tb_vec3));
         memcpy(out->rn + out->nrecv, cn.data, cn.len * sizeof(tb_vec3));
         out->nrecv += cp.len;
