@@ -31,7 +31,7 @@ struct tb_gpu_scene {
     tb_gpu_scene_info info;
     tb_accel *cpu_accel;     /* BVH over the routed objects' references (NULL if none) */
     tb_gpu_buffer *nodes, *tris, *placed, *refs, *rays, *hits; /* placed: spheres and cubes */
-    uint32_t nnodes, ntris, nspheres, ncubes;
+    uint32_t nnodes, ntris, nspheres, ncubes, nquadrics;
     uint32_t stack;          /* traversal stack entries: the GPU BVH's depth, rounded up to a multiple of 8 */
 };
 
@@ -105,7 +105,7 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     size_t ngn = ni ? ni : 1;
     tb_gpu_bvh_node *gn = calloc(2 * ngn, sizeof *gn);
     tb_gpu_tri *gt = calloc(nr ? nr : 1, sizeof *gt);
-    tb_gpu_placed *gs = calloc(nr ? nr : 1, sizeof *gs);
+    tb_gpu_placed *gs = calloc(nr ? 2 * nr : 1, sizeof *gs); /* a revolved object takes two */
     uint32_t *gr = calloc(nr ? nr : 1, sizeof *gr);
     if (!inner || !gn || !gt || !gs || !gr) {
         free(inner), free(gn), free(gt), free(gs), free(gr), tb_accel_free(acc);
@@ -132,11 +132,11 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     }
 #undef TB__CHILD
     free(inner);
-    uint32_t nt = 0, ns = 0, nc = 0; /* triangles, placed primitives, of which cubes */
+    uint32_t nt = 0, ns = 0, nc = 0, nq = 0; /* triangles, placed records, cubes, revolved objects */
     for (size_t k = 0; k < nr; ++k) {
         const tb_accel_prim *p = &refs[order[k]];
         const tb_object *o = s->objects[p->object];
-        if (p->sub == TB_SCENE_WHOLE_OBJECT) { /* a sphere or cube object */
+        if (p->sub == TB_SCENE_WHOLE_OBJECT) { /* a sphere, cube or revolved object */
             const tb_mat4 *w = &o->to_world.inv;
             tb_gpu_placed *q = &gs[ns];
             q->r0 = (tb_vec3){(float)w->m[0][0], (float)w->m[0][1], (float)w->m[0][2]};
@@ -146,12 +146,31 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
             q->w1 = (float)w->m[1][3];
             q->w2 = (float)w->m[2][3];
             q->object = o->index;
-            bool cube = o->kind == TB_PRIM_CUBE;
-            q->face = o->face_base + (cube ? TB_FACE_CUBE_NEG_X : TB_FACE_SPHERE);
+            bool cube = o->kind == TB_PRIM_CUBE, sphere = o->kind == TB_PRIM_SPHERE;
+            q->face = o->face_base + (cube ? TB_FACE_CUBE_NEG_X : sphere ? TB_FACE_SPHERE : TB_FACE_CYLINDER_SIDE);
             q->ref = scene_ref[order[k]];
             q->sign = o->flip ? -1.0f : 1.0f;
-            gr[k] = (cube ? TB_GPU_REF_CUBE : TB_GPU_REF_SPHERE) | ns++;
+            gr[k] = (cube ? TB_GPU_REF_CUBE : sphere ? TB_GPU_REF_SPHERE : TB_GPU_REF_REVOLVED) | ns++;
             nc += cube;
+            if (!cube && !sphere) { /* the shape record (shared/bvh.h), closed ends as C decides them */
+                const double *cc = o->conic;
+                double z0 = o->zrange[0], z1 = o->zrange[1];
+                bool caps = o->kind == TB_PRIM_CYLINDER ? o->geom.cylinder.caps
+                            : o->kind == TB_PRIM_CONE   ? o->geom.cone.caps
+                                                        : o->geom.conic.caps;
+                double sz0 = fabs(cc[0]) + fabs(cc[1] * z0) + fabs(cc[2] * z0 * z0);
+                double sz1 = fabs(cc[0]) + fabs(cc[1] * z1) + fabs(cc[2] * z1 * z1);
+                uint32_t flags = (caps ? TB_GPU_REVOLVED_CAPS : 0u) |
+                                 (cc[0] + cc[1] * z0 + cc[2] * z0 * z0 <= 1e-12 * sz0 ? TB_GPU_REVOLVED_CLOSED0 : 0u) |
+                                 (cc[0] + cc[1] * z1 + cc[2] * z1 * z1 <= 1e-12 * sz1 ? TB_GPU_REVOLVED_CLOSED1 : 0u);
+                tb_gpu_placed *e = &gs[ns++];
+                e->r0 = (tb_vec3){(float)cc[0], (float)cc[1], (float)cc[2]};
+                e->w0 = (float)z0;
+                float f1;
+                memcpy(&f1, &flags, sizeof f1);
+                e->r1 = (tb_vec3){(float)z1, f1, 0.0f};
+                ++nq;
+            }
             continue;
         }
         const tb_object_mesh *m = o->mesh;
@@ -183,7 +202,7 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
         for (int pass = 0; pass < 2; ++pass)
             for (uint32_t j = 0; j < c->count; ++j) {
                 uint32_t ref = gr[c->offset + j];
-                bool placed = (ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) != 0;
+                bool placed = (ref & TB_GPU_REF_KIND) != 0;
                 if (placed == (pass == 1))
                     buf[m++] = ref;
             }
@@ -193,8 +212,9 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     }
     g->nnodes = nn ? (uint32_t)ngn : 0u;
     g->ntris = nt;
-    g->nspheres = ns - nc;
+    g->nspheres = ns - nc - 2 * nq;
     g->ncubes = nc;
+    g->nquadrics = nq;
     g->info.gpu_nodes = nn ? ngn : 0;
     g->info.gpu_bytes = 2 * ngn * sizeof *gn + nt * sizeof *gt + ns * sizeof *gs + nr * sizeof *gr;
     g->nodes = tb_gpu_buffer_create(g->dev, 2 * ngn * sizeof *gn);
@@ -238,7 +258,9 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
         const tb_accel_prim *p = &scene->prims[i];
         const tb_object *o = scene->objects[p->object];
         bool tri = p->sub != TB_SCENE_WHOLE_OBJECT && o->kind == TB_PRIM_POLYGONS && o->mesh;
-        bool sphere = p->sub == TB_SCENE_WHOLE_OBJECT && (o->kind == TB_PRIM_SPHERE || o->kind == TB_PRIM_CUBE);
+        bool sphere = p->sub == TB_SCENE_WHOLE_OBJECT &&
+                      (o->kind == TB_PRIM_SPHERE || o->kind == TB_PRIM_CUBE || o->kind == TB_PRIM_CYLINDER ||
+                       o->kind == TB_PRIM_CONE || o->kind == TB_PRIM_CONIC);
         if (tri || sphere) {
             gidx[ng] = (uint32_t)i;
             gref[ng++] = *p;
@@ -257,6 +279,7 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
     g->info.gpu_triangles = g->ntris;
     g->info.gpu_spheres = g->nspheres;
     g->info.gpu_cubes = g->ncubes;
+    g->info.gpu_quadrics = g->nquadrics;
     if (!st && nc) {
         tb_accel_callbacks cb = {tb__cpu_isect, tb__cpu_occl, (void *)scene};
         st = tb_accel_build(TB_ACCEL_BVH, cref, nc, &cb, NULL, &g->cpu_accel);
@@ -295,7 +318,7 @@ void tb_gpu_scene_get_info(const tb_gpu_scene *g, tb_gpu_scene_info *out) { *out
 void tb_gpu_scene_get_bindings(const tb_gpu_scene *g, tb_gpu_scene_bindings *out)
 {
     *out = (tb_gpu_scene_bindings){g->nodes,  g->tris,       g->placed,       g->refs,      g->nnodes,
-                                   g->stack, g->ntris > 0, g->nspheres > 0, g->ncubes > 0};
+                                   g->stack, g->ntris > 0, g->nspheres > 0, g->ncubes > 0, g->nquadrics > 0};
 }
 
 bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object)
@@ -307,13 +330,14 @@ bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object)
 static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t any_hit, tb_hit *hits,
                          double *kernel_seconds)
 {
-    if (g->ntris == 0 && g->nspheres == 0 && g->ncubes == 0) {
+    if (g->ntris == 0 && g->nspheres == 0 && g->ncubes == 0 && g->nquadrics == 0) {
         for (size_t i = 0; i < n; ++i)
             hits[i] = (tb_hit){INFINITY, TB_GPU_NO_HIT, TB_GPU_NO_HIT, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
         return TB_OK;
     }
     /* Only the kinds the scene has are compiled in. */
-    tb_gpu_spec_constant spec[4] = {{1, g->ntris > 0}, {2, g->stack}, {3, g->nspheres > 0}, {4, g->ncubes > 0}};
+    tb_gpu_spec_constant spec[5] = {
+        {1, g->ntris > 0}, {2, g->stack}, {3, g->nspheres > 0}, {4, g->ncubes > 0}, {5, g->nquadrics > 0}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("intersect"),
                                                                         .buffers = 6,
                                                                         .kinds = {0, TB_GPU_BIND_TEXELS_RGBA32UI,
@@ -321,7 +345,7 @@ static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t
                                                                                   TB_GPU_BIND_TEXELS_R32UI},
                                                                         .push_size = 16,
                                                                         .spec = spec,
-                                                                        .spec_count = 4});
+                                                                        .spec_count = 5});
     if (!k)
         return TB_ERR_DEVICE;
     for (size_t at = 0; at < n; at += TB__GPU_CHUNK) {

@@ -3,7 +3,8 @@
  * GPU layout (shaders/shared/bvh.h), closest-hit and any-hit queries for
  * arrays of rays, giving the records the CPU path gives (tb_scene_intersect).
  *
- * Kinds on the GPU: triangles of polygons objects, (top-level) spheres and cubes.
+ * Kinds on the GPU: triangles of polygons objects, (top-level) spheres, cubes,
+ * cylinders, cones and conics.
  * Every other object (other analytic primitives, CSG) is **routed to the CPU path per object**: after
  * the kernel, the host tests those objects (through a CPU BVH over them
  * alone) with tmax = the GPU hit's t and keeps the better hit by the tie rule
@@ -31,10 +32,11 @@ typedef struct tb_gpu_scene tb_gpu_scene;
 
 /* Where the work of a scene runs. */
 typedef struct tb_gpu_scene_info {
-    uint32_t gpu_objects;   /* objects intersected by the kernel (polygons, sphere and cube objects) */
+    uint32_t gpu_objects;   /* objects intersected by the kernel (polygons, spheres, cubes, revolved quadrics) */
     uint64_t gpu_triangles; /* triangles of the polygons objects */
     uint32_t gpu_spheres;   /* sphere objects */
     uint32_t gpu_cubes;     /* cube objects */
+    uint32_t gpu_quadrics;  /* cylinder, cone and conic objects */
     uint32_t cpu_objects;   /* objects routed to the CPU path (every other kind, CSG) */
     size_t gpu_nodes;       /* BVH nodes uploaded */
     size_t gpu_bytes;       /* bytes of nodes and triangles uploaded */
@@ -68,7 +70,7 @@ typedef struct tb_gpu_scene_bindings {
     tb_gpu_buffer *nodes, *tris, *placed, *refs; /* never NULL (1-element buffers when empty) */
     uint32_t nnodes;                             /* 0: nothing on the GPU */
     uint32_t stack;                              /* traversal stack entries enough for this BVH */
-    bool has_triangles, has_spheres, has_cubes;  /* kinds present */
+    bool has_triangles, has_spheres, has_cubes, has_quadrics; /* kinds present (quadrics: cylinders, cones, conics) */
 } tb_gpu_scene_bindings;
 
 /* Fills `out` with the scene's device buffers (owned by the scene: valid until

@@ -36,7 +36,8 @@
 //
 // Optional, to compile out kinds the scene lacks (e.g. from specialization
 // constants the host sets from tb_gpu_scene_bindings): TB_BVH_HAS_TRIANGLES,
-// TB_BVH_HAS_SPHERES, TB_BVH_HAS_CUBES (each defaults to true: correct for
+// TB_BVH_HAS_SPHERES, TB_BVH_HAS_CUBES, TB_BVH_HAS_QUADRICS (cylinders,
+// cones, conics) (each defaults to true: correct for
 // every scene, only slower), and TB_BVH_STACK, the traversal stack entries
 // (defaults to 96; the scene's depth, tb_gpu_scene_bindings.stack, is enough).
 // Kinds added later get their own TB_BVH_HAS_* defaulting to true, so an
@@ -58,6 +59,7 @@
 #include "shared/ray.h"
 #include "aabb.glsl"
 #include "cube.glsl"
+#include "revolved.glsl"
 #include "sphere.glsl"
 #include "triangle.glsl"
 
@@ -73,6 +75,9 @@
 #endif
 #ifndef TB_BVH_HAS_CUBES
 #define TB_BVH_HAS_CUBES true
+#endif
+#ifndef TB_BVH_HAS_QUADRICS
+#define TB_BVH_HAS_QUADRICS true
 #endif
 #ifndef TB_BVH_STACK
 #define TB_BVH_STACK 96
@@ -163,6 +168,22 @@ vec3 tb_bvh_fetch_tri_normal(uint i)
 #endif
 }
 
+// The shape of the revolved object whose placed record is idx (its second
+// record, shared/bvh.h).
+tb_revolved tb_bvh_revolved(uint idx)
+{
+    tb_gpu_placed s = TB_BVH_PLACED[idx + 1u];
+    uint flags = floatBitsToUint(s.r1.y);
+    tb_revolved q;
+    q.c = s.r0;
+    q.z0 = s.w0;
+    q.z1 = s.r1.x;
+    q.caps = (flags & TB_GPU_REVOLVED_CAPS) != 0u;
+    q.closed0 = (flags & TB_GPU_REVOLVED_CLOSED0) != 0u;
+    q.closed1 = (flags & TB_GPU_REVOLVED_CLOSED1) != 0u;
+    return q;
+}
+
 // True if (t, object, face, ref) precedes the best so far (the CPU tie rule,
 // with ties up to TB_TIE_TOL).
 bool tb_better(float t, uint object, uint face, uint ref, bool have, float bt, uint bo, uint bf, uint br)
@@ -195,7 +216,7 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
     bool have = false;
     float bt = r.tmax;
     uint bo = TB_GPU_NO_HIT, bf = 0u, br = 0u, bref = 0u;
-    if ((TB_BVH_HAS_TRIANGLES || TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES) && nnodes > 0u &&
+    if ((TB_BVH_HAS_TRIANGLES || TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES || TB_BVH_HAS_QUADRICS) && nnodes > 0u &&
         tb_bvh_ray_valid(r)) {
         vec3 inv = tb_ray_inv_dir(r.d);
         tb_wray w = tb_wray_init(r.o, r.d);
@@ -255,7 +276,7 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
             if (TB_BVH_HAS_TRIANGLES) {
                 for (; k < end; ++k) {
                     uint ref = tb_bvh_fetch_ref(k);
-                    if ((ref & (TB_GPU_REF_SPHERE | TB_GPU_REF_CUBE)) != 0u)
+                    if ((ref & TB_GPU_REF_KIND) != 0u)
                         break;
                     vec3 v0, v1, v2;
                     float t;
@@ -277,22 +298,29 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     }
                 }
             }
-            if ((TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES) && !stop) {
+            if ((TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES || TB_BVH_HAS_QUADRICS) && !stop) {
                 for (; k < end; ++k) {
                     uint ref = tb_bvh_fetch_ref(k);
-                    tb_gpu_placed sp = TB_BVH_PLACED[ref & TB_GPU_REF_INDEX];
+                    uint kind = ref & TB_GPU_REF_KIND, idx = ref & TB_GPU_REF_INDEX;
+                    tb_gpu_placed sp = TB_BVH_PLACED[idx];
                     precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
                     precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
                     float t;
                     uint face = sp.face;
-                    if (TB_BVH_HAS_CUBES && (ref & TB_GPU_REF_CUBE) != 0u) {
+                    if (TB_BVH_HAS_CUBES && kind == TB_GPU_REF_CUBE) {
                         uint cf;
                         if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
                             continue;
                         face += cf;
-                    } else if (TB_BVH_HAS_SPHERES && (ref & TB_GPU_REF_SPHERE) != 0u) {
+                    } else if (TB_BVH_HAS_SPHERES && kind == TB_GPU_REF_SPHERE) {
                         if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
                             continue;
+                    } else if (TB_BVH_HAS_QUADRICS && kind == TB_GPU_REF_REVOLVED) {
+                        uint cf;
+                        vec3 nobj;
+                        if (!tb_revolved_hit(so, sd, tb_bvh_revolved(idx), r.tmin, r.tmax, t, cf, nobj))
+                            continue;
+                        face += cf;
                     } else {
                         continue;
                     }
@@ -352,21 +380,28 @@ bool tb_bvh_occluded(tb_gpu_ray r, uint nnodes)
 // objects with flipped normals) of a hit h of ray r found by tb_bvh_traverse.
 vec3 tb_bvh_normal(tb_gpu_ray r, tb_bvh_hit h)
 {
-    if (TB_BVH_HAS_CUBES && (h.leaf & TB_GPU_REF_CUBE) != 0u) {
+    uint kind = h.leaf & TB_GPU_REF_KIND, idx = h.leaf & TB_GPU_REF_INDEX;
+    if (TB_BVH_HAS_CUBES && kind == TB_GPU_REF_CUBE) {
         // The face's object-space normal -> world by the inverse transpose.
-        tb_gpu_placed sp = TB_BVH_PLACED[h.leaf & TB_GPU_REF_INDEX];
+        tb_gpu_placed sp = TB_BVH_PLACED[idx];
         uint f = h.face - sp.face;
         float sg = (f & 1u) != 0u ? 1.0 : -1.0;
         vec3 n = (f >> 1) == 0u ? sp.r0 : ((f >> 1) == 1u ? sp.r1 : sp.r2);
         return sp.sign * normalize(sg * n);
     }
-    if (TB_BVH_HAS_SPHERES && (h.leaf & TB_GPU_REF_SPHERE) != 0u) {
-        // Object-space point -> world normal by the inverse transpose.
-        tb_gpu_placed sp = TB_BVH_PLACED[h.leaf & TB_GPU_REF_INDEX];
+    if ((TB_BVH_HAS_SPHERES && kind == TB_GPU_REF_SPHERE) || (TB_BVH_HAS_QUADRICS && kind == TB_GPU_REF_REVOLVED)) {
+        // Object-space normal at the point -> world by the inverse transpose.
+        tb_gpu_placed sp = TB_BVH_PLACED[idx];
         vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
         vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
-        vec3 p = so + h.t * sd;
-        return sp.sign * normalize(sp.r0 * p.x + sp.r1 * p.y + sp.r2 * p.z);
+        vec3 p = so + h.t * sd, n = p;
+        if (kind == TB_GPU_REF_REVOLVED) {
+            tb_revolved q = tb_bvh_revolved(idx);
+            uint f = h.face - sp.face;
+            n = f == TB_REVOLVED_SIDE ? tb_revolved_side_normal(q.c, p, 0.5 * (q.z0 + q.z1))
+                                      : vec3(0.0, 0.0, f == TB_REVOLVED_TOP ? 1.0 : -1.0);
+        }
+        return sp.sign * normalize(sp.r0 * n.x + sp.r1 * n.y + sp.r2 * n.z);
     }
     return tb_bvh_fetch_tri_normal(h.leaf);
 }

@@ -1,6 +1,7 @@
 /* The scene as the intersect kernel (shaders/intersect.comp) reads it: BVH
  * nodes converted from the CPU BVH (host/render/accel.h, tb_bvh_node), leaf
- * references (TB_GPU_REF_*), world-space triangles and spheres. Built by
+ * references (TB_GPU_REF_*), world-space triangles and placed analytic
+ * objects (spheres, cubes, cylinders, cones, conics). Built by
  * host/gpu/intersect.c. See shared/types.h for the layout rules. */
 #ifndef TB_SHADERS_SHARED_BVH_H
 #define TB_SHADERS_SHARED_BVH_H
@@ -13,11 +14,22 @@ typedef struct tb_gpu_tri tb_gpu_tri;
 typedef struct tb_gpu_placed tb_gpu_placed;
 #endif
 
-/* A leaf reference (one uint): a triangle index, or TB_GPU_REF_SPHERE or
- * TB_GPU_REF_CUBE | an index into the placed-primitive array. */
-#define TB_GPU_REF_SPHERE 0x80000000u
+/* A leaf reference (one uint): a triangle index (kind bits 0), or a kind
+ * (TB_GPU_REF_CUBE, _SPHERE, _REVOLVED: the two top bits, compare
+ * ref & TB_GPU_REF_KIND with them) | an index into the placed-primitive
+ * array. A revolved object (cylinder, cone, conic) takes two placed records:
+ * its tb_gpu_placed, then its shape in the same 64 bytes: r0 = (c0, c1, c2)
+ * of r^2 = c0 + c1 z + c2 z^2, w0 = z0, r1.x = z1, r1.y = the bits of a uint
+ * TB_GPU_REVOLVED_* flags, the rest 0. */
 #define TB_GPU_REF_CUBE 0x40000000u
+#define TB_GPU_REF_SPHERE 0x80000000u
+#define TB_GPU_REF_REVOLVED 0xc0000000u
+#define TB_GPU_REF_KIND 0xc0000000u
 #define TB_GPU_REF_INDEX 0x3fffffffu
+/* Flags of a revolved object's shape record. */
+#define TB_GPU_REVOLVED_CAPS 1u    /* closed by discs at z0 and z1 */
+#define TB_GPU_REVOLVED_CLOSED0 2u /* radius 0 at z0 (an apex): crossings there are the side's */
+#define TB_GPU_REVOLVED_CLOSED1 4u /* radius 0 at z1 */
 
 /* One child record, 32 bytes; an inner node of the GPU BVH is two of them
  * (its children, records 2i and 2i + 1 of inner node i), so one fetch of 64

@@ -253,9 +253,10 @@ int tb_cmd_bench_gpu(int argc, char **argv)
     }
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    printf("device: %s\nscene: %s: %u objects (%u on the GPU, %u routed), %llu triangles, %u spheres, %u cubes\n",
+    printf("device: %s\nscene: %s: %u objects (%u on the GPU, %u routed), %llu triangles, %u spheres, %u cubes, "
+           "%u cylinders/cones/conics\n",
            tb_gpu_device_info_of(sess.device)->name, path, s->nobjects, info.gpu_objects, info.cpu_objects,
-           (unsigned long long)info.gpu_triangles, info.gpu_spheres, info.gpu_cubes);
+           (unsigned long long)info.gpu_triangles, info.gpu_spheres, info.gpu_cubes, info.gpu_quadrics);
     printf("threads: %d, runs per figure: %ld (median)\n", omp_get_max_threads(), repeat);
     printf("%-8s %9s %12s %12s %14s %7s %14s %7s %9s\n", "set", "rays", "cpu Mrays/s", "vk Mrays/s",
            "kernel Mrays/s", "ratio", "cpu/vk Mr/cpu-s", "ratio", "disagree");
