@@ -10,7 +10,11 @@
  * emission textures multiply those colours by the image's linear RGB at the
  * hit's (u, v) (Smits-upsampled in spectral scenes), filtered over the
  * pixel's footprint from camera ray differentials (EWA by default;
- * docs/raytrace.md). No indirect diffuse light.
+ * docs/raytrace.md). MID 1.1 materials: the specular term's model (Phong,
+ * exactly normalised Blinn-Phong, none for Lambert, or a GGX lobe whose
+ * reflections are glossy rays sampled from it), checker and noise patterns
+ * in (u, v) or object space (footprint-filtered), and bump maps from noise
+ * or a height image. No indirect diffuse light.
  *
  *     tb_raytracer rt;
  *     if (tb_rt_init(&rt, scene, NULL)) die(tb_last_error());

@@ -1,6 +1,7 @@
 /* Textures looked up by parametric coordinates (u, v) (docs/textures.md):
  * image textures through a MIP-map with bilinear, trilinear or EWA filtering,
- * a procedural checkerboard (optionally box-filtered in closed form) and
+ * a procedural checkerboard in 2D or 3D (optionally box-filtered in closed
+ * form) and
  * Perlin noise (fBm / turbulence), bump mapping from a height texture, the
  * footprint (du/dx, dv/dx, du/dy, dv/dy) from ray differentials, and a cache
  * that loads each image file once.
