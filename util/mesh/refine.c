@@ -174,8 +174,10 @@ static void tb__split_edge(tb_mesh_refiner *r, uint32_t e)
     uint32_t mid = tb__mean_vertex(r, 2, (uint32_t[]){ed.a, ed.b});
     if (r->err)
         return;
+    tb__fail(r, tb_array_push(&r->edge_log, &e)); /* logged first, so an undo always sees it */
+    if (r->err)
+        return;
     TB__EDGE(r, e).mid = mid;
-    tb__fail(r, tb_array_push(&r->edge_log, &e));
     tb__get_edge(r, ed.a, mid, e);
     tb__get_edge(r, mid, ed.b, e);
     for (uint32_t u = ed.use; u != TB_MESH_NONE && !r->err; u = TB_ARRAY_AT(&r->uses, tb__ruse, u).next) {
@@ -237,8 +239,10 @@ static void tb__split_node(tb_mesh_refiner *r, uint32_t n)
     }
     if (r->err)
         return;
-    TB__NODE(r, n).child = first;
     tb__fail(r, tb_array_push(&r->split_log, &n));
+    if (r->err)
+        return;
+    TB__NODE(r, n).child = first;
     r->st.red++;
 }
 
