@@ -8,7 +8,7 @@
 // double nappe) clipped by the slab, and an end on a closed end of the slab
 // (radius 0 there: a cone's apex) belongs to the side. Every step that C
 // rounds is `precise` here. Tolerance against the double CPU path:
-// docs/gpu.md ("Revolved quadrics").
+// docs/gpu.md (the table of "The GLSL library").
 #ifndef TB_LIB_REVOLVED_GLSL
 #define TB_LIB_REVOLVED_GLSL
 
