@@ -545,7 +545,8 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
             for (int c = 0; c < nch; c++)
                 L[c] += thr[c] * tmp[c];
         }
-        r->st.cpu_seconds += tb__now() - c0;
+        if (nrt)
+            r->st.cpu_seconds += tb__now() - c0;
         r->st.cpu_shaded += nrt;
         tb_stat_add(&tb__gr_cpu_shaded, (int64_t)nrt);
         r->st.gpu_shaded += nit;
@@ -667,8 +668,11 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
     tb_film_tile **tiles = calloc((size_t)tiles_per_batch, sizeof *tiles);
     double *xy = malloc(cap * 2 * sizeof *xy);
     tb_rng *rng = malloc(cap * sizeof *rng), *rng0 = malloc(cap * sizeof *rng0);
-    float *L = malloc(cap * (size_t)nch * sizeof *L), *pxy = malloc((size_t)spp * 2 * sizeof *pxy);
-    if (!film || !tiles || !xy || !rng || !rng0 || !L || !pxy)
+    int maxth = omp_get_max_threads() > o->threads ? omp_get_max_threads() : o->threads;
+    float *L = malloc(cap * (size_t)nch * sizeof *L);
+    float *pxys = malloc((size_t)maxth * (size_t)spp * 2 * sizeof *pxys); /* per thread: a pixel's positions */
+    size_t *tbase = malloc((size_t)tiles_per_batch * sizeof *tbase);
+    if (!film || !tiles || !xy || !rng || !rng0 || !L || !pxys || !tbase)
         err = tb_error(TB_ERR_NOMEM, "GPU render: out of memory");
     if (!err)
         err = tb__paths_alloc(&P, cap, r->rt.max_depth + 2, nch);
@@ -701,57 +705,74 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
                 rs.interrupted = true;
                 break;
             }
-            /* camera rays of the batch, in the CPU path's order */
+            /* camera rays of the batch, in the CPU path's order: tile k's
+             * samples from tbase[k], pixel by pixel in scanline order */
             size_t np = 0;
-            for (int k = 0; k < nt && !err; k++) {
+            for (int k = 0; k < nt; k++) {
                 tiles[k] = tb_film_tile_create(film, t + k);
                 if (!tiles[k]) {
                     err = TB_ERR_NOMEM;
                     break;
                 }
                 tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
+                tbase[k] = np;
+                np += (size_t)(rc.x1 - rc.x0) * (size_t)(rc.y1 - rc.y0) * (size_t)spp;
+            }
+            if (err)
+                break;
+            int nth = o->threads > 0 ? o->threads : omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nth)
+            for (int k = 0; k < nt; k++) {
+                tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
+                size_t q = tbase[k];
+                float *pxy = pxys + (size_t)omp_get_thread_num() * 2 * (size_t)spp;
                 for (int py = rc.y0; py < rc.y1; py++)
                     for (int px = rc.x0; px < rc.x1; px++) {
                         tb_pixel_sampler ps;
                         tb_pixel_sampler_init(&ps, &aa, px, py);
                         int ns = tb_pixel_sampler_round(&ps, pxy);
-                        for (int j = 0; j < ns; j++, np++) {
+                        for (int j = 0; j < ns; j++, q++) {
                             double x = (double)px + (double)pxy[2 * j], y = (double)py + (double)pxy[2 * j + 1];
-                            xy[2 * np] = x;
-                            xy[2 * np + 1] = y;
-                            tb_aa_sample_rng(&aa, px, py, (uint32_t)j, &rng[np]);
-                            rng0[np] = rng[np];
+                            xy[2 * q] = x;
+                            xy[2 * q + 1] = y;
+                            tb_aa_sample_rng(&aa, px, py, (uint32_t)j, &rng[q]);
+                            rng0[q] = rng[q];
                             float lu = 0.5f, lv = 0.5f;
                             if (cam->lens_radius > 0.0) {
-                                lu = tb_rng_float(&rng[np]);
-                                lv = tb_rng_float(&rng[np]);
+                                lu = tb_rng_float(&rng[q]);
+                                lv = tb_rng_float(&rng[q]);
                             }
                             tb_ray ray = tb_camera_ray(cam, x, y, lu, lv);
-                            P.top[np] = 0;
-                            tb__push(&P, np, &ray, 0, one);
+                            P.top[q] = 0;
+                            tb__push(&P, q, &ray, 0, one);
                         }
                     }
             }
-            if (err)
-                break;
             P.n = np;
             memset(L, 0, np * (size_t)nch * sizeof *L);
             if ((err = tb__wavefront(r, &P)))
                 break;
-            /* splat in the CPU path's order, tiles merged in index order */
-            size_t q = 0;
-            for (int k = 0; k < nt && !err; k++) {
+            /* splat in the CPU path's order (each tile its own buffer), tiles
+             * merged in index order */
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nth)
+            for (int k = 0; k < nt; k++) {
                 tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
+                size_t q = tbase[k];
+                double wt = 1.0 / (double)spp;
                 for (int py = rc.y0; py < rc.y1; py++)
                     for (int px = rc.x0; px < rc.x1; px++) {
-                        double wt = 1.0 / (double)spp;
                         for (int j = 0; j < spp; j++, q++)
                             tb_film_tile_add(tiles[k], xy[2 * q], xy[2 * q + 1], L + q * (size_t)nch, wt);
                         tb_film_tile_record_samples(tiles[k], px, py, (uint32_t)spp);
-                        rs.aa.pixels++;
                     }
-                err = tb_film_tile_submit(film, tiles[k]);
+            }
+            for (int k = 0; k < nt; k++) {
+                tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
+                rs.aa.pixels += (uint64_t)(rc.x1 - rc.x0) * (uint64_t)(rc.y1 - rc.y0);
+                tb_status e2 = tb_film_tile_submit(film, tiles[k]);
                 tiles[k] = NULL;
+                if (e2 && !err)
+                    err = e2;
                 if (use_prog)
                     tb_progress_add(&prog, (int64_t)(rc.x1 - rc.x0) * (rc.y1 - rc.y0));
             }
@@ -780,7 +801,7 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
     if (stats)
         *stats = rs;
     tb__paths_free(&P);
-    free(tiles), free(xy), free(rng), free(rng0), free(L), free(pxy);
+    free(tiles), free(xy), free(rng), free(rng0), free(L), free(pxys), free(tbase);
     tb_film_free(film);
     tb_gpu_renderer_destroy(r);
     return err;
