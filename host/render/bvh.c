@@ -2,7 +2,8 @@
  * binned SAH build (Wald 2007, "On fast construction of SAH-based bounding
  * volume hierarchies"), subtrees built as OpenMP tasks, flattened depth-first
  * into 32-byte nodes; traversal near child first with the robust slab test
- * (tb__accel_slab, the util/math test in a branch-free form). */
+ * (tb__accel_slab, the util/math test in a branch-free form), children
+ * tested at the parent for closest hits, an occluder cache for any hits. */
 #include <omp.h>
 #include <stdatomic.h>
 #include <stdlib.h>
