@@ -735,6 +735,50 @@ static void test_writer_refusals(void **state)
     free(buf);
 }
 
+/* The canonical text of the MID 1.1 attributes (docs/mid.md, section 12):
+ * after the 1.0 attributes, in the order of the table in 7.2; the space
+ * argument only when it is `object`; a bump's noise() with its height. */
+static void test_writer_canonical_11(void **state)
+{
+    (void)state;
+    const char *in = "mid 1.1\n"
+                     "material \"m\" { bump = noise(16, 3, -0.01, uv) diffuse_pattern = checker(8, 0.1, [1 0.5 0.25])\n"
+                     "  roughness = 0.35 model = ggx specular = 0.9 specular_pattern = noise(2.5 4 0 1 object) }\n"
+                     "sphere { rendering = { bump = image(file(\"checker.png\"), 0.002) model = lambert } }\n";
+    const char *want = "material \"m\" {\n"
+                       "    specular = 0.9\n"
+                       "    model = ggx\n"
+                       "    roughness = 0.35\n"
+                       "    diffuse_pattern = checker(8, 0.1, [1 0.5 0.25])\n"
+                       "    specular_pattern = noise(2.5, 4, 0, 1, object)\n"
+                       "    bump = noise(16, 3, -0.01)\n"
+                       "}\n"
+                       "sphere {\n"
+                       "    rendering = {\n"
+                       "        model = lambert\n"
+                       "        bump = image(file(\"checker.png\"), 0.002)\n"
+                       "    }\n"
+                       "}\n";
+    FILE *fp = fmemopen((void *)in, strlen(in), "r");
+    assert_non_null(fp);
+    tb_mid_reader *r;
+    assert_int_equal(tb_mid_reader_open_stream(&r, fp, "c.mid", DATA), TB_OK);
+    char *buf = NULL;
+    size_t len;
+    FILE *out = open_memstream(&buf, &len);
+    tb_mid_item it;
+    tb_status st;
+    while (!(st = tb_mid_reader_next(r, &it)) && it.type != TB_MID_ITEM_END)
+        assert_int_equal(tb_mid_write_item(out, &it), TB_OK);
+    if (st)
+        fail_msg("%s", tb_last_error());
+    fclose(out);
+    assert_string_equal(buf, want);
+    free(buf);
+    tb_mid_reader_close(r);
+    fclose(fp);
+}
+
 /* A program running in a locale with a decimal comma still reads and writes
  * '.' (the file format does not depend on the reader's locale). The locale
  * is generated with localedef, and the test first checks that it is active. */
@@ -780,6 +824,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_roundtrip_random_scenes),
         cmocka_unit_test(test_writer_refusals),
+        cmocka_unit_test(test_writer_canonical_11),
         cmocka_unit_test(test_comma_decimal_locale),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
