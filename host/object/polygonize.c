@@ -349,7 +349,7 @@ static tb_status tb__nomem(void) { return tb_error(TB_ERR_NOMEM, "polygonize: ou
 
 static void tb__sphere(tb__mb *m, const tb__res *r)
 {
-    tb__bp us, vs;
+    tb__bp us = {0}, vs = {0};
     int nu = tb__seg_arc(r, 1.0, TB_2PI, 3);
     int nv = tb__profile_circle_segments(r, 0.0, 1.0, TB_PI, tb__seg_arc(r, 1.0, TB_PI, 2), TB_2PI / nu);
     if (!tb__bp_uniform(&us, 0, 1, nu) || !tb__bp_uniform(&vs, 0, 1, nv)) {
@@ -363,7 +363,7 @@ static void tb__sphere(tb__mb *m, const tb__res *r)
 /* Cylinder and cone frustum: radius 1 at z = -1, r at z = 1. */
 static void tb__cone(tb__mb *m, const tb__res *r, double top, bool caps)
 {
-    tb__bp us, vs;
+    tb__bp us = {0}, vs = {0};
     double slant = hypot(2.0, 1.0 - top);
     if (!tb__bp_uniform(&us, 0, 1, tb__seg_arc(r, fmax(1.0, top), TB_2PI, 3)) ||
         !tb__bp_uniform(&vs, 0, 1, tb__seg_line(r, slant))) {
@@ -382,7 +382,7 @@ static void tb__cone(tb__mb *m, const tb__res *r, double top, bool caps)
 static void tb__torus(tb__mb *m, const tb__res *r)
 {
     const tb_geom_torus *t = &m->g->torus;
-    tb__bp us, vs;
+    tb__bp us = {0}, vs = {0};
     int nu = tb__seg_arc(r, t->major + t->minor, TB_2PI, 3);
     int nv = tb__profile_circle_segments(r, t->major, t->minor, TB_2PI, tb__seg_arc(r, t->minor, TB_2PI, 3), TB_2PI / nu);
     if (!tb__bp_uniform(&us, 0, 1, nu) || !tb__bp_uniform(&vs, 0, 1, nv)) {
@@ -396,7 +396,7 @@ static void tb__torus(tb__mb *m, const tb__res *r)
 /* Cube and pyramid frustum (top half-size t; t = 1 the cube). */
 static void tb__pyramid(tb__mb *m, const tb__res *r, double t, bool bottom, bool top)
 {
-    tb__bp hs, vs, ht;
+    tb__bp hs = {0}, vs = {0}, ht = {0}; /* freed on every path, even after a failed allocation */
     double corner_edge = sqrt(2.0 * (1.0 - t) * (1.0 - t) + 4.0);
     if (!tb__bp_uniform(&hs, 0, 1, tb__seg_line(r, 2.0 * fmax(1.0, t))) ||
         !tb__bp_uniform(&vs, 0, 1, tb__seg_line(r, corner_edge)) || !tb__bp_uniform(&ht, -1, 1, hs.n)) {
