@@ -632,8 +632,20 @@ tb_status tb_gpu_radiance(tb_gpu_renderer *r, const tb_ray *rays, tb_rng *rngs, 
 
 /* ------------------------------------------------------------ the render */
 
-/* Samples per wavefront batch: whole tiles until at least this many. */
-#define TB__GR_BATCH 65536
+/* Host memory for the paths of one wavefront batch (stacks, streams,
+ * radiance, the wave's arrays): the batch takes rows of tiles, in the CPU
+ * path's order, until its samples would need more (at least one row). */
+#define TB__GR_BATCH_BYTES ((size_t)256 << 20)
+/* ... and at most this many samples (enough to keep a device busy). */
+#define TB__GR_BATCH_MAX 65536
+
+/* A run of rows of one film tile within a batch. */
+typedef struct tb__seg {
+    int slot;      /* its tile buffer in tiles[] */
+    int y0, y1;    /* rows */
+    size_t base;   /* its first sample in the batch */
+    bool last;     /* the tile's last rows: submit it after this batch */
+} tb__seg;
 
 tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb_render_options *o,
                                  tb_image **out, tb_render_stats *stats, tb_gpu_render_stats *gstats)
@@ -659,23 +671,32 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
     int ntiles = film ? tb_film_tile_count(film) : 0;
     int spp = o->aa.spp;
     tb_tile_rect t0r = film ? tb_film_tile_rect(film, 0) : (tb_tile_rect){0};
-    size_t tile_samples = (size_t)(t0r.x1 - t0r.x0) * (size_t)(t0r.y1 - t0r.y0) * (size_t)spp;
-    int tiles_per_batch = (int)(TB__GR_BATCH / (tile_samples ? tile_samples : 1));
-    if (tiles_per_batch < 1)
-        tiles_per_batch = 1;
-    size_t cap = (size_t)tiles_per_batch * tile_samples;
+    const size_t tw = (size_t)(t0r.x1 - t0r.x0), th = (size_t)(t0r.y1 - t0r.y0);
+    const int cap_stack = r->rt.max_depth + 2;
+    /* bytes per path: stack entries (ray, depth, throughput), streams, film
+     * position, radiance, and the wave's copies */
+    size_t per_path = (size_t)cap_stack * (sizeof(tb_ray) + sizeof(int) + (size_t)nch * sizeof(float)) +
+                      2 * sizeof(tb_rng) + 2 * sizeof(double) + 2 * (size_t)nch * sizeof(float) + sizeof(tb_ray) +
+                      sizeof(tb_hit) + 4 * sizeof(size_t) + 2 * sizeof(int);
+    size_t budget = TB__GR_BATCH_BYTES / per_path;
+    if (budget > TB__GR_BATCH_MAX)
+        budget = TB__GR_BATCH_MAX;
+    size_t row_samples = tw * (size_t)spp;
+    size_t cap = budget > row_samples ? budget - budget % row_samples : row_samples; /* whole rows */
+    int max_slots = (int)(cap / row_samples / (th ? th : 1)) + 2; /* tiles a batch can touch */
+    size_t max_segs = cap / row_samples + 2;
     tb__paths P = {0};
-    tb_film_tile **tiles = calloc((size_t)tiles_per_batch, sizeof *tiles);
+    tb_film_tile **tiles = calloc((size_t)max_slots, sizeof *tiles);
+    tb__seg *segs = malloc(max_segs * sizeof *segs);
     double *xy = malloc(cap * 2 * sizeof *xy);
     tb_rng *rng = malloc(cap * sizeof *rng), *rng0 = malloc(cap * sizeof *rng0);
     int maxth = omp_get_max_threads() > o->threads ? omp_get_max_threads() : o->threads;
     float *L = malloc(cap * (size_t)nch * sizeof *L);
     float *pxys = malloc((size_t)maxth * (size_t)spp * 2 * sizeof *pxys); /* per thread: a pixel's positions */
-    size_t *tbase = malloc((size_t)tiles_per_batch * sizeof *tbase);
-    if (!film || !tiles || !xy || !rng || !rng0 || !L || !pxys || !tbase)
+    if (!film || !tiles || !segs || !xy || !rng || !rng0 || !L || !pxys)
         err = tb_error(TB_ERR_NOMEM, "GPU render: out of memory");
     if (!err)
-        err = tb__paths_alloc(&P, cap, r->rt.max_depth + 2, nch);
+        err = tb__paths_alloc(&P, cap, cap_stack, nch);
     P.rng = rng;
     P.rng0 = rng0;
     P.xy = xy;
@@ -684,6 +705,7 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
     for (int c = 0; c < TB_CHANNELS_MAX; c++)
         one[c] = 1.0f;
     const tb_camera *cam = &s->camera;
+    const int nth = o->threads > 0 ? o->threads : omp_get_max_threads();
     double tstart = tb__now();
     tb_progress prog;
     bool use_prog = o->progress && film &&
@@ -694,39 +716,60 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
         aa.pass = o->aa.pass + (uint32_t)pass;
         if (pass > 0 && (err = tb_film_begin_pass(film)))
             break;
-        for (int t = 0; t < ntiles && !err; t += tiles_per_batch) {
-            int nt = ntiles - t < tiles_per_batch ? ntiles - t : tiles_per_batch;
+        /* t: the tile being filled, row: its next row (tiles[0] is its buffer
+         * when a batch starts in its middle) */
+        int t = 0, row = ntiles > 0 ? tb_film_tile_rect(film, 0).y0 : 0;
+        while (t < ntiles && !err) {
             stop = stop || (o->cancel && atomic_load(o->cancel)) ||
                    (o->time_budget > 0.0 && tb__now() - tstart > o->time_budget);
             if (stop) {
+                /* a tile cut short is skipped whole, as the CPU path skips tiles */
+                tb_film_tile_free(tiles[0]);
+                tiles[0] = NULL;
                 for (int k = t; k < ntiles; k++)
                     tb_film_tile_skip(film, k);
                 rs.aa.tiles_skipped += ntiles - t;
                 rs.interrupted = true;
                 break;
             }
-            /* camera rays of the batch, in the CPU path's order: tile k's
-             * samples from tbase[k], pixel by pixel in scanline order */
+            /* the batch: rows of tiles in order, whole rows, at most cap
+             * samples; a tile begun in the previous batch is in tiles[0] */
+            int nseg = 0, nslot = tiles[0] ? 1 : 0;
             size_t np = 0;
-            for (int k = 0; k < nt; k++) {
-                tiles[k] = tb_film_tile_create(film, t + k);
-                if (!tiles[k]) {
-                    err = TB_ERR_NOMEM;
-                    break;
+            while (t < ntiles && np + row_samples <= cap) {
+                tb_tile_rect rc = tb_film_tile_rect(film, t);
+                int slot = 0;
+                if (row == rc.y0) {
+                    if (nslot == max_slots)
+                        break;
+                    if (!(tiles[nslot] = tb_film_tile_create(film, t))) {
+                        err = TB_ERR_NOMEM;
+                        break;
+                    }
+                    slot = nslot++;
                 }
-                tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
-                tbase[k] = np;
-                np += (size_t)(rc.x1 - rc.x0) * (size_t)(rc.y1 - rc.y0) * (size_t)spp;
+                size_t rs_ = (size_t)(rc.x1 - rc.x0) * (size_t)spp;
+                size_t fit = (cap - np) / rs_;
+                int y1 = fit >= (size_t)(rc.y1 - row) ? rc.y1 : row + (int)fit;
+                segs[nseg++] = (tb__seg){slot, row, y1, np, y1 == rc.y1};
+                np += (size_t)(y1 - row) * rs_;
+                if (y1 < rc.y1) {
+                    row = y1;
+                    break; /* the batch is full in this tile's middle */
+                }
+                t++;
+                row = t < ntiles ? tb_film_tile_rect(film, t).y0 : 0;
             }
             if (err)
                 break;
-            int nth = o->threads > 0 ? o->threads : omp_get_max_threads();
+            /* camera rays, in the CPU path's order */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nth)
-            for (int k = 0; k < nt; k++) {
-                tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
-                size_t q = tbase[k];
+            for (int g = 0; g < nseg; g++) {
+                const tb__seg *sg = &segs[g];
+                tb_tile_rect rc = tb_film_tile_pixels(tiles[sg->slot]);
+                size_t q = sg->base;
                 float *pxy = pxys + (size_t)omp_get_thread_num() * 2 * (size_t)spp;
-                for (int py = rc.y0; py < rc.y1; py++)
+                for (int py = sg->y0; py < sg->y1; py++)
                     for (int px = rc.x0; px < rc.x1; px++) {
                         tb_pixel_sampler ps;
                         tb_pixel_sampler_init(&ps, &aa, px, py);
@@ -752,29 +795,41 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
             memset(L, 0, np * (size_t)nch * sizeof *L);
             if ((err = tb__wavefront(r, &P)))
                 break;
-            /* splat in the CPU path's order (each tile its own buffer), tiles
-             * merged in index order */
+            /* splat in the CPU path's order (each tile its own buffer: the
+             * segments of a batch are in distinct tiles), tiles merged in
+             * index order */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nth)
-            for (int k = 0; k < nt; k++) {
-                tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
-                size_t q = tbase[k];
+            for (int g = 0; g < nseg; g++) {
+                const tb__seg *sg = &segs[g];
+                tb_tile_rect rc = tb_film_tile_pixels(tiles[sg->slot]);
+                size_t q = sg->base;
                 double wt = 1.0 / (double)spp;
-                for (int py = rc.y0; py < rc.y1; py++)
+                for (int py = sg->y0; py < sg->y1; py++)
                     for (int px = rc.x0; px < rc.x1; px++) {
                         for (int j = 0; j < spp; j++, q++)
-                            tb_film_tile_add(tiles[k], xy[2 * q], xy[2 * q + 1], L + q * (size_t)nch, wt);
-                        tb_film_tile_record_samples(tiles[k], px, py, (uint32_t)spp);
+                            tb_film_tile_add(tiles[sg->slot], xy[2 * q], xy[2 * q + 1], L + q * (size_t)nch, wt);
+                        tb_film_tile_record_samples(tiles[sg->slot], px, py, (uint32_t)spp);
                     }
             }
-            for (int k = 0; k < nt; k++) {
-                tb_tile_rect rc = tb_film_tile_pixels(tiles[k]);
-                rs.aa.pixels += (uint64_t)(rc.x1 - rc.x0) * (uint64_t)(rc.y1 - rc.y0);
-                tb_status e2 = tb_film_tile_submit(film, tiles[k]);
-                tiles[k] = NULL;
+            int keep = -1; /* a tile left unfinished moves to slot 0 for the next batch */
+            for (int g = 0; g < nseg; g++) {
+                tb__seg *sg = &segs[g];
+                tb_tile_rect rc = tb_film_tile_pixels(tiles[sg->slot]);
+                rs.aa.pixels += (uint64_t)(rc.x1 - rc.x0) * (uint64_t)(sg->y1 - sg->y0);
+                if (use_prog)
+                    tb_progress_add(&prog, (int64_t)(rc.x1 - rc.x0) * (sg->y1 - sg->y0));
+                if (!sg->last) {
+                    keep = sg->slot;
+                    continue;
+                }
+                tb_status e2 = tb_film_tile_submit(film, tiles[sg->slot]);
+                tiles[sg->slot] = NULL;
                 if (e2 && !err)
                     err = e2;
-                if (use_prog)
-                    tb_progress_add(&prog, (int64_t)(rc.x1 - rc.x0) * (rc.y1 - rc.y0));
+            }
+            if (keep > 0) {
+                tiles[0] = tiles[keep];
+                tiles[keep] = NULL;
             }
             rs.aa.samples += np;
         }
@@ -784,7 +839,7 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
         if (o->on_pass && o->on_pass(o->on_pass_ctx, pass, spp * (pass + 1), tb__now() - tstart, film))
             break;
     }
-    for (int k = 0; k < tiles_per_batch && tiles; k++)
+    for (int k = 0; k < max_slots && tiles; k++)
         tb_film_tile_free(tiles[k]);
     rs.aa.max_spp_used = spp;
     rs.seconds = tb__now() - tstart;
@@ -801,7 +856,7 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
     if (stats)
         *stats = rs;
     tb__paths_free(&P);
-    free(tiles), free(xy), free(rng), free(rng0), free(L), free(pxys), free(tbase);
+    free(tiles), free(segs), free(xy), free(rng), free(rng0), free(L), free(pxys);
     tb_film_free(film);
     tb_gpu_renderer_destroy(r);
     return err;
