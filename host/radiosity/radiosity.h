@@ -15,15 +15,18 @@
  * MID emission: W/m^2 per channel (W/m^2/nm per band); radiance is B / pi.
  * The solver keeps
  *   - per VERTEX, the gathered irradiance H_v (per channel): the sum over
- *     shots of B_shooter F(v -> shooter), a vertex being a receiver point
+ *     shots of dB_shooter F(v -> shooter), a vertex being a receiver point
  *     with its own normal (Wallace, Elmquist and Haines 1989);
- *   - per ELEMENT, the unshot radiosity dB_e (per channel).
- * An element's radiosity is E_e + rho_e * H_e, H_e the mean of its corners'
- * H_v; the value at corner k of element e (for Gouraud display) is
- * E_e + rho_e * H_v. So vertices may be shared by elements of different
- * materials, and refining an element (adaptive subdivision) only needs H at
- * the new vertices and dB for the children (their parent's: dB is a
- * density), given to tb_rad_solver_create as the initial state.
+ *   - per ELEMENT, the gathered irradiance H_e, the sum over shots of
+ *     dB_shooter F_e,shooter (the mean of its corners' point form factors,
+ *     or a better estimate next to the shooter: docs/radiosity.md), and the
+ *     unshot radiosity dB_e (per channel).
+ * An element's radiosity is E_e + rho_e * H_e; the value at corner k of
+ * element e (for Gouraud display) is E_e + rho_e * H_v. So vertices may be
+ * shared by elements of different materials, and refining an element
+ * (adaptive subdivision) only needs H at the new vertices, and H and dB for
+ * the children (their parent's: both are densities), given to
+ * tb_rad_solver_create as the initial state.
  *
  * With TB_RAD_FF_HEMICUBE the form factors are element to element, from a
  * hemicube at the shooter's centroid; H is then kept per element and H_v is
@@ -45,6 +48,8 @@
 #include "host/render/scene.h"
 #include "util/base/error.h"
 #include "util/math/vec.h"
+
+struct tb_image;
 
 /* "No vertex / no element" in radiosity mesh indices. */
 #define TB_RAD_NONE UINT32_MAX
@@ -136,8 +141,9 @@ typedef struct tb_rad_options {
 /* Initial state (e.g. carried over a refinement); NULL arrays mean zero H
  * and "everything still to shoot" (dB = E). */
 typedef struct tb_rad_state {
-    const double *gathered; /* nverts * nchannels: H_v (ray cast) -- or nelems * nchannels: H_e (hemicube) */
-    const double *unshot;   /* nelems * nchannels: dB_e */
+    const double *gathered;       /* nverts * nchannels: H_v (ray cast) -- or nelems * nchannels: H_e (hemicube) */
+    const double *unshot;         /* nelems * nchannels: dB_e */
+    const double *gathered_elems; /* ray cast: nelems * nchannels: H_e; NULL: the mean of the corners' H_v */
 } tb_rad_state;
 
 /* A solver (opaque). */
@@ -236,5 +242,14 @@ tb_status tb_rad_read_patches(const char *path, size_t *nrows, int *ncols, doubl
  * included, radiosity scaled by `scale` before the 8-bit conversion.
  * Written all-or-nothing. */
 tb_status tb_rad_write_ply(const tb_rad_solver *s, const char *path, double scale);
+
+/* The solution seen from the scene's camera at its resolution: spp rays
+ * per pixel on a regular sub-pixel grid (spp rounded up to a square) against
+ * the elements, the corners' radiosities (ambient term included)
+ * interpolated linearly over the triangles (v0 v1 v2) and (v0 v2 v3) of
+ * each element, radiance B / pi, back faces and misses black; a box-filtered
+ * film of the scene's channels resolved like the ray tracer's images
+ * (tb_render_resolve: linear sRGB). */
+tb_status tb_rad_render_image(const tb_rad_solver *s, const tb_scene *scene, int spp, struct tb_image **out);
 
 #endif

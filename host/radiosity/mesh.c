@@ -1,0 +1,423 @@
+/* Radiosity meshes: a scene's objects polygonized in world space and meshed
+ * into elements (docs/radiosity.md, "Meshing"). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "host/object/object.h"
+#include "host/object/polygonize.h"
+#include "host/radiosity/radiosity.h"
+#include "util/mesh/mesh.h"
+
+/* Corners whose element normals are within this angle share a vertex. */
+#define TB__RAD_CREASE_COS 0.8660254037844387 /* cos 30 degrees */
+
+void tb_rad_mesh_init(tb_rad_mesh *m)
+{
+    memset(m, 0, sizeof *m);
+}
+
+void tb_rad_mesh_free(tb_rad_mesh *m)
+{
+    if (!m)
+        return;
+    free(m->verts);
+    free(m->elems);
+    free(m->rho);
+    free(m->emission);
+    int nc = m->nchannels;
+    bool sp = m->spectral;
+    tb_bands b = m->bands;
+    tb_rad_mesh_init(m);
+    m->nchannels = nc, m->spectral = sp, m->bands = b;
+}
+
+/* Newell normal (unnormalized, twice the area vector) and area centroid of
+ * a planar polygon, in double. */
+static void tb__poly_frame(const tb_vec3 *v, int n, double nrm[3], double c[3])
+{
+    nrm[0] = nrm[1] = nrm[2] = 0.0;
+    for (int k = 0; k < n; k++) {
+        const tb_vec3 a = v[k], b = v[(k + 1) % n];
+        nrm[0] += ((double)a.y - b.y) * ((double)a.z + b.z);
+        nrm[1] += ((double)a.z - b.z) * ((double)a.x + b.x);
+        nrm[2] += ((double)a.x - b.x) * ((double)a.y + b.y);
+    }
+    /* area centroid: fan of triangles from corner 0 */
+    double sw = 0.0;
+    c[0] = c[1] = c[2] = 0.0;
+    for (int k = 1; k + 1 < n; k++) {
+        double e1[3] = {(double)v[k].x - v[0].x, (double)v[k].y - v[0].y, (double)v[k].z - v[0].z};
+        double e2[3] = {(double)v[k + 1].x - v[0].x, (double)v[k + 1].y - v[0].y, (double)v[k + 1].z - v[0].z};
+        double cr[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        double w = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+        c[0] += w * ((double)v[0].x + v[k].x + v[k + 1].x) / 3.0;
+        c[1] += w * ((double)v[0].y + v[k].y + v[k + 1].y) / 3.0;
+        c[2] += w * ((double)v[0].z + v[k].z + v[k + 1].z) / 3.0;
+        sw += w;
+    }
+    if (sw > 0.0)
+        c[0] /= sw, c[1] /= sw, c[2] /= sw;
+}
+
+tb_status tb_rad_mesh_update_geometry(tb_rad_mesh *m)
+{
+    for (size_t i = 0; i < m->nelems; i++) {
+        tb_rad_element *e = &m->elems[i];
+        int n = e->v[3] == TB_RAD_NONE ? 3 : 4;
+        tb_vec3 p[4];
+        for (int k = 0; k < n; k++) {
+            if (e->v[k] >= m->nverts)
+                return tb_error(TB_ERR_ARG, "radiosity mesh: element %zu: vertex index %u out of range", i, e->v[k]);
+            p[k] = m->verts[e->v[k]].p;
+        }
+        double nrm[3], c[3];
+        tb__poly_frame(p, n, nrm, c);
+        double len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        if (!(len > 0.0) || !isfinite(len))
+            return tb_error(TB_ERR_ARG, "radiosity mesh: element %zu is degenerate", i);
+        e->area = 0.5 * len;
+        e->normal = tb_vec3_make((float)(nrm[0] / len), (float)(nrm[1] / len), (float)(nrm[2] / len));
+        e->centroid = tb_vec3_make((float)c[0], (float)c[1], (float)c[2]);
+    }
+    return TB_OK;
+}
+
+void tb_rad_mesh_polygon(const tb_rad_mesh *m, size_t i, tb_ff_polygon *out)
+{
+    const tb_rad_element *e = &m->elems[i];
+    out->n = e->v[3] == TB_RAD_NONE ? 3 : 4;
+    for (int k = 0; k < TB_FF_MAX_VERTS; k++)
+        out->v[k] = k < out->n ? m->verts[e->v[k]].p : tb_vec3_splat(0.0f);
+}
+
+/* Growable output arrays. */
+typedef struct tb__mb {
+    tb_rad_mesh *m;
+    size_t vcap, ecap;
+} tb__mb;
+
+static tb_status tb__push_vert(tb__mb *b, tb_rad_vertex v)
+{
+    if (b->m->nverts == b->vcap) {
+        size_t cap = b->vcap ? 2 * b->vcap : 1024;
+        tb_rad_vertex *p = realloc(b->m->verts, cap * sizeof *p);
+        if (!p)
+            return tb_error(TB_ERR_NOMEM, "radiosity mesh: out of memory");
+        b->m->verts = p, b->vcap = cap;
+    }
+    b->m->verts[b->m->nverts++] = v;
+    return TB_OK;
+}
+
+static tb_status tb__push_elem(tb__mb *b, const tb_rad_element *e, const tb_channels *rho, const tb_channels *em)
+{
+    tb_rad_mesh *m = b->m;
+    int nc = m->nchannels;
+    if (m->nelems == b->ecap) {
+        size_t cap = b->ecap ? 2 * b->ecap : 1024;
+        tb_rad_element *pe = realloc(m->elems, cap * sizeof *pe);
+        if (pe)
+            m->elems = pe;
+        float *pr = realloc(m->rho, cap * (size_t)nc * sizeof *pr);
+        if (pr)
+            m->rho = pr;
+        float *pm = realloc(m->emission, cap * (size_t)nc * sizeof *pm);
+        if (pm)
+            m->emission = pm;
+        if (!pe || !pr || !pm)
+            return tb_error(TB_ERR_NOMEM, "radiosity mesh: out of memory");
+        b->ecap = cap;
+    }
+    size_t i = m->nelems++;
+    m->elems[i] = *e;
+    for (int c = 0; c < nc; c++) {
+        m->rho[i * (size_t)nc + (size_t)c] = rho->v[c];
+        m->emission[i * (size_t)nc + (size_t)c] = em->v[c];
+    }
+    return TB_OK;
+}
+
+/* The material of FED face f of object o (CSG: its leaf's). */
+static int tb__face_material(const tb_object *o, const tb_fed *fed, uint32_t f)
+{
+    if (fed->face_ids && o->nchildren > 0) {
+        const tb_object *leaf = tb_object_leaf_for_face(o, (uint32_t)fed->face_ids[f], NULL);
+        if (leaf && leaf->material >= 0)
+            return leaf->material;
+    }
+    return o->material;
+}
+
+/* Meshes one object's world-space FED into the output. */
+static tb_status tb__add_object(tb__mb *b, const tb_scene *s, const tb_object *o, const tb_fed *fed,
+                                const tb_rad_mesh_options *opt)
+{
+    tb_mesh mesh;
+    tb_mesh_init(&mesh);
+    tb_mesh_opts mo = {.max_edge = opt->max_edge, .max_area = opt->max_area, .quads = true};
+    tb_status st = tb_mesh_from_fed(fed, &mo, &mesh);
+    if (st) {
+        tb_mesh_free(&mesh);
+        return st;
+    }
+    size_t nmv = mesh.positions.len, ne = tb_mesh_nelems(&mesh);
+    bool has_n = mesh.normals.len == nmv;
+    /* per mesh vertex, a chain of output vertices (one per crease side) */
+    uint32_t *head = malloc((nmv ? nmv : 1) * sizeof *head);
+    tb_array chain, rep, nsum; /* next index, representative normal, normal sum (area weighted) */
+    tb_array_init(&chain, sizeof(uint32_t));
+    tb_array_init(&rep, sizeof(tb_vec3));
+    tb_array_init(&nsum, sizeof(double) * 4); /* [3]: 1 if the normal came from the surface */
+    size_t vbase = b->m->nverts;
+    if (!head) {
+        st = tb_error(TB_ERR_NOMEM, "radiosity mesh: out of memory");
+        goto done;
+    }
+    for (size_t k = 0; k < nmv; k++)
+        head[k] = TB_RAD_NONE;
+    for (size_t i = 0; i < ne && !st; i++) {
+        const tb_mesh_elem *me = tb_mesh_elem_at(&mesh, i);
+        int n = tb_mesh_elem_size(me);
+        tb_vec3 p[4];
+        for (int k = 0; k < n; k++)
+            p[k] = TB_ARRAY_AT(&mesh.positions, tb_vec3, me->v[k]);
+        double nrm[3], c[3];
+        tb__poly_frame(p, n, nrm, c);
+        double len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        if (!(len > 0.0))
+            continue; /* a sliver below float resolution carries no energy */
+        tb_vec3 en = tb_vec3_make((float)(nrm[0] / len), (float)(nrm[1] / len), (float)(nrm[2] / len));
+        tb_rad_element e = {.v = {TB_RAD_NONE, TB_RAD_NONE, TB_RAD_NONE, TB_RAD_NONE},
+                            .object = o->index,
+                            .parent = TB_RAD_NONE};
+        for (int k = 0; k < n && !st; k++) {
+            uint32_t mv = me->v[k], ov = TB_RAD_NONE;
+            for (uint32_t q = head[mv]; q != TB_RAD_NONE; q = TB_ARRAY_AT(&chain, uint32_t, q)) {
+                if (tb_vec3_dot(TB_ARRAY_AT(&rep, tb_vec3, q), en) > TB__RAD_CREASE_COS) {
+                    ov = q;
+                    break;
+                }
+            }
+            if (ov == TB_RAD_NONE) {
+                ov = (uint32_t)chain.len;
+                double z[4] = {0, 0, 0, 0};
+                tb_rad_vertex rv = {.p = p[k], .n = en};
+                if (has_n) {
+                    /* the surface's own normal (curved objects), unless it is
+                     * far from this side of a crease */
+                    tb_vec3 vn = TB_ARRAY_AT(&mesh.normals, tb_vec3, mv);
+                    float l = tb_vec3_length(vn);
+                    if (l > 0.0f && tb_vec3_dot(tb_vec3_scale(vn, 1.0f / l), en) > TB__RAD_CREASE_COS)
+                        rv.n = tb_vec3_scale(vn, 1.0f / l), z[3] = 1.0;
+                }
+                if ((st = tb_array_push(&chain, &head[mv])) || (st = tb_array_push(&rep, &en)) ||
+                    (st = tb_array_push(&nsum, z)))
+                    break;
+                head[mv] = ov;
+                if ((st = tb__push_vert(b, rv)))
+                    break;
+            }
+            double *ns = (double *)tb_array_at(&nsum, ov);
+            ns[0] += nrm[0], ns[1] += nrm[1], ns[2] += nrm[2];
+            e.v[k] = (uint32_t)(vbase + ov);
+        }
+        if (st)
+            break;
+        const tb_material *mat = NULL;
+        int mi = tb__face_material(o, fed, me->face);
+        if (mi >= 0 && mi < s->nmaterials)
+            mat = &s->materials[mi];
+        tb_channels rho = tb_channels_splat(s->nchannels, 0.0f), em = rho;
+        if (mat) {
+            rho = mat->diffuse;
+            em = mat->emission;
+        }
+        for (int ch = 0; ch < s->nchannels; ch++) {
+            if (!(rho.v[ch] >= 0.0f && rho.v[ch] < 1.0f)) {
+                st = tb_error(TB_ERR_UNSUPPORTED,
+                              "radiosity: object %u: diffuse reflectance %g in channel %d is not in [0, 1)",
+                              o->index, (double)rho.v[ch], ch);
+                break;
+            }
+            if (!(em.v[ch] >= 0.0f) || !isfinite(em.v[ch])) {
+                st = tb_error(TB_ERR_UNSUPPORTED, "radiosity: object %u: emission %g in channel %d is invalid",
+                              o->index, (double)em.v[ch], ch);
+                break;
+            }
+        }
+        if (!st)
+            st = tb__push_elem(b, &e, &rho, &em);
+    }
+    /* vertices without a surface normal take their elements' mean normal */
+    for (size_t q = 0; q < chain.len && !st; q++) {
+        tb_rad_vertex *rv = &b->m->verts[vbase + q];
+        const double *ns = (const double *)tb_array_at(&nsum, q);
+        double l = sqrt(ns[0] * ns[0] + ns[1] * ns[1] + ns[2] * ns[2]);
+        if (ns[3] == 0.0 && l > 0.0)
+            rv->n = tb_vec3_make((float)(ns[0] / l), (float)(ns[1] / l), (float)(ns[2] / l));
+    }
+done:
+    free(head);
+    tb_array_free(&chain);
+    tb_array_free(&rep);
+    tb_array_free(&nsum);
+    tb_mesh_free(&mesh);
+    return st;
+}
+
+/* A copy of `fed` with positions and normals taken to world space. */
+static tb_status tb__fed_to_world(const tb_fed *f, const tb_transform *t, tb_fed **out)
+{
+    *out = NULL;
+    tb_vec3 *pos = malloc((f->nverts ? f->nverts : 1) * sizeof *pos);
+    tb_vec3 *nrm = f->normals ? malloc((f->nverts ? f->nverts : 1) * sizeof *nrm) : NULL;
+    uint32_t *sizes = malloc((f->nloops ? f->nloops : 1) * sizeof *sizes);
+    uint32_t *nl = malloc((f->nfaces ? f->nfaces : 1) * sizeof *nl);
+    tb_status st = TB_OK;
+    if (!pos || (f->normals && !nrm) || !sizes || !nl) {
+        st = tb_error(TB_ERR_NOMEM, "radiosity mesh: out of memory");
+        goto done;
+    }
+    bool flip = tb_transform_swaps_handedness(t);
+    for (uint32_t v = 0; v < f->nverts; v++) {
+        pos[v] = tb_transform_point(t, f->positions[v]);
+        if (nrm) {
+            tb_vec3 n = tb_transform_normal(t, f->normals[v]);
+            float l = tb_vec3_length(n);
+            nrm[v] = l > 0.0f ? tb_vec3_scale(n, 1.0f / l) : n;
+        }
+    }
+    for (uint32_t l = 0; l < f->nloops; l++)
+        sizes[l] = tb_fed_loop_size(f, l);
+    for (uint32_t fc = 0; fc < f->nfaces; fc++)
+        nl[fc] = tb_fed_face_nloops(f, fc);
+    /* a mirroring transform reverses every loop so the front stays the front */
+    uint32_t *corners = malloc((f->ncorners ? f->ncorners : 1) * sizeof *corners);
+    if (!corners) {
+        st = tb_error(TB_ERR_NOMEM, "radiosity mesh: out of memory");
+        goto done;
+    }
+    for (uint32_t l = 0; l < f->nloops; l++) {
+        uint32_t b = f->loop_corners[l], n = sizes[l];
+        for (uint32_t k = 0; k < n; k++)
+            corners[b + k] = f->corner_vert[b + (flip ? n - 1 - k : k)];
+    }
+    tb_fed_desc d = {.nverts = f->nverts,
+                     .positions = pos,
+                     .normals = nrm,
+                     .nfaces = f->nfaces,
+                     .face_nloops = nl,
+                     .nloops = f->nloops,
+                     .loop_sizes = sizes,
+                     .corners = corners,
+                     .face_ids = f->face_ids};
+    st = tb_fed_build(&d, out, NULL);
+    free(corners);
+done:
+    free(pos);
+    free(nrm);
+    free(sizes);
+    free(nl);
+    return st;
+}
+
+/* The inline polygons of `obj` as a world-space FED, one face per polygon. */
+static tb_status tb__polygons_world(const tb_object *obj, tb_fed **out)
+{
+    const tb_geom_polygons *g = &obj->geom.polygons;
+    *out = NULL;
+    size_t nv = (size_t)g->nvertices, nf = (size_t)g->nfaces, ncorn = (size_t)g->face_start[g->nfaces];
+    tb_vec3 *pos = malloc((nv ? nv : 1) * sizeof *pos);
+    tb_vec3 *nrm = g->normals ? malloc((nv ? nv : 1) * sizeof *nrm) : NULL;
+    uint32_t *sizes = malloc((nf ? nf : 1) * sizeof *sizes);
+    uint32_t *corners = malloc((ncorn ? ncorn : 1) * sizeof *corners);
+    int32_t *ids = malloc((nf ? nf : 1) * sizeof *ids);
+    tb_status st = TB_OK;
+    if (!pos || (g->normals && !nrm) || !sizes || !corners || !ids) {
+        st = tb_error(TB_ERR_NOMEM, "radiosity mesh: out of memory");
+        goto done;
+    }
+    bool flip = tb_transform_swaps_handedness(&obj->to_world);
+    for (size_t v = 0; v < nv; v++) {
+        pos[v] = tb_transform_point(&obj->to_world, g->vertices[v]);
+        if (nrm) {
+            tb_vec3 n = tb_transform_normal(&obj->to_world, g->normals[v]);
+            float l = tb_vec3_length(n);
+            nrm[v] = l > 0.0f ? tb_vec3_scale(n, 1.0f / l) : n;
+        }
+    }
+    for (size_t f = 0; f < nf; f++) {
+        int b = g->face_start[f], n = g->face_start[f + 1] - b;
+        sizes[f] = (uint32_t)n;
+        ids[f] = (int32_t)f;
+        for (int k = 0; k < n; k++)
+            corners[b + k] = (uint32_t)g->indices[b + (flip ? n - 1 - k : k)];
+    }
+    tb_fed_desc d = {.nverts = (uint32_t)nv,
+                     .positions = pos,
+                     .normals = nrm,
+                     .nfaces = (uint32_t)nf,
+                     .nloops = (uint32_t)nf,
+                     .loop_sizes = sizes,
+                     .corners = corners,
+                     .face_ids = ids};
+    st = tb_fed_build(&d, out, NULL);
+done:
+    free(pos);
+    free(nrm);
+    free(sizes);
+    free(corners);
+    free(ids);
+    return st;
+}
+
+tb_status tb_rad_mesh_from_scene(const tb_scene *scene, const tb_rad_mesh_options *opt, tb_rad_mesh *out)
+{
+    tb_rad_mesh_options o = {0};
+    if (opt)
+        o = *opt;
+    if (!(o.max_edge >= 0.0) || !(o.max_area >= 0.0) || !(o.max_angle >= 0.0) || !isfinite(o.max_edge) ||
+        !isfinite(o.max_area) || !isfinite(o.max_angle))
+        return tb_error(TB_ERR_ARG, "radiosity mesh: max edge, area and angle must be finite and >= 0");
+    tb_rad_mesh_init(out);
+    out->nchannels = scene->nchannels;
+    out->spectral = scene->spectral;
+    out->bands = scene->bands;
+    tb__mb b = {.m = out};
+    /* CSG boundary resolution: the element size, else 1/50 of the scene */
+    tb_vec3 ext = tb_vec3_sub(scene->bounds.hi, scene->bounds.lo);
+    double diag = tb_vec3_length(ext);
+    double csg_edge = o.max_edge > 0.0 ? o.max_edge : (o.max_area > 0 ? sqrt(o.max_area) : diag / 50.0);
+    if (!(csg_edge > 0.0))
+        csg_edge = 1.0;
+    tb_status st = TB_OK;
+    for (uint32_t i = 0; i < scene->nobjects && !st; i++) {
+        const tb_object *obj = scene->objects[i];
+        tb_fed *fed = NULL;
+        if (obj->kind == TB_PRIM_POLYGONS && obj->fed) {
+            st = tb__fed_to_world(obj->fed, &obj->to_world, &fed);
+        } else if (obj->kind == TB_PRIM_POLYGONS) {
+            /* inline polygons keep their faces whole (quads stay quads; the
+             * polygonizer would triangulate them): the element mesher
+             * subdivides them */
+            st = tb__polygons_world(obj, &fed);
+        } else {
+            tb_poly_options po = {.max_edge = o.max_edge, .max_angle = o.max_angle, .split = true};
+            st = tb_polygonize_object(obj, &po, csg_edge, &fed);
+        }
+        if (!st)
+            st = tb__add_object(&b, scene, obj, fed, &o);
+        if (st)
+            st = tb_error_context(st, "radiosity mesh: object %u%s%s", i, obj->name ? " " : "",
+                                  obj->name ? obj->name : "");
+        tb_fed_free(fed);
+    }
+    if (!st && out->nelems == 0)
+        st = tb_error(TB_ERR_ARG, "radiosity mesh: the scene has no surfaces");
+    if (!st)
+        st = tb_rad_mesh_update_geometry(out);
+    if (st)
+        tb_rad_mesh_free(out);
+    return st;
+}

@@ -1,0 +1,229 @@
+/* Radiosity outputs: the --patches CSV and the PLY mesh (docs/radiosity.md,
+ * "Outputs"). */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "host/radiosity/radiosity.h"
+#include "util/base/outfile.h"
+#include "util/color/srgb.h"
+#include "util/math/float.h"
+
+/* Column suffix of channel c: r, g, b, or the band's wavelength. */
+static void tb__channel_name(const tb_rad_mesh *m, int c, char *buf, size_t n)
+{
+    if (m->spectral)
+        snprintf(buf, n, "%g", m->bands.lambda[c]);
+    else
+        snprintf(buf, n, "%s", c == 0 ? "r" : c == 1 ? "g" : c == 2 ? "b" : "x");
+}
+
+tb_status tb_rad_write_patches(const tb_rad_solver *s, const char *path)
+{
+    const tb_rad_mesh *m = tb_rad_solver_mesh(s);
+    tb_outfile of;
+    tb_status st = tb_outfile_open(&of, path);
+    if (st)
+        return st;
+    FILE *fp = of.fp;
+    int nc = m->nchannels;
+    char name[32];
+    fputs("element,object,area,cx,cy,cz,nx,ny,nz", fp);
+    for (int c = 0; c < nc; c++)
+        tb__channel_name(m, c, name, sizeof name), fprintf(fp, ",b_%s", name);
+    for (int c = 0; c < nc; c++)
+        tb__channel_name(m, c, name, sizeof name), fprintf(fp, ",u_%s", name);
+    fputc('\n', fp);
+    double b[TB_CHANNELS_MAX], u[TB_CHANNELS_MAX];
+    for (size_t i = 0; i < m->nelems; i++) {
+        const tb_rad_element *e = &m->elems[i];
+        fprintf(fp, "%zu,%u,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g", i, e->object, e->area, (double)e->centroid.x,
+                (double)e->centroid.y, (double)e->centroid.z, (double)e->normal.x, (double)e->normal.y,
+                (double)e->normal.z);
+        tb_rad_element_radiosity(s, i, false, b);
+        tb_rad_element_unshot(s, i, u);
+        for (int c = 0; c < nc; c++)
+            fprintf(fp, ",%.9g", b[c]);
+        for (int c = 0; c < nc; c++)
+            fprintf(fp, ",%.9g", u[c]);
+        fputc('\n', fp);
+    }
+    if (ferror(fp)) {
+        tb_outfile_abort(&of);
+        return tb_error(TB_ERR_IO, "%s: write failed", path);
+    }
+    return tb_outfile_commit(&of);
+}
+
+tb_status tb_rad_read_patches(const char *path, size_t *nrows, int *ncols, double **b)
+{
+    *nrows = 0, *ncols = 0, *b = NULL;
+    FILE *fp = fopen(path, "r");
+    if (!fp)
+        return tb_error(TB_ERR_IO, "%s: %s", path, strerror(errno));
+    size_t cap = 1 << 16, len = 0;
+    char *line = malloc(cap);
+    tb_status st = TB_OK;
+    size_t lineno = 0, rows = 0, rcap = 0;
+    int nb = -1, first_b = -1, ntot = 0;
+    double *vals = NULL;
+    if (!line) {
+        fclose(fp);
+        return tb_error(TB_ERR_NOMEM, "out of memory");
+    }
+    int ch;
+    for (;;) {
+        len = 0;
+        while ((ch = fgetc(fp)) != EOF && ch != '\n') {
+            if (len + 1 >= cap) {
+                char *p = realloc(line, cap * 2);
+                if (!p) {
+                    st = tb_error(TB_ERR_NOMEM, "out of memory");
+                    goto done;
+                }
+                line = p, cap *= 2;
+            }
+            line[len++] = (char)ch;
+        }
+        if (len == 0 && ch == EOF)
+            break;
+        line[len] = 0;
+        if (len && line[len - 1] == '\r')
+            line[--len] = 0;
+        lineno++;
+        if (lineno == 1) {
+            /* header: count the b_ columns and where they start */
+            if (strncmp(line, "element,object,area,cx,cy,cz,nx,ny,nz,", 38) != 0) {
+                st = tb_error(TB_ERR_FORMAT, "%s:1: not a radiosity patches CSV (header '%.40s')", path, line);
+                goto done;
+            }
+            int col = 0;
+            nb = 0;
+            for (char *t = line; t; t = strchr(t, ',') ? strchr(t, ',') + 1 : NULL, col++) {
+                if (!strncmp(t, "b_", 2)) {
+                    if (first_b < 0)
+                        first_b = col;
+                    nb++;
+                }
+            }
+            ntot = col;
+            if (nb == 0) {
+                st = tb_error(TB_ERR_FORMAT, "%s:1: no b_ columns", path);
+                goto done;
+            }
+            continue;
+        }
+        if (rows == rcap) {
+            rcap = rcap ? 2 * rcap : 1024;
+            double *p = realloc(vals, rcap * (size_t)nb * sizeof *p);
+            if (!p) {
+                st = tb_error(TB_ERR_NOMEM, "out of memory");
+                goto done;
+            }
+            vals = p;
+        }
+        char *t = line;
+        int col = 0;
+        for (; col < ntot && t; col++) {
+            char *end;
+            double v = strtod(t, &end);
+            if (end == t || (*end != ',' && *end != 0)) {
+                st = tb_error(TB_ERR_FORMAT, "%s:%zu: column %d is not a number", path, lineno, col + 1);
+                goto done;
+            }
+            if (col >= first_b && col < first_b + nb)
+                vals[rows * (size_t)nb + (size_t)(col - first_b)] = v;
+            t = *end == ',' ? end + 1 : NULL;
+        }
+        if (col != ntot || t) {
+            st = tb_error(TB_ERR_FORMAT, "%s:%zu: expected %d columns", path, lineno, ntot);
+            goto done;
+        }
+        rows++;
+    }
+    if (lineno == 0)
+        st = tb_error(TB_ERR_FORMAT, "%s: empty file", path);
+done:
+    free(line);
+    fclose(fp);
+    if (st) {
+        free(vals);
+        return st;
+    }
+    *nrows = rows, *ncols = nb, *b = vals;
+    return TB_OK;
+}
+
+/* Linear sRGB of a radiosity (channels of the mesh), radiance B / pi. */
+static void tb__to_rgb(const tb_rad_mesh *m, const double *b, double rgb[3])
+{
+    if (m->spectral) {
+        double v[TB_CHANNELS_MAX];
+        for (int c = 0; c < m->nchannels; c++)
+            v[c] = b[c] / TB_PI;
+        tb_bands_to_linear_srgb(&m->bands, v, 1.0, rgb);
+    } else {
+        for (int c = 0; c < 3; c++)
+            rgb[c] = (c < m->nchannels ? b[c] : b[0]) / TB_PI;
+    }
+}
+
+tb_status tb_rad_write_ply(const tb_rad_solver *s, const char *path, double scale)
+{
+    const tb_rad_mesh *m = tb_rad_solver_mesh(s);
+    size_t ncorners = 0;
+    for (size_t i = 0; i < m->nelems; i++)
+        ncorners += m->elems[i].v[3] == TB_RAD_NONE ? 3 : 4;
+    tb_outfile of;
+    tb_status st = tb_outfile_open(&of, path);
+    if (st)
+        return st;
+    FILE *fp = of.fp;
+    fprintf(fp,
+            "ply\nformat binary_little_endian 1.0\ncomment testbed radiosity solution: colour = radiance B/pi in "
+            "linear sRGB (r g b floats) and 8-bit sRGB times %g (red green blue)\n"
+            "element vertex %zu\nproperty float x\nproperty float y\nproperty float z\n"
+            "property float nx\nproperty float ny\nproperty float nz\n"
+            "property float r\nproperty float g\nproperty float b\n"
+            "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+            "element face %zu\nproperty list uchar uint vertex_indices\nproperty uint object\nend_header\n",
+            scale, ncorners, m->nelems);
+    double b[TB_CHANNELS_MAX];
+    for (size_t i = 0; i < m->nelems; i++) {
+        const tb_rad_element *e = &m->elems[i];
+        int n = e->v[3] == TB_RAD_NONE ? 3 : 4;
+        for (int k = 0; k < n; k++) {
+            const tb_rad_vertex *v = &m->verts[e->v[k]];
+            tb_rad_corner_radiosity(s, i, k, true, b);
+            double rgb[3];
+            tb__to_rgb(m, b, rgb);
+            float f[9] = {v->p.x, v->p.y, v->p.z, e->normal.x, e->normal.y, e->normal.z,
+                          (float)rgb[0], (float)rgb[1], (float)rgb[2]};
+            unsigned char u8[3];
+            for (int c = 0; c < 3; c++) {
+                double x = tb_srgb_encode(rgb[c] * scale);
+                x = x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x;
+                u8[c] = (unsigned char)lround(x * 255.0);
+            }
+            fwrite(f, sizeof f, 1, fp);
+            fwrite(u8, 1, 3, fp);
+        }
+    }
+    uint32_t base = 0;
+    for (size_t i = 0; i < m->nelems; i++) {
+        const tb_rad_element *e = &m->elems[i];
+        unsigned char n = e->v[3] == TB_RAD_NONE ? 3 : 4;
+        uint32_t idx[4] = {base, base + 1, base + 2, base + 3};
+        fwrite(&n, 1, 1, fp);
+        fwrite(idx, sizeof(uint32_t), n, fp);
+        fwrite(&e->object, sizeof(uint32_t), 1, fp);
+        base += n;
+    }
+    if (ferror(fp)) {
+        tb_outfile_abort(&of);
+        return tb_error(TB_ERR_IO, "%s: write failed", path);
+    }
+    return tb_outfile_commit(&of);
+}

@@ -1,0 +1,673 @@
+/* Progressive-refinement radiosity (docs/radiosity.md, "Solver"). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "host/radiosity/radiosity.h"
+#include "util/base/progress.h"
+#include "util/container/pqueue.h"
+#include "util/math/float.h"
+#include "util/stats/stats.h"
+
+/* Receivers within this many shooter radii (centroid to farthest corner)
+ * get the near-field form factor (tb__near_field). */
+#define TB__RAD_NEAR 4.0
+
+TB_STAT_COUNTER(tb__rad_shots, "Radiosity/shots");
+TB_STAT_COUNTER(tb__rad_ffs, "Radiosity/form factors");
+TB_STAT_COUNTER(tb__rad_rays, "Radiosity/rays (receivers x samples)");
+TB_STAT_TIMER(tb__rad_ff_time, "Radiosity/form factor time");
+TB_STAT_TIMER(tb__rad_update_time, "Radiosity/update time");
+
+struct tb_rad_solver {
+    tb_rad_mesh m;          /* own copy */
+    tb_rad_options opt;
+    int nc;
+    size_t nrecv;           /* receivers: vertices (ray cast) or elements (hemicube) */
+    double *He;             /* nelems * nc: gathered irradiance of each element (what its unshot follows) */
+    double *Hv;             /* nverts * nc: gathered irradiance at each vertex (display); hemicube: the
+                               area-weighted mean of the elements around it */
+    double *vert_area;      /* hemicube: area of the elements around each vertex */
+    double *vvis;           /* ray cast: nverts, visible fraction of the vertices near the shooter (NaN: not near) */
+    double *gnear;          /* ray cast: nelems, F_ji of the elements near the shooter (NaN: not near) */
+    size_t *near_list;      /* ray cast: the elements gnear holds this shot */
+    size_t nnear;
+    double *dB;             /* nelems * nc: unshot radiosity */
+    double *ff;             /* nrecv: form factors of one shot */
+    tb_vec3 *rp, *rn;       /* ray cast: receiver positions and normals (the vertices) */
+    tb_vec3 *pts;           /* ray cast: shooter sample points */
+    tb_ff_polygon *polys;   /* every element */
+    tb_ff_occluders *occ;   /* the CPU backend's, when the solver built it */
+    tb_hemicube *hc;
+    tb_pqueue q;            /* elements by unshot power */
+    uint64_t shots;
+    double seconds;
+    double emitted, absorbed, escaped;
+    double total_area;
+    double *rho_mean;       /* nc: area-weighted mean reflectance */
+};
+
+static double tb__now(void) { return 1e-9 * (double)tb_stats_now_ns(); }
+
+/* Seed of the sample points of shot k (a SplitMix64 step: every shot gets
+ * an unrelated stream, whatever the thread count). */
+static uint64_t tb__shot_seed(uint64_t seed, uint64_t k)
+{
+    uint64_t z = seed + 0x9e3779b97f4a7c15ull * (k + 1);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+/* Unshot power of element i, summed over channels. */
+static double tb__unshot_power(const tb_rad_solver *s, size_t i)
+{
+    double p = 0.0;
+    for (int c = 0; c < s->nc; c++)
+        p += s->dB[i * (size_t)s->nc + (size_t)c];
+    return p * s->m.elems[i].area;
+}
+
+void tb_rad_solver_free(tb_rad_solver *s)
+{
+    if (!s)
+        return;
+    tb_rad_mesh_free(&s->m);
+    free(s->He);
+    free(s->Hv);
+    free(s->gnear);
+    free(s->vvis);
+    free(s->near_list);
+    free(s->vert_area);
+    free(s->dB);
+    free(s->ff);
+    free(s->rp);
+    free(s->rn);
+    free(s->pts);
+    free(s->polys);
+    free(s->rho_mean);
+    tb_ff_occluders_free(s->occ);
+    tb_hemicube_free(s->hc);
+    tb_pqueue_free(&s->q);
+    free(s);
+}
+
+const tb_rad_mesh *tb_rad_solver_mesh(const tb_rad_solver *s) { return &s->m; }
+
+static void *tb__calloc(size_t n, size_t size, bool *ok)
+{
+    void *p = calloc(n ? n : 1, size);
+    if (!p)
+        *ok = false;
+    return p;
+}
+
+tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *state, const tb_rad_options *opt,
+                               tb_rad_solver **out)
+{
+    *out = NULL;
+    tb_rad_options o = {0};
+    if (opt)
+        o = *opt;
+    if (o.ff != TB_RAD_FF_RAYCAST && o.ff != TB_RAD_FF_HEMICUBE)
+        return tb_error(TB_ERR_ARG, "radiosity: unknown form-factor method %d", (int)o.ff);
+    if (o.samples == 0)
+        o.samples = TB_RAD_DEFAULT_SAMPLES;
+    if (o.hemicube_res == 0)
+        o.hemicube_res = TB_RAD_DEFAULT_HEMICUBE_RES;
+    if (o.samples < 1 || o.samples > 65536)
+        return tb_error(TB_ERR_ARG, "radiosity: samples per shooter %d not in 1..65536", o.samples);
+    if (o.hemicube_res < 2 || o.hemicube_res > 8192)
+        return tb_error(TB_ERR_ARG, "radiosity: hemicube resolution %d not in 2..8192", o.hemicube_res);
+    if (!mesh || mesh->nelems == 0 || mesh->nverts == 0)
+        return tb_error(TB_ERR_ARG, "radiosity: empty mesh");
+    if (mesh->nelems > TB_PQUEUE_MAX_KEY)
+        return tb_error(TB_ERR_ARG, "radiosity: too many elements (%zu)", mesh->nelems);
+    if (mesh->nchannels < 1 || mesh->nchannels > TB_CHANNELS_MAX)
+        return tb_error(TB_ERR_ARG, "radiosity: %d channels not in 1..%d", mesh->nchannels, TB_CHANNELS_MAX);
+    int nc = mesh->nchannels;
+    size_t ne = mesh->nelems, nv = mesh->nverts;
+    for (size_t i = 0; i < ne * (size_t)nc; i++) {
+        if (!(mesh->rho[i] >= 0.0f && mesh->rho[i] < 1.0f))
+            return tb_error(TB_ERR_ARG, "radiosity: element %zu: reflectance %g not in [0, 1)", i / (size_t)nc,
+                            (double)mesh->rho[i]);
+        if (!(mesh->emission[i] >= 0.0f) || !isfinite(mesh->emission[i]))
+            return tb_error(TB_ERR_ARG, "radiosity: element %zu: bad emission %g", i / (size_t)nc,
+                            (double)mesh->emission[i]);
+    }
+    for (size_t i = 0; i < ne; i++) {
+        const tb_rad_element *e = &mesh->elems[i];
+        for (int k = 0; k < 4; k++)
+            if ((k < 3 || e->v[k] != TB_RAD_NONE) && e->v[k] >= nv)
+                return tb_error(TB_ERR_ARG, "radiosity: element %zu: vertex %u out of range", i, e->v[k]);
+        if (!(e->area > 0.0) || !isfinite(e->area))
+            return tb_error(TB_ERR_ARG, "radiosity: element %zu: area %g (geometry not up to date?)", i, e->area);
+    }
+
+    tb_rad_solver *s = calloc(1, sizeof *s);
+    if (!s)
+        return tb_error(TB_ERR_NOMEM, "radiosity: out of memory");
+    tb_pqueue_init(&s->q);
+    s->opt = o;
+    s->nc = nc;
+    bool ok = true;
+    s->m = *mesh;
+    s->m.verts = tb__calloc(nv, sizeof *s->m.verts, &ok);
+    s->m.elems = tb__calloc(ne, sizeof *s->m.elems, &ok);
+    s->m.rho = tb__calloc(ne * (size_t)nc, sizeof *s->m.rho, &ok);
+    s->m.emission = tb__calloc(ne * (size_t)nc, sizeof *s->m.emission, &ok);
+    bool hemi = o.ff == TB_RAD_FF_HEMICUBE;
+    s->nrecv = hemi ? ne : nv;
+    s->He = tb__calloc(ne * (size_t)nc, sizeof *s->He, &ok);
+    s->Hv = tb__calloc(nv * (size_t)nc, sizeof *s->Hv, &ok);
+    s->dB = tb__calloc(ne * (size_t)nc, sizeof *s->dB, &ok);
+    s->ff = tb__calloc(s->nrecv, sizeof *s->ff, &ok);
+    s->polys = tb__calloc(ne, sizeof *s->polys, &ok);
+    s->rho_mean = tb__calloc((size_t)nc, sizeof *s->rho_mean, &ok);
+    if (hemi) {
+        s->vert_area = tb__calloc(nv, sizeof *s->vert_area, &ok);
+    } else {
+        s->rp = tb__calloc(nv, sizeof *s->rp, &ok);
+        s->rn = tb__calloc(nv, sizeof *s->rn, &ok);
+        s->pts = tb__calloc((size_t)o.samples, sizeof *s->pts, &ok);
+        s->gnear = tb__calloc(ne, sizeof *s->gnear, &ok);
+        s->vvis = tb__calloc(nv, sizeof *s->vvis, &ok);
+        s->near_list = tb__calloc(ne, sizeof *s->near_list, &ok);
+    }
+    if (!ok || tb_pqueue_reserve(&s->q, ne)) {
+        tb_rad_solver_free(s);
+        return tb_error(TB_ERR_NOMEM, "radiosity: out of memory");
+    }
+    memcpy(s->m.verts, mesh->verts, nv * sizeof *s->m.verts);
+    memcpy(s->m.elems, mesh->elems, ne * sizeof *s->m.elems);
+    memcpy(s->m.rho, mesh->rho, ne * (size_t)nc * sizeof *s->m.rho);
+    memcpy(s->m.emission, mesh->emission, ne * (size_t)nc * sizeof *s->m.emission);
+    for (size_t i = 0; i < ne; i++)
+        tb_rad_mesh_polygon(&s->m, i, &s->polys[i]);
+
+    /* state */
+    if (state && state->gathered)
+        memcpy(hemi ? s->He : s->Hv, state->gathered, s->nrecv * (size_t)nc * sizeof(double));
+    if (!hemi && state && state->gathered_elems)
+        memcpy(s->He, state->gathered_elems, ne * (size_t)nc * sizeof(double));
+    else if (!hemi) {
+        /* elements start from the mean of their corners */
+        for (size_t i = 0; i < ne; i++) {
+            const tb_rad_element *e = &s->m.elems[i];
+            int n = e->v[3] == TB_RAD_NONE ? 3 : 4;
+            for (int c = 0; c < nc; c++) {
+                double h = 0.0;
+                for (int k = 0; k < n; k++)
+                    h += s->Hv[e->v[k] * (size_t)nc + (size_t)c];
+                s->He[i * (size_t)nc + (size_t)c] = h / n;
+            }
+        }
+    }
+    for (size_t i = 0; i < ne * (size_t)nc; i++)
+        s->dB[i] = state && state->unshot ? state->unshot[i] : (double)s->m.emission[i];
+    double unshot = 0.0;
+    for (size_t i = 0; i < ne; i++) {
+        const tb_rad_element *e = &s->m.elems[i];
+        s->total_area += e->area;
+        for (int c = 0; c < nc; c++) {
+            s->emitted += (double)s->m.emission[i * (size_t)nc + (size_t)c] * e->area;
+            s->rho_mean[c] += (double)s->m.rho[i * (size_t)nc + (size_t)c] * e->area;
+            double d = s->dB[i * (size_t)nc + (size_t)c];
+            if (!(d >= 0.0) || !isfinite(d)) {
+                tb_rad_solver_free(s);
+                return tb_error(TB_ERR_ARG, "radiosity: element %zu: bad initial unshot radiosity %g", i, d);
+            }
+        }
+        double p = tb__unshot_power(s, i);
+        unshot += p;
+        if (p > 0.0)
+            tb_pqueue_set(&s->q, (uint32_t)i, p);
+    }
+    for (int c = 0; c < nc; c++)
+        s->rho_mean[c] /= s->total_area;
+    /* what is no longer unshot has been absorbed (the bookkeeping of a continued solution) */
+    s->absorbed = s->emitted > unshot ? s->emitted - unshot : 0.0;
+    if (hemi) {
+        for (size_t i = 0; i < ne; i++) {
+            const tb_rad_element *e = &s->m.elems[i];
+            for (int k = 0; k < 4 && (k < 3 || e->v[k] != TB_RAD_NONE); k++)
+                s->vert_area[e->v[k]] += e->area;
+        }
+        for (size_t i = 0; i < ne; i++) {
+            const tb_rad_element *e = &s->m.elems[i];
+            for (int k = 0; k < 4 && (k < 3 || e->v[k] != TB_RAD_NONE); k++) {
+                double w = e->area / s->vert_area[e->v[k]];
+                for (int c = 0; c < nc; c++)
+                    s->Hv[e->v[k] * (size_t)nc + (size_t)c] += w * s->He[i * (size_t)nc + (size_t)c];
+            }
+        }
+        s->hc = tb_hemicube_create(o.hemicube_res);
+        if (!s->hc) {
+            tb_status st = tb_error_context(TB_ERR_NOMEM, "radiosity: hemicube");
+            tb_rad_solver_free(s);
+            return st;
+        }
+    } else {
+        for (size_t v = 0; v < nv; v++)
+            s->rp[v] = s->m.verts[v].p, s->rn[v] = s->m.verts[v].n;
+        for (size_t i = 0; i < ne; i++)
+            s->gnear[i] = NAN;
+        if (!s->opt.batch) {
+            s->opt.batch = tb_ff_raycast_batch;
+            s->opt.batch_ctx = NULL;
+            if (!o.no_occlusion) {
+                tb_status st = tb_ff_occluders_build(s->polys, ne, &s->occ);
+                if (st) {
+                    tb_rad_solver_free(s);
+                    return st;
+                }
+                s->opt.batch_ctx = s->occ;
+            }
+        }
+    }
+    *out = s;
+    return TB_OK;
+}
+
+static inline int tb__elem_size(const tb_rad_element *e) { return e->v[3] == TB_RAD_NONE ? 3 : 4; }
+
+static void tb__near_field(tb_rad_solver *s, size_t i);
+
+/* Form factors of one shot from element i: s->ff[r] for every receiver. */
+static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i, uint64_t shot)
+{
+    const tb_rad_element *e = &s->m.elems[i];
+    tb_timer_token tt = tb_timer_start(&tb__rad_ff_time);
+    tb_status st;
+    if (s->opt.ff == TB_RAD_FF_HEMICUBE) {
+        st = tb_hemicube_formfactors(s->hc, e->centroid, e->normal, s->polys, s->m.nelems, (uint32_t)i, s->ff);
+    } else {
+        st = tb_ff_sample_polygon(&s->polys[i], s->opt.samples, tb__shot_seed(s->opt.seed, shot), s->pts);
+        if (!st)
+            st = s->opt.batch(s->opt.batch_ctx, s->pts, s->opt.samples, e->normal, e->area, s->rp, s->rn,
+                              s->m.nverts, s->ff);
+        tb_stat_add(&tb__rad_rays, (int64_t)s->m.nverts * s->opt.samples);
+        if (!st)
+            tb__near_field(s, i);
+    }
+    tb_stat_add(&tb__rad_ffs, (int64_t)s->nrecv);
+    (void)tb_timer_stop(tt);
+    return st;
+}
+
+/* The exact point-to-polygon form factor (as tb_ff_point_polygon), made
+ * safe for what the near field meets all the time: p in the polygon's plane
+ * or a corner on p's tangent plane. Corners within a relative 1e-7 of the
+ * tangent plane count as on it (float noise would otherwise make a convex
+ * polygon cross the plane more than twice). */
+static double tb__point_polygon(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly)
+{
+    double r[TB_FF_MAX_VERTS][3], d[TB_FF_MAX_VERTS], size = 0.0, dmax = 0.0;
+    for (int k = 0; k < poly->n; k++) {
+        r[k][0] = (double)poly->v[k].x - p.x, r[k][1] = (double)poly->v[k].y - p.y, r[k][2] = (double)poly->v[k].z - p.z;
+        d[k] = r[k][0] * n.x + r[k][1] * n.y + r[k][2] * n.z;
+        size = fmax(size, sqrt(r[k][0] * r[k][0] + r[k][1] * r[k][1] + r[k][2] * r[k][2]));
+    }
+    for (int k = 0; k < poly->n; k++) {
+        if (fabs(d[k]) <= 1e-7 * size)
+            d[k] = 0.0;
+        dmax = fmax(dmax, d[k]);
+    }
+    if (!(dmax > 0.0))
+        return 0.0;
+    /* p must see the polygon's front */
+    tb_vec3 pn;
+    double area;
+    tb_ff_polygon_frame(poly, &pn, &area);
+    if (!(-(r[0][0] * pn.x + r[0][1] * pn.y + r[0][2] * pn.z) > 1e-7 * size))
+        return 0.0;
+    double c[2 * TB_FF_MAX_VERTS][3];
+    int m = 0;
+    for (int k = 0; k < poly->n; k++) {
+        int k1 = (k + 1) % poly->n;
+        if (d[k] >= 0.0) {
+            memcpy(c[m++], r[k], sizeof r[k]);
+        }
+        if ((d[k] > 0.0 && d[k1] < 0.0) || (d[k] < 0.0 && d[k1] > 0.0)) {
+            double t = d[k] / (d[k] - d[k1]);
+            for (int a = 0; a < 3; a++)
+                c[m][a] = r[k][a] + t * (r[k1][a] - r[k][a]);
+            m++;
+        }
+    }
+    if (m < 3)
+        return 0.0;
+    double sum = 0.0;
+    for (int k = 0; k < m; k++) {
+        const double *a = c[k], *b = c[(k + 1) % m];
+        double g[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+        double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (!(gl > 0.0))
+            continue;
+        double gamma = atan2(gl, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+        sum += gamma * ((n.x * g[0] + n.y * g[1] + n.z * g[2]) / gl);
+    }
+    double f = -sum / (2.0 * TB_PI);
+    return f > 0.0 ? f : 0.0;
+}
+
+/* Near the shooter the sampled estimate (a disk per sample point) is poor:
+ * a receiver at a shared edge sees the shooter at distances down to zero.
+ * There (within TB__RAD_NEAR shooter radii of its centroid)
+ *  - a vertex's form factor is the exact unoccluded point-to-polygon one
+ *    times the visible fraction the samples measured (their occluded over
+ *    their unoccluded estimate);
+ *  - an element's F_ji, which moves the energy, is not the mean of its
+ *    corners (the point form factor varies far from linearly across an
+ *    element next to the shooter, and the corner mean loses up to a third
+ *    of the power of a shooter in a corner) but, by reciprocity,
+ *    A_i / A_j times F_ij, F_ij the mean over the shooter's sample points of
+ *    the exact point-to-polygon form factor to j, times the mean visible
+ *    fraction of j's corners. */
+static void tb__near_field(tb_rad_solver *s, size_t i)
+{
+    const tb_rad_element *e = &s->m.elems[i];
+    const tb_ff_polygon *poly = &s->polys[i];
+    double rad2 = 0.0;
+    for (int k = 0; k < poly->n; k++)
+        rad2 = fmax(rad2, (double)tb_vec3_length2(tb_vec3_sub(poly->v[k], e->centroid)));
+    double rad = sqrt(rad2), near2 = TB__RAD_NEAR * TB__RAD_NEAR * rad2;
+    for (size_t v = 0; v < s->m.nverts; v++) {
+        s->vvis[v] = NAN;
+        tb_vec3 d = tb_vec3_sub(s->rp[v], e->centroid);
+        if ((double)tb_vec3_length2(d) >= near2)
+            continue;
+        double exact = tb__point_polygon(s->rp[v], s->rn[v], poly);
+        if (!(exact >= 0.0) || !isfinite(exact))
+            continue;
+        double open = tb_ff_raycast(s->pts, s->opt.samples, e->normal, e->area, s->rp[v], s->rn[v], NULL, NULL);
+        double vis = open > 0.0 ? s->ff[v] / open : 1.0;
+        vis = vis > 1.0 ? 1.0 : vis;
+        s->vvis[v] = vis;
+        s->ff[v] = exact * vis;
+    }
+    s->nnear = 0;
+    for (size_t j = 0; j < s->m.nelems; j++) {
+        if (j == i)
+            continue;
+        const tb_rad_element *ej = &s->m.elems[j];
+        const tb_ff_polygon *pj = &s->polys[j];
+        double rj2 = 0.0;
+        for (int k = 0; k < pj->n; k++)
+            rj2 = fmax(rj2, (double)tb_vec3_length2(tb_vec3_sub(pj->v[k], ej->centroid)));
+        double lim = TB__RAD_NEAR * rad + sqrt(rj2);
+        if ((double)tb_vec3_length2(tb_vec3_sub(ej->centroid, e->centroid)) >= lim * lim)
+            continue;
+        double f = 0.0;
+        for (int k = 0; k < s->opt.samples; k++) {
+            double x = tb__point_polygon(s->pts[k], e->normal, pj);
+            if (x > 0.0 && isfinite(x))
+                f += x;
+        }
+        f /= s->opt.samples;
+        double vis = 0.0;
+        for (int k = 0; k < pj->n; k++) {
+            double x = s->vvis[ej->v[k]];
+            vis += isnan(x) ? 1.0 : x;
+        }
+        vis /= pj->n;
+        s->gnear[j] = f * e->area / ej->area * vis;
+        s->near_list[s->nnear++] = j;
+    }
+}
+
+tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
+{
+    if (shot)
+        *shot = false;
+    uint32_t i;
+    double pri;
+    if (!tb_pqueue_peek(&s->q, &i, &pri) || !(pri > 0.0))
+        return TB_OK;
+    double t0 = tb__now();
+    int nc = s->nc;
+    tb_status st = tb__shot_formfactors(s, i, s->shots);
+    if (st)
+        return st;
+    tb_timer_token tt = tb_timer_start(&tb__rad_update_time);
+    const tb_rad_element *ei = &s->m.elems[i];
+    double dBi[TB_CHANNELS_MAX];
+    for (int c = 0; c < nc; c++) {
+        dBi[c] = s->dB[i * (size_t)nc + (size_t)c];
+        s->dB[i * (size_t)nc + (size_t)c] = 0.0;
+    }
+    double shot_power = 0.0, received_all = 0.0;
+    for (int c = 0; c < nc; c++)
+        shot_power += dBi[c] * ei->area;
+    /* receivers gather */
+    if (s->opt.ff == TB_RAD_FF_HEMICUBE) {
+        s->ff[i] = 0.0;
+        for (size_t j = 0; j < s->m.nelems; j++) {
+            double f = s->ff[j];
+            if (!(f > 0.0))
+                continue;
+            const tb_rad_element *ej = &s->m.elems[j];
+            double g = f * ei->area / ej->area; /* F_ji */
+            double rec = 0.0, abs_ = 0.0;
+            for (int c = 0; c < nc; c++) {
+                double dh = dBi[c] * g, rho = s->m.rho[j * (size_t)nc + (size_t)c];
+                s->He[j * (size_t)nc + (size_t)c] += dh;
+                s->dB[j * (size_t)nc + (size_t)c] += rho * dh;
+                rec += dh * ej->area;
+                abs_ += (1.0 - rho) * dh * ej->area;
+                for (int k = 0; k < tb__elem_size(ej); k++)
+                    s->Hv[ej->v[k] * (size_t)nc + (size_t)c] += dh * ej->area / s->vert_area[ej->v[k]];
+            }
+            received_all += rec;
+            s->absorbed += abs_;
+            tb_pqueue_set(&s->q, (uint32_t)j, tb__unshot_power(s, j));
+        }
+    } else {
+        for (size_t v = 0; v < s->m.nverts; v++) {
+            double f = s->ff[v];
+            if (f != 0.0)
+                for (int c = 0; c < nc; c++)
+                    s->Hv[v * (size_t)nc + (size_t)c] += dBi[c] * f;
+        }
+        for (size_t j = 0; j < s->m.nelems; j++) {
+            if (j == i)
+                continue;
+            const tb_rad_element *ej = &s->m.elems[j];
+            double g = s->gnear[j];
+            if (isnan(g)) {
+                /* F_ji: the element's mean of its corners' point form factors */
+                int n = tb__elem_size(ej);
+                g = 0.0;
+                for (int k = 0; k < n; k++)
+                    g += s->ff[ej->v[k]];
+                g /= n;
+            }
+            if (!(g > 0.0))
+                continue;
+            double rec = 0.0, abs_ = 0.0;
+            for (int c = 0; c < nc; c++) {
+                double dh = dBi[c] * g, rho = s->m.rho[j * (size_t)nc + (size_t)c];
+                s->He[j * (size_t)nc + (size_t)c] += dh;
+                s->dB[j * (size_t)nc + (size_t)c] += rho * dh;
+                rec += dh * ej->area;
+                abs_ += (1.0 - rho) * dh * ej->area;
+            }
+            received_all += rec;
+            s->absorbed += abs_;
+            tb_pqueue_set(&s->q, (uint32_t)j, tb__unshot_power(s, j));
+        }
+        for (size_t k = 0; k < s->nnear; k++)
+            s->gnear[s->near_list[k]] = NAN;
+        s->nnear = 0;
+    }
+    tb_pqueue_remove(&s->q, i);
+    s->escaped += shot_power - received_all;
+    (void)tb_timer_stop(tt);
+    s->shots++;
+    tb_stat_add(&tb__rad_shots, 1);
+    s->seconds += tb__now() - t0;
+    if (shot)
+        *shot = true;
+    return TB_OK;
+}
+
+uint64_t tb_rad_solver_shots(const tb_rad_solver *s) { return s->shots; }
+
+double tb_rad_solver_seconds(const tb_rad_solver *s) { return s->seconds; }
+
+double tb_rad_unshot_fraction(const tb_rad_solver *s)
+{
+    if (!(s->emitted > 0.0))
+        return 0.0;
+    double u = 0.0;
+    for (size_t i = 0; i < s->m.nelems; i++)
+        u += tb__unshot_power(s, i);
+    return u / s->emitted;
+}
+
+tb_rad_energy tb_rad_solver_energy(const tb_rad_solver *s)
+{
+    tb_rad_energy e = {.emitted = s->emitted, .absorbed = s->absorbed, .escaped = s->escaped};
+    for (size_t i = 0; i < s->m.nelems; i++)
+        e.unshot += tb__unshot_power(s, i);
+    return e;
+}
+
+tb_status tb_rad_solver_run(tb_rad_solver *s, const tb_rad_stop *stop, tb_rad_report_fn report, void *user,
+                            uint64_t every)
+{
+    tb_rad_stop sp = {0};
+    if (stop)
+        sp = *stop;
+    double thr = sp.threshold > 0.0 ? sp.threshold : TB_RAD_DEFAULT_THRESHOLD;
+    if (!(thr < 1.0))
+        return tb_error(TB_ERR_ARG, "radiosity: threshold %g not below 1", thr);
+    if (!(sp.time_budget >= 0.0) || !isfinite(sp.time_budget))
+        return tb_error(TB_ERR_ARG, "radiosity: bad time budget %g", sp.time_budget);
+    tb_progress pr;
+    /* progress in thousandths of the way from fraction 1 down to thr, on a log scale */
+    tb_progress_start(&pr, "radiosity", 1000, NULL, 0);
+    bool draw = sp.progress && tb_progress_active(&pr);
+    int64_t drawn = 0;
+    double t0 = tb__now();
+    tb_status st = TB_OK;
+    uint64_t n = 0;
+    double frac = tb_rad_unshot_fraction(s);
+    while (frac >= thr) {
+        if (sp.max_shots > 0 && n >= sp.max_shots)
+            break;
+        if (sp.time_budget > 0.0 && tb__now() - t0 >= sp.time_budget)
+            break;
+        bool shot;
+        if ((st = tb_rad_solver_step(s, &shot)))
+            break;
+        if (!shot)
+            break;
+        n++;
+        frac = tb_rad_unshot_fraction(s);
+        if (draw) {
+            double x = frac > 0.0 ? log(frac) / log(thr) : 1.0;
+            int64_t k = (int64_t)(1000.0 * (x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x));
+            if (k > drawn)
+                tb_progress_add(&pr, k - drawn), drawn = k;
+        }
+        if (report && every > 0 && n % every == 0 && (st = report(user, s)))
+            break;
+    }
+    if (draw)
+        tb_progress_finish(&pr);
+    if (!st && report && (every == 0 || n % every != 0))
+        st = report(user, s);
+    return st;
+}
+
+void tb_rad_ambient(const tb_rad_solver *s, double *out)
+{
+    int nc = s->nc;
+    for (int c = 0; c < nc; c++)
+        out[c] = 0.0;
+    for (size_t i = 0; i < s->m.nelems; i++)
+        for (int c = 0; c < nc; c++)
+            out[c] += s->dB[i * (size_t)nc + (size_t)c] * s->m.elems[i].area;
+    for (int c = 0; c < nc; c++)
+        out[c] = out[c] / s->total_area / (1.0 - s->rho_mean[c]);
+}
+
+/* Gathered irradiance at vertex v, channel c. */
+static inline double tb__Hv(const tb_rad_solver *s, uint32_t v, int c)
+{
+    return s->Hv[v * (size_t)s->nc + (size_t)c];
+}
+
+void tb_rad_element_radiosity(const tb_rad_solver *s, size_t i, bool ambient, double *out)
+{
+    int nc = s->nc;
+    double amb[TB_CHANNELS_MAX] = {0};
+    if (ambient)
+        tb_rad_ambient(s, amb);
+    for (int c = 0; c < nc; c++) {
+        double h = s->He[i * (size_t)nc + (size_t)c];
+        double rho = s->m.rho[i * (size_t)nc + (size_t)c];
+        out[c] = s->m.emission[i * (size_t)nc + (size_t)c] + rho * (h + amb[c]);
+    }
+}
+
+void tb_rad_element_unshot(const tb_rad_solver *s, size_t i, double *out)
+{
+    for (int c = 0; c < s->nc; c++)
+        out[c] = s->dB[i * (size_t)s->nc + (size_t)c];
+}
+
+void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambient, double *out)
+{
+    int nc = s->nc;
+    const tb_rad_element *e = &s->m.elems[i];
+    double amb[TB_CHANNELS_MAX] = {0};
+    if (ambient)
+        tb_rad_ambient(s, amb);
+    for (int c = 0; c < nc; c++) {
+        double rho = s->m.rho[i * (size_t)nc + (size_t)c];
+        out[c] = s->m.emission[i * (size_t)nc + (size_t)c] + rho * (tb__Hv(s, e->v[k], c) + amb[c]);
+    }
+}
+
+tb_rad_state tb_rad_solver_state(const tb_rad_solver *s)
+{
+    bool hemi = s->opt.ff == TB_RAD_FF_HEMICUBE;
+    tb_rad_state st = {.gathered = hemi ? s->He : s->Hv, .gathered_elems = hemi ? NULL : s->He, .unshot = s->dB};
+    return st;
+}
+
+tb_status tb_rad_formfactor(tb_rad_solver *s, size_t i, size_t j, double *f)
+{
+    *f = 0.0;
+    if (i >= s->m.nelems || j >= s->m.nelems)
+        return tb_error(TB_ERR_ARG, "radiosity: element index out of range");
+    if (i == j)
+        return TB_OK;
+    const tb_rad_element *ei = &s->m.elems[i], *ej = &s->m.elems[j];
+    if (s->opt.ff == TB_RAD_FF_HEMICUBE) {
+        tb_status st = tb_hemicube_formfactors(s->hc, ei->centroid, ei->normal, s->polys, s->m.nelems, (uint32_t)i,
+                                               s->ff);
+        if (!st)
+            *f = s->ff[j];
+        return st;
+    }
+    /* the whole shot, exactly as tb_rad_solver_step computes it */
+    tb_status st = tb__shot_formfactors(s, i, 0);
+    if (st)
+        return st;
+    double g = s->gnear[j];
+    if (isnan(g)) {
+        int n = tb__elem_size(ej);
+        g = 0.0;
+        for (int k = 0; k < n; k++)
+            g += s->ff[ej->v[k]];
+        g /= n;
+    }
+    for (size_t k = 0; k < s->nnear; k++)
+        s->gnear[s->near_list[k]] = NAN;
+    s->nnear = 0;
+    *f = g * ej->area / ei->area;
+    return TB_OK;
+}

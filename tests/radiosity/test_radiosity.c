@@ -1,0 +1,483 @@
+/* Progressive radiosity (host/radiosity/radiosity.h) against exact answers:
+ * the white furnace, a closed sphere with an emitting cap, energy
+ * bookkeeping, reciprocity, thread-count independence, the patches CSV, and
+ * the spectral Cornell box image. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+#include <omp.h>
+
+#include "host/radiosity/radiosity.h"
+#include "host/render/scene.h"
+#include "tb_test.h"
+#include "util/image/image.h"
+
+#define TB__PI 3.14159265358979323846
+
+static tb_scene *tb__load(const char *rel)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", TB_SOURCE_DIR, rel);
+    tb_scene_options so = {.no_accel = true};
+    tb_scene *s = NULL;
+    if (tb_scene_load(path, &so, &s))
+        fail_msg("%s", tb_last_error());
+    return s;
+}
+
+static tb_rad_solver *tb__solve(const tb_rad_mesh *m, const tb_rad_options *o, double threshold)
+{
+    tb_rad_solver *s = NULL;
+    if (tb_rad_solver_create(m, NULL, o, &s))
+        fail_msg("%s", tb_last_error());
+    tb_rad_stop stop = {.threshold = threshold};
+    if (tb_rad_solver_run(s, &stop, NULL, NULL, 0))
+        fail_msg("%s", tb_last_error());
+    return s;
+}
+
+/* Furnace: B = E / (1 - rho) = 2 on every element; the ambient term accounts
+ * for what is left unshot, so with it every element is within the
+ * form-factor error, and without it within that plus the threshold. */
+static void tb__furnace(tb_rad_ff_method ff, double tol)
+{
+    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 0.2};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    assert_int_equal(m.nelems, 6 * 25);
+    tb_rad_options o = {.ff = ff, .samples = 16, .hemicube_res = 128};
+    double thr = 1e-3;
+    tb_rad_solver *s = tb__solve(&m, &o, thr);
+    assert_true(tb_rad_unshot_fraction(s) < thr);
+    double b[TB_CHANNELS_MAX], worst = 0.0, worst_na = 0.0;
+    for (size_t i = 0; i < m.nelems; i++) {
+        tb_rad_element_radiosity(s, i, true, b);
+        for (int c = 0; c < m.nchannels; c++)
+            worst = fmax(worst, fabs(b[c] - 2.0) / 2.0);
+        if (getenv("TB_RAD_DEBUG") && fabs(b[0] - 2.0) > 0.04)
+            print_message("element %zu at %g %g %g: %g\n", i, (double)m.elems[i].centroid.x,
+                          (double)m.elems[i].centroid.y, (double)m.elems[i].centroid.z, b[0]);
+        tb_rad_element_radiosity(s, i, false, b);
+        for (int c = 0; c < m.nchannels; c++)
+            worst_na = fmax(worst_na, fabs(b[c] - 2.0) / 2.0);
+    }
+    print_message("furnace %s: worst relative error %.4f (ambient), %.4f (none), %llu shots\n",
+                  ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "raycast", worst, worst_na,
+                  (unsigned long long)tb_rad_solver_shots(s));
+    assert_true(worst < tol);
+    assert_true(worst_na < tol + 2.0 * thr);
+    tb_rad_solver_free(s);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
+static void test_furnace_raycast(void **state)
+{
+    (void)state;
+    tb__furnace(TB_RAD_FF_RAYCAST, 0.02);
+}
+
+static void test_furnace_hemicube(void **state)
+{
+    (void)state;
+    tb__furnace(TB_RAD_FF_HEMICUBE, 0.03);
+}
+
+/* A closed sphere of radius 1 seen from inside (lat-long quads, triangles
+ * at the poles, normals inward), elements above z > cap_z emitting E = 1,
+ * reflectance rho. */
+static void tb__sphere(tb_rad_mesh *m, int nlat, int nlon, double cap_z, float rho)
+{
+    tb_rad_mesh_init(m);
+    m->nchannels = 3;
+    size_t nv = (size_t)(nlat - 1) * (size_t)nlon + 2;
+    m->verts = calloc(nv, sizeof *m->verts);
+    size_t ne = (size_t)nlat * (size_t)nlon;
+    m->elems = calloc(ne, sizeof *m->elems);
+    m->rho = calloc(ne * 3, sizeof(float));
+    m->emission = calloc(ne * 3, sizeof(float));
+    assert_non_null(m->verts);
+    m->nverts = nv;
+    /* vertex 0: north pole, 1: south, then rings */
+    m->verts[0].p = tb_vec3_make(0, 0, 1);
+    m->verts[1].p = tb_vec3_make(0, 0, -1);
+    for (int i = 1; i < nlat; i++)
+        for (int j = 0; j < nlon; j++) {
+            double th = TB__PI * i / nlat, ph = 2 * TB__PI * j / nlon;
+            m->verts[2 + (size_t)(i - 1) * (size_t)nlon + (size_t)j].p =
+                tb_vec3_make((float)(sin(th) * cos(ph)), (float)(sin(th) * sin(ph)), (float)cos(th));
+        }
+    for (size_t v = 0; v < nv; v++)
+        m->verts[v].n = tb_vec3_scale(m->verts[v].p, -1.0f / tb_vec3_length(m->verts[v].p));
+#define RING(i, j) ((uint32_t)(2 + (size_t)((i) - 1) * (size_t)nlon + (size_t)(((j) % nlon))))
+    size_t e = 0;
+    for (int i = 0; i < nlat; i++)
+        for (int j = 0; j < nlon; j++, e++) {
+            tb_rad_element *el = &m->elems[e];
+            el->parent = TB_RAD_NONE;
+            /* counter-clockwise seen from inside (the centre) */
+            if (i == 0)
+                *el = (tb_rad_element){.v = {0, RING(1, j + 1), RING(1, j), TB_RAD_NONE}, .parent = TB_RAD_NONE};
+            else if (i == nlat - 1)
+                *el = (tb_rad_element){.v = {1, RING(i, j), RING(i, j + 1), TB_RAD_NONE}, .parent = TB_RAD_NONE};
+            else
+                *el = (tb_rad_element){.v = {RING(i, j), RING(i, j + 1), RING(i + 1, j + 1), RING(i + 1, j)},
+                                       .parent = TB_RAD_NONE};
+        }
+#undef RING
+    m->nelems = ne;
+    assert_int_equal(tb_rad_mesh_update_geometry(m), TB_OK);
+    for (size_t k = 0; k < ne; k++) {
+        /* inward: the normal points to the centre */
+        assert_true(tb_vec3_dot(m->elems[k].normal, m->elems[k].centroid) < 0.0f);
+        for (int c = 0; c < 3; c++) {
+            m->rho[k * 3 + (size_t)c] = rho;
+            m->emission[k * 3 + (size_t)c] = m->elems[k].centroid.z > cap_z ? 1.0f : 0.0f;
+        }
+    }
+}
+
+/* In a sphere F_ij = A_j / A, so B_i = E_i + rho Ebar / (1 - rho) with Ebar
+ * the area-weighted mean emission. */
+static void test_sphere_cap(void **state)
+{
+    (void)state;
+    tb_rad_mesh m;
+    float rho = 0.6f;
+    tb__sphere(&m, 12, 24, 0.8, rho);
+    double ea = 0.0, a = 0.0;
+    for (size_t i = 0; i < m.nelems; i++)
+        ea += m.emission[i * 3] * m.elems[i].area, a += m.elems[i].area;
+    double ebar = ea / a;
+    assert_true(ebar > 0.0 && ebar < 0.2);
+    for (int method = 0; method < 2; method++) {
+        /* the inside of a sphere is convex: nothing to occlude */
+        tb_rad_options o = {.ff = method ? TB_RAD_FF_HEMICUBE : TB_RAD_FF_RAYCAST, .samples = 16, .no_occlusion = true};
+        tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+        double worst = 0.0, b[3];
+        for (size_t i = 0; i < m.nelems; i++) {
+            tb_rad_element_radiosity(s, i, true, b);
+            double exact = m.emission[i * 3] + rho * ebar / (1.0 - rho);
+            /* relative to the reflected part, the hard one */
+            worst = fmax(worst, fabs(b[1] - exact) / (rho * ebar / (1.0 - rho)));
+        }
+        print_message("sphere cap %s: worst error %.4f of the reflected radiosity\n", method ? "hemicube" : "raycast",
+                      worst);
+        assert_true(worst < 0.1);
+        tb_rad_solver_free(s);
+    }
+    tb_rad_mesh_free(&m);
+}
+
+/* Power bookkeeping: absorbed + unshot + escaped = emitted; in the closed
+ * furnace almost nothing escapes, and the absorbed power equals the one
+ * computed independently from the solution, sum (1 - rho) H A. */
+static void test_energy(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 0.25};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    /* only the floor emits, so light has to bounce */
+    for (size_t i = 0; i < m.nelems; i++)
+        if (m.elems[i].object != 0)
+            for (int c = 0; c < m.nchannels; c++)
+                m.emission[i * (size_t)m.nchannels + (size_t)c] = 0.0f;
+    tb_rad_options o = {.samples = 16};
+    tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+    tb_rad_energy en = tb_rad_solver_energy(s);
+    print_message("energy: emitted %g absorbed %g unshot %g escaped %g\n", en.emitted, en.absorbed, en.unshot,
+                  en.escaped);
+    assert_true(en.emitted > 0.0);
+    tb_assert_near(en.absorbed + en.unshot + en.escaped, en.emitted, 1e-9 * en.emitted);
+    assert_true(fabs(en.escaped) < 0.02 * en.emitted);
+    assert_true(en.unshot < 0.01 * en.emitted);
+    /* independent: absorbed = sum over elements of (1 - rho) (B - E) / rho A */
+    double absorbed = 0.0, b[TB_CHANNELS_MAX];
+    int nc = m.nchannels;
+    for (size_t i = 0; i < m.nelems; i++) {
+        tb_rad_element_radiosity(s, i, false, b);
+        for (int c = 0; c < nc; c++) {
+            double rho = m.rho[i * (size_t)nc + (size_t)c], e = m.emission[i * (size_t)nc + (size_t)c];
+            absorbed += (1.0 - rho) * (b[c] - e) / rho * m.elems[i].area;
+        }
+    }
+    tb_assert_near(absorbed, en.absorbed, 1e-6 * en.emitted);
+    tb_rad_solver_free(s);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
+/* A_i F_ij = A_j F_ji on the solver's own form factors, in the furnace
+ * (convex, so point-sampled visibility plays no part), for pairs of
+ * elements at least two element sizes apart. */
+static void test_reciprocity(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 0.2};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    for (int method = 0; method < 2; method++) {
+        tb_rad_options o = {.ff = method ? TB_RAD_FF_HEMICUBE : TB_RAD_FF_RAYCAST, .samples = 16,
+                            .hemicube_res = 256};
+        tb_rad_solver *s = NULL;
+        assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &s), TB_OK);
+        int checked = 0;
+        double worst = 0.0, sum_fij = 0.0, sum_diff = 0.0, sum_max = 0.0;
+        for (size_t i = 0; i < m.nelems; i += 4) {
+            for (size_t j = i + 1; j < m.nelems; j += 5) {
+                const tb_rad_element *ei = &m.elems[i], *ej = &m.elems[j];
+                if (tb_vec3_distance(ei->centroid, ej->centroid) < 0.4)
+                    continue;
+                double fij, fji;
+                assert_int_equal(tb_rad_formfactor(s, i, j, &fij), TB_OK);
+                assert_int_equal(tb_rad_formfactor(s, j, i, &fji), TB_OK);
+                double l = ei->area * fij, r = ej->area * fji;
+                sum_fij += fij;
+                if (fmax(l, r) < 1e-4 * ei->area)
+                    continue; /* coplanar */
+                worst = fmax(worst, fabs(l - r) / fmax(l, r));
+                sum_diff += fabs(l - r), sum_max += fmax(l, r);
+                checked++;
+            }
+        }
+        print_message("reciprocity %s: %d pairs, worst relative difference %.4f, overall %.4f\n",
+                      method ? "hemicube" : "raycast", checked, worst, sum_diff / sum_max);
+        assert_true(checked > 150);
+        assert_true(sum_fij > 0.0);
+        /* the corner-mean quadrature of ray-cast F_ji is not symmetric:
+         * docs/radiosity.md, "Accuracy" */
+        assert_true(sum_diff / sum_max < 0.03);
+        assert_true(worst < 0.2);
+        tb_rad_solver_free(s);
+    }
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
+static char *tb__slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    buf[n] = 0;
+    fclose(f);
+    *len = (size_t)n;
+    return buf;
+}
+
+/* The same CSV bytes with 1 and 2 threads. */
+static void test_threads(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb__load("scenes/cornell-box-rgb.mid");
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 120};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    char p1[1024], p2[1024];
+    snprintf(p1, sizeof p1, "%s/rad_threads1.csv", tb_test_tmpdir());
+    snprintf(p2, sizeof p2, "%s/rad_threads2.csv", tb_test_tmpdir());
+    for (int t = 1; t <= 2; t++) {
+        omp_set_num_threads(t);
+        tb_rad_options o = {.samples = 4, .seed = 7};
+        tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+        assert_int_equal(tb_rad_write_patches(s, t == 1 ? p1 : p2), TB_OK);
+        tb_rad_solver_free(s);
+    }
+    size_t n1, n2;
+    char *a = tb__slurp(p1, &n1), *b = tb__slurp(p2, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(a, b, n1);
+    /* and a different seed changes the answer (the comparison can fail) */
+    tb_rad_options o = {.samples = 4, .seed = 8};
+    tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+    assert_int_equal(tb_rad_write_patches(s, p2), TB_OK);
+    tb_rad_solver_free(s);
+    free(b);
+    b = tb__slurp(p2, &n2);
+    assert_true(n1 != n2 || memcmp(a, b, n1) != 0);
+    free(a), free(b);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
+/* The CSV header, one row per element, object = the face of the cube the
+ * centroid lies on, and tb_rad_read_patches reading it back. */
+static void test_patches_csv(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 0.5};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    tb_rad_options o = {.samples = 4};
+    tb_rad_solver *s = tb__solve(&m, &o, 0.1);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/rad_patches.csv", tb_test_tmpdir());
+    assert_int_equal(tb_rad_write_patches(s, path), TB_OK);
+    size_t len;
+    char *text = tb__slurp(path, &len);
+    const char *hdr = "element,object,area,cx,cy,cz,nx,ny,nz,b_r,b_g,b_b,u_r,u_g,u_b\n";
+    assert_memory_equal(text, hdr, strlen(hdr));
+    char *line = strchr(text, '\n') + 1;
+    size_t rows = 0;
+    /* face k of furnace.mid: floor z=0, ceiling z=1, y=0, y=1, x=0, x=1 */
+    while (*line) {
+        unsigned long el, obj;
+        double area, c[3], n[3], b[3], u[3];
+        int k = sscanf(line, "%lu,%lu,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &el, &obj, &area, &c[0],
+                       &c[1], &c[2], &n[0], &n[1], &n[2], &b[0], &b[1], &b[2], &u[0], &u[1], &u[2]);
+        assert_int_equal(k, 15);
+        assert_int_equal(el, rows);
+        assert_true(obj < 6);
+        int axis = obj < 2 ? 2 : obj < 4 ? 1 : 0;
+        double side = (obj % 2) ? 1.0 : 0.0;
+        tb_assert_near(c[axis], side, 1e-6);
+        tb_assert_near(n[axis], side ? -1.0 : 1.0, 1e-6);
+        tb_assert_near(area, 0.25, 1e-6);
+        assert_true(b[0] >= 1.0 && b[0] <= 2.0 && u[0] >= 0.0);
+        rows++;
+        line = strchr(line, '\n') + 1;
+    }
+    assert_int_equal(rows, m.nelems);
+    free(text);
+    size_t nr;
+    int ncol;
+    double *vals;
+    assert_int_equal(tb_rad_read_patches(path, &nr, &ncol, &vals), TB_OK);
+    assert_int_equal(nr, m.nelems);
+    assert_int_equal(ncol, 3);
+    double b[3];
+    tb_rad_element_radiosity(s, 5, false, b);
+    tb_assert_near(vals[5 * 3 + 1], b[1], 1e-8 * b[1]);
+    free(vals);
+    tb_rad_solver_free(s);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
+/* Continuing from a state gives the same answer as running on. */
+static void test_continue(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 0.25};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    tb_rad_options o = {.samples = 8};
+    tb_rad_solver *a = NULL, *b = NULL;
+    assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &a), TB_OK);
+    tb_rad_stop st = {.threshold = 1e-9, .max_shots = 40};
+    assert_int_equal(tb_rad_solver_run(a, &st, NULL, NULL, 0), TB_OK);
+    tb_rad_state s0 = tb_rad_solver_state(a);
+    assert_int_equal(tb_rad_solver_create(&m, &s0, &o, &b), TB_OK);
+    tb_assert_near(tb_rad_unshot_fraction(b), tb_rad_unshot_fraction(a), 1e-12);
+    double x[3], y[3];
+    for (size_t i = 0; i < m.nelems; i++) {
+        tb_rad_element_radiosity(a, i, true, x);
+        tb_rad_element_radiosity(b, i, true, y);
+        tb_assert_near(x[0], y[0], 1e-12);
+    }
+    tb_rad_energy e = tb_rad_solver_energy(b);
+    tb_assert_near(e.absorbed + e.unshot + e.escaped, e.emitted, 1e-9 * e.emitted);
+    tb_rad_solver_free(a);
+    tb_rad_solver_free(b);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
+/* Bad arguments are refused with a message. */
+static void test_errors(void **state)
+{
+    (void)state;
+    tb_rad_mesh m;
+    tb__sphere(&m, 4, 8, 0.5, 0.5f);
+    tb_rad_solver *s = NULL;
+    tb_rad_options o = {.samples = -1};
+    assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &s), TB_ERR_ARG);
+    assert_null(s);
+    o = (tb_rad_options){.ff = (tb_rad_ff_method)7};
+    assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &s), TB_ERR_ARG);
+    m.rho[4] = 1.0f;
+    o = (tb_rad_options){0};
+    assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &s), TB_ERR_ARG);
+    assert_non_null(strstr(tb_last_error(), "reflectance"));
+    m.rho[4] = 0.5f;
+    m.elems[3].v[1] = 100000;
+    assert_int_equal(tb_rad_mesh_update_geometry(&m), TB_ERR_ARG);
+    tb_rad_mesh_free(&m);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/rad_bad.csv", tb_test_tmpdir());
+    FILE *f = fopen(path, "w");
+    fputs("element,object,area,cx,cy,cz,nx,ny,nz,b_r\n0,0,1,0,0,0,0,0,1,zz\n", f);
+    fclose(f);
+    size_t nr;
+    int nc;
+    double *v;
+    assert_int_equal(tb_rad_read_patches(path, &nr, &nc, &v), TB_ERR_FORMAT);
+}
+
+/* The spectral Cornell box: the red wall is on the left of the image, the
+ * green one on the right, and the image is not black. */
+static void test_cornell_image(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb__load("scenes/cornell-box.mid");
+    assert_true(sc->spectral);
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 100};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    tb_rad_options o = {.samples = 4};
+    tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+    tb_image *img = NULL;
+    assert_int_equal(tb_rad_render_image(s, sc, 1, &img), TB_OK);
+    assert_int_equal(img->channels, 3);
+    /* mean colour of a band of columns at mid height */
+    double left[3] = {0}, right[3] = {0}, all = 0.0;
+    int w = img->width, h = img->height, n = 0;
+    for (int y = h / 3; y < 2 * h / 3; y++)
+        for (int x = 0; x < w / 12; x++, n++)
+            for (int c = 0; c < 3; c++) {
+                left[c] += img->pixels[((size_t)y * (size_t)w + (size_t)(w / 48 + x)) * 3 + (size_t)c];
+                right[c] += img->pixels[((size_t)y * (size_t)w + (size_t)(w - 1 - w / 48 - x)) * 3 + (size_t)c];
+            }
+    for (size_t k = 0; k < (size_t)w * (size_t)h * 3; k++)
+        all += img->pixels[k];
+    print_message("cornell: left %.4g %.4g %.4g, right %.4g %.4g %.4g\n", left[0] / n, left[1] / n, left[2] / n,
+                  right[0] / n, right[1] / n, right[2] / n);
+    assert_true(all > 0.0);
+    assert_true(left[0] > 2.0 * left[1] && left[0] > 2.0 * left[2]);
+    assert_true(right[1] > 1.5 * right[0] && right[1] > right[2]);
+    tb_image_free(img);
+    tb_rad_solver_free(s);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc > 1)
+        cmocka_set_test_filter(argv[1]);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_furnace_raycast), cmocka_unit_test(test_furnace_hemicube),
+        cmocka_unit_test(test_sphere_cap),      cmocka_unit_test(test_energy),
+        cmocka_unit_test(test_reciprocity),     cmocka_unit_test(test_threads),
+        cmocka_unit_test(test_patches_csv),     cmocka_unit_test(test_continue),
+        cmocka_unit_test(test_errors),          cmocka_unit_test(test_cornell_image),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
