@@ -41,7 +41,8 @@ static void tb__usage(FILE *out)
             "\n"
             "  --kernel K   intersect, shade, formfactor or all (every one)\n"
             "               shade: the image rendered by the CPU ray tracer and by the Vulkan wavefront\n"
-            "               renderer (testbed render --backend vulkan) at 96 pixels wide, 4 spp, seed S;\n"
+            "               renderer (testbed render --backend vulkan) at 4 spp, seed S, at most 96 pixels\n"
+            "               wide and --rays camera samples;\n"
             "               image NMSE against its tolerance, hits shaded by the kernel and routed\n"
             "               formfactor: the scene meshed into elements as for radiosity (edge: bounds\n"
             "               diagonal / 24); receivers at element centroids and corners; shooters: emitting\n"
@@ -296,7 +297,7 @@ formfactor:
     }
     if (!strcmp(kernel, "shade") || !strcmp(kernel, "all")) { /* cmd_validate_shade.c */
         bool sh_ok = false;
-        if (tb_validate_shade(s, &sess, 96, 4, seed, &sh_ok))
+        if (tb_validate_shade(s, &sess, nrays, seed, &sh_ok))
             goto done;
         ok = ok && sh_ok;
     }

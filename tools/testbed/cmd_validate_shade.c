@@ -9,11 +9,14 @@
 #include "host/render/render.h"
 #include "util/image/image.h"
 
-int tb_validate_shade(const tb_scene *s, tb_gpu_session *sess, int width, int spp, long seed, bool *ok)
+int tb_validate_shade(const tb_scene *s, tb_gpu_session *sess, long samples, long seed, bool *ok)
 {
     *ok = false;
+    const int spp = 4;
     /* A shallow copy of the scene with a smaller camera: only the camera differs. */
     tb_scene sc = *s;
+    double aspect = (double)s->camera.width / s->camera.height;
+    int width = (int)fmin(96.0, fmax(8.0, floor(sqrt((double)samples / spp * aspect))));
     int w = width < s->camera.width ? width : s->camera.width;
     int h = (int)lround((double)s->camera.height * w / s->camera.width);
     if (h < 1)

@@ -16,12 +16,13 @@
  * here long before it shows in the NMSE. */
 #define TB_VALIDATE_SHADE_TOL_BIAS 1e-3
 
-/* Renders `s` at a small resolution (width `width`, the file's aspect ratio)
- * with `spp` samples per pixel and seed `seed` on the CPU path and with the
+/* Renders `s` at a small resolution (the file's aspect ratio, at most 96
+ * pixels wide and `samples` camera samples, at least 8 pixels wide) with 4
+ * samples per pixel and seed `seed` on the CPU path and with the
  * Vulkan wavefront renderer on the session's device, prints the image NMSE,
  * the mean bias, the largest pixel difference and the routing, and sets *ok
  * when the NMSE and the bias are within their tolerances. Returns nonzero (message printed)
  * when a render fails. */
-int tb_validate_shade(const tb_scene *s, tb_gpu_session *sess, int width, int spp, long seed, bool *ok);
+int tb_validate_shade(const tb_scene *s, tb_gpu_session *sess, long samples, long seed, bool *ok);
 
 #endif
