@@ -13,7 +13,7 @@ if ! TB_VK_VALIDATION=1 "$TESTBED" validate "$scene" --kernel formfactor --shoot
     exit 1
 fi
 cat "$out"
-for line in "max relative error .* ok$" "mean relative error .* ok$" "visibility agreement .* ok$" \
+for line in "max scaled error .* ok$" "max relative error " "mean relative error .* ok$" "visibility agreement .* ok$" \
             "validation layer       0 errors, 0 warnings  ok"; do
     grep -q "$line" "$out" || { echo "missing: $line"; exit 1; }
 done
