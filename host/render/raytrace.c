@@ -219,10 +219,41 @@ static tb_channels tb__textured(const tb_raytracer *rt, const tb_material *m, in
     return tb_channels_mul(base, t);
 }
 
+/* What a glossy ray needs to weight the emission it finds against the light
+ * samples of the same point (multiple importance sampling, power heuristic). */
+typedef struct tb__mis {
+    tb_vec3 p;       /* the shading point the ray left, where the light samples are taken from */
+    tb_vec3 w;       /* the ray's unit direction */
+    double pdf;      /* the lobe's density of w */
+    double nb, nl;   /* glossy rays and light samples taken there */
+} tb__mis;
+
+/* Solid-angle density with which the area light's sampler, called at p,
+ * returns direction w: the sum over the emitters the line crosses. */
+static double tb__area_pdf_dir(const tb_raytracer *rt, tb_vec3 p, tb_vec3 w)
+{
+    double pdf = 0.0;
+    for (int i = 0; i < rt->area.n; i++) {
+        double t;
+        tb_vec3 q, nq;
+        if (tb_emitter_intersect(&rt->area.emitters[i], p, w, &t, &q, &nq))
+            pdf += tb_area_light_pdf(&rt->area, i, p, q, nq);
+    }
+    return pdf;
+}
+
+/* The power heuristic weight of a sample of density a (x its count) against
+ * the other strategy's b. */
+static double tb__power(double a, double b)
+{
+    return a > 0.0 ? a * a / (a * a + b * b) : 0.0;
+}
+
 /* rd: the camera ray's offset rays {rx_o, rx_d, ry_o, ry_d} (NULL past the
- * first hit: reflected and refracted rays are point sampled). */
+ * first hit: reflected and refracted rays are point sampled). mis: set for a
+ * glossy ray, whose emission found is weighted against light sampling. */
 static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb_vec3 *rd, tb_rng *rng,
-                             int depth)
+                             int depth, const tb__mis *mis)
 {
     const tb_scene *s = rt->scene;
     const int nch = s->nchannels;
@@ -278,9 +309,14 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
     }
 
     /* Emitters are one-sided: M / pi on the front side only. */
-    if (m->emits && front)
-        L = tb_channels_add(L, tb_radiance_from_exitance(
-                                   tb__textured(rt, m, TB__RT_SLOT_EMISSION, m->emission, &hit, fp)));
+    if (m->emits && front) {
+        double w = 1.0;
+        if (mis && rt->has_area)
+            w = tb__power(mis->nb * mis->pdf, mis->nl * tb__area_pdf_dir(rt, mis->p, mis->w));
+        L = tb_channels_add_scaled(
+            L, tb_radiance_from_exitance(tb__textured(rt, m, TB__RT_SLOT_EMISSION, m->emission, &hit, fp)),
+            (float)w);
+    }
 
     tb_channels diffuse =
         tb__textured(rt, m, TB__RT_SLOT_DIFFUSE, tb__patterned(rt, m, 0, m->diffuse, g), &hit, fp);
@@ -303,6 +339,10 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
         frame = tb_frame_from_normal(n);
         wo_local = tb_frame_to_local(&frame, wo);
     }
+    /* Glossy rays are traced (below) unless the material refracts or the
+     * depth is exhausted; their count enters the MIS weights. */
+    const bool glossy_rays = ggx && !has_transmission && depth < rt->max_depth;
+    const int nglossy = glossy_rays ? (depth == 0 ? rt->glossy_samples : 1) : 0;
 
     /* Point, spot and directional lights: Lambert + the model's specular lobe. */
     if ((has_diffuse || has_specular) && s->nlights > 0) {
@@ -325,8 +365,11 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
     }
 
     /* Area lights: stratified samples over all emitters (soft shadows). The
-     * specular part of area lights arrives through the mirror ray instead. */
-    if (has_diffuse && rt->has_area) {
+     * Phong/Blinn specular part of area lights arrives through the mirror ray
+     * instead; the GGX lobe takes both, weighted by the power heuristic
+     * against its glossy rays (which weight the emission they find likewise). */
+    if ((has_diffuse || ggx) && rt->has_area) {
+        tb_channels G = tb_channels_splat(nch, 0.0f);
         float u[2 * TB__RT_MAX_LIGHT_SAMPLES];
         tb_stratified_2d(rng, rt->lsx, rt->lsy, u);
         tb_channels E = tb_channels_splat(nch, 0.0f);
@@ -340,9 +383,17 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             if (tb__shadowed(s, p, perr, ng, &ls))
                 continue;
             E = tb_channels_add_scaled(E, ls.L, (float)(cosi / ls.pdf));
+            if (ggx) {
+                tb_vec3 wi = tb_frame_to_local(&frame, ls.wi);
+                double w = tb__power(rt->light_samples * ls.pdf, nglossy * tb_bsdf_pdf(&lobe, wo_local, wi));
+                G = tb_channels_add(G, tb_channels_scale(tb_channels_mul(tb_bsdf_eval(&lobe, wo_local, wi), ls.L),
+                                                         (float)(cosi / ls.pdf * w)));
+            }
         }
         L = tb_channels_add(L, tb_channels_mul(diffuse,
                                                tb_channels_scale(E, (float)(1.0 / (TB_PI * rt->light_samples)))));
+        if (ggx)
+            L = tb_channels_add_scaled(L, G, (float)(1.0 / rt->light_samples));
     }
 
     if (depth >= rt->max_depth)
@@ -356,19 +407,19 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
         if (sp.R > 0.0) {
             tb_ray r = tb__spawn(p, perr, ng, tb_frame_to_world(&fr, sp.wr));
             TB_STAT_INC(tb__rt_secondary_rays);
-            L = tb_channels_add_scaled(L, tb__trace(rt, &r, NULL, rng, depth + 1), (float)sp.R);
+            L = tb_channels_add_scaled(L, tb__trace(rt, &r, NULL, rng, depth + 1, NULL), (float)sp.R);
         }
         if (sp.refracts && sp.T > 0.0) {
             tb_ray r = tb__spawn(p, perr, ng, tb_vec3_normalize(tb_frame_to_world(&fr, sp.wt)));
             TB_STAT_INC(tb__rt_secondary_rays);
-            tb_channels Lt = tb__trace(rt, &r, NULL, rng, depth + 1);
+            tb_channels Lt = tb__trace(rt, &r, NULL, rng, depth + 1, NULL);
             L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(transmission, Lt), (float)sp.T));
         }
-    } else if (ggx) {
+    } else if (glossy_rays) {
         /* Glossy reflection (distributed ray tracing): rays sampled from the
          * GGX lobe's visible normals, each weighted by F G2 / G1; the split
          * into several rays is done only at the camera ray's hit. */
-        int ns = depth == 0 ? rt->glossy_samples : 1, nx = depth == 0 ? rt->gsx : 1, ny = depth == 0 ? rt->gsy : 1;
+        int ns = nglossy, nx = depth == 0 ? rt->gsx : 1, ny = depth == 0 ? rt->gsy : 1;
         float u[2 * TB__RT_MAX_LIGHT_SAMPLES];
         tb_stratified_2d(rng, nx, ny, u);
         tb_channels Lg = tb_channels_splat(nch, 0.0f);
@@ -381,7 +432,8 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
                 continue; /* a bumped normal can send the ray into the surface: no light there */
             tb_ray r = tb__spawn(p, perr, ng, wi);
             TB_STAT_INC(tb__rt_secondary_rays);
-            Lg = tb_channels_add(Lg, tb_channels_mul(bs.weight, tb__trace(rt, &r, NULL, rng, depth + 1)));
+            const tb__mis mis_g = {p, wi, bs.pdf, (double)ns, (double)rt->light_samples};
+            Lg = tb_channels_add(Lg, tb_channels_mul(bs.weight, tb__trace(rt, &r, NULL, rng, depth + 1, &mis_g)));
         }
         L = tb_channels_add_scaled(L, Lg, 1.0f / (float)ns);
     } else if (has_specular) {
@@ -390,7 +442,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
         if ((tb_vec3_dot(wr, ng) > 0.0f) == front) { /* a bumped normal can mirror into the surface */
             tb_ray r = tb__spawn(p, perr, ng, wr);
             TB_STAT_INC(tb__rt_secondary_rays);
-            L = tb_channels_add(L, tb_channels_mul(specular, tb__trace(rt, &r, NULL, rng, depth + 1)));
+            L = tb_channels_add(L, tb_channels_mul(specular, tb__trace(rt, &r, NULL, rng, depth + 1, NULL)));
         }
     }
     return L;
@@ -398,7 +450,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
 
 tb_channels tb_rt_radiance(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng)
 {
-    return tb__trace(rt, ray, NULL, rng, 0);
+    return tb__trace(rt, ray, NULL, rng, 0, NULL);
 }
 
 void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
@@ -416,7 +468,7 @@ void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
         tb_camera_ray_diff cd;
         tb_camera_ray_differential(cam, x, y, lu, lv, &cd);
         const tb_vec3 rd[4] = {cd.rx_o, cd.rx_d, cd.ry_o, cd.ry_d};
-        L = tb__trace(rt, &cd.ray, rd, rng, 0);
+        L = tb__trace(rt, &cd.ray, rd, rng, 0, NULL);
     } else {
         tb_ray r = tb_camera_ray(cam, x, y, lu, lv);
         L = tb_rt_radiance(rt, &r, rng);

@@ -147,6 +147,46 @@ static void test_ggx_white_furnace(void **state)
     }
 }
 
+/* A GGX floor (F0 = 1, alpha 0.3) under a 1 x 1 emitter of radiance 1 at
+ * height 2, seen along the mirror direction of the emitter's centre: light
+ * samples and glossy rays, combined by the power heuristic, must give the
+ * integral of f L cos cos' / d^2 over the emitter (quadrature here). Weights
+ * that did not sum to one for every direction would bias it. */
+static void test_ggx_area_light_mis(void **state)
+{
+    (void)state;
+    const double alpha = 0.3;
+    tb_scene *s = load("mid 1.1\n"
+                       "polygons { geometry = { vertices = [[0 -0.5 2] [0 0.5 2] [1 0.5 2] [1 -0.5 2]] faces = [[0 1 2 3]] }\n"
+                       "  rendering = { diffuse = 0 emission = 3.14159265358979 } }\n"
+                       "polygons { geometry = { vertices = [[-50 -50 0] [50 -50 0] [50 50 0] [-50 50 0]] faces = [[0 1 2 3]] }\n"
+                       "  rendering = { diffuse = 0 specular = 1 model = ggx roughness = 0.3 } }\n");
+    tb_bsdf b = tb_bsdf_ggx(tb_channels_splat(1, 1.0f), alpha, TB_FRESNEL_SCHLICK, 1.0);
+    tb_vec3 wo = tb_vec3_normalize((tb_vec3){-0.5f, 0.0f, 2.0f});
+    const int n = 400;
+    double want = 0.0;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double x = (i + 0.5) / n, y = -0.5 + (j + 0.5) / n, d2 = x * x + y * y + 4.0;
+            tb_vec3 wi = {(float)(x / sqrt(d2)), (float)(y / sqrt(d2)), (float)(2.0 / sqrt(d2))};
+            want += tb_bsdf_eval(&b, wo, wi).v[0] * wi.z * wi.z / d2 / ((double)n * n);
+        }
+    tb_raytracer rt;
+    rt_init(&rt, s, 16);
+    const int calls = 400;
+    double sum = 0.0, sum2 = 0.0;
+    for (int c = 0; c < calls; c++) {
+        double L = radiance(&rt, tb_vec3_scale(wo, 3.0f), (tb_vec3){0, 0, 0}, (uint64_t)c).v[0];
+        sum += L;
+        sum2 += L * L;
+    }
+    double mean = sum / calls, se = sqrt(fmax(0.0, sum2 / calls - mean * mean) / calls);
+    print_message("GGX under an area light (MIS): rendered %.5f +- %.5f, quadrature %.5f\n", mean, se, want);
+    tb_assert_near(mean, want, 5.0 * se + 1e-3 * want);
+    tb_rt_release(&rt);
+    tb_scene_free(s);
+}
+
 /* ------------------------------------------------------- models, point light */
 
 static void test_models_under_point_light(void **state)
@@ -356,6 +396,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ggx_white_furnace),
+        cmocka_unit_test(test_ggx_area_light_mis),
         cmocka_unit_test(test_models_under_point_light),
         cmocka_unit_test(test_grazing_checker_is_grey),
         cmocka_unit_test(test_noise_pattern_statistics),
