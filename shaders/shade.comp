@@ -361,6 +361,8 @@ void main()
         }
     } else if (HAS_MIRROR && has_specular) {
         vec3 w = normalize(2.0 * dot(wo, n) * n - wo);
+        if ((dot(w, ng) > 0.0) != front)
+            return; // rounded into the surface at grazing incidence: raytrace.c traces nothing either
         write_ray(S, spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
         put(vm, 0, 1.0);
         for (int k = 0; k < NCH; k++)

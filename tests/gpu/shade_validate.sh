@@ -11,7 +11,7 @@ out="$TB_TEST_TMPDIR/shade_validate.out"
 n=0
 for scene in "$TB_SOURCE_DIR"/scenes/*.mid "$TB_SOURCE_DIR"/scenes/tests/*.mid; do
     [ -f "$scene" ] || continue
-    if ! TB_VK_VALIDATION=1 "$TESTBED" validate "$scene" --kernel shade --seed 5 >"$out" 2>&1; then
+    if ! TB_VK_VALIDATION=1 "$TESTBED" validate "$scene" --kernel shade --seed 5 --rays 16384 >"$out" 2>&1; then
         echo "FAIL: testbed validate --kernel shade $scene"
         cat "$out"
         exit 1
