@@ -12,7 +12,8 @@
  * pixel's footprint from camera ray differentials (EWA by default;
  * docs/raytrace.md). MID 1.1 materials: the specular term's model (Phong,
  * exactly normalised Blinn-Phong, none for Lambert, or a GGX lobe whose
- * reflections are glossy rays sampled from it), checker and noise patterns
+ * reflections are glossy rays sampled from it, combined with the area-light
+ * samples by multiple importance sampling), checker and noise patterns
  * in (u, v) or object space (footprint-filtered), and bump maps from noise
  * or a height image. No indirect diffuse light.
  *

@@ -6,6 +6,9 @@
  *    radiance 1 (a white furnace) returns its directional albedo E(wo),
  *    integrated here from tb_bsdf_eval by quadrature (< 1: the
  *    single-scattering loss);
+ *  - a GGX floor under a small area light, lit by light samples and glossy
+ *    rays combined by multiple importance sampling, gives the quadrature of
+ *    f L cos cos' / d^2 over the emitter;
  *  - under a point light, every model's radiance is rho/pi + its lobe times
  *    I cos / d^2 (GGX: tb_bsdf_eval; Blinn: the exact normalisation; Lambert:
  *    no specular term), so GGX and Lambert differ by the lobe where it is
