@@ -1,0 +1,78 @@
+#!/bin/sh
+# `testbed render --backend`: auto on lavapipe uses the CPU path and says
+# why; without a Vulkan driver auto falls back with the reason and vulkan
+# fails without writing an image; --backend metal is a usage error,
+# --adaptive is refused on the Vulkan renderer; --help lists the options;
+# and a tile with more samples than a wavefront batch holds, rendered over
+# two batches, gives the CPU's image. (The other image comparisons are in
+# shade_cli.sh.)
+set -eu
+: "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
+t="$TB_TEST_TMPDIR"
+fail() { echo "FAIL: $*"; [ -f "$t/backend.err" ] && cat "$t/backend.err"; [ -f "$t/backend.out" ] && cat "$t/backend.out"; exit 1; }
+sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [32 32]/' "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" >"$t/backend.mid"
+
+# Image NMSE = sum (a - b)^2 / sum b^2 of two PFM files (b the reference).
+nmse() {
+    python3 - "$1" "$2" <<'EOF'
+import struct, sys
+def rd(p):
+    with open(p, 'rb') as f:
+        assert f.readline().strip() == b'PF'
+        w, h = map(int, f.readline().split())
+        s = float(f.readline())
+        n = w * h * 3
+        return struct.unpack(('<' if s < 0 else '>') + '%df' % n, f.read(4 * n))
+a, b = rd(sys.argv[1]), rd(sys.argv[2])
+assert len(a) == len(b)
+num = sum((x - y) ** 2 for x, y in zip(a, b))
+den = sum(y * y for y in b)
+print('%.6g' % (num / den if den > 0 else float('inf')))
+EOF
+}
+
+# More samples than a wavefront batch holds (65 536) in one tile: the tile is
+# rendered in runs of rows over several batches; same image as the CPU.
+sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [20 8]/' "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" >"$t/split.mid"
+"$TESTBED" render "$t/split.mid" -o "$t/split-cpu.pfm" --spp 600 --backend cpu >/dev/null 2>&1 || fail "cpu split"
+"$TESTBED" render "$t/split.mid" -o "$t/split-vk.pfm" --spp 600 --backend vulkan >"$t/backend.out" 2>&1 ||
+    fail "vulkan split"
+grep -q " 2 waves" "$t/backend.out" || fail "the 20 x 8 image at 600 spp should take 2 batches of one wave"
+e=$(nmse "$t/split-vk.pfm" "$t/split-cpu.pfm")
+echo "20x8 600 spp (tiles split across batches): NMSE $e"
+python3 -c "import sys; sys.exit(0 if $e <= 1e-4 else 1)" || fail "split: NMSE $e > 1e-4"
+
+# Backend choice: auto on a CPU driver uses the CPU path and says why.
+"$TESTBED" render "$t/backend.mid" -o "$t/auto.pfm" --backend auto >"$t/backend.out" 2>"$t/backend.err" ||
+    fail "auto"
+if grep -q "(CPU)" "$t/backend.err" || ! grep -q "backend vulkan" "$t/backend.err"; then
+    grep -q "backend cpu: " "$t/backend.err" || fail "auto on lavapipe should say it uses the CPU path"
+    if grep -q "hits shaded by the kernel" "$t/backend.out"; then fail "auto on lavapipe ran the kernel"; fi
+fi
+# No Vulkan driver: auto falls back with the reason, vulkan fails with it.
+VK_ICD_FILENAMES=/nonexistent/tb-no-icd.json VK_DRIVER_FILES=/nonexistent/tb-no-icd.json \
+    "$TESTBED" render "$t/backend.mid" -o "$t/noicd.pfm" >"$t/backend.out" 2>"$t/backend.err" ||
+    fail "auto without a driver should fall back to the CPU path"
+grep -q "backend cpu: .*driver" "$t/backend.err" || fail "no fallback reason without a driver"
+[ -f "$t/noicd.pfm" ] || fail "no image from the fallback"
+set +e
+VK_ICD_FILENAMES=/nonexistent/tb-no-icd.json VK_DRIVER_FILES=/nonexistent/tb-no-icd.json \
+    "$TESTBED" render "$t/backend.mid" -o "$t/noicd2.pfm" --backend vulkan >"$t/backend.out" 2>"$t/backend.err"
+rc=$?
+set -e
+[ $rc -ne 0 ] || fail "--backend vulkan without a driver should fail"
+grep -q "backend vulkan" "$t/backend.err" || fail "no --backend vulkan message"
+[ ! -f "$t/noicd2.pfm" ] || fail "a failed vulkan render wrote an image"
+
+# Usage and unsupported options.
+set +e
+"$TESTBED" render "$t/backend.mid" -o "$t/x.pfm" --backend metal >/dev/null 2>&1
+[ $? -eq 2 ] || fail "--backend metal should be a usage error"
+"$TESTBED" render "$t/backend.mid" -o "$t/x.pfm" --backend vulkan --adaptive >/dev/null 2>"$t/backend.err"
+rc=$?
+set -e
+[ $rc -ne 0 ] || fail "--adaptive with --backend vulkan should fail (not implemented)"
+grep -q "adaptive" "$t/backend.err" || fail "no adaptive message"
+"$TESTBED" render --help | grep -q -- "--backend B" || fail "--backend not in --help"
+"$TESTBED" render --help | grep -q -- "--device N" || fail "--device not in --help"
+echo "ok"
