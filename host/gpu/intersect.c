@@ -187,8 +187,9 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
         q->pad0 = 0;
         gr[k] = nt++;
     }
-    /* Each leaf lists its triangles first (stable), so the kernel tests them
-     * in one loop and the placed objects in another (lib/bvh_traverse.glsl). */
+    /* Each leaf lists its references by kind (stable): triangles, cubes,
+     * spheres, revolved objects (the kind bits' order), so the kernel tests
+     * each kind in a loop of its own (lib/bvh_traverse.glsl). */
     for (size_t i = 0; i < nn; ++i) {
         const tb_bvh_node *c = &nodes[i];
         if (c->count < 2)
@@ -199,13 +200,10 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
             return tb_error(TB_ERR_NOMEM, "out of memory for the GPU scene");
         }
         uint32_t m = 0;
-        for (int pass = 0; pass < 2; ++pass)
-            for (uint32_t j = 0; j < c->count; ++j) {
-                uint32_t ref = gr[c->offset + j];
-                bool placed = (ref & TB_GPU_REF_KIND) != 0;
-                if (placed == (pass == 1))
-                    buf[m++] = ref;
-            }
+        for (uint32_t kind = 0; kind < 4; ++kind)
+            for (uint32_t j = 0; j < c->count; ++j)
+                if (gr[c->offset + j] >> 30 == kind)
+                    buf[m++] = gr[c->offset + j];
         memcpy(&gr[c->offset], buf, c->count * sizeof *buf);
         if (buf != tmp)
             free(buf);
@@ -236,6 +234,11 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
 
 tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
 {
+    return tb_gpu_scene_create_ex(dev, scene, NULL);
+}
+
+tb_gpu_scene *tb_gpu_scene_create_ex(tb_gpu_device *dev, const tb_scene *scene, const tb_gpu_scene_desc *desc)
+{
     if (!dev || !scene) {
         tb_error(TB_ERR_ARG, "tb_gpu_scene_create: NULL device or scene");
         return NULL;
@@ -252,6 +255,14 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
     }
     g->dev = dev;
     g->scene = scene;
+    /* On lavapipe the kernel runs 8 lanes in lockstep and executes both sides
+     * of every branch, and the revolved test (a scaled quadratic, two
+     * intervals, a slab clip) costs more there than the C path's double code
+     * does on the same core: measured slower on the showcase
+     * (docs/performance.md, "Vulkan"), so quadrics stay on the CPU there. */
+    tb_gpu_quadrics qmode = desc ? desc->quadrics : TB_GPU_QUADRICS_AUTO;
+    bool quadrics_on_gpu = qmode == TB_GPU_QUADRICS_GPU ||
+                           (qmode == TB_GPU_QUADRICS_AUTO && tb_gpu_device_info_of(dev)->type != TB_GPU_DEVICE_CPU);
     g->on_gpu = has_tri;
     size_t ng = 0, nc = 0;
     for (size_t i = 0; i < scene->nprims; ++i) {
@@ -259,8 +270,9 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
         const tb_object *o = scene->objects[p->object];
         bool tri = p->sub != TB_SCENE_WHOLE_OBJECT && o->kind == TB_PRIM_POLYGONS && o->mesh;
         bool sphere = p->sub == TB_SCENE_WHOLE_OBJECT &&
-                      (o->kind == TB_PRIM_SPHERE || o->kind == TB_PRIM_CUBE || o->kind == TB_PRIM_CYLINDER ||
-                       o->kind == TB_PRIM_CONE || o->kind == TB_PRIM_CONIC);
+                      (o->kind == TB_PRIM_SPHERE || o->kind == TB_PRIM_CUBE ||
+                       (quadrics_on_gpu && (o->kind == TB_PRIM_CYLINDER || o->kind == TB_PRIM_CONE ||
+                                            o->kind == TB_PRIM_CONIC)));
         if (tri || sphere) {
             gidx[ng] = (uint32_t)i;
             gref[ng++] = *p;

@@ -49,10 +49,25 @@ typedef struct tb_gpu_intersect_timing {
     double cpu_seconds;    /* host wall time of the routed CPU tests and merge (and u, v of triangle hits) */
 } tb_gpu_intersect_timing;
 
+/* Where cylinders, cones and conics are intersected (tb_gpu_scene_desc). */
+typedef enum tb_gpu_quadrics {
+    TB_GPU_QUADRICS_AUTO = 0, /* in the kernel, except on a CPU driver (lavapipe), where the C path is faster */
+    TB_GPU_QUADRICS_GPU,      /* in the kernel (lib/revolved.glsl) */
+    TB_GPU_QUADRICS_CPU,      /* routed to the CPU path per object */
+} tb_gpu_quadrics;
+
+/* Options of tb_gpu_scene_create_ex; zero-initialised = the defaults. */
+typedef struct tb_gpu_scene_desc {
+    tb_gpu_quadrics quadrics;
+} tb_gpu_scene_desc;
+
 /* Uploads the scene's geometry to `dev` (the scene must have been loaded with
  * an acceleration structure, and outlive the result). NULL with a status on
  * failure (TB_ERR_DEVICE from the device, TB_ERR_NOMEM). */
 tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene);
+
+/* tb_gpu_scene_create with options (`desc` may be NULL: the defaults). */
+tb_gpu_scene *tb_gpu_scene_create_ex(tb_gpu_device *dev, const tb_scene *scene, const tb_gpu_scene_desc *desc);
 
 /* Frees the device buffers and the host data; NULL is ignored. */
 void tb_gpu_scene_destroy(tb_gpu_scene *g);

@@ -230,8 +230,9 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
         // the split axis and the ray's sign, as on the CPU) is taken and the
         // other pushed. A popped child is tested again against the best t so
         // far. The lane's child is (cur_off, cur_count): cur_count 0 an
-        // inner node. Leaves list triangles before placed objects, so each
-        // kind's code runs in its own loop.
+        // inner node. Leaves list their references by kind (triangles,
+        // cubes, spheres, revolved objects), so each kind's code runs in its
+        // own loop.
         uint stack[TB_BVH_STACK];
         int sp = 0;
         bool done = false;
@@ -298,32 +299,81 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     }
                 }
             }
-            if ((TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES || TB_BVH_HAS_QUADRICS) && !stop) {
+            // Placed objects, one loop per kind (each leaf lists cubes, then
+            // spheres, then revolved objects): a kind's code runs only while
+            // some lane has that kind left.
+            if (TB_BVH_HAS_CUBES && !stop) {
                 for (; k < end; ++k) {
                     uint ref = tb_bvh_fetch_ref(k);
-                    uint kind = ref & TB_GPU_REF_KIND, idx = ref & TB_GPU_REF_INDEX;
+                    uint idx = ref & TB_GPU_REF_INDEX;
+                    if ((ref & TB_GPU_REF_KIND) != TB_GPU_REF_CUBE)
+                        break;
                     tb_gpu_placed sp = TB_BVH_PLACED[idx];
                     precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
                     precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
                     float t;
                     uint face = sp.face;
-                    if (TB_BVH_HAS_CUBES && kind == TB_GPU_REF_CUBE) {
-                        uint cf;
-                        if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
-                            continue;
-                        face += cf;
-                    } else if (TB_BVH_HAS_SPHERES && kind == TB_GPU_REF_SPHERE) {
-                        if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
-                            continue;
-                    } else if (TB_BVH_HAS_QUADRICS && kind == TB_GPU_REF_REVOLVED) {
-                        uint cf;
-                        vec3 nobj;
-                        if (!tb_revolved_hit(so, sd, tb_bvh_revolved(idx), r.tmin, r.tmax, t, cf, nobj))
-                            continue;
-                        face += cf;
-                    } else {
+                    uint cf;
+                    if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
                         continue;
+                    face += cf;
+                    if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
+                        have = true;
+                        bt = t;
+                        bo = sp.object;
+                        bf = face;
+                        br = sp.ref;
+                        bref = ref;
                     }
+                    if (any_hit) {
+                        stop = true;
+                        break;
+                    }
+                }
+            }
+            if (TB_BVH_HAS_SPHERES && !stop) {
+                for (; k < end; ++k) {
+                    uint ref = tb_bvh_fetch_ref(k);
+                    uint idx = ref & TB_GPU_REF_INDEX;
+                    if ((ref & TB_GPU_REF_KIND) != TB_GPU_REF_SPHERE)
+                        break;
+                    tb_gpu_placed sp = TB_BVH_PLACED[idx];
+                    precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+                    precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+                    float t;
+                    uint face = sp.face;
+                    if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
+                        continue;
+                    if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
+                        have = true;
+                        bt = t;
+                        bo = sp.object;
+                        bf = face;
+                        br = sp.ref;
+                        bref = ref;
+                    }
+                    if (any_hit) {
+                        stop = true;
+                        break;
+                    }
+                }
+            }
+            if (TB_BVH_HAS_QUADRICS && !stop) {
+                for (; k < end; ++k) {
+                    uint ref = tb_bvh_fetch_ref(k);
+                    uint idx = ref & TB_GPU_REF_INDEX;
+                    if ((ref & TB_GPU_REF_KIND) != TB_GPU_REF_REVOLVED)
+                        break;
+                    tb_gpu_placed sp = TB_BVH_PLACED[idx];
+                    precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+                    precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+                    float t;
+                    uint face = sp.face;
+                    uint cf;
+                    vec3 nobj;
+                    if (!tb_revolved_hit(so, sd, tb_bvh_revolved(idx), r.tmin, r.tmax, t, cf, nobj))
+                        continue;
+                    face += cf;
                     if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
                         have = true;
                         bt = t;

@@ -431,9 +431,18 @@ static void test_revolved(void **state)
     tb__env e;
     tb__open(&e);
     tb_scene *s = tb__load(text);
+    /* By default a CPU driver routes them to the CPU (faster there), a GPU runs them. */
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
     assert_non_null(g);
     tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    bool cpu_driver = tb_gpu_device_info_of(e.dev)->type == TB_GPU_DEVICE_CPU;
+    assert_int_equal(info.gpu_quadrics, cpu_driver ? 0 : 7);
+    assert_int_equal(info.cpu_objects, cpu_driver ? 7 : 0);
+    tb_gpu_scene_destroy(g);
+    /* The kernel's path, forced. */
+    g = tb_gpu_scene_create_ex(e.dev, s, &(tb_gpu_scene_desc){TB_GPU_QUADRICS_GPU});
+    assert_non_null(g);
     tb_gpu_scene_get_info(g, &info);
     assert_int_equal(info.gpu_quadrics, 7);
     assert_int_equal(info.cpu_objects, 0);

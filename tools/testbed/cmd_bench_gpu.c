@@ -28,6 +28,7 @@ static void tb__gpu_usage(FILE *out)
 {
     fprintf(out,
             "usage: testbed bench gpu SCENE.mid [--rays N] [--repeat R] [--seed S] [--device N]\n"
+            "                         [--quadrics auto|gpu|cpu]\n"
             "\n"
             "Times the Vulkan intersect kernel (tb_gpu_intersect / tb_gpu_occluded) and the CPU path\n"
             "(tb_scene_intersect / tb_scene_occluded, OpenMP over rays) on the same rays:\n"
@@ -45,7 +46,9 @@ static void tb__gpu_usage(FILE *out)
             "  --rays N    primary rays (default 500000)\n"
             "  --repeat R  timed runs per set and path (default 3)\n"
             "  --seed S    seed of the shadow and diffuse sampling (default 1)\n"
-            "  --device N  Vulkan device (testbed devices; default: the best one)\n");
+            "  --device N  Vulkan device (testbed devices; default: the best one)\n"
+            "  --quadrics auto|gpu|cpu  where cylinders, cones and conics run (default auto: in the\n"
+            "              kernel except on a CPU driver such as lavapipe; tb_gpu_scene_desc)\n");
 }
 
 static tb_vec3 tb__gcosine_dir(tb_vec3 n, float u1, float u2)
@@ -185,6 +188,7 @@ int tb_cmd_bench_gpu(int argc, char **argv)
 {
     const char *path = NULL;
     long nrays = 500000, repeat = 3, seed = 1, device = -1;
+    tb_gpu_scene_desc gdesc = {TB_GPU_QUADRICS_AUTO};
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
@@ -192,6 +196,15 @@ int tb_cmd_bench_gpu(int argc, char **argv)
             return TB_EXIT_OK;
         }
         bool ok = true;
+        if (!strcmp(a, "--quadrics")) {
+            const char *v = i + 1 < argc ? argv[++i] : "";
+            if (!strcmp(v, "auto") || !strcmp(v, "gpu") || !strcmp(v, "cpu")) {
+                gdesc.quadrics = v[0] == 'a' ? TB_GPU_QUADRICS_AUTO : v[0] == 'g' ? TB_GPU_QUADRICS_GPU : TB_GPU_QUADRICS_CPU;
+                continue;
+            }
+            fprintf(stderr, "testbed bench gpu: error: --quadrics must be auto, gpu or cpu\n");
+            return TB_EXIT_USAGE;
+        }
         if (!strcmp(a, "--rays") || !strcmp(a, "--repeat") || !strcmp(a, "--seed") || !strcmp(a, "--device")) {
             if (i + 1 >= argc) {
                 fprintf(stderr, "testbed bench gpu: error: %s needs a value\n", a);
@@ -247,7 +260,7 @@ int tb_cmd_bench_gpu(int argc, char **argv)
         fprintf(stderr, "testbed bench gpu: error: out of memory for %zu rays\n", np);
         goto done;
     }
-    if (!(g = tb_gpu_scene_create(sess.device, s))) {
+    if (!(g = tb_gpu_scene_create_ex(sess.device, s, &gdesc))) {
         fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
         goto done;
     }
