@@ -1,7 +1,8 @@
 #!/bin/sh
 # `testbed render --backend`: auto on lavapipe uses the CPU path and says
 # why; without a Vulkan driver auto falls back with the reason and vulkan
-# fails without writing an image; --backend metal is a usage error,
+# fails without writing an image; --device 0 runs Vulkan, a missing device
+# fails; --backend metal is a usage error,
 # --adaptive is refused on the Vulkan renderer; --help lists the options;
 # and a tile with more samples than a wavefront batch holds, rendered over
 # two batches, gives the CPU's image. (The other image comparisons are in
@@ -49,6 +50,16 @@ if grep -q "(CPU)" "$t/backend.err" || ! grep -q "backend vulkan" "$t/backend.er
     grep -q "backend cpu: " "$t/backend.err" || fail "auto on lavapipe should say it uses the CPU path"
     if grep -q "hits shaded by the kernel" "$t/backend.out"; then fail "auto on lavapipe ran the kernel"; fi
 fi
+# --device N means Vulkan on that device (lavapipe too); a missing one fails.
+"$TESTBED" render "$t/backend.mid" -o "$t/dev0.pfm" --device 0 >"$t/backend.out" 2>"$t/backend.err" || fail "--device 0"
+grep -q "backend vulkan: device 0" "$t/backend.err" || fail "--device 0 should use Vulkan device 0"
+grep -q "hits shaded by the kernel" "$t/backend.out" || fail "--device 0 did not run the kernel"
+set +e
+"$TESTBED" render "$t/backend.mid" -o "$t/dev9.pfm" --device 9 >"$t/backend.out" 2>"$t/backend.err"
+rc=$?
+set -e
+[ $rc -ne 0 ] && [ ! -f "$t/dev9.pfm" ] || fail "--device 9 should fail without an image"
+grep -q "device 9 does not exist" "$t/backend.err" || fail "no message for a missing device"
 # No Vulkan driver: auto falls back with the reason, vulkan fails with it.
 VK_ICD_FILENAMES=/nonexistent/tb-no-icd.json VK_DRIVER_FILES=/nonexistent/tb-no-icd.json \
     "$TESTBED" render "$t/backend.mid" -o "$t/noicd.pfm" >"$t/backend.out" 2>"$t/backend.err" ||
