@@ -45,7 +45,8 @@ static tb_status tb__pattern_texture(const tb_material_pattern *p, bool bump, in
     }
     default: return tb_error(TB_ERR_ARG, "raytrace: unknown pattern kind %d", (int)p->kind);
     }
-    out->su = out->sv = p->scale;
+    out->su = p->scale; /* solid textures use su alone */
+    out->sv = p->scale_v;
     out->solid = p->object_space;
     return TB_OK;
 }

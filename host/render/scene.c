@@ -188,6 +188,7 @@ static void tb__material_key(tb__bytes *b, const tb_mid_material *m)
         if (p->kind == TB_MID_PATTERN_NONE)
             continue;
         tb__put(b, &p->scale, sizeof p->scale);
+        tb__put(b, &p->scale_v, sizeof p->scale_v);
         tb__put(b, &p->height, sizeof p->height);
         tb__put_color(b, &p->a);
         tb__put_color(b, &p->b);
@@ -538,6 +539,7 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
             d->kind = src->kind;
             d->object_space = src->object_space;
             d->scale = (float)src->scale;
+            d->scale_v = (float)src->scale_v;
             d->octaves = src->octaves;
             d->height = (float)src->height;
             d->image = src->image.path;

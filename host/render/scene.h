@@ -71,7 +71,7 @@ typedef struct tb_scene_options {
 typedef struct tb_material_pattern {
     tb_mid_pattern_kind kind; /* TB_MID_PATTERN_NONE: none */
     bool object_space;        /* of the object-space point (else of (u, v)) */
-    float scale;              /* checks or noise cells per unit */
+    float scale, scale_v;     /* checks or noise cells per unit of u (or object space), of v */
     int octaves;              /* noise */
     tb_channels a, b;         /* colour patterns: checker even/odd squares, noise at 0 and 1 */
     float height;             /* bump: height of the unit value, scene units */

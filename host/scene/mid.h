@@ -268,7 +268,8 @@ typedef enum tb_mid_pattern_kind {
 typedef struct tb_mid_pattern {
     tb_mid_pattern_kind kind;
     bool object_space;   /* of the object-space point (symbol `object`), else of (u, v) (`uv`, the default) */
-    double scale;        /* checks or noise cells per unit of u, v or object space, > 0 */
+    double scale;        /* checks or noise cells per unit of u (or of object space), > 0 */
+    double scale_v;      /* per unit of v: equal to scale unless written [su sv] (uv space only) */
     int octaves;         /* noise: 1 .. 16 */
     tb_mid_color a, b;   /* colour patterns: checker even/odd squares; noise value at 0 and 1 */
     double height;       /* bump: height of the unit value in scene units (may be negative) */

@@ -326,7 +326,7 @@ static bool tb__pattern_eq(const tb_mid_pattern *a, const tb_mid_pattern *b)
     case TB_MID_PATTERN_NONE: return true;
     case TB_MID_PATTERN_CHECKER:
     case TB_MID_PATTERN_NOISE:
-        if (a->object_space != b->object_space || a->scale != b->scale)
+        if (a->object_space != b->object_space || a->scale != b->scale || a->scale_v != b->scale_v)
             return false;
         if (a->kind == TB_MID_PATTERN_NOISE && a->octaves != b->octaves)
             return false;

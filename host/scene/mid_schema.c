@@ -784,6 +784,30 @@ static tb_status tb__pattern_space(tb_mid_reader *r, const tb_mid_value *v, cons
     return TB_OK;
 }
 
+/* The scale of a pattern: a number > 0, or [su sv] (both > 0) in uv space. */
+static tb_status tb__pattern_scale(tb_mid_reader *r, const tb_mid_value *v, tb_mid_pattern *out)
+{
+    if (v->type == TB_MID_VECTOR && v->count == 2) {
+        for (int i = 0; i < 2; i++)
+            if (!(v->numbers[i] > 0.0))
+                return TB__ERR(r, v->loc, "'scale' must be > 0, found %g", v->numbers[i]);
+        out->scale = v->numbers[0];
+        out->scale_v = v->numbers[1];
+        return TB_OK;
+    }
+    tb_status st = tb__param(r, v, "scale", true, INFINITY, &out->scale);
+    out->scale_v = out->scale;
+    return st;
+}
+
+/* A 2-vector scale is for (u, v) only. */
+static tb_status tb__pattern_scale_space(tb_mid_reader *r, const tb_mid_value *v, const tb_mid_pattern *p)
+{
+    if (p->object_space && p->scale_v != p->scale)
+        return TB__ERR(r, v->loc, "a scale [su sv] applies to (u, v); object space takes one number");
+    return TB_OK;
+}
+
 /* A procedural pattern (diffuse_pattern, specular_pattern) or, with `bump`,
  * a bump map (docs/mid.md, 7.2). */
 static tb_status tb__pattern(tb_mid_reader *r, const tb_mid_value *v, const char *what, bool bump,
@@ -802,11 +826,11 @@ static tb_status tb__pattern(tb_mid_reader *r, const tb_mid_value *v, const char
             return TB__ERR(r, v->loc,
                            "checker takes a scale, two colours and an optional space: checker(scale, a, b [, uv|object])");
         out->kind = TB_MID_PATTERN_CHECKER;
-        if ((st = tb__param(r, &a[0], "scale", true, INFINITY, &out->scale)) ||
-            (st = tb__color(r, &a[1], what, 1.0, &out->a)) || (st = tb__color(r, &a[2], what, 1.0, &out->b)) ||
+        if ((st = tb__pattern_scale(r, &a[0], out)) || (st = tb__color(r, &a[1], what, 1.0, &out->a)) ||
+            (st = tb__color(r, &a[2], what, 1.0, &out->b)) ||
             (n == 4 && (st = tb__pattern_space(r, &a[3], "checker", &out->object_space))))
             return st;
-        return TB_OK;
+        return tb__pattern_scale_space(r, &a[0], out);
     }
     if (strcmp(v->name, "noise") == 0) {
         int k = bump ? 3 : 4;
@@ -817,8 +841,7 @@ static tb_status tb__pattern(tb_mid_reader *r, const tb_mid_value *v, const char
                                 : "noise takes a scale, an octave count, two colours and an optional space: "
                                   "noise(scale, octaves, a, b [, uv|object])");
         out->kind = TB_MID_PATTERN_NOISE;
-        if ((st = tb__param(r, &a[0], "scale", true, INFINITY, &out->scale)) ||
-            (st = tb__int(r, &a[1], "octaves", 1, 16, &out->octaves)))
+        if ((st = tb__pattern_scale(r, &a[0], out)) || (st = tb__int(r, &a[1], "octaves", 1, 16, &out->octaves)))
             return st;
         if (bump)
             st = tb__number(r, &a[2], "height", &out->height);
@@ -826,7 +849,7 @@ static tb_status tb__pattern(tb_mid_reader *r, const tb_mid_value *v, const char
             st = tb__color(r, &a[3], what, 1.0, &out->b);
         if (!st && n == k + 1)
             st = tb__pattern_space(r, &a[k], "noise", &out->object_space);
-        return st;
+        return st ? st : tb__pattern_scale_space(r, &a[0], out);
     }
     if (bump && strcmp(v->name, "image") == 0) {
         if (n != 2 || a[0].type != TB_MID_FILE)

@@ -278,13 +278,24 @@ static void tb__ops(tb__w *w, const tb_mid_op *ops, int n, int level)
     fputs("]\n", w->fp);
 }
 
+/* A pattern's scale: one number, or [su sv] when they differ. */
+static void tb__pattern_scale(tb__w *w, const tb_mid_pattern *p)
+{
+    if (p->scale_v == p->scale) {
+        tb__double(w, p->scale);
+        return;
+    }
+    const double s[2] = {p->scale, p->scale_v};
+    tb__dvec(w, s, 2);
+}
+
 /* A pattern or bump map (docs/mid.md, 7.2): the space only when not uv. */
 static void tb__pattern(tb__w *w, const tb_mid_pattern *p)
 {
     switch (p->kind) {
     case TB_MID_PATTERN_CHECKER:
         fputs("checker(", w->fp);
-        tb__double(w, p->scale);
+        tb__pattern_scale(w, p);
         fputs(", ", w->fp);
         tb__color(w, &p->a);
         fputs(", ", w->fp);
@@ -292,7 +303,7 @@ static void tb__pattern(tb__w *w, const tb_mid_pattern *p)
         break;
     case TB_MID_PATTERN_NOISE:
         fputs("noise(", w->fp);
-        tb__double(w, p->scale);
+        tb__pattern_scale(w, p);
         fprintf(w->fp, ", %d, ", p->octaves);
         if (w->bump) {
             tb__double(w, p->height); /* a bump map has a height, a colour pattern two colours */

@@ -507,7 +507,8 @@ static void test_materials_11(void **state)
                       "sphere { rendering = { material = \"metal\" model = blinn\n"
                       "    bump = image(file(\"checker.png\"), 0.002) } }\n"
                       "cube { rendering = { model = lambert diffuse_pattern = checker(1.5, 0, 1, object) } }\n"
-                      "cube { rendering = { model = phong } }\n");
+                      "cube { rendering = { model = phong } }\n"
+                      "cube { rendering = { diffuse_pattern = checker([24 8], 0, 1) bump = noise([6 2], 2, 0.1) } }\n");
     tb_mid_item it = next(&s);
     const tb_mid_material *d = it.material;
     assert_int_equal(d->model, TB_MID_MODEL_PHONG);
@@ -524,7 +525,8 @@ static void test_materials_11(void **state)
                      TB_MID_SET_MODEL | TB_MID_SET_ROUGHNESS | TB_MID_SET_DIFFUSE_PATTERN |
                          TB_MID_SET_SPECULAR_PATTERN | TB_MID_SET_BUMP);
     assert_int_equal(m->diffuse_pattern.kind, TB_MID_PATTERN_CHECKER);
-    assert_true(m->diffuse_pattern.scale == 8.0 && !m->diffuse_pattern.object_space);
+    assert_true(m->diffuse_pattern.scale == 8.0 && m->diffuse_pattern.scale_v == 8.0 &&
+                !m->diffuse_pattern.object_space);
     assert_rgb(&m->diffuse_pattern.a, 0.1f, 0.1f, 0.1f);
     assert_rgb(&m->diffuse_pattern.b, 1.0f, 0.5f, 0.25f);
     assert_int_equal(m->specular_pattern.kind, TB_MID_PATTERN_NOISE);
@@ -553,6 +555,10 @@ static void test_materials_11(void **state)
     it = next(&s);
     assert_int_equal(it.object->material.model, TB_MID_MODEL_PHONG);
     assert_int_equal(it.object->material.set, TB_MID_SET_MODEL);
+    it = next(&s);
+    o = &it.object->material;
+    assert_true(o->diffuse_pattern.scale == 24.0 && o->diffuse_pattern.scale_v == 8.0);
+    assert_true(o->bump.scale == 6.0 && o->bump.scale_v == 2.0 && o->bump.height == 0.1);
     expect_end(&s);
     close_text(&s);
 }

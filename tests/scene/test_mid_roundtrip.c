@@ -288,12 +288,13 @@ static tb_mid_pattern any_pattern(gen *g, bool bump)
     memset(&p, 0, sizeof p);
     p.scale = chance(g, 30) ? (double)(1 + below(g, 64)) : ldexp(uniform(g, 0.5, 1.0), (int)below(g, 40) - 20);
     p.object_space = chance(g, 40);
+    p.scale_v = p.object_space || chance(g, 50) ? p.scale : uniform(g, 0.25, 64.0);
     if (bump) {
         p.height = any_double(g);
         if (chance(g, 40)) {
             p.kind = TB_MID_PATTERN_IMAGE;
             p.image = any_ref(g);
-            p.scale = 0.0;
+            p.scale = p.scale_v = 0.0;
             p.object_space = false;
         } else {
             p.kind = TB_MID_PATTERN_NOISE;
@@ -742,14 +743,14 @@ static void test_writer_canonical_11(void **state)
 {
     (void)state;
     const char *in = "mid 1.1\n"
-                     "material \"m\" { bump = noise(16, 3, -0.01, uv) diffuse_pattern = checker(8, 0.1, [1 0.5 0.25])\n"
+                     "material \"m\" { bump = noise(16, 3, -0.01, uv) diffuse_pattern = checker([8 4], 0.1, [1 0.5 0.25])\n"
                      "  roughness = 0.35 model = ggx specular = 0.9 specular_pattern = noise(2.5 4 0 1 object) }\n"
                      "sphere { rendering = { bump = image(file(\"checker.png\"), 0.002) model = lambert } }\n";
     const char *want = "material \"m\" {\n"
                        "    specular = 0.9\n"
                        "    model = ggx\n"
                        "    roughness = 0.35\n"
-                       "    diffuse_pattern = checker(8, 0.1, [1 0.5 0.25])\n"
+                       "    diffuse_pattern = checker([8 4], 0.1, [1 0.5 0.25])\n"
                        "    specular_pattern = noise(2.5, 4, 0, 1, object)\n"
                        "    bump = noise(16, 3, -0.01)\n"
                        "}\n"
