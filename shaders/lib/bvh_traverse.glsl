@@ -184,6 +184,24 @@ tb_revolved tb_bvh_revolved(uint idx)
     return q;
 }
 
+// The tmin with which a placed object is tested: r.tmin raised by a bound on
+// the float error of a crossing's t near the origin (32 u times the size of
+// the object-space origin and of the float world-to-object map's terms, in
+// units of |d|). A ray spawned on such a surface by the CPU's error bounds
+// (tb_spawn_ray_origin: offsets for double arithmetic) would otherwise find
+// that surface again at t ~ 0 in float (measured: 1 % of diffuse rays off a
+// sphere); crossings this close to the origin are not resolvable in float,
+// as pbrt's conservative t bounds reject them.
+float tb_bvh_placed_tmin(tb_gpu_placed sp, tb_gpu_ray r, vec3 so, vec3 sd)
+{
+    vec3 ao = abs(r.o);
+    float e = dot(abs(sp.r0), ao) + abs(sp.w0) + dot(abs(sp.r1), ao) + abs(sp.w1) + dot(abs(sp.r2), ao) +
+              abs(sp.w2) + abs(so.x) + abs(so.y) + abs(so.z);
+    float len = sqrt(dot(sd, sd));
+    float eps = len > 0.0 ? 32.0 * 5.9604644775390625e-8 * e / len : 0.0;
+    return r.tmin + (tb_isfinite(eps) ? eps : 0.0);
+}
+
 // True if (t, object, face, ref) precedes the best so far (the CPU tie rule,
 // with ties up to TB_TIE_TOL).
 bool tb_better(float t, uint object, uint face, uint ref, bool have, float bt, uint bo, uint bf, uint br)
@@ -313,8 +331,9 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
                     float t;
                     uint face = sp.face;
+                    float tlo = tb_bvh_placed_tmin(sp, r, so, sd);
                     uint cf;
-                    if (!tb_cube_hit(so, sd, r.tmin, r.tmax, t, cf))
+                    if (!tb_cube_hit(so, sd, tlo, r.tmax, t, cf))
                         continue;
                     face += cf;
                     if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
@@ -342,7 +361,8 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
                     float t;
                     uint face = sp.face;
-                    if (!tb_sphere_intersect(so, sd, 1.0, r.tmin, r.tmax, t))
+                    float tlo = tb_bvh_placed_tmin(sp, r, so, sd);
+                    if (!tb_sphere_intersect(so, sd, 1.0, tlo, r.tmax, t))
                         continue;
                     if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
                         have = true;
@@ -369,9 +389,10 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
                     float t;
                     uint face = sp.face;
+                    float tlo = tb_bvh_placed_tmin(sp, r, so, sd);
                     uint cf;
                     vec3 nobj;
-                    if (!tb_revolved_hit(so, sd, tb_bvh_revolved(idx), r.tmin, r.tmax, t, cf, nobj))
+                    if (!tb_revolved_hit(so, sd, tb_bvh_revolved(idx), tlo, r.tmax, t, cf, nobj))
                         continue;
                     face += cf;
                     if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
