@@ -40,6 +40,7 @@ layout(constant_id = 6) const bool HAS_MIRROR = false;  // some material is a mi
 layout(constant_id = 7) const bool HAS_DIELECTRIC = false; // some material transmits
 layout(constant_id = 8) const bool HAS_EMISSION = false;   // some material emits
 layout(constant_id = 9) const uint EMITTER_KINDS = 1u;  // bit k: an emitter of kind k exists
+layout(constant_id = 10) const bool HAS_IES = false;    // some light has an IES distribution
 
 const int S = NLIGHTS + NSAMPLES;  // shadow rays per item
 const int NRAYS = S + 2;           // TB_GPU_SHADE_RAYS
@@ -110,6 +111,64 @@ float spot_falloff(float cos_total, float cos_falloff, float c)
         return 1.0;
     float t = (c - cos_total) / (cos_falloff - cos_total);
     return t * t * (3.0 - 2.0 * t);
+}
+
+// The interval i of a[base .. base + n) with a[i] <= x (tb__interval in host/render/ies.c).
+int ies_interval(uint base, int n, float x)
+{
+    int lo = 0, hi = n - 2;
+    while (lo < hi) {
+        int mid = lo + (hi - lo + 1) / 2;
+        if (colours[base + uint(mid)] <= x)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    return lo;
+}
+
+// tb_ies_normalized (host/render/ies.c) of the record at `rec` for the
+// photometric-frame direction w: the candela table interpolated bilinearly
+// in (vertical, horizontal) degrees, horizontal angles reduced by the
+// table's symmetry, divided by the maximum.
+float ies_normalized(uint rec, vec3 w)
+{
+    int nv = int(colours[rec]), nh = int(colours[rec + 1u]), sym = int(colours[rec + 2u]);
+    float inv_max = colours[rec + 3u];
+    uint va = rec + 4u, ha = va + uint(nv), cd = ha + uint(nh);
+    float v = degrees(atan(length(w.xy), -w.z));
+    float h = degrees(atan(w.y, w.x));
+    if (h < 0.0)
+        h += 360.0;
+    if (h >= 360.0)
+        h = 0.0;
+    if (!(v >= colours[va] && v <= colours[va + uint(nv - 1)]))
+        return 0.0;
+    int i = ies_interval(va, nv, v);
+    float t = (v - colours[va + uint(i)]) / (colours[va + uint(i + 1)] - colours[va + uint(i)]);
+    if (nh == 1 || sym == 1) // rotational
+        return ((1.0 - t) * colours[cd + uint(i)] + t * colours[cd + uint(i + 1)]) * inv_max;
+    if (sym == 2) { // quadrant
+        if (h > 180.0)
+            h = 360.0 - h;
+        if (h > 90.0)
+            h = 180.0 - h;
+    } else if (sym == 3) { // bilateral
+        if (h > 180.0)
+            h = 360.0 - h;
+    } else if (sym == 4) { // bilateral about 90-270
+        if (h < 90.0)
+            h = 180.0 - h;
+        else if (h > 270.0)
+            h = 540.0 - h;
+    }
+    h = clamp(h, colours[ha], colours[ha + uint(nh - 1)]);
+    int j = ies_interval(ha, nh, h);
+    float sj = (h - colours[ha + uint(j)]) / (colours[ha + uint(j + 1)] - colours[ha + uint(j)]);
+    uint r0 = cd + uint(j * nv + i), r1 = cd + uint((j + 1) * nv + i);
+    float lo = (1.0 - t) * colours[r0] + t * colours[r0 + 1u];
+    float hi = (1.0 - t) * colours[r1] + t * colours[r1 + 1u];
+    return ((1.0 - sj) * lo + sj * hi) * inv_max;
 }
 
 // tb_fresnel_dielectric (host/render/shading.c), in float.
@@ -269,6 +328,12 @@ void main()
                 float k = 1.0;
                 if (HAS_SPOT && lt.kind == TB_GPU_LIGHT_SPOT)
                     k = spot_falloff(lt.cos_total, lt.cos_falloff, dot(-wi, lt.axis));
+                if (HAS_IES && lt.ies != TB_GPU_NO_IES && k > 0.0) {
+                    // photometric frame: x, y = x cross nadir, z = -nadir (tb__shape)
+                    vec3 wl = -wi;
+                    vec3 y = cross(lt.xaxis, lt.axis);
+                    k *= ies_normalized(lt.ies, vec3(dot(wl, lt.xaxis), dot(wl, y), -dot(wl, lt.axis)));
+                }
                 if (!(k > 0.0))
                     continue;
                 scale = k / (dist * dist);

@@ -38,7 +38,7 @@ struct tb_gpu_renderer {
     int S;                /* shadow slots per item */
     char **route;         /* per material: why it is routed, or NULL */
     uint8_t *mflags;      /* per material: TB_GPU_MAT_* */
-    tb_gpu_spec_constant spec[9];
+    tb_gpu_spec_constant spec[10];
     tb_gpu_buffer *b_items, *b_lightu, *b_emitters, *b_lights, *b_materials, *b_colours, *b_rays, *b_values;
     size_t chunk;         /* items per shade dispatch */
     uint32_t light_col, emitter_col;
@@ -177,8 +177,6 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
             why = "GGX lobe (glossy rays)";
         else if (m->model != TB_MID_MODEL_PHONG && m->model != TB_MID_MODEL_BLINN && m->model != TB_MID_MODEL_LAMBERT)
             why = "reflection model";
-        else if (ies && (f & (TB_GPU_MAT_DIFFUSE | TB_GPU_MAT_SPECULAR)))
-            why = "lit by an IES light";
         else if (bad_emitter && (f & TB_GPU_MAT_DIFFUSE))
             why = "lit by an emitter the kernel does not sample (custom or two-sided sphere)";
         if (why) {
@@ -198,14 +196,24 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
     }
     if (!kinds)
         kinds = 1; /* no emitter: the constant only prunes code */
-    tb_gpu_spec_constant spec[9] = {{1, (uint32_t)nch},       {2, (uint32_t)r->nlights}, {3, (uint32_t)r->nsamples},
-                                    {4, spot},                {5, any_phong},            {6, any_mirror},
-                                    {7, any_dielectric},      {8, any_emission},         {9, kinds}};
+    tb_gpu_spec_constant spec[10] = {{1, (uint32_t)nch},  {2, (uint32_t)r->nlights}, {3, (uint32_t)r->nsamples},
+                                     {4, spot},           {5, any_phong},            {6, any_mirror},
+                                     {7, any_dielectric}, {8, any_emission},         {9, kinds},
+                                     {10, ies}};
     memcpy(r->spec, spec, sizeof spec);
 
     /* Tables: materials (scalars), colours (materials' 4 x nch, lights' and
      * emitters' nch each), lights, emitters. */
     size_t ncol = (size_t)nm * 4 * (size_t)nch + (size_t)s->nlights * (size_t)nch + (size_t)s->nemitters * (size_t)nch;
+    size_t ies_at = ncol; /* IES records follow (shared/shade.h), one per distinct table */
+    for (int i = 0; i < s->nlights; i++) {
+        const tb_ies *t = s->lights[i].ies;
+        bool seen = false;
+        for (int k = 0; k < i && t && !seen; k++)
+            seen = s->lights[k].ies == t;
+        if (t && !seen)
+            ncol += 4 + (size_t)t->nv + (size_t)t->nh + (size_t)t->nv * (size_t)t->nh;
+    }
     float *col = calloc(ncol ? ncol : 1, sizeof *col);
     tb_gpu_shade_material *mats = calloc((size_t)(nm > 0 ? nm : 1), sizeof *mats);
     tb_gpu_delta_light *lts = calloc((size_t)(s->nlights > 0 ? s->nlights : 1), sizeof *lts);
@@ -233,8 +241,32 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
                         : l->kind == TB_LIGHT_DIRECTIONAL ? TB_GPU_LIGHT_DIRECTIONAL
                                                           : TB_GPU_LIGHT_POINT;
         lts[i] = (tb_gpu_delta_light){.position = l->position, .kind = kind, .axis = l->axis,
-                                      .cos_total = (float)l->cos_total, .cos_falloff = (float)l->cos_falloff,
-                                      .black = tb_channels_is_black(l->intensity)};
+                                      .cos_total = (float)l->cos_total, .xaxis = l->xaxis,
+                                      .cos_falloff = (float)l->cos_falloff,
+                                      .black = tb_channels_is_black(l->intensity), .ies = TB_GPU_NO_IES};
+        if (l->ies && kind != TB_GPU_LIGHT_DIRECTIONAL) {
+            int k = 0;
+            while (k < i && s->lights[k].ies != l->ies)
+                k++;
+            if (k < i) {
+                lts[i].ies = lts[k].ies;
+            } else {
+                const tb_ies *t = l->ies;
+                float *rec = col + ies_at;
+                lts[i].ies = (uint32_t)ies_at;
+                rec[0] = (float)t->nv;
+                rec[1] = (float)t->nh;
+                rec[2] = (float)t->symmetry;
+                rec[3] = (float)(1.0 / t->max_candela);
+                for (int v = 0; v < t->nv; v++)
+                    rec[4 + v] = (float)t->v_angles[v];
+                for (int h = 0; h < t->nh; h++)
+                    rec[4 + t->nv + h] = (float)t->h_angles[h];
+                for (int c = 0; c < t->nv * t->nh; c++)
+                    rec[4 + t->nv + t->nh + c] = (float)t->candela[c];
+                ies_at += 4 + (size_t)t->nv + (size_t)t->nh + (size_t)t->nv * (size_t)t->nh;
+            }
+        }
         for (int c = 0; c < nch; c++)
             col[r->light_col + (size_t)i * (size_t)nch + (size_t)c] = l->intensity.v[c];
     }
@@ -367,7 +399,7 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
                                                                         .buffers = 8,
                                                                         .push_size = sizeof(tb_gpu_shade_push),
                                                                         .spec = r->spec,
-                                                                        .spec_count = 9});
+                                                                        .spec_count = 10});
     if (!k)
         return TB_ERR_DEVICE;
     tb_gpu_shade_push push = {(uint32_t)ni, 0, 0, 0};

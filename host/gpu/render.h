@@ -17,9 +17,9 @@
  *
  * Hits the kernel cannot shade are ROUTED to the CPU path with their whole
  * subtree (tb_rt_radiance with the same stream): materials with image
- * textures, any lit material in a scene with an IES light, diffuse materials
- * in a scene with emitters the kernel does not sample (custom, two-sided
- * spheres). They are counted in tb_gpu_render_stats and reported by
+ * textures, procedural patterns, bump maps or the GGX model, and diffuse
+ * materials in a scene with emitters the kernel does not sample (custom,
+ * two-sided spheres). They are counted in tb_gpu_render_stats and reported by
  * `testbed render --backend vulkan`.
  *
  *     tb_gpu_renderer *r;

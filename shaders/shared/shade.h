@@ -85,15 +85,24 @@ struct tb_gpu_emitter {
     float inv_area;      /* 1 / area, from the host's double area (offset 60) */
 };
 
-/* One point, spot or directional light (no IES: such scenes route lit hits
- * to the CPU); std430 size 48. */
+/* tb_gpu_delta_light.ies of a light without an IES distribution. */
+#define TB_GPU_NO_IES 0xffffffffu
+
+/* One point, spot or directional light; std430 size 64. An IES
+ * distribution is a record in the colour table at float offset `ies`:
+ * nv, nh, symmetry (host/render/ies.h's tb_ies_symmetry), 1 / max candela,
+ * then nv vertical angles, nh horizontal angles and nh x nv candela values
+ * (degrees and cd, rounded to float; the counts are exact as floats). */
 struct tb_gpu_delta_light {
     TB_GPU_VEC3 position;  /* point, spot (offset 0) */
     TB_GPU_UINT kind;      /* TB_GPU_LIGHT_* (offset 12) */
-    TB_GPU_VEC3 axis;      /* spot: beam axis; directional: direction light travels (offset 16) */
+    TB_GPU_VEC3 axis;      /* spot: beam axis; directional: direction light travels;
+                              point: the IES nadir (offset 16) */
     float cos_total;       /* spot (offset 28) */
-    float cos_falloff;     /* spot (offset 32) */
-    TB_GPU_UINT black;     /* 1 if the intensity is 0 in every channel: no light (offset 36) */
+    TB_GPU_VEC3 xaxis;     /* IES horizontal angle 0 (offset 32) */
+    float cos_falloff;     /* spot (offset 44) */
+    TB_GPU_UINT black;     /* 1 if the intensity is 0 in every channel: no light (offset 48) */
+    TB_GPU_UINT ies;       /* float offset of its IES record in the colour table, or TB_GPU_NO_IES (offset 52) */
     TB_GPU_UINT pad0, pad1;
 };
 
@@ -134,9 +143,10 @@ _Static_assert(sizeof(tb_gpu_emitter) == 64 && offsetof(tb_gpu_emitter, kind) ==
                    offsetof(tb_gpu_emitter, v2) == 32 && offsetof(tb_gpu_emitter, two_sided) == 44 &&
                    offsetof(tb_gpu_emitter, normal) == 48 && offsetof(tb_gpu_emitter, inv_area) == 60,
                "tb_gpu_emitter follows the std430 offsets of its GLSL twin");
-_Static_assert(sizeof(tb_gpu_delta_light) == 48 && offsetof(tb_gpu_delta_light, kind) == 12 &&
+_Static_assert(sizeof(tb_gpu_delta_light) == 64 && offsetof(tb_gpu_delta_light, kind) == 12 &&
                    offsetof(tb_gpu_delta_light, axis) == 16 && offsetof(tb_gpu_delta_light, cos_total) == 28 &&
-                   offsetof(tb_gpu_delta_light, cos_falloff) == 32 && offsetof(tb_gpu_delta_light, black) == 36,
+                   offsetof(tb_gpu_delta_light, xaxis) == 32 && offsetof(tb_gpu_delta_light, cos_falloff) == 44 &&
+                   offsetof(tb_gpu_delta_light, black) == 48 && offsetof(tb_gpu_delta_light, ies) == 52,
                "tb_gpu_delta_light follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_shade_material) == 16 && offsetof(tb_gpu_shade_material, ior) == 4 &&
                    offsetof(tb_gpu_shade_material, knorm) == 8 && offsetof(tb_gpu_shade_material, flags) == 12,

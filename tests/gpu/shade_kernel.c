@@ -218,6 +218,24 @@ static void test_routed_models(void **state)
                 (tb__want){.channels = 3, .routed = "bump map"});
 }
 
+/* IES distributions (tests/render/data: every symmetry) on a point light
+ * and a spot light: the kernel's float table lookup against tb_ies_normalized. */
+static void test_ies(void **state)
+{
+    static const char *const files[] = {"full", "quadrant", "bilateral", "bilateral90", "lambertian"};
+    for (int i = 0; i < 5; i++) {
+        char extra[1024], name[32];
+        snprintf(extra, sizeof extra,
+                 "point_light { position = [0.3 0.2 2] intensity = [40 30 20] ies = file(\"%s/render/data/%s.ies\") }\n"
+                 "spot_light { position = [-1 -1 2.5] direction = [0.3 0.5 -1] cone_angle = 50 cone_delta = 10 "
+                 "intensity = 30 ies = file(\"%s/render/data/%s.ies\") }\n",
+                 TB_TEST_SOURCE_DIR, files[i], TB_TEST_SOURCE_DIR, files[i]);
+        snprintf(name, sizeof name, "ies %s", files[i]);
+        tb__compare(*state, tb__load("diffuse = 0.6 specular = 0.2 exponent = 10", extra, false, NULL), name,
+                    (tb__want){.channels = 3, .secondary = true});
+    }
+}
+
 static void test_spot(void **state)
 {
     tb__compare(*state,
@@ -288,7 +306,7 @@ int main(void)
         cmocka_unit_test(test_lambert),     cmocka_unit_test(test_phong_mirror),   cmocka_unit_test(test_spot),
         cmocka_unit_test(test_directional), cmocka_unit_test(test_glass),          cmocka_unit_test(test_spectral),
         cmocka_unit_test(test_sphere_emitter), cmocka_unit_test(test_routed_texture), cmocka_unit_test(test_blinn),
-        cmocka_unit_test(test_lambert_model),  cmocka_unit_test(test_routed_models),
+        cmocka_unit_test(test_lambert_model),  cmocka_unit_test(test_routed_models),  cmocka_unit_test(test_ies),
     };
     return cmocka_run_group_tests(tests, tb__setup, tb__teardown);
 }
