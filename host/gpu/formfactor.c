@@ -27,9 +27,10 @@ struct tb_gpu_ff_scene {
     uint32_t *zeros;                    /* vis_cap zero words: the visibility bits' initial value */
 };
 
-/* Workgroup width and most invocations per receiver (shaders/formfactor.comp, TB_FF_LANES). */
+/* Workgroup width, and most invocations per receiver (shaders/formfactor.comp,
+ * TB_FF_LANES) when the device does not say its subgroup size. */
 #define TB__FF_WORKGROUP 64u
-#define TB__FF_MAX_LANES 16u
+#define TB__FF_DEFAULT_LANES 8u
 
 /* tb_accel_build wants an intersect callback; this BVH is converted for the
  * kernel and never traversed on the host. */
@@ -265,9 +266,14 @@ tb_status tb_gpu_ff_raycast(tb_gpu_ff_scene *g, const tb_vec3 *pts, int npts, tb
         return st;
     bool occl = g->nnodes > 0;
     /* Lanes per receiver: the samples' count rounded up to a power of two, at
-     * most 16 (a quarter of the workgroup: 4 receivers per group). */
+     * most one subgroup (one SIMD group traces one receiver's segments) and
+     * 16. On lavapipe (subgroups of 8) 8 lanes ran 13 % faster per CPU second
+     * than 16, and 2 or 16 slowest (docs/gpu.md). */
+    uint32_t sg = tb_gpu_device_info_of(g->dev)->subgroup_size, max_lanes = TB__FF_DEFAULT_LANES;
+    if (sg >= 1 && (sg & (sg - 1)) == 0)
+        max_lanes = sg < 16 ? sg : 16;
     uint32_t lanes = 1;
-    while (lanes < (uint32_t)npts && lanes < TB__FF_MAX_LANES)
+    while (lanes < (uint32_t)npts && lanes < max_lanes)
         lanes *= 2;
     tb_gpu_spec_constant spec[4] = {{1, g->stack}, {2, occl}, {3, visible != NULL}, {4, lanes}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("formfactor"),
