@@ -25,14 +25,15 @@ static void tb__ffb_usage(FILE *out)
             "\n"
             "Ray-cast form factors (Wallace et al. 1989) per second, the Vulkan kernel against the CPU\n"
             "batch (OpenMP over receivers), on the same work: the scene (e.g. scenes/cornell-box.mid)\n"
-            "meshed into elements as `testbed validate --kernel formfactor`\n"
-            "does (edge: bounds diagonal / 24; every element occludes), every element centroid and\n"
-            "corner a receiver, N shooters (emitting elements first, then random ones), each with S\n"
-            "sample points. Prints, for the best of R runs, form factors (receiver-shooter pairs) per\n"
-            "second and sample segments per second by wall clock, the kernel's device time, the\n"
-            "process CPU seconds (the driver's threads included), the ratio vulkan/cpu, and the\n"
-            "largest relative difference between the two (floor 1e-6) as a sanity check. Pipeline\n"
-            "creation is excluded (one untimed shot first).\n"
+            "meshed into elements as `testbed validate --kernel formfactor` does (edge: bounds\n"
+            "diagonal / 24; every element occludes), every element centroid and corner a receiver,\n"
+            "N shooters (emitting elements first, then random ones), each with S sample points.\n"
+            "Prints, for the best of R runs: form factors (receiver-shooter pairs) and sample\n"
+            "segments per second by wall clock, the process CPU seconds (the driver's threads\n"
+            "included), the kernel's device time (timestamp queries: the Vulkan path is timed\n"
+            "through tb_gpu_ff_raycast, which is tb_gpu_ff_batch plus timing), the ratio\n"
+            "vulkan/cpu, and the largest relative difference between the two (floor 1e-6) as a\n"
+            "sanity check. Pipeline creation is excluded (one untimed shot first).\n"
             "\n"
             "  --shooters N  shooters (default 16)\n"
             "  --samples N   sample points per shooter (default 16)\n"
@@ -69,6 +70,22 @@ typedef struct tb__ffb_work {
     tb_vec3 *pts; /* nshoot * npts */
     const uint32_t *shoot;
 } tb__ffb_work;
+
+/* The Vulkan batch with its kernel time added up (tb_gpu_ff_batch plus timing). */
+typedef struct tb__ffb_gpu {
+    tb_gpu_ff_scene *g;
+    double kernel_s;
+} tb__ffb_gpu;
+
+static tb_status tb__ffb_gpu_batch(void *ctx, const tb_vec3 *pts, int npts, tb_vec3 ns, double area, const tb_vec3 *p,
+                                   const tb_vec3 *n, size_t count, double *ff)
+{
+    tb__ffb_gpu *c = ctx;
+    tb_gpu_ff_timing tm;
+    tb_status st = tb_gpu_ff_raycast(c->g, pts, npts, ns, area, p, n, count, ff, NULL, &tm);
+    c->kernel_s += tm.kernel_seconds;
+    return st;
+}
 
 /* Every shot through `fn`; results of shooter j in out[j * nrecv ..]. Wall seconds, or -1 on an error. */
 static double tb__ffb_run(const tb__ffb_work *w, tb_ff_batch_fn fn, void *ctx, double *out, double *cpu_s)
@@ -182,12 +199,14 @@ int tb_cmd_bench_formfactor(int argc, char **argv)
         fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
         goto done;
     }
-    double best[2] = {INFINITY, INFINITY}, cpu_at_best[2] = {0.0, 0.0};
+    double best[2] = {INFINITY, INFINITY}, cpu_at_best[2] = {0.0, 0.0}, kernel_at_best = NAN;
+    tb__ffb_gpu gctx = {g, 0.0};
     for (long r = 0; r < repeat; ++r)
         for (int path_k = 0; path_k < 2; ++path_k) {
             double cs = 0.0;
+            gctx.kernel_s = 0.0;
             double t = path_k == 0 ? tb__ffb_run(&w, tb_ff_raycast_batch, occ, cf, &cs)
-                                   : tb__ffb_run(&w, tb_gpu_ff_batch, g, gf, &cs);
+                                   : tb__ffb_run(&w, tb__ffb_gpu_batch, &gctx, gf, &cs);
             if (t < 0.0) {
                 fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
                 goto done;
@@ -195,6 +214,8 @@ int tb_cmd_bench_formfactor(int argc, char **argv)
             if (t < best[path_k]) {
                 best[path_k] = t;
                 cpu_at_best[path_k] = cs;
+                if (path_k == 1)
+                    kernel_at_best = gctx.kernel_s;
             }
         }
     double pairs = (double)w.nshoot * (double)e.nrecv, segs = pairs * (double)samples, worst = 0.0;
@@ -205,6 +226,8 @@ int tb_cmd_bench_formfactor(int argc, char **argv)
     for (int k = 0; k < 2; ++k)
         printf("%-8s %14.4f %14.3f %10.3f %12.3f\n", names[k], pairs / best[k] * 1e-6, segs / best[k] * 1e-6, best[k],
                cpu_at_best[k]);
+    printf("kernel device time %.3f s: %.3f M segments/s (timestamps; the rest is packing, upload, download)\n",
+           kernel_at_best, segs / kernel_at_best * 1e-6);
     printf("\nratio vulkan/cpu: %.3f (wall clock), %.3f (per CPU second)\n", best[0] / best[1],
            cpu_at_best[0] / cpu_at_best[1]);
     printf("largest relative difference vulkan vs cpu: %.3g (visibility flips of grazing segments: testbed validate)\n",
