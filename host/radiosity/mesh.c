@@ -9,6 +9,9 @@
 #include "host/radiosity/radiosity.h"
 #include "util/mesh/mesh.h"
 
+/* Relative planarity tolerance of the faces meshed into grids. */
+#define TB__RAD_PLANAR_TOL 1e-2
+
 /* Corners whose element normals are within this angle share a vertex. */
 #define TB__RAD_CREASE_COS 0.8660254037844387 /* cos 30 degrees */
 
@@ -155,7 +158,13 @@ static tb_status tb__add_object(tb__mb *b, const tb_scene *s, const tb_object *o
 {
     tb_mesh mesh;
     tb_mesh_init(&mesh);
-    tb_mesh_opts mo = {.max_edge = opt->max_edge, .max_area = opt->max_area, .quads = true};
+    /* A face a little off its plane (the Cornell box's red wall: 3.2 mm over
+     * 550 mm) is gridded as a bilinear patch rather than split in two
+     * triangles that longest-edge bisection then refines into thousands of
+     * slivers; each element is then off its own plane by only the face's
+     * deviation over the number of cells (docs/radiosity.md, "Meshing"). */
+    tb_mesh_opts mo = {.max_edge = opt->max_edge, .max_area = opt->max_area, .quads = true,
+                       .planar_tol = TB__RAD_PLANAR_TOL};
     tb_status st = tb_mesh_from_fed(fed, &mo, &mesh);
     if (st) {
         tb_mesh_free(&mesh);

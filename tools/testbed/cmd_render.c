@@ -33,7 +33,8 @@ static void tb__render_usage(FILE *out)
 {
     fprintf(out,
             "usage: testbed render SCENE.mid -o OUT.{png,exr,pfm,rle} [options]\n"
-            "  --method raytrace    the renderer (only the Whitted ray tracer so far)\n"
+            "  --method M           raytrace (default: the Whitted ray tracer) or radiosity (options:\n"
+            "                       testbed render --method radiosity --help)\n"
             "  --spp N              samples per pixel (per pass; default 1)\n"
             "  --adaptive [T]       adaptive antialiasing (--max-spp N, --aa-criterion stderr|contrast)\n"
             "  --aa-pattern P       stratified (default) | sobol\n"
@@ -107,6 +108,10 @@ static int tb__report_pass(void *ctx, int pass, int spp_total, double seconds, c
 
 int tb_cmd_render(int argc, char **argv)
 {
+    /* --method radiosity is another renderer with options of its own */
+    for (int i = 1; i + 1 < argc && strcmp(argv[i], "--"); i++)
+        if (!strcmp(argv[i], "--method") && !strcmp(argv[i + 1], "radiosity"))
+            return tb_cmd_render_radiosity(argc, argv);
     if (tb_wants_help(argc, argv)) {
         tb__render_usage(stdout);
         return TB_EXIT_OK;
@@ -143,7 +148,7 @@ int tb_cmd_render(int argc, char **argv)
                 return tb__render_fail("%s", tb_last_error()), TB_EXIT_USAGE;
         } else if (!strcmp(a, "--method") && has) {
             if (strcmp(argv[++i], "raytrace") != 0)
-                return tb__render_fail("unknown --method '%s' (raytrace)", argv[i]), TB_EXIT_USAGE;
+                return tb__render_fail("unknown --method '%s' (raytrace, radiosity)", argv[i]), TB_EXIT_USAGE;
         } else if (!strcmp(a, "--max-depth") && has && tb__parse_long(argv[i + 1], 0, 64, &v))
             ro.rt.max_depth = v == 0 ? -1 : (int)v, i++;
         else if (!strcmp(a, "--light-samples") && has && tb__parse_long(argv[i + 1], 1, 1024, &v))
