@@ -221,9 +221,11 @@ void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambie
 tb_rad_state tb_rad_solver_state(const tb_rad_solver *s);
 
 /* The element-to-element form factor F_ij (fraction of the power leaving i
- * that reaches j) as the solver computes it with its method and shot-0
- * samples: ray cast, the mean over j's corners of F(v -> i) times A_j / A_i;
- * hemicube, the hemicube at i's centroid. For reciprocity checks. */
+ * that reaches j) exactly as a shot from i moves energy (with the sample
+ * points of shot 0): ray cast, A_j / A_i times F_ji, F_ji the mean over j's
+ * corners of F(v -> i) or, next to i, the near-field estimate
+ * (docs/radiosity.md); hemicube, the hemicube at i's centroid. For
+ * reciprocity checks; costs a whole shot. */
 tb_status tb_rad_formfactor(tb_rad_solver *s, size_t i, size_t j, double *f);
 
 /* --patches CSV: header `element,object,area,cx,cy,cz,nx,ny,nz,` then
