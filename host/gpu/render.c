@@ -180,13 +180,13 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         else if (bad_emitter && (f & TB_GPU_MAT_DIFFUSE))
             why = "lit by an emitter the kernel does not sample (custom or two-sided sphere)";
         if (why) {
-            char buf[320];
+            char buf[sizeof r->st.routed_reason];
             snprintf(buf, sizeof buf, "material %d%s%s%s: %s", i, m->name ? " (" : "", m->name ? m->name : "",
                      m->name ? ")" : "", why);
             if (!(r->route[i] = tb__strdup(buf)))
                 goto nomem;
             if (r->st.routed_materials++ == 0)
-                snprintf(r->st.routed_reason, sizeof r->st.routed_reason, "%s", buf);
+                memcpy(r->st.routed_reason, buf, sizeof buf);
             continue;
         }
         any_phong = any_phong || ((f & TB_GPU_MAT_SPECULAR) && s->nlights > 0);
