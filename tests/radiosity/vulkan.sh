@@ -1,0 +1,22 @@
+#!/bin/sh
+# `render --method radiosity --backend vulkan` (the form-factor kernel,
+# host/gpu/formfactor.h) against the CPU backend on the furnace: the same
+# shots, radiosities equal to float rounding. Skipped (77) without a device.
+set -u
+T="${TB_TEST_TMPDIR:-/tmp}/radiosity_vulkan.$$"
+rm -rf "$T" && mkdir -p "$T"
+FURNACE="$TB_SOURCE_DIR/tests/radiosity/furnace.mid"
+run() { "$TESTBED" render --method radiosity "$FURNACE" --max-edge 0.25 --samples 8 --threshold 1e-2 "$@"; }
+if ! run --backend vulkan --patches "$T/v.csv" > "$T/v.log" 2>&1; then
+    if grep -qi "no vulkan\|vulkan loader\|no device\|cannot load" "$T/v.log"; then
+        echo "SKIP: no Vulkan device"; rm -rf "$T"; exit 77
+    fi
+    cat "$T/v.log"; echo "FAIL: vulkan run"; exit 1
+fi
+run --backend cpu --patches "$T/c.csv" > /dev/null 2>&1 || { echo "FAIL: cpu run"; exit 1; }
+[ "$(wc -l < "$T/v.csv")" -eq "$(wc -l < "$T/c.csv")" ] || { echo "FAIL: row counts"; exit 1; }
+paste -d, "$T/v.csv" "$T/c.csv" | awk -F, 'NR > 1 {
+    for (c = 10; c <= 12; c++) { d = $c - $(c + 15); if (d < 0) d = -d; if (d > 1e-5 * $(c + 15)) bad = 1; if (d > m) m = d }
+} END { print "largest |B_vulkan - B_cpu| = " m; exit bad }' || { echo "FAIL: backends differ"; exit 1; }
+rm -rf "$T"
+echo OK
