@@ -46,7 +46,7 @@ static void tb__render_usage(FILE *out)
             "                       lavapipe included, and fails if there is none; auto uses it only on a\n"
             "                       real GPU and otherwise, or if the device fails, the CPU path (says why).\n"
             "                       Same image as cpu within docs/accuracy.md's tolerance; hits the kernel\n"
-            "                       cannot shade (textures, IES lights) run on the CPU and are reported\n"
+            "                       cannot shade (textures, patterns, bump, GGX) run on the CPU: reported\n"
             "  --device N           Vulkan device N (testbed devices lists them; implies Vulkan in auto)\n"
             "  --accel bvh|grid|list  acceleration structure (default bvh)\n"
             "  --max-depth N        deepest reflected/refracted ray (default %d)\n"
