@@ -33,10 +33,11 @@
  * the area-weighted mean of the elements around v that face the same way.
  *
  * Determinism: the shooter is the element with the most unshot power
- * (ties: the lower index, util/container/pqueue.h); sample points of shot k
- * come from a PCG32 stream seeded by (seed, k); form-factor backends answer
- * independently of the thread count. So the solution is bit-identical for
- * any thread count. */
+ * (ties: the lower index, util/container/pqueue.h); the sample points of
+ * shooter k come from a PCG32 stream seeded by (seed, k), the same at every
+ * shot of k (so its form factors, rounded to float, are cached); form-factor
+ * backends answer independently of the thread count. So the solution is
+ * bit-identical for any thread count. */
 #ifndef TB_HOST_RADIOSITY_RADIOSITY_H
 #define TB_HOST_RADIOSITY_RADIOSITY_H
 
@@ -136,6 +137,8 @@ typedef struct tb_rad_options {
     tb_ff_batch_fn batch; /* ray cast backend; NULL: tb_ff_raycast_batch over occluders the solver builds */
     void *batch_ctx;      /* its context (occluders over tb_rad_mesh_polygon of every element, in order) */
     bool no_occlusion;    /* ray cast with the CPU backend: no visibility test (convex enclosures, tests) */
+    bool no_cache;        /* do not keep each shooter's form factors for its next shots (up to 512 MB are
+                             kept by default; the answer is the same either way) */
 } tb_rad_options;
 
 /* Initial state (e.g. carried over a refinement); NULL arrays mean zero H
@@ -221,8 +224,7 @@ void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambie
 tb_rad_state tb_rad_solver_state(const tb_rad_solver *s);
 
 /* The element-to-element form factor F_ij (fraction of the power leaving i
- * that reaches j) exactly as a shot from i moves energy (with the sample
- * points of shot 0): ray cast, A_j / A_i times F_ji, F_ji the mean over j's
+ * that reaches j) exactly as a shot from i moves energy: ray cast, A_j / A_i times F_ji, F_ji the mean over j's
  * corners of F(v -> i) or, next to i, the near-field estimate
  * (docs/radiosity.md); hemicube, the hemicube at i's centroid. For
  * reciprocity checks; costs a whole shot. */

@@ -16,6 +16,7 @@
 TB_STAT_COUNTER(tb__rad_shots, "Radiosity/shots");
 TB_STAT_COUNTER(tb__rad_ffs, "Radiosity/form factors");
 TB_STAT_COUNTER(tb__rad_rays, "Radiosity/rays (receivers x samples)");
+TB_STAT_COUNTER(tb__rad_cached, "Radiosity/shots from cached form factors");
 TB_STAT_TIMER(tb__rad_ff_time, "Radiosity/form factor time");
 TB_STAT_TIMER(tb__rad_update_time, "Radiosity/update time");
 
@@ -40,6 +41,9 @@ struct tb_rad_solver {
     tb_ff_occluders *occ;   /* the CPU backend's, when the solver built it */
     tb_hemicube *hc;
     tb_pqueue q;            /* elements by unshot power */
+    float *vff, *eff;       /* one shooter's form factors: F(v -> i) per vertex (ray cast), F_ji per element */
+    float **cache;          /* per shooter: its vff (nverts, ray cast) then eff (nelems), or NULL */
+    size_t cache_bytes;     /* held by `cache` */
     uint64_t shots;
     double seconds;
     double emitted, absorbed, escaped;
@@ -49,8 +53,9 @@ struct tb_rad_solver {
 
 static double tb__now(void) { return 1e-9 * (double)tb_stats_now_ns(); }
 
-/* Seed of the sample points of shot k (a SplitMix64 step: every shot gets
- * an unrelated stream, whatever the thread count). */
+/* Seed of the sample points of shooter k (a SplitMix64 step: every
+ * shooter gets an unrelated stream, whatever the thread count; the same
+ * shooter always gets the same points, so its form factors can be cached). */
 static uint64_t tb__shot_seed(uint64_t seed, uint64_t k)
 {
     uint64_t z = seed + 0x9e3779b97f4a7c15ull * (k + 1);
@@ -81,6 +86,12 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->vert_area);
     free(s->dB);
     free(s->ff);
+    free(s->vff);
+    free(s->eff);
+    if (s->cache)
+        for (size_t i = 0; i < s->m.nelems; i++)
+            free(s->cache[i]);
+    free(s->cache);
     free(s->rp);
     free(s->rn);
     free(s->pts);
@@ -162,6 +173,10 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     s->Hv = tb__calloc(nv * (size_t)nc, sizeof *s->Hv, &ok);
     s->dB = tb__calloc(ne * (size_t)nc, sizeof *s->dB, &ok);
     s->ff = tb__calloc(s->nrecv, sizeof *s->ff, &ok);
+    s->vff = tb__calloc(nv, sizeof *s->vff, &ok);
+    s->eff = tb__calloc(ne, sizeof *s->eff, &ok);
+    if (!o.no_cache)
+        s->cache = tb__calloc(ne, sizeof *s->cache, &ok);
     s->polys = tb__calloc(ne, sizeof *s->polys, &ok);
     s->rho_mean = tb__calloc((size_t)nc, sizeof *s->rho_mean, &ok);
     if (hemi) {
@@ -272,9 +287,67 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
 static inline int tb__elem_size(const tb_rad_element *e) { return e->v[3] == TB_RAD_NONE ? 3 : 4; }
 
 static void tb__near_field(tb_rad_solver *s, size_t i);
+static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i);
+
+/* Most bytes of form factors kept for shooters shot again. */
+#define TB__RAD_CACHE_BYTES ((size_t)512 << 20)
+
+/* The form factors of shooter i, rounded to float (whether cached or not, so
+ * that caching never changes an answer): s->vff[v] = F(v -> i) for every
+ * vertex (ray cast) and s->eff[j] = F_ji for every element (0 for i). */
+static tb_status tb__shooter_ff(tb_rad_solver *s, size_t i)
+{
+    size_t nv = s->m.nverts, ne = s->m.nelems;
+    bool hemi = s->opt.ff == TB_RAD_FF_HEMICUBE;
+    size_t nvf = hemi ? 0 : nv;
+    if (s->cache && s->cache[i]) {
+        memcpy(s->vff, s->cache[i], nvf * sizeof(float));
+        memcpy(s->eff, s->cache[i] + nvf, ne * sizeof(float));
+        tb_stat_add(&tb__rad_cached, 1);
+        return TB_OK;
+    }
+    tb_status st = tb__shot_formfactors(s, i);
+    if (st)
+        return st;
+    const tb_rad_element *ei = &s->m.elems[i];
+    if (hemi) {
+        for (size_t j = 0; j < ne; j++)
+            s->eff[j] = j == i ? 0.0f : (float)(s->ff[j] * ei->area / s->m.elems[j].area);
+    } else {
+        for (size_t v = 0; v < nv; v++)
+            s->vff[v] = (float)s->ff[v];
+        for (size_t j = 0; j < ne; j++) {
+            double g = s->gnear[j];
+            if (isnan(g)) {
+                /* F_ji: the element's mean of its corners' point form factors */
+                const tb_rad_element *ej = &s->m.elems[j];
+                int n = tb__elem_size(ej);
+                g = 0.0;
+                for (int k = 0; k < n; k++)
+                    g += s->vff[ej->v[k]];
+                g /= n;
+            }
+            s->eff[j] = j == i ? 0.0f : (float)g;
+        }
+        for (size_t k = 0; k < s->nnear; k++)
+            s->gnear[s->near_list[k]] = NAN;
+        s->nnear = 0;
+    }
+    size_t bytes = (nvf + ne) * sizeof(float);
+    if (s->cache && s->cache_bytes + bytes <= TB__RAD_CACHE_BYTES) {
+        float *c = malloc(bytes);
+        if (c) {
+            memcpy(c, s->vff, nvf * sizeof(float));
+            memcpy(c + nvf, s->eff, ne * sizeof(float));
+            s->cache[i] = c;
+            s->cache_bytes += bytes;
+        }
+    }
+    return TB_OK;
+}
 
 /* Form factors of one shot from element i: s->ff[r] for every receiver. */
-static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i, uint64_t shot)
+static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i)
 {
     const tb_rad_element *e = &s->m.elems[i];
     tb_timer_token tt = tb_timer_start(&tb__rad_ff_time);
@@ -282,7 +355,7 @@ static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i, uint64_t shot)
     if (s->opt.ff == TB_RAD_FF_HEMICUBE) {
         st = tb_hemicube_formfactors(s->hc, e->centroid, e->normal, s->polys, s->m.nelems, (uint32_t)i, s->ff);
     } else {
-        st = tb_ff_sample_polygon(&s->polys[i], s->opt.samples, tb__shot_seed(s->opt.seed, shot), s->pts);
+        st = tb_ff_sample_polygon(&s->polys[i], s->opt.samples, tb__shot_seed(s->opt.seed, i), s->pts);
         if (!st)
             st = s->opt.batch(s->opt.batch_ctx, s->pts, s->opt.samples, e->normal, e->area, s->rp, s->rn,
                               s->m.nverts, s->ff);
@@ -426,7 +499,7 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
         return TB_OK;
     double t0 = tb__now();
     int nc = s->nc;
-    tb_status st = tb__shot_formfactors(s, i, s->shots);
+    tb_status st = tb__shooter_ff(s, i);
     if (st)
         return st;
     tb_timer_token tt = tb_timer_start(&tb__rad_update_time);
@@ -441,13 +514,11 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
         shot_power += dBi[c] * ei->area;
     /* receivers gather */
     if (s->opt.ff == TB_RAD_FF_HEMICUBE) {
-        s->ff[i] = 0.0;
         for (size_t j = 0; j < s->m.nelems; j++) {
-            double f = s->ff[j];
-            if (!(f > 0.0))
+            double g = s->eff[j]; /* F_ji */
+            if (!(g > 0.0))
                 continue;
             const tb_rad_element *ej = &s->m.elems[j];
-            double g = f * ei->area / ej->area; /* F_ji */
             double rec = 0.0, abs_ = 0.0;
             for (int c = 0; c < nc; c++) {
                 double dh = dBi[c] * g, rho = s->m.rho[j * (size_t)nc + (size_t)c];
@@ -464,7 +535,7 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
         }
     } else {
         for (size_t v = 0; v < s->m.nverts; v++) {
-            double f = s->ff[v];
+            double f = s->vff[v];
             if (f != 0.0)
                 for (int c = 0; c < nc; c++)
                     s->Hv[v * (size_t)nc + (size_t)c] += dBi[c] * f;
@@ -473,15 +544,7 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
             if (j == i)
                 continue;
             const tb_rad_element *ej = &s->m.elems[j];
-            double g = s->gnear[j];
-            if (isnan(g)) {
-                /* F_ji: the element's mean of its corners' point form factors */
-                int n = tb__elem_size(ej);
-                g = 0.0;
-                for (int k = 0; k < n; k++)
-                    g += s->ff[ej->v[k]];
-                g /= n;
-            }
+            double g = s->eff[j];
             if (!(g > 0.0))
                 continue;
             double rec = 0.0, abs_ = 0.0;
@@ -496,9 +559,6 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
             s->absorbed += abs_;
             tb_pqueue_set(&s->q, (uint32_t)j, tb__unshot_power(s, j));
         }
-        for (size_t k = 0; k < s->nnear; k++)
-            s->gnear[s->near_list[k]] = NAN;
-        s->nnear = 0;
     }
     tb_pqueue_remove(&s->q, i);
     s->escaped += shot_power - received_all;
@@ -646,28 +706,10 @@ tb_status tb_rad_formfactor(tb_rad_solver *s, size_t i, size_t j, double *f)
     if (i == j)
         return TB_OK;
     const tb_rad_element *ei = &s->m.elems[i], *ej = &s->m.elems[j];
-    if (s->opt.ff == TB_RAD_FF_HEMICUBE) {
-        tb_status st = tb_hemicube_formfactors(s->hc, ei->centroid, ei->normal, s->polys, s->m.nelems, (uint32_t)i,
-                                               s->ff);
-        if (!st)
-            *f = s->ff[j];
-        return st;
-    }
-    /* the whole shot, exactly as tb_rad_solver_step computes it */
-    tb_status st = tb__shot_formfactors(s, i, 0);
+    /* exactly what a shot from i uses */
+    tb_status st = tb__shooter_ff(s, i);
     if (st)
         return st;
-    double g = s->gnear[j];
-    if (isnan(g)) {
-        int n = tb__elem_size(ej);
-        g = 0.0;
-        for (int k = 0; k < n; k++)
-            g += s->ff[ej->v[k]];
-        g /= n;
-    }
-    for (size_t k = 0; k < s->nnear; k++)
-        s->gnear[s->near_list[k]] = NAN;
-    s->nnear = 0;
-    *f = g * ej->area / ei->area;
+    *f = (double)s->eff[j] * ej->area / ei->area;
     return TB_OK;
 }

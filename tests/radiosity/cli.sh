@@ -13,9 +13,9 @@ fail() { echo "FAIL: $*"; exit 1; }
 rad() { "$TESTBED" render --method radiosity "$@"; }
 
 # --- the furnace, 1 and 2 threads
-rad "$FURNACE" --max-edge 0.25 --samples 8 --threshold 1e-3 --threads 1 --patches "$T/a.csv" \
+rad "$FURNACE" --max-edge 0.25 --samples 16 --threshold 1e-3 --threads 1 --patches "$T/a.csv" \
     --mesh-out "$T/a.ply" --stats "$T/a.json" > "$T/out1" 2>&1 || { cat "$T/out1"; fail "furnace run"; }
-rad "$FURNACE" --max-edge 0.25 --samples 8 --threshold 1e-3 --threads 2 --patches "$T/b.csv" > "$T/out2" 2>&1 ||
+rad "$FURNACE" --max-edge 0.25 --samples 16 --threshold 1e-3 --threads 2 --patches "$T/b.csv" > "$T/out2" 2>&1 ||
     { cat "$T/out2"; fail "furnace run, 2 threads"; }
 cmp -s "$T/a.csv" "$T/b.csv" || fail "1 and 2 threads give different CSV bytes"
 head -1 "$T/a.csv" | grep -qx 'element,object,area,cx,cy,cz,nx,ny,nz,b_r,b_g,b_b,u_r,u_g,u_b' ||

@@ -349,7 +349,8 @@ static void test_patches_csv(void **state)
         tb_assert_near(c[axis], side, 1e-6);
         tb_assert_near(n[axis], side ? -1.0 : 1.0, 1e-6);
         tb_assert_near(area, 0.25, 1e-6);
-        assert_true(b[0] >= 1.0 && b[0] <= 2.0 && u[0] >= 0.0);
+        /* sanity only (2 x 2 elements per face, 4 samples, stopped at 10%) */
+        assert_true(b[0] >= 1.0 && b[0] <= 2.2 && u[0] >= 0.0);
         rows++;
         line = strchr(line, '\n') + 1;
     }
