@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "host/gpu/formfactor.h"
 #include "host/gpu/gpu.h"
+#include "host/radiosity/adaptive.h"
 #include "host/radiosity/radiosity.h"
 #include "host/render/scene.h"
 #include "util/base/outfile.h"
@@ -41,6 +42,11 @@ static void tb__rad_usage(FILE *out)
             "  --max-shots N         stop after N shots\n"
             "  --max-edge L          longest element edge, scene units (default: faces whole)\n"
             "  --max-area A          largest element area, scene units^2\n"
+            "  --adapt X             adaptive subdivision (Cohen et al. 1986): after solving, split elements whose\n"
+            "                        corners' reflected luminance differs by more than X times the brightest\n"
+            "                        element's, keep the mesh conforming, gather for the new vertices, continue\n"
+            "  --adapt-levels N      --adapt: at most N splits below an initial element, one per round (default %d)\n"
+            "  --min-area A          --adapt: never split an element of area A or less (scene units^2)\n"
             "  --threads N           OpenMP threads (the solution does not depend on it)\n"
             "  --seed N              seed of the shooters' sample points (default 0)\n"
             "  --spp N               image: rays per pixel on a regular sub-grid (default 4)\n"
@@ -48,7 +54,7 @@ static void tb__rad_usage(FILE *out)
             "  --report FILE.csv     with --reference REF.csv (a --patches file of the same mesh): rows of\n"
             "                        seconds,shots,shots_per_n,unshot_fraction,nrmse,nrmse_ambient\n"
             "  --stats FILE.json     counters, times and provenance\n",
-            TB_RAD_DEFAULT_SAMPLES, TB_RAD_DEFAULT_HEMICUBE_RES, TB_RAD_DEFAULT_THRESHOLD);
+            TB_RAD_DEFAULT_SAMPLES, TB_RAD_DEFAULT_HEMICUBE_RES, TB_RAD_DEFAULT_THRESHOLD, TB_RAD_ADAPT_DEFAULT_LEVELS);
 }
 
 static int tb__rad_fail(const char *fmt, const char *arg)
@@ -162,6 +168,8 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     tb_rad_options ro = {0};
     tb_rad_mesh_options mo = {0};
     tb_rad_stop stop = {.threshold = TB_RAD_DEFAULT_THRESHOLD, .progress = true};
+    tb_rad_adapt_options ao = {0};
+    tb_rad_adapt_stats as = {0};
     int threads = 0, spp = 4, gdevice = -1;
     const char *backend = "cpu";
     double exposure = NAN;
@@ -220,6 +228,18 @@ int tb_cmd_render_radiosity(int argc, char **argv)
             if (!tb__rad_long(nx, 0, 4096, &v))
                 return tb__rad_fail("bad --threads '%s' (0..4096)", nx), TB_EXIT_USAGE;
             threads = (int)v, i++;
+        } else if (!strcmp(a, "--adapt") && has) {
+            if (!tb__rad_double(nx, 1e-300, 1e30, &d))
+                return tb__rad_fail("bad --adapt '%s' (> 0)", nx), TB_EXIT_USAGE;
+            ao.threshold = d, i++;
+        } else if (!strcmp(a, "--adapt-levels") && has) {
+            if (!tb__rad_long(nx, 1, TB_RAD_ADAPT_MAX_LEVELS, &v))
+                return tb__rad_fail("bad --adapt-levels '%s' (1..60)", nx), TB_EXIT_USAGE;
+            ao.max_levels = (int)v, i++;
+        } else if (!strcmp(a, "--min-area") && has) {
+            if (!tb__rad_double(nx, 0, 1e30, &d))
+                return tb__rad_fail("bad --min-area '%s' (>= 0)", nx), TB_EXIT_USAGE;
+            ao.min_area = d, i++;
         } else if (!strcmp(a, "--seed") && has) {
             char *end;
             unsigned long long s = strtoull(argv[++i], &end, 10);
@@ -269,6 +289,11 @@ int tb_cmd_render_radiosity(int argc, char **argv)
         return tb__rad_fail("--mesh-out '%s': only .ply is written", mesh_path), TB_EXIT_USAGE;
     if (!report_path != !ref_path)
         return tb__rad_fail("%s", "--report and --reference go together"), TB_EXIT_USAGE;
+    if (!(ao.threshold > 0) && (ao.max_levels || ao.min_area > 0))
+        return tb__rad_fail("%s", "--adapt-levels and --min-area go with --adapt"), TB_EXIT_USAGE;
+    if (ao.threshold > 0 && report_path)
+        return tb__rad_fail("%s", "--report compares with a reference of the same mesh: not with --adapt"),
+               TB_EXIT_USAGE;
     if (ro.ff == TB_RAD_FF_HEMICUBE && ro.samples)
         return tb__rad_fail("%s", "--samples is for --formfactor raycast"), TB_EXIT_USAGE;
     if (ro.ff == TB_RAD_FF_RAYCAST && ro.hemicube_res)
@@ -347,16 +372,24 @@ int tb_cmd_render_radiosity(int argc, char **argv)
             ro.batch_ctx = gscene;
         }
     }
-    if ((st = tb_rad_solver_create(&mesh, NULL, &ro, &solver)))
-        goto fail;
     fprintf(stderr, "testbed render: radiosity on %s: %zu elements, %zu vertices, %d channels (%s), %s\n", scene_path,
             mesh.nelems, mesh.nverts, mesh.nchannels, mesh.spectral ? "spectral" : "rgb",
             ro.ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "ray cast");
-    uint64_t every = mesh.nelems / 20 ? mesh.nelems / 20 : 1;
-    if (rep.ref && (st = tb__rad_report_row(&rep, solver)))
-        goto fail;
-    if ((st = tb_rad_solver_run(solver, &stop, rep.ref ? tb__rad_report_row : NULL, &rep, every)))
-        goto fail;
+    if (ao.threshold > 0) {
+        /* host/radiosity/adaptive.h: mesh becomes the refined mesh */
+        if ((st = tb_rad_adapt_solve(&mesh, &ro, &stop, &ao, &solver, &as)))
+            goto fail;
+        fprintf(stderr, "testbed render: adaptive subdivision: %d rounds, %zu -> %zu elements, %llu shots in all\n",
+                as.rounds, as.elems_in, as.elems_out, (unsigned long long)as.shots);
+    } else {
+        if ((st = tb_rad_solver_create(&mesh, NULL, &ro, &solver)))
+            goto fail;
+        uint64_t every = mesh.nelems / 20 ? mesh.nelems / 20 : 1;
+        if (rep.ref && (st = tb__rad_report_row(&rep, solver)))
+            goto fail;
+        if ((st = tb_rad_solver_run(solver, &stop, rep.ref ? tb__rad_report_row : NULL, &rep, every)))
+            goto fail;
+    }
     double frac = tb_rad_unshot_fraction(solver);
     tb_rad_energy en = tb_rad_solver_energy(solver);
     int nthreads = threads > 0 ? threads : omp_get_max_threads();
@@ -378,11 +411,12 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     char opts[512];
     snprintf(opts, sizeof opts,
              "method=radiosity formfactor=%s samples=%d hemicube_res=%d threshold=%g time_budget=%g max_edge=%g "
-             "max_area=%g spp=%d threads=%d colour=%s backend=%s",
+             "max_area=%g spp=%d threads=%d colour=%s backend=%s adapt=%g adapt_levels=%d min_area=%g",
              ro.ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "raycast", ro.samples ? ro.samples : TB_RAD_DEFAULT_SAMPLES,
              ro.hemicube_res ? ro.hemicube_res : TB_RAD_DEFAULT_HEMICUBE_RES, stop.threshold, stop.time_budget,
              mo.max_edge, mo.max_area, spp, nthreads, mesh.spectral ? "spectral" : "rgb",
-             ro.batch ? "vulkan" : "cpu");
+             ro.batch ? "vulkan" : "cpu", ao.threshold,
+             ao.threshold > 0 ? (ao.max_levels ? ao.max_levels : TB_RAD_ADAPT_DEFAULT_LEVELS) : 0, ao.min_area);
     tb_provenance_set_seed(&prov, ro.seed);
     if (strcmp(scene_path, "-") != 0)
         st = tb_provenance_hash_file(&prov, scene_path);
@@ -408,7 +442,9 @@ int tb_cmd_render_radiosity(int argc, char **argv)
                   {"power_absorbed", en.absorbed},
                   {"power_unshot", en.unshot},
                   {"power_escaped", en.escaped},
-                  {"threads", (double)nthreads}};
+                  {"threads", (double)nthreads},
+                  {"adapt_rounds", (double)as.rounds},
+                  {"adapt_shots", (double)as.shots}};
         for (size_t k = 0; k < sizeof kv / sizeof kv[0] && !st; k++)
             st = tb_stats_set_value(kv[k].k, kv[k].v);
         if (!st)
