@@ -67,7 +67,7 @@ tb_status tb_rad_adapt_mark(const tb_rad_solver *s, double threshold, double min
  * elements left whole); the input's vertices keep their indices.
  * Deterministic: the marks, the refinement and the gathering do not depend
  * on the thread count. TB_ERR_ARG for bad options or a mesh the refiner
- * refuses (it must be conforming, with planar convex quads); the solver's
+ * refuses (it must be conforming, with convex quads); the solver's
  * errors; on failure *mesh is unchanged. `stats` may be NULL. */
 tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const tb_rad_stop *stop,
                              const tb_rad_adapt_options *aopt, tb_rad_solver **out, tb_rad_adapt_stats *stats);

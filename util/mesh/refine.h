@@ -53,7 +53,8 @@ typedef struct tb_mesh_refine_stats {
 /* A refiner whose current mesh is a copy of `base`. `base` must be a
  * conforming element mesh (as tb_mesh_from_fed makes): TB_ERR_FORMAT for a
  * degenerate element (repeated vertex, zero-length edge, zero area), a quad
- * that is not planar and strictly convex, a vertex index out of range, or
+ * that is not strictly convex about its Newell normal (slightly non-planar
+ * ones are accepted), a vertex index out of range, or
  * non-finite positions; TB_ERR_ARG for normal/uv arrays of the wrong
  * length; TB_ERR_NOMEM. */
 tb_status tb_mesh_refiner_create(const tb_mesh *base, tb_mesh_refiner **out);
