@@ -52,7 +52,8 @@ static void tb__rad_usage(FILE *out)
             "  --spp N               image: rays per pixel on a regular sub-grid (default 4)\n"
             "  --exposure STOPS      PNG/RLE only: scale by 2^STOPS (default: mean luminance to 0.18)\n"
             "  --report FILE.csv     with --reference REF.csv (a --patches file of the same mesh): rows of\n"
-            "                        seconds,shots,shots_per_n,unshot_fraction,nrmse,nrmse_ambient\n"
+            "                        seconds,shots,shots_per_n,unshot_fraction,nrmse,nrmse_ambient (the RMS\n"
+            "                        error over the reference's RMS reflected radiosity B - E)\n"
             "  --stats FILE.json     counters, times and provenance\n",
             TB_RAD_DEFAULT_SAMPLES, TB_RAD_DEFAULT_HEMICUBE_RES, TB_RAD_DEFAULT_THRESHOLD, TB_RAD_ADAPT_DEFAULT_LEVELS);
 }
@@ -119,7 +120,10 @@ static tb_status tb__rad_report_row(void *user, const tb_rad_solver *s)
             double ref = r->ref[i * (size_t)r->nc + (size_t)c];
             double d = r->b[c] - ref;
             double da = d + m->rho[i * (size_t)r->nc + (size_t)c] * amb[c];
-            num += d * d, num_a += da * da, den += ref * ref;
+            /* relative to the reflected radiosity: the emitters' own E is
+             * exact in every solution and would swamp the error */
+            double refl = ref - m->emission[i * (size_t)r->nc + (size_t)c];
+            num += d * d, num_a += da * da, den += refl * refl;
         }
     }
     double nrmse = den > 0 ? sqrt(num / den) : 0.0, nrmse_a = den > 0 ? sqrt(num_a / den) : 0.0;
