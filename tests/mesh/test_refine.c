@@ -882,6 +882,28 @@ static void test_refusals(void **state)
     flat_mesh(&m, (const float(*)[2])dart, 4, (const uint32_t(*)[5])q, 1, false);
     assert_int_equal(tb_mesh_refiner_create(&m, &r), TB_ERR_FORMAT);
     tb_mesh_free(&m);
+    /* a slightly non-planar convex quad is accepted and split as a
+     * bilinear patch (the radiosity mesh has them on the Cornell red wall) */
+    flat_mesh(&m, (const float(*)[2])dart, 4, (const uint32_t(*)[5])q, 1, false);
+    TB_ARRAY_AT(&m.positions, tb_vec3, 2) = (tb_vec3){4, 4, 0.25f};
+    assert_int_equal(tb_mesh_refiner_create(&m, &r), TB_OK);
+    uint32_t all = 0;
+    assert_int_equal(tb_mesh_refine(r, &all, 1, NULL, NULL), TB_OK);
+    const tb_mesh *nq = tb_mesh_refiner_mesh(r);
+    assert_int_equal(tb_mesh_nelems(nq), 4);
+    long double va[3] = {0, 0, 0}, v0[3]; /* vector area is additive, planar or not */
+    for (size_t i = 0; i < 4; i++) {
+        long double a[3];
+        newell(nq, tb_mesh_elem_at(nq, i), a);
+        for (int k = 0; k < 3; k++)
+            va[k] += a[k];
+        assert_true(elem_min_angle(nq, tb_mesh_elem_at(nq, i)) > 30);
+    }
+    newell(&m, tb_mesh_elem_at(&m, 0), v0);
+    for (int k = 0; k < 3; k++)
+        tb_assert_near((double)va[k], (double)v0[k], 1e-9);
+    tb_mesh_refiner_free(r);
+    tb_mesh_free(&m);
     /* a vertex index out of range */
     uint32_t oor[1][5] = {{0, 1, 7, TB_MESH_NONE, 0}};
     flat_mesh(&m, (const float(*)[2])xy, 5, (const uint32_t(*)[5])oor, 1, false);
