@@ -513,8 +513,9 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     }
     printf("testbed render: %s: radiosity, %zu elements, %llu shots (%.2f N), unshot %.3g, %.3f s (%d threads, %s, "
            "%s)\n",
-           scene_path, mesh.nelems, (unsigned long long)tb_rad_solver_shots(solver),
-           (double)tb_rad_solver_shots(solver) / (double)mesh.nelems, frac, tb_rad_solver_seconds(solver), nthreads,
+           scene_path, mesh.nelems, (unsigned long long)(ao.threshold > 0 ? as.shots : tb_rad_solver_shots(solver)),
+           (double)(ao.threshold > 0 ? as.shots : tb_rad_solver_shots(solver)) / (double)mesh.nelems, frac,
+           ao.threshold > 0 ? as.seconds : tb_rad_solver_seconds(solver), nthreads,
            mesh.spectral ? "spectral" : "rgb", ro.batch ? "vulkan" : "cpu");
     rc = TB_EXIT_OK;
     goto done;
