@@ -77,6 +77,10 @@ void tb_rad_solver_free(tb_rad_solver *s)
 {
     if (!s)
         return;
+    if (s->cache) /* before the mesh, which holds the count */
+        for (size_t i = 0; i < s->m.nelems; i++)
+            free(s->cache[i]);
+    free(s->cache);
     tb_rad_mesh_free(&s->m);
     free(s->He);
     free(s->Hv);
@@ -88,10 +92,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->ff);
     free(s->vff);
     free(s->eff);
-    if (s->cache)
-        for (size_t i = 0; i < s->m.nelems; i++)
-            free(s->cache[i]);
-    free(s->cache);
+
     free(s->rp);
     free(s->rn);
     free(s->pts);
