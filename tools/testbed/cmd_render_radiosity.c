@@ -379,6 +379,11 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     fprintf(stderr, "testbed render: radiosity on %s: %zu elements, %zu vertices, %d channels (%s), %s\n", scene_path,
             mesh.nelems, mesh.nverts, mesh.nchannels, mesh.spectral ? "spectral" : "rgb",
             ro.ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "ray cast");
+    if (scene->nlights > 0)
+        fprintf(stderr,
+                "testbed render: note: radiosity light comes from emitting surfaces only; the scene's %d point, "
+                "spot or directional light%s ignored\n",
+                scene->nlights, scene->nlights == 1 ? " is" : "s are");
     if (ao.threshold > 0) {
         /* host/radiosity/adaptive.h: mesh becomes the refined mesh */
         if ((st = tb_rad_adapt_solve(&mesh, &ro, &stop, &ao, &solver, &as)))
