@@ -29,6 +29,11 @@ _Static_assert(TB_RAD_ADAPT_MAX_LEVELS == TB_MESH_REFINE_MAX_LEVEL, "one limit f
 TB_STAT_COUNTER(tb__adapt_marked, "Radiosity/adaptive: elements marked");
 TB_STAT_COUNTER(tb__adapt_gathered, "Radiosity/adaptive: receivers gathered");
 
+/* The near field of a shooter, in its radii (max centroid-corner
+ * distance): the solver's rule (docs/radiosity.md, "Ray-cast form
+ * factors"). */
+#define TB__ADAPT_NEAR 4.0
+
 /* Luminance of one colour in the mesh's channels. */
 static double tb__lum(const tb_rad_mesh *m, const double *v)
 {
@@ -265,6 +270,32 @@ static tb_status tb__carry(const tb_rad_solver *s, const tb_rad_mesh *nm, const 
         st = tb_ff_sample_polygon(&polys[j], ns, tb__gather_seed(opt->seed, round, j), pts);
         if (!st)
             st = batch(ctx, pts, ns, e->normal, e->area, p, n, nnew, ff);
+        /* Near the shooter (within TB__ADAPT_NEAR of its radii) the
+         * sampled estimate is poor; as the solver does there, take the
+         * exact unoccluded point-to-polygon form factor times the visible
+         * fraction the samples measured. Receivers in the shooter's plane
+         * see nothing of it. */
+        double rad2 = 0;
+        for (int k = 0; k < polys[j].n; k++) {
+            tb_vec3 d = tb_vec3_sub(polys[j].v[k], e->centroid);
+            rad2 = fmax(rad2, (double)tb_vec3_dot(d, d));
+        }
+        double rad = sqrt(rad2);
+        for (size_t v = 0; v < nnew && !st; v++) {
+            tb_vec3 d = tb_vec3_sub(p[v], e->centroid);
+            if (!((double)tb_vec3_dot(d, d) < TB__ADAPT_NEAR * TB__ADAPT_NEAR * rad2))
+                continue;
+            if (fabs((double)tb_vec3_dot(d, e->normal)) <= 1e-6 * rad) {
+                ff[v] = 0;
+                continue;
+            }
+            double exact = tb_ff_point_polygon(p[v], n[v], &polys[j]);
+            if (!(exact >= 0) || !isfinite(exact))
+                continue;
+            double open = tb_ff_raycast(pts, ns, e->normal, e->area, p[v], n[v], NULL, NULL);
+            double vis = open > 0 ? fmin(1, ff[v] / open) : 1;
+            ff[v] = exact * vis;
+        }
         for (size_t v = 0; v < nnew && !st; v++)
             if (ff[v] > 0)
                 for (int c = 0; c < nc; c++)

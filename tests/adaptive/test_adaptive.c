@@ -484,6 +484,64 @@ static void test_hemicube(void **state)
     tb_rad_mesh_free(&m);
 }
 
+/* A floor (8 x 8) under a large emitter close to it (0.25 x 0.25 at height
+ * 0.1): every floor element marked once gives the 16 x 16 grid, whose new
+ * vertices were gathered from the emitter's shot, many of them in its near
+ * field. Their values must match a direct solve on a uniform 16 x 16 floor
+ * at the same points. */
+static void test_gather_matches_direct(void **state)
+{
+    (void)state;
+    tb_rad_mesh m[2];
+    for (int t = 0; t < 2; t++) {
+        uint32_t k = t ? 16 : 8;
+        shadow_scene(&m[t], k);
+        /* drop the occluder, move the emitter down and make it larger */
+        m[t].emission[3 * (m[t].nelems - 2)] = 0;
+        for (size_t v = m[t].nverts - 8; v < m[t].nverts - 4; v++)
+            m[t].verts[v].p.z = -5; /* the occluder out of the way, below the floor, facing down */
+        float c[4][2] = {{0.375f, 0.375f}, {0.625f, 0.375f}, {0.625f, 0.625f}, {0.375f, 0.625f}};
+        for (int q = 0; q < 4; q++)
+            m[t].verts[m[t].nverts - 4 + (size_t)q].p = (tb_vec3){c[q][0], c[q][1], 0.1f};
+        assert_int_equal(tb_rad_mesh_update_geometry(&m[t]), TB_OK);
+    }
+    tb_rad_adapt_options a = {.threshold = 1e-9, .max_levels = 1};
+    tb_rad_solver *s, *u;
+    assert_int_equal(tb_rad_adapt_solve(&m[0], &ray_opt, &one_shot, &a, &s, NULL), TB_OK);
+    assert_int_equal(count_object(tb_rad_solver_mesh(s), 0), 256);
+    assert_int_equal(tb_rad_solver_create(&m[1], NULL, &ray_opt, &u), TB_OK);
+    assert_int_equal(tb_rad_solver_run(u, &one_shot, NULL, NULL, 0), TB_OK);
+    /* corner values of both at every floor vertex, by position */
+    const tb_rad_mesh *am = tb_rad_solver_mesh(s), *um = tb_rad_solver_mesh(u);
+    double va[17][17], vu[17][17], top = 0, worst = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        const tb_rad_solver *x = pass ? u : s;
+        const tb_rad_mesh *xm = pass ? um : am;
+        for (size_t i = 0; i < xm->nelems; i++) {
+            if (xm->elems[i].object != 0)
+                continue;
+            for (int k = 0; k < 4; k++) {
+                tb_vec3 p = xm->verts[xm->elems[i].v[k]].p;
+                double b[3];
+                tb_rad_corner_radiosity(x, i, k, false, b);
+                (pass ? vu : va)[lround(p.x * 16)][lround(p.y * 16)] = b[0];
+            }
+        }
+    }
+    for (int i = 0; i <= 16; i++)
+        for (int j = 0; j <= 16; j++) {
+            top = fmax(top, vu[i][j]);
+            worst = fmax(worst, fabs(va[i][j] - vu[i][j]));
+        }
+    print_message("gathered vs direct on the 16 x 16 floor: largest difference %.4f of the brightest %.4f\n",
+                  worst, top);
+    assert_true(worst < 0.02 * top);
+    tb_rad_solver_free(s);
+    tb_rad_solver_free(u);
+    tb_rad_mesh_free(&m[0]);
+    tb_rad_mesh_free(&m[1]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -491,6 +549,7 @@ int main(void)
         cmocka_unit_test(test_carry_and_determinism),
         cmocka_unit_test(test_limits),
         cmocka_unit_test(test_hemicube),
+        cmocka_unit_test(test_gather_matches_direct),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
