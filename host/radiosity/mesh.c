@@ -430,3 +430,63 @@ tb_status tb_rad_mesh_from_scene(const tb_scene *scene, const tb_rad_mesh_option
         tb_rad_mesh_free(out);
     return st;
 }
+
+/* One distinct plane of the mesh and whether every vertex is on its front. */
+typedef struct tb__plane {
+    double n[3], d; /* n . x = d */
+    bool enclosing;
+} tb__plane;
+
+/* Most plane x vertex tests tb_rad_mesh_occluders makes before it gives up
+ * and keeps every element. */
+#define TB__RAD_ENCLOSURE_WORK 50000000.0
+
+size_t tb_rad_mesh_occluders(const tb_rad_mesh *m, tb_ff_polygon *out)
+{
+    size_t ne = m->nelems, nv = m->nverts, nout = 0;
+    /* scene size, for the tolerance */
+    tb_vec3 lo = m->verts[0].p, hi = lo;
+    for (size_t v = 1; v < nv; v++)
+        lo = tb_vec3_min(lo, m->verts[v].p), hi = tb_vec3_max(hi, m->verts[v].p);
+    double eps = 1e-6 * (double)tb_vec3_length(tb_vec3_sub(hi, lo));
+    /* distinct planes (elements of one face share theirs): keyed by the exact
+     * float normal and the rounded offset, found by a linear scan that stops
+     * being worth it for curved meshes, where the work bound below bails out */
+    tb__plane *pl = malloc((ne ? ne : 1) * sizeof *pl);
+    uint32_t *of = malloc((ne ? ne : 1) * sizeof *of);
+    size_t np = 0;
+    bool ok = pl && of;
+    for (size_t i = 0; i < ne && ok; i++) {
+        const tb_rad_element *e = &m->elems[i];
+        double n[3] = {e->normal.x, e->normal.y, e->normal.z};
+        double d = n[0] * e->centroid.x + n[1] * e->centroid.y + n[2] * e->centroid.z;
+        size_t k = np;
+        for (size_t q = np; q-- > 0 && np - q <= 64;) /* recent planes: the same face's elements are consecutive */
+            if (pl[q].n[0] == n[0] && pl[q].n[1] == n[1] && pl[q].n[2] == n[2] && fabs(pl[q].d - d) <= eps) {
+                k = q;
+                break;
+            }
+        if (k == np) {
+            if ((double)(np + 1) * (double)nv > TB__RAD_ENCLOSURE_WORK) {
+                ok = false;
+                break;
+            }
+            pl[np].n[0] = n[0], pl[np].n[1] = n[1], pl[np].n[2] = n[2], pl[np].d = d, pl[np].enclosing = true;
+            np++;
+        }
+        of[i] = (uint32_t)k;
+    }
+    if (ok)
+        for (size_t q = 0; q < np; q++)
+            for (size_t v = 0; v < nv && pl[q].enclosing; v++) {
+                tb_vec3 p = m->verts[v].p;
+                if (pl[q].n[0] * p.x + pl[q].n[1] * p.y + pl[q].n[2] * p.z < pl[q].d - eps)
+                    pl[q].enclosing = false;
+            }
+    for (size_t i = 0; i < ne; i++)
+        if (!ok || !pl[of[i]].enclosing)
+            tb_rad_mesh_polygon(m, i, &out[nout++]);
+    free(pl);
+    free(of);
+    return nout;
+}

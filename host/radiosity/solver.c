@@ -272,7 +272,15 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
             s->opt.batch = tb_ff_raycast_batch;
             s->opt.batch_ctx = NULL;
             if (!o.no_occlusion) {
-                tb_status st = tb_ff_occluders_build(s->polys, ne, &s->occ);
+                /* the room's walls cannot occlude: build over the rest */
+                tb_ff_polygon *occ = malloc(ne * sizeof *occ);
+                if (!occ) {
+                    tb_rad_solver_free(s);
+                    return tb_error(TB_ERR_NOMEM, "radiosity: out of memory");
+                }
+                size_t nocc = tb_rad_mesh_occluders(&s->m, occ);
+                tb_status st = tb_ff_occluders_build(occ, nocc, &s->occ);
+                free(occ);
                 if (st) {
                     tb_rad_solver_free(s);
                     return st;

@@ -365,9 +365,9 @@ int tb_cmd_render_radiosity(int argc, char **argv)
                 st = tb_error(TB_ERR_NOMEM, "out of memory");
                 goto fail;
             }
-            for (size_t i = 0; i < mesh.nelems; i++)
-                tb_rad_mesh_polygon(&mesh, i, &gpolys[i]);
-            gscene = tb_gpu_ff_scene_create(gsess.device, gpolys, mesh.nelems);
+            /* the same occluders as the CPU path: the room's walls cannot occlude */
+            size_t nocc = tb_rad_mesh_occluders(&mesh, gpolys);
+            gscene = tb_gpu_ff_scene_create(gsess.device, gpolys, nocc);
             if (!gscene) {
                 st = TB_ERR_DEVICE;
                 goto fail;
