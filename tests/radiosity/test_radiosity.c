@@ -469,6 +469,71 @@ static void test_cornell_image(void **state)
     tb_scene_free(sc);
 }
 
+/* Occluders: the walls of a room cannot block a segment inside it. In the
+ * furnace nothing occludes; in the Cornell box the blocks' faces all do and
+ * the floor, ceiling, back and right walls never do; and
+ * visibility through the reduced set equals visibility through every
+ * element for segments between element centroids. */
+static void test_occluders(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 0.25};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    tb_ff_polygon *p = malloc(m.nelems * sizeof *p);
+    assert_int_equal(tb_rad_mesh_occluders(&m, p), 0);
+    free(p);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+
+    sc = tb__load("scenes/cornell-box-rgb.mid");
+    mo.max_edge = 80;
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    p = malloc(m.nelems * sizeof *p);
+    tb_ff_polygon *all = malloc(m.nelems * sizeof *all);
+    size_t n = tb_rad_mesh_occluders(&m, p);
+    size_t blocks = 0;
+    for (size_t i = 0; i < m.nelems; i++) {
+        tb_rad_mesh_polygon(&m, i, &all[i]);
+        blocks += m.elems[i].object >= 6;
+    }
+    /* every kept polygon is a block's, the (non-planar) red wall's or the light's (0.1 mm
+     * below the ceiling: it hides the ceiling above it) */
+    size_t kept_blocks = 0;
+    for (size_t k = 0; k < n; k++) {
+        size_t i = 0;
+        while (i < m.nelems && memcmp(&all[i], &p[k], sizeof p[k]) != 0)
+            i++;
+        assert_true(i < m.nelems);
+        uint32_t o = m.elems[i].object;
+        assert_true(o == 4 || o >= 5);
+        kept_blocks += o >= 6;
+    }
+    assert_int_equal(kept_blocks, blocks);
+    tb_ff_occluders *oa = NULL, *ob = NULL;
+    assert_int_equal(tb_ff_occluders_build(all, m.nelems, &oa), TB_OK);
+    assert_int_equal(tb_ff_occluders_build(p, n, &ob), TB_OK);
+    int blocked = 0;
+    for (size_t i = 0; i < m.nelems; i += 3)
+        for (size_t j = i + 1; j < m.nelems; j += 7) {
+            /* a little in front of each surface, as sample points and receivers are */
+            tb_vec3 a = tb_vec3_add(m.elems[i].centroid, tb_vec3_scale(m.elems[i].normal, 0.01f));
+            tb_vec3 b = tb_vec3_add(m.elems[j].centroid, tb_vec3_scale(m.elems[j].normal, 0.01f));
+            bool va = tb_ff_occluders_visible(oa, a, b), vb = tb_ff_occluders_visible(ob, a, b);
+            assert_true(va == vb);
+            blocked += !va;
+        }
+    print_message("occluders: %zu of %zu elements; %d blocked segments agree\n", n, m.nelems, blocked);
+    assert_true(blocked > 100);
+    tb_ff_occluders_free(oa);
+    tb_ff_occluders_free(ob);
+    free(p);
+    free(all);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1)
@@ -479,6 +544,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_reciprocity),     cmocka_unit_test(test_threads),
         cmocka_unit_test(test_patches_csv),     cmocka_unit_test(test_continue),
         cmocka_unit_test(test_errors),          cmocka_unit_test(test_cornell_image),
+        cmocka_unit_test(test_occluders),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
