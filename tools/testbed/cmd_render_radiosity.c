@@ -379,6 +379,11 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     fprintf(stderr, "testbed render: radiosity on %s: %zu elements, %zu vertices, %d channels (%s), %s\n", scene_path,
             mesh.nelems, mesh.nverts, mesh.nchannels, mesh.spectral ? "spectral" : "rgb",
             ro.ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "ray cast");
+    bool emits = false;
+    for (size_t k = 0; k < mesh.nelems * (size_t)mesh.nchannels && !emits; k++)
+        emits = mesh.emission[k] > 0.0f;
+    if (!emits)
+        fprintf(stderr, "testbed render: note: no surface of %s emits: the solution is black\n", scene_path);
     if (scene->nlights > 0)
         fprintf(stderr,
                 "testbed render: note: radiosity light comes from emitting surfaces only; the scene's %d point, "
