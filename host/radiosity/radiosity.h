@@ -236,7 +236,7 @@ tb_rad_state tb_rad_solver_state(const tb_rad_solver *s);
  * that reaches j) exactly as a shot from i moves energy: ray cast, A_j / A_i times F_ji, F_ji the mean over j's
  * corners of F(v -> i) or, next to i, the near-field estimate
  * (docs/radiosity.md); hemicube, the hemicube at i's centroid. For
- * reciprocity checks; costs a whole shot. */
+ * reciprocity checks; costs a shot unless i's form factors are cached. */
 tb_status tb_rad_formfactor(tb_rad_solver *s, size_t i, size_t j, double *f);
 
 /* --patches CSV: header `element,object,area,cx,cy,cz,nx,ny,nz,` then
