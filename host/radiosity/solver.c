@@ -9,6 +9,12 @@
 #include "util/math/float.h"
 #include "util/stats/stats.h"
 
+/* How far (a fraction of the way to its elements' centroid) a receiver
+ * vertex is moved into its surface (see tb_rad_solver_create). */
+#define TB__RAD_RECEIVER_INSET 1e-3
+
+static inline int tb__elem_size(const tb_rad_element *e) { return e->v[3] == TB_RAD_NONE ? 3 : 4; }
+
 /* Receivers within this many shooter radii (centroid to farthest corner)
  * get the near-field form factor (tb__near_field). */
 #define TB__RAD_NEAR 4.0
@@ -264,8 +270,37 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
             return st;
         }
     } else {
-        for (size_t v = 0; v < nv; v++)
-            s->rp[v] = s->m.verts[v].p, s->rn[v] = s->m.verts[v].n;
+        /* Receivers sit a hair inside their surface: the point form factor
+         * is discontinuous at an edge (a point on the floor's edge sees the
+         * wall beside it edge-on and half its hemisphere behind it, so it
+         * gets half the irradiance of a point just inside; a corner a
+         * quarter), and the vertex stands for the limit from inside. Each
+         * vertex moves TB__RAD_RECEIVER_INSET of the way to the area-weighted
+         * centroid of its elements. */
+        double *acc = calloc(nv * 4, sizeof *acc);
+        if (!acc) {
+            tb_rad_solver_free(s);
+            return tb_error(TB_ERR_NOMEM, "radiosity: out of memory");
+        }
+        for (size_t i = 0; i < ne; i++) {
+            const tb_rad_element *e = &s->m.elems[i];
+            for (int k = 0; k < tb__elem_size(e); k++) {
+                double *a = acc + (size_t)e->v[k] * 4;
+                a[0] += e->area * e->centroid.x, a[1] += e->area * e->centroid.y, a[2] += e->area * e->centroid.z;
+                a[3] += e->area;
+            }
+        }
+        for (size_t v = 0; v < nv; v++) {
+            tb_vec3 p = s->m.verts[v].p;
+            const double *a = acc + v * 4;
+            if (a[3] > 0.0) {
+                double t = TB__RAD_RECEIVER_INSET;
+                p = tb_vec3_make((float)(p.x + t * (a[0] / a[3] - p.x)), (float)(p.y + t * (a[1] / a[3] - p.y)),
+                                 (float)(p.z + t * (a[2] / a[3] - p.z)));
+            }
+            s->rp[v] = p, s->rn[v] = s->m.verts[v].n;
+        }
+        free(acc);
         for (size_t i = 0; i < ne; i++)
             s->gnear[i] = NAN;
         if (!s->opt.batch) {
@@ -293,7 +328,6 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     return TB_OK;
 }
 
-static inline int tb__elem_size(const tb_rad_element *e) { return e->v[3] == TB_RAD_NONE ? 3 : 4; }
 
 static void tb__near_field(tb_rad_solver *s, size_t i);
 static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i);

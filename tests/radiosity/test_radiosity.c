@@ -71,8 +71,18 @@ static void tb__furnace(tb_rad_ff_method ff, double tol)
     print_message("furnace %s: worst relative error %.4f (ambient), %.4f (none), %llu shots\n",
                   ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "raycast", worst, worst_na,
                   (unsigned long long)tb_rad_solver_shots(s));
+    /* the display values at the corners too: a receiver vertex on the box's
+     * edge must count the wall beside it (the limit from inside) */
+    double worst_c = 0.0;
+    for (size_t i = 0; i < m.nelems; i++)
+        for (int k = 0; k < (m.elems[i].v[3] == TB_RAD_NONE ? 3 : 4); k++) {
+            tb_rad_corner_radiosity(s, i, k, true, b);
+            worst_c = fmax(worst_c, fabs(b[0] - 2.0) / 2.0);
+        }
+    print_message("furnace corners: worst relative error %.4f\n", worst_c);
     assert_true(worst < tol);
     assert_true(worst_na < tol + 2.0 * thr);
+    assert_true(worst_c < tol);
     tb_rad_solver_free(s);
     tb_rad_mesh_free(&m);
     tb_scene_free(sc);
