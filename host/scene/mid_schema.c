@@ -10,6 +10,11 @@
 
 #define TB__ERR(r, loc, ...) TB__MID_ERR(r, loc, __VA_ARGS__)
 
+/* Whether attribute or symbol name `s` is the literal `lit`. The first byte
+ * is compared inline: most tests in an attribute dispatch fail on it, and a
+ * strcmp call for each was about 5% of reading a file of small objects. */
+#define TB__IS(s, lit) ((s)[0] == (lit)[0] && strcmp((s), (lit)) == 0)
+
 static tb_status tb__nomem(tb_mid_reader *r) { return tb_error(TB_ERR_NOMEM, "%s: out of memory", r->lx.name); }
 
 /* "found ..." text for a value. */
@@ -62,9 +67,9 @@ static tb_status tb__range_error(tb_mid_reader *r, tb_mid_loc loc, const char *w
 static tb_status tb__bool(tb_mid_reader *r, const tb_mid_value *v, const char *what, bool *out)
 {
     char found[96];
-    if (v->type == TB_MID_SYMBOL && strcmp(v->text, "true") == 0)
+    if (v->type == TB_MID_SYMBOL && TB__IS(v->text, "true"))
         *out = true;
-    else if (v->type == TB_MID_SYMBOL && strcmp(v->text, "false") == 0)
+    else if (v->type == TB_MID_SYMBOL && TB__IS(v->text, "false"))
         *out = false;
     else
         return TB__ERR(r, v->loc, "expected true or false for '%s', found %s", what, TB__DESC(v));
@@ -294,7 +299,7 @@ static tb_status tb__color(tb_mid_reader *r, const tb_mid_value *v, const char *
         }
         return TB_OK;
     }
-    if (v->type == TB_MID_CALL && strcmp(v->name, "spectrum") == 0) {
+    if (v->type == TB_MID_CALL && TB__IS(v->name, "spectrum")) {
         if (v->count == 1 && v->items[0].type == TB_MID_FILE) {
             out->type = TB_MID_COLOR_SPECTRUM_FILE;
             out->file = v->items[0].ref;
@@ -360,12 +365,12 @@ static tb_status tb__transform(tb_mid_reader *r, const tb_mid_value *v, const tb
             return TB__ERR(r, c->loc, "expected a transform operation (translate, scale, rotate or matrix), found %s",
                            TB__DESC(c));
         const tb_mid_value *a = c->items;
-        if (strcmp(c->name, "translate") == 0) {
+        if (TB__IS(c->name, "translate")) {
             if (c->count != 1 || a[0].type != TB_MID_VECTOR || a[0].count != 3)
                 return TB__ERR(r, c->loc, "translate takes one 3-vector: translate([x y z])");
             op->kind = TB_MID_TRANSLATE;
             memcpy(op->v, a[0].numbers, 3 * sizeof(double));
-        } else if (strcmp(c->name, "scale") == 0) {
+        } else if (TB__IS(c->name, "scale")) {
             op->kind = TB_MID_SCALE;
             if (c->count == 1 && a[0].type == TB_MID_NUMBER)
                 op->v[0] = op->v[1] = op->v[2] = a[0].number;
@@ -375,7 +380,7 @@ static tb_status tb__transform(tb_mid_reader *r, const tb_mid_value *v, const tb
                 return TB__ERR(r, c->loc, "scale takes a number or a 3-vector: scale(s) or scale([x y z])");
             if (op->v[0] == 0.0 || op->v[1] == 0.0 || op->v[2] == 0.0)
                 return TB__ERR(r, c->loc, "scale factors must be non-zero (a zero scale is singular)");
-        } else if (strcmp(c->name, "rotate") == 0) {
+        } else if (TB__IS(c->name, "rotate")) {
             if (c->count != 2 || a[0].type != TB_MID_VECTOR || a[0].count != 3 || a[1].type != TB_MID_NUMBER)
                 return TB__ERR(r, c->loc, "rotate takes an axis and an angle: rotate([x y z], degrees)");
             op->kind = TB_MID_ROTATE;
@@ -383,7 +388,7 @@ static tb_status tb__transform(tb_mid_reader *r, const tb_mid_value *v, const tb
             op->v[3] = a[1].number;
             if (op->v[0] == 0.0 && op->v[1] == 0.0 && op->v[2] == 0.0)
                 return TB__ERR(r, c->loc, "the rotation axis must be non-zero");
-        } else if (strcmp(c->name, "matrix") == 0) {
+        } else if (TB__IS(c->name, "matrix")) {
             if (c->count != 1 || a[0].type != TB_MID_VECTOR || a[0].count != 16)
                 return TB__ERR(r, c->loc,
                                "matrix takes one list of 16 numbers, row by row: matrix([m00 m01 ... m33])");
@@ -432,11 +437,12 @@ static tb_status tb__vec_list(tb_mid_reader *r, const tb_mid_value *v, const cha
                               int *count)
 {
     char found[96];
-    if (v->type == TB_MID_VECTOR && v->count == 0) {
-        *out = NULL;
-        *count = 0;
+    /* Defined on every path, errors included: the callers' -O3 builds
+     * cannot see that an error return is never TB_OK. */
+    *out = NULL;
+    *count = 0;
+    if (v->type == TB_MID_VECTOR && v->count == 0)
         return TB_OK;
-    }
     if (v->type != TB_MID_LIST)
         return TB__ERR(r, v->loc, "expected a list of %d-vectors for '%s', e.g. [%s], found %s", n, what,
                        n == 2 ? "[0 0] [1 0] [0 1]" : "[0 0 0] [1 0 0] [0 1 0]", TB__DESC(v));
@@ -508,15 +514,15 @@ static tb_status tb__polygons(tb_mid_reader *r, const tb_mid_value *g, tb_geom_p
     tb_status st;
     for (int i = 0; i < g->count; i++) {
         const tb_mid_attr *a = &g->attrs[i];
-        if (strcmp(a->name, "vertices") == 0)
+        if (TB__IS(a->name, "vertices"))
             vertices = &a->value;
-        else if (strcmp(a->name, "faces") == 0)
+        else if (TB__IS(a->name, "faces"))
             faces = &a->value;
-        else if (strcmp(a->name, "normals") == 0)
+        else if (TB__IS(a->name, "normals"))
             normals = &a->value;
-        else if (strcmp(a->name, "uvs") == 0)
+        else if (TB__IS(a->name, "uvs"))
             uvs = &a->value;
-        else if (strcmp(a->name, "mesh") == 0)
+        else if (TB__IS(a->name, "mesh"))
             mesh = &a->value;
         else if ((st = tb__extra_push(r, extra, a)))
             return st;
@@ -642,34 +648,34 @@ static tb_status tb__geometry(tb_mid_reader *r, tb_prim_kind k, const tb_mid_val
         st = TB_OK;
         switch (k) {
         case TB_PRIM_CYLINDER:
-            if (strcmp(n, "caps") == 0)
+            if (TB__IS(n, "caps"))
                 st = tb__bool(r, v, n, &geo->cylinder.caps);
             else
                 known = false;
             break;
         case TB_PRIM_CONE:
-            if (strcmp(n, "caps") == 0)
+            if (TB__IS(n, "caps"))
                 st = tb__bool(r, v, n, &geo->cone.caps);
-            else if (strcmp(n, "top_radius") == 0)
+            else if (TB__IS(n, "top_radius"))
                 st = tb__param(r, v, n, false, INFINITY, &geo->cone.top_radius);
             else
                 known = false;
             break;
         case TB_PRIM_PYRAMID:
-            if (strcmp(n, "caps") == 0)
+            if (TB__IS(n, "caps"))
                 st = tb__bool(r, v, n, &geo->pyramid.caps);
-            else if (strcmp(n, "top") == 0)
+            else if (TB__IS(n, "top"))
                 st = tb__param(r, v, n, false, INFINITY, &geo->pyramid.top);
             else
                 known = false;
             break;
         case TB_PRIM_PRISM:
-            if (strcmp(n, "caps") == 0)
+            if (TB__IS(n, "caps"))
                 st = tb__bool(r, v, n, &geo->prism.caps);
-            else if (strcmp(n, "sides") == 0) {
+            else if (TB__IS(n, "sides")) {
                 st = tb__int(r, v, n, 3, 1000000, &geo->prism.sides);
                 sides = a;
-            } else if (strcmp(n, "profile") == 0) {
+            } else if (TB__IS(n, "profile")) {
                 float *f;
                 int np;
                 if ((st = tb__vec_list(r, v, n, 2, &f, &np)))
@@ -691,19 +697,19 @@ static tb_status tb__geometry(tb_mid_reader *r, tb_prim_kind k, const tb_mid_val
                 known = false;
             break;
         case TB_PRIM_TORUS:
-            if (strcmp(n, "major") == 0)
+            if (TB__IS(n, "major"))
                 st = tb__param(r, v, n, true, INFINITY, &geo->torus.major);
-            else if (strcmp(n, "minor") == 0)
+            else if (TB__IS(n, "minor"))
                 st = tb__param(r, v, n, true, INFINITY, &geo->torus.minor);
             else
                 known = false;
             break;
         case TB_PRIM_CONIC:
-            if (strcmp(n, "caps") == 0)
+            if (TB__IS(n, "caps"))
                 st = tb__bool(r, v, n, &geo->conic.caps);
-            else if (strcmp(n, "coefficients") == 0)
+            else if (TB__IS(n, "coefficients"))
                 st = tb__vec(r, v, n, 3, geo->conic.c);
-            else if (strcmp(n, "z_range") == 0) {
+            else if (TB__IS(n, "z_range")) {
                 double z[2];
                 if (!(st = tb__vec(r, v, n, 2, z))) {
                     geo->conic.z0 = z[0];
@@ -714,9 +720,9 @@ static tb_status tb__geometry(tb_mid_reader *r, tb_prim_kind k, const tb_mid_val
             break;
         case TB_PRIM_SQUARE_ARCH:
         case TB_PRIM_ROUND_ARCH:
-            if (strcmp(n, "width") == 0)
+            if (TB__IS(n, "width"))
                 st = tb__param(r, v, n, true, 2.0, &geo->arch.width);
-            else if (strcmp(n, "height") == 0)
+            else if (TB__IS(n, "height"))
                 st = tb__param(r, v, n, true, 2.0, &geo->arch.height);
             else
                 known = false;
@@ -775,9 +781,9 @@ static void tb__material_unset(tb_mid_material *m, tb_mid_loc loc)
 static tb_status tb__pattern_space(tb_mid_reader *r, const tb_mid_value *v, const char *fn, bool *object)
 {
     char found[96];
-    if (v->type == TB_MID_SYMBOL && strcmp(v->text, "uv") == 0)
+    if (v->type == TB_MID_SYMBOL && TB__IS(v->text, "uv"))
         *object = false;
-    else if (v->type == TB_MID_SYMBOL && strcmp(v->text, "object") == 0)
+    else if (v->type == TB_MID_SYMBOL && TB__IS(v->text, "object"))
         *object = true;
     else
         return TB__ERR(r, v->loc, "expected uv or object for the space of %s(), found %s", fn, TB__DESC(v));
@@ -821,7 +827,7 @@ static tb_status tb__pattern(tb_mid_reader *r, const tb_mid_value *v, const char
                        bump ? "noise(...) or image(...)" : "checker(...) or noise(...)", what, TB__DESC(v));
     const tb_mid_value *a = v->items;
     const int n = v->count;
-    if (!bump && strcmp(v->name, "checker") == 0) {
+    if (!bump && TB__IS(v->name, "checker")) {
         if (n != 3 && n != 4)
             return TB__ERR(r, v->loc,
                            "checker takes a scale, two colours and an optional space: checker(scale, a, b [, uv|object])");
@@ -832,7 +838,7 @@ static tb_status tb__pattern(tb_mid_reader *r, const tb_mid_value *v, const char
             return st;
         return tb__pattern_scale_space(r, &a[0], out);
     }
-    if (strcmp(v->name, "noise") == 0) {
+    if (TB__IS(v->name, "noise")) {
         int k = bump ? 3 : 4;
         if (n != k && n != k + 1)
             return TB__ERR(r, v->loc, "%s",
@@ -851,7 +857,7 @@ static tb_status tb__pattern(tb_mid_reader *r, const tb_mid_value *v, const char
             st = tb__pattern_space(r, &a[k], "noise", &out->object_space);
         return st ? st : tb__pattern_scale_space(r, &a[0], out);
     }
-    if (bump && strcmp(v->name, "image") == 0) {
+    if (bump && TB__IS(v->name, "image")) {
         if (n != 2 || a[0].type != TB_MID_FILE)
             return TB__ERR(r, v->loc, "image takes a file and a height: image(file(\"heights.png\"), height)");
         out->kind = TB_MID_PATTERN_IMAGE;
@@ -873,7 +879,7 @@ static tb_status tb__rendering(tb_mid_reader *r, const tb_mid_attr *attrs, int n
     tb__material_unset(m, loc);
     /* The base material first, wherever it is written. */
     for (int i = 0; i < n; i++) {
-        if (strcmp(attrs[i].name, "material") != 0)
+        if (!TB__IS(attrs[i].name, "material"))
             continue;
         const tb_mid_value *v = &attrs[i].value;
         if (v->type != TB_MID_STRING)
@@ -892,43 +898,43 @@ static tb_status tb__rendering(tb_mid_reader *r, const tb_mid_attr *attrs, int n
         const char *nm = a->name;
         double x = 0.0;
         st = TB_OK;
-        if (strcmp(nm, "material") == 0)
+        if (TB__IS(nm, "material"))
             continue;
-        else if (strcmp(nm, "diffuse") == 0) {
+        else if (TB__IS(nm, "diffuse")) {
             st = tb__color(r, v, nm, 1.0, &m->diffuse);
             m->set |= TB_MID_SET_DIFFUSE;
-        } else if (strcmp(nm, "specular") == 0) {
+        } else if (TB__IS(nm, "specular")) {
             st = tb__color(r, v, nm, 1.0, &m->specular);
             m->set |= TB_MID_SET_SPECULAR;
-        } else if (strcmp(nm, "transmission") == 0) {
+        } else if (TB__IS(nm, "transmission")) {
             st = tb__color(r, v, nm, 1.0, &m->transmission);
             m->set |= TB_MID_SET_TRANSMISSION;
-        } else if (strcmp(nm, "emission") == 0) {
+        } else if (TB__IS(nm, "emission")) {
             st = tb__color(r, v, nm, INFINITY, &m->emission);
             m->set |= TB_MID_SET_EMISSION;
-        } else if (strcmp(nm, "exponent") == 0) {
+        } else if (TB__IS(nm, "exponent")) {
             if (!(st = tb__param(r, v, nm, false, INFINITY, &x)))
                 st = tb__float_ok(r, v->loc, nm, x);
             m->exponent = (float)x;
             m->set |= TB_MID_SET_EXPONENT;
-        } else if (strcmp(nm, "ior") == 0) {
+        } else if (TB__IS(nm, "ior")) {
             if (!(st = tb__param(r, v, nm, true, INFINITY, &x)))
                 st = tb__float_ok(r, v->loc, nm, x);
             m->ior = (float)x;
             m->set |= TB_MID_SET_IOR;
-        } else if (strcmp(nm, "diffuse_texture") == 0) {
+        } else if (TB__IS(nm, "diffuse_texture")) {
             st = tb__file(r, v, nm, &m->diffuse_texture);
             m->set |= TB_MID_SET_DIFFUSE_TEXTURE;
-        } else if (strcmp(nm, "specular_texture") == 0) {
+        } else if (TB__IS(nm, "specular_texture")) {
             st = tb__file(r, v, nm, &m->specular_texture);
             m->set |= TB_MID_SET_SPECULAR_TEXTURE;
-        } else if (strcmp(nm, "transmission_texture") == 0) {
+        } else if (TB__IS(nm, "transmission_texture")) {
             st = tb__file(r, v, nm, &m->transmission_texture);
             m->set |= TB_MID_SET_TRANSMISSION_TEXTURE;
-        } else if (strcmp(nm, "emission_texture") == 0) {
+        } else if (TB__IS(nm, "emission_texture")) {
             st = tb__file(r, v, nm, &m->emission_texture);
             m->set |= TB_MID_SET_EMISSION_TEXTURE;
-        } else if (strcmp(nm, "model") == 0) {
+        } else if (TB__IS(nm, "model")) {
             int k = 0;
             while (k < TB_MID_MODEL_COUNT &&
                    !(v->type == TB_MID_SYMBOL && strcmp(v->text, tb_mid_model_name((tb_mid_model)k)) == 0))
@@ -937,18 +943,18 @@ static tb_status tb__rendering(tb_mid_reader *r, const tb_mid_attr *attrs, int n
                 st = TB__ERR(r, v->loc, "expected phong, blinn, lambert or ggx for 'model', found %s", TB__DESC(v));
             m->model = (tb_mid_model)k;
             m->set |= TB_MID_SET_MODEL;
-        } else if (strcmp(nm, "roughness") == 0) {
+        } else if (TB__IS(nm, "roughness")) {
             if (!(st = tb__number(r, v, nm, &x)) && !(x >= 0.0 && x <= 1.0))
                 st = tb__range_error(r, v->loc, nm, "in [0, 1]", x);
             m->roughness = (float)x;
             m->set |= TB_MID_SET_ROUGHNESS;
-        } else if (strcmp(nm, "diffuse_pattern") == 0) {
+        } else if (TB__IS(nm, "diffuse_pattern")) {
             st = tb__pattern(r, v, nm, false, &m->diffuse_pattern);
             m->set |= TB_MID_SET_DIFFUSE_PATTERN;
-        } else if (strcmp(nm, "specular_pattern") == 0) {
+        } else if (TB__IS(nm, "specular_pattern")) {
             st = tb__pattern(r, v, nm, false, &m->specular_pattern);
             m->set |= TB_MID_SET_SPECULAR_PATTERN;
-        } else if (strcmp(nm, "bump") == 0) {
+        } else if (TB__IS(nm, "bump")) {
             st = tb__pattern(r, v, nm, true, &m->bump);
             m->set |= TB_MID_SET_BUMP;
         } else
@@ -1106,12 +1112,12 @@ static tb_status tb__object(tb_mid_reader *r, const tb__mid_node *n, const tb_tr
     tb__extra extra = {0};
     for (int i = 0; i < n->nattrs; i++) {
         const tb_mid_attr *a = &n->attrs[i];
-        if (strcmp(a->name, "transform") == 0)
+        if (TB__IS(a->name, "transform"))
             st = tb__transform(r, &a->value, &o->ops, &o->nops, &local);
-        else if (strcmp(a->name, "geometry") == 0) {
+        else if (TB__IS(a->name, "geometry")) {
             st = tb__block(r, &a->value, "geometry");
             geometry = &a->value;
-        } else if (strcmp(a->name, "rendering") == 0) {
+        } else if (TB__IS(a->name, "rendering")) {
             st = tb__block(r, &a->value, "rendering");
             rendering = a;
         } else
@@ -1174,27 +1180,27 @@ static tb_status tb__light(tb_mid_reader *r, const tb__mid_node *n, tb_mid_light
         const tb_mid_attr *a = &n->attrs[i];
         const tb_mid_value *v = &a->value;
         const char *nm = a->name;
-        if (strcmp(nm, "transform") == 0)
+        if (TB__IS(nm, "transform"))
             st = tb__transform(r, v, &l->ops, &l->nops, &local);
-        else if (!dir && strcmp(nm, "position") == 0)
+        else if (!dir && TB__IS(nm, "position"))
             st = tb__dvec3(r, v, nm, &l->position);
-        else if ((spot || dir) && strcmp(nm, "direction") == 0) {
+        else if ((spot || dir) && TB__IS(nm, "direction")) {
             if (!(st = tb__dvec3(r, v, nm, &l->direction)) && l->direction.x == 0.0 && l->direction.y == 0.0 &&
                 l->direction.z == 0.0)
                 st = TB__ERR(r, v->loc, "'direction' must be non-zero");
-        } else if (!dir && strcmp(nm, "intensity") == 0)
+        } else if (!dir && TB__IS(nm, "intensity"))
             st = tb__color(r, v, nm, INFINITY, &l->intensity);
-        else if (dir && strcmp(nm, "irradiance") == 0)
+        else if (dir && TB__IS(nm, "irradiance"))
             st = tb__color(r, v, nm, INFINITY, &l->intensity);
-        else if (spot && strcmp(nm, "cone_angle") == 0) {
+        else if (spot && TB__IS(nm, "cone_angle")) {
             double x = 0.0;
             if (!(st = tb__number(r, v, nm, &x)) && !(x > 0.0 && x <= 90.0))
                 st = tb__range_error(r, v->loc, nm, "in (0, 90]", x);
             l->cone_angle = x;
-        } else if (spot && strcmp(nm, "cone_delta") == 0) {
+        } else if (spot && TB__IS(nm, "cone_delta")) {
             st = tb__param(r, v, nm, false, INFINITY, &l->cone_delta);
             cone_loc = v->loc;
-        } else if (!dir && strcmp(nm, "ies") == 0)
+        } else if (!dir && TB__IS(nm, "ies"))
             st = tb__file(r, v, nm, &l->ies);
         else
             st = tb__extra_push(r, &extra, a);
@@ -1228,24 +1234,24 @@ static tb_status tb__camera(tb_mid_reader *r, const tb__mid_node *n, tb_mid_came
         const tb_mid_value *v = &a->value;
         const char *nm = a->name;
         double x = 0.0;
-        if (strcmp(nm, "eye") == 0)
+        if (TB__IS(nm, "eye"))
             st = tb__dvec3(r, v, nm, &c->eye);
-        else if (strcmp(nm, "look_at") == 0)
+        else if (TB__IS(nm, "look_at"))
             st = tb__dvec3(r, v, nm, &c->look_at);
-        else if (strcmp(nm, "up") == 0)
+        else if (TB__IS(nm, "up"))
             st = tb__dvec3(r, v, nm, &c->up);
-        else if (strcmp(nm, "fov") == 0) {
+        else if (TB__IS(nm, "fov")) {
             if (!(st = tb__number(r, v, nm, &x)) && !(x > 0.0 && x < 180.0))
                 st = tb__range_error(r, v->loc, nm, "in (0, 180)", x);
             c->fov = x;
             fov = v;
-        } else if (strcmp(nm, "focal_length") == 0) {
+        } else if (TB__IS(nm, "focal_length")) {
             st = tb__param(r, v, nm, true, INFINITY, &c->focal_length);
             focal = v;
-        } else if (strcmp(nm, "film") == 0) {
+        } else if (TB__IS(nm, "film")) {
             if (!(st = tb__vec(r, v, nm, 2, c->film)) && !(c->film[0] > 0.0 && c->film[1] > 0.0))
                 st = TB__ERR(r, v->loc, "'film' sizes must be > 0, found [%g %g]", c->film[0], c->film[1]);
-        } else if (strcmp(nm, "resolution") == 0) {
+        } else if (TB__IS(nm, "resolution")) {
             if (v->type != TB_MID_VECTOR || v->count != 2)
                 st = TB__ERR(r, v->loc, "expected 2 integers [width height] for 'resolution', found %s",
                              TB__DESC(v));
@@ -1258,9 +1264,9 @@ static tb_status tb__camera(tb_mid_reader *r, const tb__mid_node *n, tb_mid_came
                     st = tb__int(r, &e, nm, 1, 65536, &c->height);
                 }
             }
-        } else if (strcmp(nm, "aperture") == 0)
+        } else if (TB__IS(nm, "aperture"))
             st = tb__param(r, v, nm, false, INFINITY, &c->aperture);
-        else if (strcmp(nm, "focus_distance") == 0) {
+        else if (TB__IS(nm, "focus_distance")) {
             st = tb__param(r, v, nm, true, INFINITY, &c->focus_distance);
             focus = v;
         } else

@@ -41,6 +41,7 @@ tb_status tb_emission_to_xyz(const tb_spectrum *emission, tb_emission_units unit
 /* int S ybar, checked to be usable as a normalisation. */
 static tb_status tb__illuminant_y(const tb_spectrum *illuminant, double white_y, double *y)
 {
+    *y = 0.0; /* defined on error paths too (gcc -O3 cannot see they never return TB_OK) */
     if (!isfinite(white_y) || !(white_y > 0.0))
         return tb_error(TB_ERR_ARG, "reflectance to XYZ: white Y %g must be finite and > 0", white_y);
     *y = tb_spectrum_product_integral(illuminant, &tb__ybar, NULL);

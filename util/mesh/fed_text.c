@@ -203,6 +203,7 @@ static tb_status tb__float(tb__lexer *lx, float *out, const char *what)
 static tb_status tb__integer(tb__lexer *lx, long long lo, long long hi, long long *out, const char *what)
 {
     char buf[TB__TOKEN_MAX + 8];
+    *out = 0; /* defined on error paths too (gcc -O3 cannot see they never return TB_OK) */
     if (lx->kind != TB__TOK_NUMBER)
         return tb__error_at(lx, lx->tline, lx->tcol, "expected %s, found %s", what, tb__describe(lx, buf, sizeof buf));
     const char *p = lx->text;
