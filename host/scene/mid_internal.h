@@ -22,6 +22,9 @@
 /* Bytes read from the file at a time; more than a maximal token, so a token
  * never needs a bigger buffer. */
 #define TB__MID_BUF ((size_t)256 * 1024)
+/* Zero bytes allocated after the buffer's sentinel, so the lexer may load
+ * 8 bytes at any position up to the sentinel (word-at-a-time skipping). */
+#define TB__MID_BUF_PAD 8
 
 /* Token types. */
 typedef enum tb__mid_tok {
@@ -43,7 +46,7 @@ typedef enum tb__mid_tok {
 typedef struct tb__mid_lexer {
     FILE *fp;
     const char *name;     /* file name for messages */
-    char *buf;            /* TB__MID_BUF + 1 bytes; buf[end] == 0 is a sentinel */
+    char *buf;            /* TB__MID_BUF + 1 + TB__MID_BUF_PAD bytes; buf[end] == 0 is a sentinel */
     size_t pos, end;      /* next byte, end of valid bytes */
     size_t keep;          /* bytes from here on survive a refill (the token being read) */
     uint64_t base;        /* file offset of buf[0] */
@@ -194,15 +197,20 @@ tb_status tb__mid_interpret(tb_mid_reader *r, const tb__mid_node *node, tb_mid_i
 
 /* tb_array_push with the common case (room left) inline: the reader pushes
  * every value and attribute it parses. */
-static inline tb_status tb__mid_push(tb_array *a, const void *elem)
+static inline __attribute__((always_inline)) tb_status tb__mid_push_sz(tb_array *a, const void *elem,
+                                                                        size_t size)
 {
-    if (a->len < a->cap) {
-        memcpy((char *)a->data + a->len * a->elem_size, elem, a->elem_size);
+    /* size is a constant here (see tb__mid_push), so the copy is a few
+     * moves instead of a memcpy call. */
+    if (a->len < a->cap && a->elem_size == size) {
+        memcpy((char *)a->data + a->len * size, elem, size);
         a->len++;
         return TB_OK;
     }
     return tb_array_push(a, elem);
 }
+/* Pushes *elem (whose type must be the array's element type) on a. */
+#define tb__mid_push(a, elem) tb__mid_push_sz((a), (elem), sizeof *(elem))
 
 /* The "C" locale for numbers (a '.' decimal point whatever the program's
  * LC_NUMERIC), created once; (locale_t)0 if it could not be. Used with

@@ -20,7 +20,7 @@ tb_status tb__mid_lexer_init(tb__mid_lexer *lx, FILE *fp, const char *name)
     memset(lx, 0, sizeof *lx);
     lx->fp = fp;
     lx->name = name;
-    lx->buf = malloc(TB__MID_BUF + 1);
+    lx->buf = calloc(1, TB__MID_BUF + 1 + TB__MID_BUF_PAD);
     lx->str = malloc(TB_MID_MAX_TOKEN + 1);
     if (!lx->buf || !lx->str) {
         tb__mid_lexer_free(lx);
@@ -544,6 +544,19 @@ tb_status tb__mid_lex(tb__mid_lexer *lx)
         /* White space, scanned with a local pointer (the sentinel stops it). */
         const char *p = lx->buf + lx->pos;
         for (;;) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+            /* Runs of spaces (indentation) 8 bytes at a time: the first
+             * byte that is not a space ends the run. The zero sentinel is
+             * not a space, and the buffer has TB__MID_BUF_PAD bytes after it. */
+            uint64_t w;
+            memcpy(&w, p, 8);
+            w ^= 0x2020202020202020u;
+            if (w == 0) {
+                p += 8;
+                continue;
+            }
+            p += (unsigned)__builtin_ctzll(w) >> 3;
+#endif
             if (tb__cls[(unsigned char)*p] & TB__C_SPACE)
                 p++;
             else if (*p == '\n') {

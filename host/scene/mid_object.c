@@ -51,7 +51,8 @@ int tb__mid_keyword(const char *name)
 int tb__mid_keyword_n(const char *s, size_t n)
 {
     for (int k = 0; k < TB__K_COUNT; k++)
-        if (strncmp(s, tb__keywords[k], n) == 0 && tb__keywords[k][n] == '\0')
+        if (n > 0 && tb__keywords[k][0] == s[0] && strncmp(s, tb__keywords[k], n) == 0 &&
+            tb__keywords[k][n] == '\0')
             return k;
     return -1;
 }

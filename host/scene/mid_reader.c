@@ -225,7 +225,7 @@ uint64_t tb_mid_reader_offset(const tb_mid_reader *r) { return tb__mid_lexer_off
 
 size_t tb_mid_reader_memory(const tb_mid_reader *r)
 {
-    return TB__MID_BUF + 1 + TB_MID_MAX_TOKEN + 1 + tb_arena_capacity(&r->item) + tb_arena_capacity(&r->keep) +
+    return TB__MID_BUF + 1 + TB__MID_BUF_PAD + TB_MID_MAX_TOKEN + 1 + tb_arena_capacity(&r->item) + tb_arena_capacity(&r->keep) +
            r->values.cap * r->values.elem_size + r->nums.cap * r->nums.elem_size + r->attrs.cap * r->attrs.elem_size +
            r->nodes.cap * r->nodes.elem_size + r->refs.cap * r->refs.elem_size + r->order.cap * r->order.elem_size;
 }
