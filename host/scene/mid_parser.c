@@ -139,7 +139,7 @@ static tb_status tb__check_duplicates(tb_mid_reader *r, const tb_mid_attr *a, si
     if (n <= 16) {
         for (size_t j = 1; j < n; j++)
             for (size_t i = 0; i < j; i++)
-                if (strcmp(a[i].name, a[j].name) == 0)
+                if (a[i].name[0] == a[j].name[0] && strcmp(a[i].name, a[j].name) == 0)
                     return TB__MID_ERR(r, a[j].loc, "duplicate attribute '%.40s' (first given at %ld:%ld)",
                                        a[j].name, a[i].loc.line, a[i].loc.col);
         return TB_OK;

@@ -875,22 +875,32 @@ static tb_status tb__rendering(tb_mid_reader *r, const tb_mid_attr *attrs, int n
 {
     char found[96];
     tb_status st;
-    *m = *inherited;
-    tb__material_unset(m, loc);
-    /* The base material first, wherever it is written. */
+    /* The base material first, wherever it is written: the inherited one
+     * or the one it names. Found before copying, so the 880-byte material is
+     * copied once per object, not twice. */
+    const tb_mid_material *start = inherited;
+    const char *base = NULL;
     for (int i = 0; i < n; i++) {
         if (!TB__IS(attrs[i].name, "material"))
             continue;
         const tb_mid_value *v = &attrs[i].value;
+        uint64_t p = 0;
         if (v->type != TB_MID_STRING)
-            return TB__ERR(r, v->loc, "expected a material name string for 'material', found %s", TB__DESC(v));
-        uint64_t p;
-        if (!tb_htab_get_str(&r->materials, v->text, &p))
-            return TB__ERR(r, v->loc, "unknown material '%.40s' (materials must be defined before use)", v->text);
-        *m = *(const tb_mid_material *)(uintptr_t)p;
+            st = TB__ERR(r, v->loc, "expected a material name string for 'material', found %s", TB__DESC(v));
+        else if (!tb_htab_get_str(&r->materials, v->text, &p))
+            st = TB__ERR(r, v->loc, "unknown material '%.40s' (materials must be defined before use)", v->text);
+        else {
+            start = (const tb_mid_material *)(uintptr_t)p;
+            base = v->text;
+            continue;
+        }
+        *m = *inherited;
         tb__material_unset(m, loc);
-        m->base = v->text;
+        return st;
     }
+    *m = *start;
+    tb__material_unset(m, loc);
+    m->base = base;
     tb__extra extra = {0};
     for (int i = 0; i < n; i++) {
         const tb_mid_attr *a = &attrs[i];
