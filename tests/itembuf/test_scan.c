@@ -333,7 +333,7 @@ static void test_scan_fan(void **state)
         int k = 4 + (int)tb_rng_below(&rng, 12);
         float centre[2] = {(float)(round((24 + 4 * tb_rng_double(&rng)) * scale) / scale),
                            (float)(round((24 + 4 * tb_rng_double(&rng)) * scale) / scale)};
-        float ring[16][2];
+        float ring[16][2] = {{0}}; /* the first k entries are set below */
         /* Consecutive angles differ by less than pi, so every triangle has the
          * same orientation; retry if snapping made one degenerate. */
         int ok;

@@ -188,7 +188,7 @@ static void test_slab_basic(void **state)
 {
     (void)state;
     tb_aabb b = {{-1, -1, -1}, {1, 1, 1}};
-    float t0, t1;
+    float t0 = NAN, t1 = NAN; /* NAN fails the checks if the test did not set them */
     assert_true(hit(&b, (tb_vec3){-5, 0, 0}, (tb_vec3){1, 0, 0}, &t0, &t1));
     assert_t_near(t0, t1, 4, 6);
     assert_true(hit(&b, (tb_vec3){5, 0.5f, 0}, (tb_vec3){-2, 0, 0}, &t0, &t1));
@@ -222,7 +222,7 @@ static void test_slab_inside(void **state)
 {
     (void)state;
     tb_aabb b = {{-1, -1, -1}, {1, 1, 1}};
-    float t0, t1;
+    float t0 = NAN, t1 = NAN; /* NAN fails the checks if the test did not set them */
     assert_true(hit(&b, (tb_vec3){0, 0, 0}, (tb_vec3){0, 0, 1}, &t0, &t1));
     assert_true(t0 == 0.0f); /* clipped to tmin */
     assert_t_near(0, t1, 0, 1);
@@ -241,7 +241,7 @@ static void test_slab_axis_parallel_signed_zeros(void **state)
     (void)state;
     tb_aabb b = {{-1, -1, -1}, {1, 1, 1}};
     const float zeros[2] = {0.0f, -0.0f};
-    float t0, t1;
+    float t0 = NAN, t1 = NAN; /* NAN fails the checks if the test did not set them */
     for (int zy = 0; zy < 2; ++zy) {
         for (int zz = 0; zz < 2; ++zz) {
             tb_vec3 d = {1, zeros[zy], zeros[zz]};
@@ -287,7 +287,7 @@ static void test_slab_axis_parallel_signed_zeros(void **state)
 static void test_slab_extreme_scales(void **state)
 {
     (void)state;
-    float t0, t1;
+    float t0 = NAN, t1 = NAN; /* NAN fails the checks if the test did not set them */
     /* Huge box, far origin. */
     tb_aabb big = {{-1e30f, -1e30f, -1e30f}, {1e30f, 1e30f, 1e30f}};
     assert_true(hit(&big, (tb_vec3){-3e30f, 0, 0}, (tb_vec3){1, 0, 0}, &t0, &t1));
