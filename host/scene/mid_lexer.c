@@ -544,27 +544,33 @@ tb_status tb__mid_lex(tb__mid_lexer *lx)
         /* White space, scanned with a local pointer (the sentinel stops it). */
         const char *p = lx->buf + lx->pos;
         for (;;) {
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-            /* Runs of spaces (indentation) 8 bytes at a time: the first
-             * byte that is not a space ends the run. The zero sentinel is
-             * not a space, and the buffer has TB__MID_BUF_PAD bytes after it. */
-            uint64_t w;
-            memcpy(&w, p, 8);
-            w ^= 0x2020202020202020u;
-            if (w == 0) {
-                p += 8;
+            unsigned char ch = (unsigned char)*p;
+            if (ch == ' ' || ch == '\t' || ch == '\r') {
+                p++;
                 continue;
             }
-            p += (unsigned)__builtin_ctzll(w) >> 3;
-#endif
-            if (tb__cls[(unsigned char)*p] & TB__C_SPACE)
-                p++;
-            else if (*p == '\n') {
-                p++;
-                lx->line++;
-                lx->line_start = lx->base + (uint64_t)(p - lx->buf);
-            } else
+            if (ch != '\n')
                 break;
+            p++;
+            lx->line++;
+            lx->line_start = lx->base + (uint64_t)(p - lx->buf);
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+            /* The indentation after a newline, 8 bytes at a time: the first
+             * byte that is not a space ends the run. The zero sentinel is
+             * not a space, and the buffer has TB__MID_BUF_PAD bytes after
+             * it. (Between tokens a run is mostly one space, which the byte
+             * loop above handles with less latency.) */
+            for (;;) {
+                uint64_t w;
+                memcpy(&w, p, 8);
+                w ^= 0x2020202020202020u;
+                if (w) {
+                    p += (unsigned)__builtin_ctzll(w) >> 3;
+                    break;
+                }
+                p += 8;
+            }
+#endif
         }
         lx->pos = (size_t)(p - lx->buf);
         lx->keep = lx->pos;
