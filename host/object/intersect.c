@@ -72,14 +72,6 @@ void tb__xbuf_free(tb__xbuf *b)
     tb__xbuf_init(b);
 }
 
-tb__oray tb__object_ray(const tb_object *o, const tb_ray *r)
-{
-    tb__oray q;
-    q.o = tb_mat4_mul_point(&o->to_world.inv, (tb_dvec3){r->o.x, r->o.y, r->o.z});
-    q.d = tb_mat4_mul_vec(&o->to_world.inv, (tb_dvec3){r->d.x, r->d.y, r->d.z});
-    return q;
-}
-
 void tb__prim_xings(const tb_object *o, const tb__oray *r, tb__xbuf *out)
 {
     tb__count_kind(o->kind);

@@ -4,10 +4,12 @@
 #ifndef TB_HOST_OBJECT_INTERSECT_INTERNAL_H
 #define TB_HOST_OBJECT_INTERSECT_INTERNAL_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
 
 #include "host/object/object.h"
+#include "util/math/mat.h"
 #include "util/math/vec.h"
 
 /* A ray in object space, in double: the world ray's origin and direction
@@ -104,7 +106,30 @@ void tb__csg_xings(const tb_object *node, const tb_ray *world_ray, tb__xbuf *out
 /* Adds one to the "Intersect/<kind>" counter. */
 void tb__count_kind(tb_prim_kind k);
 
-/* The world ray in o's object space. */
-tb__oray tb__object_ray(const tb_object *o, const tb_ray *world_ray);
+/* The world ray in o's object space (inline: it runs for every primitive a
+ * ray tests). */
+static inline tb__oray tb__object_ray(const tb_object *o, const tb_ray *r)
+{
+    /* tb_mat4_mul_point / tb_mat4_mul_vec written out with the same
+     * operations in the same order (so bit for bit the same), without the
+     * calls: this runs for every primitive a ray tests. The inverse of an
+     * accepted transform is affine (projective ones are rejected when the
+     * object is built), so its w row is 0 0 0 1 and mul_point's w is exactly
+     * 1 for a finite origin; anything else takes the general path. */
+    const double(*m)[4] = o->to_world.inv.m;
+    double ox = r->o.x, oy = r->o.y, oz = r->o.z, dx = r->d.x, dy = r->d.y, dz = r->d.z;
+    tb__oray q;
+    if (m[3][0] == 0.0 && m[3][1] == 0.0 && m[3][2] == 0.0 && m[3][3] == 1.0 && isfinite(ox) && isfinite(oy) &&
+        isfinite(oz)) {
+        q.o = (tb_dvec3){m[0][0] * ox + m[0][1] * oy + m[0][2] * oz + m[0][3],
+                         m[1][0] * ox + m[1][1] * oy + m[1][2] * oz + m[1][3],
+                         m[2][0] * ox + m[2][1] * oy + m[2][2] * oz + m[2][3]};
+    } else {
+        q.o = tb_mat4_mul_point(&o->to_world.inv, (tb_dvec3){ox, oy, oz});
+    }
+    q.d = (tb_dvec3){m[0][0] * dx + m[0][1] * dy + m[0][2] * dz, m[1][0] * dx + m[1][1] * dy + m[1][2] * dz,
+                     m[2][0] * dx + m[2][1] * dy + m[2][2] * dz};
+    return q;
+}
 
 #endif
