@@ -41,7 +41,53 @@ static bool tb__member(tb_prim_kind k, int nin, int nchildren, bool first_in)
     }
 }
 
-void tb__csg_xings(const tb_object *node, const tb_ray *ray, tb__xbuf *out)
+/* Sorts ev[0..m) by tb__ev_cmp. The keys (t, child, seq) are distinct, so
+ * every correct sort gives the same order; the events arrive as the
+ * children's sorted lists one after another, nearly in order, where
+ * insertion sort is far cheaper than qsort's calls through a pointer. */
+static void tb__ev_sort(tb__ev *ev, size_t m)
+{
+    if (m > 32) {
+        tb__ev_sort(ev, m);
+        return;
+    }
+    for (size_t i = 1; i < m; i++) {
+        if (tb__ev_cmp(&ev[i - 1], &ev[i]) <= 0)
+            continue;
+        tb__ev e = ev[i];
+        size_t j = i;
+        while (j > 0 && tb__ev_cmp(&ev[j - 1], &e) > 0) {
+            ev[j] = ev[j - 1];
+            j--;
+        }
+        ev[j] = e;
+    }
+}
+
+/* A child without crossings whose absence already decides the node: an
+ * empty first operand of a difference, or any empty operand of an
+ * intersection, makes the node empty whatever the other children are. */
+static bool tb__empty_decides(tb_prim_kind k, int child)
+{
+    return k == TB_PRIM_INTERSECTION || (k == TB_PRIM_DIFFERENCE && child == 0);
+}
+
+/* True if some crossing of the list has t, rounded to float as the queries
+ * see it, in [tmin, tmax]. */
+static bool tb__any_in_range(const tb__xbuf *b, double tmin, double tmax)
+{
+    for (int i = 0; i < b->n; i++)
+        if ((float)b->x[i].t >= tmin && (float)b->x[i].t <= tmax)
+            return true;
+    return false;
+}
+
+/* The node's crossings as tb__csg_xings; with `range` (tmin, tmax), only the
+ * first crossing in it matters (tb__csg_xings_in): the sweep is skipped when
+ * no child crossing is in range (the node's crossings are some of its
+ * children's, copied with their t) and stops after the first one in range
+ * (it emits crossings in order of t). */
+static void tb__csg_node(const tb_object *node, const tb_ray *ray, tb__xbuf *out, const double *range)
 {
     if (!tb_prim_is_csg(node->kind)) {
         tb__oray r = tb__object_ray(node, ray);
@@ -56,12 +102,27 @@ void tb__csg_xings(const tb_object *node, const tb_ray *ray, tb__xbuf *out)
         return;
     }
     size_t total = 0;
-    for (int i = 0; i < k; i++) {
+    for (int i = 0; i < k; i++)
         tb__xbuf_init(&lists[i]);
-        tb__csg_xings(&node->children[i], ray, &lists[i]);
+    bool any_in_range = range == NULL;
+    for (int i = 0; i < k; i++) {
+        tb__csg_node(&node->children[i], ray, &lists[i], NULL);
         if (lists[i].oom)
             out->oom = true;
         total += (size_t)lists[i].n;
+        if (lists[i].n == 0 && !lists[i].oom && tb__empty_decides(node->kind, i)) {
+            total = 0; /* the node is empty: the sweep below would find nothing */
+            break;
+        }
+        if (!any_in_range)
+            any_in_range = tb__any_in_range(&lists[i], range[0], range[1]);
+    }
+    if (total == 0 || !any_in_range) {
+        for (int i = 0; i < k; i++)
+            tb__xbuf_free(&lists[i]);
+        if (lists != local)
+            free(lists);
+        return;
     }
     tb__ev evlocal[32], *ev = evlocal;
     bool *state = NULL, statelocal[16];
@@ -76,7 +137,7 @@ void tb__csg_xings(const tb_object *node, const tb_ray *ray, tb__xbuf *out)
     for (int i = 0; i < k; i++)
         for (int j = 0; j < lists[i].n; j++)
             ev[m++] = (tb__ev){lists[i].x[j], i, j};
-    qsort(ev, m, sizeof *ev, tb__ev_cmp);
+    tb__ev_sort(ev, m);
 
     double scale = tb__t_scale(ray);
     int nin = 0;
@@ -109,6 +170,8 @@ void tb__csg_xings(const tb_object *node, const tb_ray *ray, tb__xbuf *out)
                 x.dir = want;
                 tb__xbuf_push(out, &x);
                 in = after;
+                if (range && (float)x.t >= range[0] && (float)x.t <= range[1])
+                    break; /* occlusion: this crossing answers it */
             }
         }
         i = j;
@@ -139,6 +202,17 @@ oom:
         tb__xbuf_free(&lists[i]);
     if (lists != local)
         free(lists);
+}
+
+void tb__csg_xings(const tb_object *node, const tb_ray *ray, tb__xbuf *out)
+{
+    tb__csg_node(node, ray, out, NULL);
+}
+
+void tb__csg_xings_in(const tb_object *node, const tb_ray *ray, double tmin, double tmax, tb__xbuf *out)
+{
+    double range[2] = {tmin, tmax};
+    tb__csg_node(node, ray, out, range);
 }
 
 int tb_object_intervals(const tb_object *obj, const tb_ray *ray, float *t_in, float *t_out, int max)

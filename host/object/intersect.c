@@ -65,13 +65,6 @@ bool tb__xbuf_grow(tb__xbuf *b)
     return true;
 }
 
-void tb__xbuf_free(tb__xbuf *b)
-{
-    if (b->x != b->local)
-        free(b->x);
-    tb__xbuf_init(b);
-}
-
 void tb__prim_xings(const tb_object *o, const tb__oray *r, tb__xbuf *out)
 {
     tb__count_kind(o->kind);
@@ -102,7 +95,7 @@ static bool tb__closest(const tb_object *obj, const tb_ray *ray, double tmin, do
     tb__xbuf b;
     tb__xbuf_init(&b);
     if (tb_prim_is_csg(obj->kind)) {
-        tb__csg_xings(obj, ray, &b);
+        tb__csg_xings_in(obj, ray, tmin, tmax, &b);
     } else {
         tb__oray r = tb__object_ray(obj, ray);
         tb__prim_xings(obj, &r, &b);

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdlib.h>
 
 #include "host/object/object.h"
 #include "util/math/mat.h"
@@ -57,8 +58,13 @@ static inline void tb__xbuf_push(tb__xbuf *b, const tb__xing *x)
     b->x[b->n++] = *x;
 }
 
-/* Frees heap storage. */
-void tb__xbuf_free(tb__xbuf *b);
+/* Frees heap storage (inline: most lists never leave the stack). */
+static inline void tb__xbuf_free(tb__xbuf *b)
+{
+    if (b->x != b->local)
+        free(b->x);
+    tb__xbuf_init(b);
+}
 
 /* Every crossing of the whole line (t from -inf to +inf) with primitive
  * `leaf`, sorted by t. For a closed solid they alternate +1, -1, starting
@@ -102,6 +108,11 @@ double tb__face_residual(const tb_object *o, uint32_t face, uint32_t tri, tb_dve
 /* The crossings of a CSG node (or a primitive) with the whole line, in the
  * same form as tb__prim_xings: intervals of the solid, sorted (csg.c). */
 void tb__csg_xings(const tb_object *node, const tb_ray *world_ray, tb__xbuf *out);
+/* As tb__csg_xings when only the first crossing whose t, rounded to float,
+ * lies in [tmin, tmax] matters: the list holds that same crossing (the
+ * first in range; none if there is none) with less work: the sweep stops
+ * there, and is skipped when no child has a crossing in range (csg.c). */
+void tb__csg_xings_in(const tb_object *node, const tb_ray *world_ray, double tmin, double tmax, tb__xbuf *out);
 
 /* Adds one to the "Intersect/<kind>" counter. */
 void tb__count_kind(tb_prim_kind k);
