@@ -79,13 +79,6 @@ void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out)
     case TB_PRIM_CONE: caps = o->geom.cone.caps; break;
     default: caps = o->geom.conic.caps; break;
     }
-    /* An end where the radius is zero closes in a point: anything found
-     * there belongs to the side. */
-    double sz0 = fabs(c[0]) + fabs(c[1] * z0) + fabs(c[2] * z0 * z0);
-    double sz1 = fabs(c[0]) + fabs(c[1] * z1) + fabs(c[2] * z1 * z1);
-    bool closed0 = c[0] + c[1] * z0 + c[2] * z0 * z0 <= 1e-12 * sz0;
-    bool closed1 = c[0] + c[1] * z1 + c[2] * z1 * z1 <= 1e-12 * sz1;
-
     tb_dvec3 d = r->d;
     double dd = tb_dvec3_dot(d, d);
     tb_dvec3 oc = {r->o.x, r->o.y, r->o.z - zc};
@@ -141,6 +134,13 @@ void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out)
         sa = (tb__end){-INFINITY, TB_FACE_CYLINDER_BOTTOM, {0, 0, -1}};
         sb = (tb__end){INFINITY, TB_FACE_CYLINDER_TOP, {0, 0, 1}};
     } else {
+        /* An end where the radius is zero closes in a point: anything found
+         * there belongs to the side. (Only needed here, after the misses
+         * have returned.) */
+        double sz0 = fabs(c[0]) + fabs(c[1] * z0) + fabs(c[2] * z0 * z0);
+        double sz1 = fabs(c[0]) + fabs(c[1] * z1) + fabs(c[2] * z1 * z1);
+        bool closed0 = c[0] + c[1] * z0 + c[2] * z0 * z0 <= 1e-12 * sz0;
+        bool closed1 = c[0] + c[1] * z1 + c[2] * z1 * z1 <= 1e-12 * sz1;
         tb__end bot = {(z0 - p0.z) / d.z, closed0 ? TB_FACE_CYLINDER_SIDE : TB_FACE_CYLINDER_BOTTOM, {0, 0, -1}};
         tb__end top = {(z1 - p0.z) / d.z, closed1 ? TB_FACE_CYLINDER_SIDE : TB_FACE_CYLINDER_TOP, {0, 0, 1}};
         sa = d.z > 0.0 ? bot : top;
