@@ -15,28 +15,11 @@
 
 #define TB__PI 3.14159265358979323846
 
-typedef struct tb__env {
-    tb_gpu_instance *inst;
-    tb_gpu_device *dev;
-} tb__env;
-
-static void tb__open(tb__env *e, bool staging)
+/* The form-factor tests' device: `staging` forces the copies through staging
+ * buffers (the discrete-GPU path) on a device that could map its memory. */
+static void tb__open(gpu_test_env *e, bool staging)
 {
-    e->inst = gpu_test_instance();
-    int idx = -1;
-    char why[256];
-    assert_int_equal(tb_gpu_pick_device(tb_gpu_device_info_at(e->inst, 0), tb_gpu_device_count(e->inst),
-                                        TB_GPU_MODE_VULKAN, -1, &idx, why, sizeof why),
-                     TB_OK);
-    e->dev = tb_gpu_device_create(e->inst, idx, &(tb_gpu_device_desc){.force_staging = staging});
-    assert_non_null(e->dev);
-}
-
-static void tb__close(tb__env *e)
-{
-    tb_gpu_device_destroy(e->dev);
-    gpu_assert_clean(e->inst);
-    tb_gpu_instance_destroy(e->inst);
+    gpu_test_open(e, &(tb_gpu_device_desc){.force_staging = staging});
 }
 
 /* The formula in double on the same float inputs, `blocked` deciding visibility
@@ -130,7 +113,7 @@ static bool tb__blocked(tb_vec3 s, tb_vec3 p)
  * ~10u, u = 2^-24; a sum of 64 positive terms adds at most 63u): 2e-5 relative. */
 static void tb__unoccluded(bool staging)
 {
-    tb__env e;
+    gpu_test_env e;
     tb__open(&e, staging);
     tb_gpu_ff_scene *g = tb_gpu_ff_scene_create(e.dev, NULL, 0);
     assert_non_null(g);
@@ -165,7 +148,7 @@ static void tb__unoccluded(bool staging)
     for (size_t i = 0; i < m; ++i)
         assert_true(ff2[i] == ff[i]);
     tb_gpu_ff_scene_destroy(g);
-    tb__close(&e);
+    gpu_test_close(&e);
 }
 
 static void test_ff_unoccluded(void **state)
@@ -188,7 +171,7 @@ static void test_ff_occluded(void **state)
 {
     (void)state;
     tb__make_occluders();
-    tb__env e;
+    gpu_test_env e;
     tb__open(&e, false);
     tb_gpu_ff_scene *g = tb_gpu_ff_scene_create(e.dev, tb__occ, TB__NOCC);
     assert_non_null(g);
@@ -230,7 +213,7 @@ static void test_ff_occluded(void **state)
     assert_true(blocked > pairs / 20 && blocked < pairs);
     tb_ff_occluders_free(occ);
     tb_gpu_ff_scene_destroy(g);
-    tb__close(&e);
+    gpu_test_close(&e);
 }
 
 /* One occluder (the BVH's root is a leaf): a square covering every segment
@@ -238,7 +221,7 @@ static void test_ff_occluded(void **state)
 static void test_ff_single_occluder(void **state)
 {
     (void)state;
-    tb__env e;
+    gpu_test_env e;
     tb__open(&e, false);
     tb_vec3 s[64], p[576], n[576];
     tb__grid_samples(s);
@@ -262,7 +245,7 @@ static void test_ff_single_occluder(void **state)
         }
         tb_gpu_ff_scene_destroy(g);
     }
-    tb__close(&e);
+    gpu_test_close(&e);
 }
 
 /* Howell's catalogue (C-11): directly opposed parallel unit squares one unit
@@ -283,7 +266,7 @@ static void test_ff_howell_parallel_squares(void **state)
                     x * sqrt(1 + y * y) * atan(x / sqrt(1 + y * y)) + y * sqrt(1 + x * x) * atan(y / sqrt(1 + x * x)) -
                     x * atan(x) - y * atan(y));
     tb_assert_near(exact, 0.199824, 1e-6);
-    tb__env e;
+    gpu_test_env e;
     tb__open(&e, false);
     tb_gpu_ff_scene *g = tb_gpu_ff_scene_create(e.dev, NULL, 0);
     assert_non_null(g);
@@ -310,7 +293,7 @@ static void test_ff_howell_parallel_squares(void **state)
     }
     assert_true(worst <= 1.5e-2);
     tb_gpu_ff_scene_destroy(g);
-    tb__close(&e);
+    gpu_test_close(&e);
 }
 
 /* More receivers than one dispatch takes (TB_GPU_FF_CHUNK): two chunks, every
@@ -318,7 +301,7 @@ static void test_ff_howell_parallel_squares(void **state)
 static void test_ff_chunks(void **state)
 {
     (void)state;
-    tb__env e;
+    gpu_test_env e;
     tb__open(&e, false);
     tb_gpu_ff_scene *g = tb_gpu_ff_scene_create(e.dev, NULL, 0);
     assert_non_null(g);
@@ -340,14 +323,14 @@ static void test_ff_chunks(void **state)
     }
     free(p), free(n), free(ff);
     tb_gpu_ff_scene_destroy(g);
-    tb__close(&e);
+    gpu_test_close(&e);
 }
 
 /* Refused arguments give TB_ERR_ARG with a message; an empty batch is fine. */
 static void test_ff_errors(void **state)
 {
     (void)state;
-    tb__env e;
+    gpu_test_env e;
     tb__open(&e, false);
     tb_ff_polygon bad = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, 5};
     assert_null(tb_gpu_ff_scene_create(e.dev, &bad, 1));
@@ -374,7 +357,7 @@ static void test_ff_errors(void **state)
     assert_int_equal(tb_gpu_ff_raycast(g, &s, 1, n, 1.0, NULL, NULL, 0, NULL, NULL, NULL), TB_OK);
     assert_true(ff == -1.0);
     tb_gpu_ff_scene_destroy(g);
-    tb__close(&e);
+    gpu_test_close(&e);
 }
 
 int main(int argc, char **argv)

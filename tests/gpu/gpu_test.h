@@ -5,9 +5,11 @@
 
 #include "tb_test.h"
 
+#include <stdio.h>
 #include <string.h>
 
 #include "host/gpu/gpu.h"
+#include "host/render/scene.h"
 
 /* kernels/<name>.comp, embedded by tb_gpu_add_shaders (tests/gpu/CMakeLists.txt). */
 extern const tb_gpu_spirv tb_test_spirv[];
@@ -44,6 +46,50 @@ static inline void gpu_assert_clean(tb_gpu_instance *inst)
     for (int i = 0; i < tb_gpu_validation_message_count(inst); i++)
         print_error("  %s\n", tb_gpu_validation_message(inst, i));
     fail_msg("the validation layer reported %d error(s) and %d warning(s)", e, w);
+}
+
+/* A validated instance and the Vulkan device the tests run on. */
+typedef struct gpu_test_env {
+    tb_gpu_instance *inst;
+    tb_gpu_device *dev;
+} gpu_test_env;
+
+/* Opens gpu_test_instance and the device `--device auto` would pick in
+ * Vulkan mode, created with `desc` (NULL: defaults); fails the test if none. */
+static inline void gpu_test_open(gpu_test_env *e, const tb_gpu_device_desc *desc)
+{
+    e->inst = gpu_test_instance();
+    int idx = -1;
+    char why[256];
+    if (tb_gpu_pick_device(tb_gpu_device_info_at(e->inst, 0), tb_gpu_device_count(e->inst), TB_GPU_MODE_VULKAN, -1,
+                           &idx, why, sizeof why))
+        fail_msg("no Vulkan device: %s", why);
+    e->dev = tb_gpu_device_create(e->inst, idx, desc);
+    if (!e->dev)
+        fail_msg("device: %s", tb_last_error());
+}
+
+/* Destroys the device, then fails if the validation layer reported anything. */
+static inline void gpu_test_close(gpu_test_env *e)
+{
+    tb_gpu_device_destroy(e->dev);
+    gpu_assert_clean(e->inst);
+    tb_gpu_instance_destroy(e->inst);
+}
+
+/* The scene in MID `text` (`name` for messages, files relative to `dir`,
+ * NULL: the working folder); fails the test if it does not load. */
+static inline tb_scene *gpu_test_load(const char *text, const char *name, const char *dir)
+{
+    FILE *fp = fmemopen((void *)text, strlen(text), "r");
+    if (!fp)
+        fail_msg("fmemopen failed");
+    tb_scene *s = NULL;
+    tb_status st = tb_scene_load_stream(fp, name, dir, NULL, &s);
+    fclose(fp);
+    if (st)
+        fail_msg("scene: %s", tb_last_error());
+    return s;
 }
 
 /* Asserts `st` is `want` and the error message contains `part`. */

@@ -13,24 +13,7 @@ t="$TB_TEST_TMPDIR"
 fail() { echo "FAIL: $*"; [ -f "$t/backend.err" ] && cat "$t/backend.err"; [ -f "$t/backend.out" ] && cat "$t/backend.out"; exit 1; }
 sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [32 32]/' "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" >"$t/backend.mid"
 
-# Image NMSE = sum (a - b)^2 / sum b^2 of two PFM files (b the reference).
-nmse() {
-    python3 - "$1" "$2" <<'EOF'
-import struct, sys
-def rd(p):
-    with open(p, 'rb') as f:
-        assert f.readline().strip() == b'PF'
-        w, h = map(int, f.readline().split())
-        s = float(f.readline())
-        n = w * h * 3
-        return struct.unpack(('<' if s < 0 else '>') + '%df' % n, f.read(4 * n))
-a, b = rd(sys.argv[1]), rd(sys.argv[2])
-assert len(a) == len(b)
-num = sum((x - y) ** 2 for x, y in zip(a, b))
-den = sum(y * y for y in b)
-print('%.6g' % (num / den if den > 0 else float('inf')))
-EOF
-}
+. "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
 
 # More samples than a wavefront batch holds (65 536) in one tile: the tile is
 # rendered in runs of rows over several batches; same image as the CPU.

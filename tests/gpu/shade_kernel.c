@@ -40,41 +40,20 @@ static tb_scene *tb__load(const char *mat, const char *extra, bool lamp, const c
                     " faces = [[0 1 2 3]] } rendering = { diffuse = 0 emission = [10 8 6] } }\n"
                   : "",
              extra);
-    FILE *fp = fmemopen(text, strlen(text), "r");
-    assert_non_null(fp);
-    tb_scene *s = NULL;
-    tb_status st = tb_scene_load_stream(fp, "shade.mid", dir, NULL, &s);
-    fclose(fp);
-    if (st)
-        fail_msg("scene: %s", tb_last_error());
-    return s;
+    return gpu_test_load(text, "shade.mid", dir);
 }
-
-typedef struct tb__env {
-    tb_gpu_instance *inst;
-    tb_gpu_device *dev;
-} tb__env;
 
 static int tb__setup(void **state)
 {
-    static tb__env e;
-    e.inst = gpu_test_instance();
-    int idx = -1;
-    char why[256];
-    if (tb_gpu_pick_device(tb_gpu_device_info_at(e.inst, 0), tb_gpu_device_count(e.inst), TB_GPU_MODE_VULKAN, -1,
-                           &idx, why, sizeof why))
-        return -1;
-    e.dev = tb_gpu_device_create(e.inst, idx, NULL);
+    static gpu_test_env e;
+    gpu_test_open(&e, NULL);
     *state = &e;
-    return e.dev ? 0 : -1;
+    return 0;
 }
 
 static int tb__teardown(void **state)
 {
-    tb__env *e = *state;
-    tb_gpu_device_destroy(e->dev);
-    gpu_assert_clean(e->inst);
-    tb_gpu_instance_destroy(e->inst);
+    gpu_test_close(*state);
     return 0;
 }
 
@@ -98,7 +77,7 @@ typedef struct tb__want {
 } tb__want;
 
 /* Renders the 1024 rays on both paths and compares. */
-static void tb__compare(tb__env *e, tb_scene *s, const char *name, tb__want want)
+static void tb__compare(gpu_test_env *e, tb_scene *s, const char *name, tb__want want)
 {
     assert_int_equal(s->nchannels, want.channels);
     tb_rt_options opt = {.max_depth = 5, .light_samples = 4};

@@ -34,38 +34,51 @@ static const char *tb__analytic =
 
 static tb_scene *tb__load(const char *text)
 {
-    FILE *fp = fmemopen((void *)text, strlen(text), "r");
-    assert_non_null(fp);
-    tb_scene *s = NULL;
-    tb_status st = tb_scene_load_stream(fp, "t.mid", NULL, NULL, &s);
-    fclose(fp);
-    if (st)
-        fail_msg("scene: %s", tb_last_error());
-    return s;
+    return gpu_test_load(text, "t.mid", NULL);
 }
 
-typedef struct tb__env {
-    tb_gpu_instance *inst;
-    tb_gpu_device *dev;
-} tb__env;
-
-static void tb__open(tb__env *e)
+/* Ends a test: the GPU scene, the scene, then the device (validation checked). */
+static void tb__finish(gpu_test_env *e, tb_gpu_scene *g, tb_scene *s)
 {
-    e->inst = gpu_test_instance();
-    int idx = -1;
-    char why[256];
-    assert_int_equal(tb_gpu_pick_device(tb_gpu_device_info_at(e->inst, 0), tb_gpu_device_count(e->inst),
-                                        TB_GPU_MODE_VULKAN, -1, &idx, why, sizeof why),
-                     TB_OK);
-    e->dev = tb_gpu_device_create(e->inst, idx, NULL);
-    assert_non_null(e->dev);
+    tb_gpu_scene_destroy(g);
+    tb_scene_free(s);
+    gpu_test_close(e);
 }
 
-static void tb__close(tb__env *e)
+/* A random test's rays with their GPU closest hits and any-hit flags. */
+typedef struct tb__batch {
+    int n;
+    tb_ray *rays;
+    tb_hit *hits;
+    uint8_t *occ;
+} tb__batch;
+
+static tb__batch tb__batch_new(int n)
 {
-    tb_gpu_device_destroy(e->dev);
-    gpu_assert_clean(e->inst);
-    tb_gpu_instance_destroy(e->inst);
+    tb__batch b = {n, malloc((size_t)n * sizeof *b.rays), malloc((size_t)n * sizeof *b.hits), malloc((size_t)n)};
+    assert_true(b.rays && b.hits && b.occ);
+    return b;
+}
+
+/* Both kernels on the batch's rays. */
+static void tb__batch_trace(tb_gpu_scene *g, tb__batch *b)
+{
+    assert_int_equal(tb_gpu_intersect(g, b->rays, b->n, b->hits, NULL), TB_OK);
+    assert_int_equal(tb_gpu_occluded(g, b->rays, b->n, b->occ, NULL), TB_OK);
+}
+
+/* How many of the batch's any-hit flags differ from the CPU's. */
+static int tb__occ_differ(const tb_scene *s, const tb__batch *b)
+{
+    int n = 0;
+    for (int i = 0; i < b->n; ++i)
+        n += b->occ[i] != tb_scene_occluded(s, &b->rays[i]);
+    return n;
+}
+
+static void tb__batch_free(tb__batch *b)
+{
+    free(b->rays), free(b->hits), free(b->occ);
 }
 
 static tb_hit tb__cpu(const tb_scene *s, const tb_ray *r)
@@ -90,8 +103,8 @@ static bool tb__same(const tb_hit *a, const tb_hit *b, double uv_tol)
 static void test_exact_grid(void **state)
 {
     (void)state;
-    tb__env e;
-    tb__open(&e);
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
     tb_scene *s = tb__load(tb__mixed);
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
     assert_non_null(g);
@@ -165,9 +178,7 @@ static void test_exact_grid(void **state)
     assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
     for (int i = 0; i < N; ++i)
         assert_int_equal(occ[i], tb_scene_occluded(s, &rays[i]));
-    tb_gpu_scene_destroy(g);
-    tb_scene_free(s);
-    tb__close(&e);
+    tb__finish(&e, g, s);
 }
 
 /* Random rays through the mixed scene: hits on the routed torus are the CPU's
@@ -180,16 +191,15 @@ static void test_random_mixed(void **state)
     uint64_t seed = tb_test_seed("test_random_mixed", 6);
     tb_rng rng;
     tb_rng_seed(&rng, seed, 1);
-    tb__env e;
-    tb__open(&e);
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
     tb_scene *s = tb__load(tb__mixed);
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
     assert_non_null(g);
     enum { N = 4000 };
-    tb_ray *rays = malloc(N * sizeof *rays);
-    tb_hit *hits = malloc(N * sizeof *hits);
-    uint8_t *occ = malloc(N);
-    assert_true(rays && hits && occ);
+    tb__batch b = tb__batch_new(N);
+    tb_ray *rays = b.rays;
+    const tb_hit *hits = b.hits;
     for (int i = 0; i < N; ++i) {
         float o[3], p[3];
         for (int k = 0; k < 3; ++k) {
@@ -200,12 +210,10 @@ static void test_random_mixed(void **state)
         float tmax = tb_rng_double(&rng) < 0.25 ? (float)tb_rng_double(&rng) : INFINITY;
         rays[i] = (tb_ray){{o[0], o[1], o[2]}, 0.0f, {p[0] - o[0], p[1] - o[1], p[2] - o[2]}, tmax};
     }
-    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
-    assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
-    int differ = 0, routed = 0, tri = 0, occ_differ = 0;
+    tb__batch_trace(g, &b);
+    int occ_differ = tb__occ_differ(s, &b), differ = 0, routed = 0, tri = 0;
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
-        occ_differ += occ[i] != tb_scene_occluded(s, &rays[i]);
         if (c.object != hits[i].object || c.face != hits[i].face) {
             ++differ;
             continue;
@@ -234,18 +242,16 @@ static void test_random_mixed(void **state)
     assert_true(routed > 20 && tri > 50);
     assert_true(differ <= N / 1000);
     assert_true(occ_differ <= N / 1000);
-    free(rays), free(hits), free(occ);
-    tb_gpu_scene_destroy(g);
-    tb_scene_free(s);
-    tb__close(&e);
+    tb__batch_free(&b);
+    tb__finish(&e, g, s);
 }
 
 /* A scene with no triangles: no dispatch, every object routed, CPU records. */
 static void test_all_routed(void **state)
 {
     (void)state;
-    tb__env e;
-    tb__open(&e);
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
     tb_scene *s = tb__load(tb__analytic);
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
     assert_non_null(g);
@@ -266,9 +272,7 @@ static void test_all_routed(void **state)
         hit += c.object != UINT32_MAX;
     }
     assert_true(hit > 0);
-    tb_gpu_scene_destroy(g);
-    tb_scene_free(s);
-    tb__close(&e);
+    tb__finish(&e, g, s);
 }
 
 /* A lone cube: the BVH's root is a leaf (the GPU BVH then has one node of
@@ -278,8 +282,8 @@ static void test_all_routed(void **state)
 static void test_lone_cube(void **state)
 {
     (void)state;
-    tb__env e;
-    tb__open(&e);
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
     tb_scene *s = tb__load("mid 1\ncube \"box\" { transform = [scale(0.5) translate([1 2 3])] }\n");
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
     assert_non_null(g);
@@ -310,9 +314,7 @@ static void test_lone_cube(void **state)
         }
     }
     assert_true(hit == 8 * 8); /* x in [0.5, 1.5], y in [1.5, 2.5]: columns and rows 4..11 of 16 */
-    tb_gpu_scene_destroy(g);
-    tb_scene_free(s);
-    tb__close(&e);
+    tb__finish(&e, g, s);
 }
 
 /* A deep BVH mixing kinds in its leaves: a 48 x 48 height field of
@@ -347,8 +349,8 @@ static void test_deep_mixed(void **state)
                                k % 2 ? "cube" : "sphere", k, x, y);
     }
     assert_true(at < cap);
-    tb__env e;
-    tb__open(&e);
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
     tb_scene *s = tb__load(text);
     free(text);
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
@@ -361,10 +363,9 @@ static void test_deep_mixed(void **state)
     tb_rng rng;
     tb_rng_seed(&rng, seed, 2);
     enum { N = 20000 };
-    tb_ray *rays = malloc(N * sizeof *rays);
-    tb_hit *hits = malloc(N * sizeof *hits);
-    uint8_t *occ = malloc(N);
-    assert_true(rays && hits && occ);
+    tb__batch b = tb__batch_new(N);
+    tb_ray *rays = b.rays;
+    const tb_hit *hits = b.hits;
     for (int i = 0; i < N; ++i) {
         float o[3], p[3];
         for (int k = 0; k < 3; ++k) {
@@ -376,12 +377,10 @@ static void test_deep_mixed(void **state)
         float tmax = i % 3 == 0 ? (float)tb_rng_double(&rng) : INFINITY;
         rays[i] = (tb_ray){{o[0], o[1], o[2]}, 0.0f, {p[0] - o[0], p[1] - o[1], p[2] - o[2]}, tmax};
     }
-    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
-    assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
-    int differ = 0, occ_differ = 0, field = 0, placed = 0;
+    tb__batch_trace(g, &b);
+    int occ_differ = tb__occ_differ(s, &b), differ = 0, field = 0, placed = 0;
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
-        occ_differ += occ[i] != tb_scene_occluded(s, &rays[i]);
         if (c.object != hits[i].object || c.face != hits[i].face) {
             ++differ;
             continue;
@@ -399,10 +398,8 @@ static void test_deep_mixed(void **state)
     assert_true(field > N / 4 && placed > 50);
     assert_true(differ <= N / 1000);
     assert_true(occ_differ <= N / 1000);
-    free(rays), free(hits), free(occ);
-    tb_gpu_scene_destroy(g);
-    tb_scene_free(s);
-    tb__close(&e);
+    tb__batch_free(&b);
+    tb__finish(&e, g, s);
 }
 
 /* Cylinders, cones and conics (lib/revolved.glsl) against host/object's
@@ -430,8 +427,8 @@ static void test_revolved(void **state)
         "geometry = { coefficients = [1 0 -1] z_range = [-1 1] } }\n"
         "conic \"dome\" { transform = [scale([0.7 0.7 0.6]) translate([-4 -4 0.6])] "
         "geometry = { coefficients = [0.5 -0.5 0] z_range = [-1 1] } }\n";
-    tb__env e;
-    tb__open(&e);
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
     tb_scene *s = tb__load(text);
     /* By default a CPU driver routes them to the CPU (faster there), a GPU runs them. */
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
@@ -479,10 +476,9 @@ static void test_revolved(void **state)
     tb_rng rng;
     tb_rng_seed(&rng, seed, 3);
     enum { N = 20000 };
-    tb_ray *rays = malloc(N * sizeof *rays);
-    tb_hit *hits = malloc(N * sizeof *hits);
-    uint8_t *occ = malloc(N);
-    assert_true(rays && hits && occ);
+    tb__batch b = tb__batch_new(N);
+    tb_ray *rays = b.rays;
+    const tb_hit *hits = b.hits;
     for (int i = 0; i < N; ++i) {
         float o[3], p[3];
         for (int k = 0; k < 3; ++k) {
@@ -496,12 +492,10 @@ static void test_revolved(void **state)
         float tmax = i % 4 == 0 ? (float)tb_rng_double(&rng) : INFINITY;
         rays[i] = (tb_ray){{o[0], o[1], o[2]}, 0.0f, {p[0] - o[0], p[1] - o[1], p[2] - o[2]}, tmax};
     }
-    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
-    assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
-    int differ = 0, occ_differ = 0, on[7] = {0}, caps = 0;
+    tb__batch_trace(g, &b);
+    int occ_differ = tb__occ_differ(s, &b), differ = 0, on[7] = {0}, caps = 0;
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
-        occ_differ += occ[i] != tb_scene_occluded(s, &rays[i]);
         if (c.object != hits[i].object || c.face != hits[i].face) {
             ++differ;
             continue;
@@ -521,10 +515,8 @@ static void test_revolved(void **state)
     assert_true(caps > 50);
     assert_true(differ <= N / 1000);
     assert_true(occ_differ <= N / 1000);
-    free(rays), free(hits), free(occ);
-    tb_gpu_scene_destroy(g);
-    tb_scene_free(s);
-    tb__close(&e);
+    tb__batch_free(&b);
+    tb__finish(&e, g, s);
 }
 
 /* Rays spawned off the GPU's analytic surfaces the way a renderer spawns
@@ -545,8 +537,8 @@ static void test_spawned(void **state)
         "cone \"cone\" { transform = [scale(0.7) translate([0 0 0.7])] }\n"
         "conic \"tower\" { transform = [scale([0.6 0.6 1.2]) translate([0 3.5 1.2])] "
         "geometry = { coefficients = [0.5 0 0.5] z_range = [-1 1] caps = false } }\n";
-    tb__env e;
-    tb__open(&e);
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
     tb_scene *s = tb__load(text);
     tb_gpu_scene *g = tb_gpu_scene_create_ex(e.dev, s, &(tb_gpu_scene_desc){TB_GPU_QUADRICS_GPU});
     assert_non_null(g);
@@ -554,10 +546,9 @@ static void test_spawned(void **state)
     tb_rng rng;
     tb_rng_seed(&rng, seed, 4);
     enum { N = 20000 };
-    tb_ray *rays = malloc(N * sizeof *rays);
-    tb_hit *hits = malloc(N * sizeof *hits);
-    uint8_t *occ = malloc(N);
-    assert_true(rays && hits && occ);
+    tb__batch b = tb__batch_new(N);
+    tb_ray *rays = b.rays;
+    const tb_hit *hits = b.hits;
     int n = 0;
     while (n < N) {
         /* A ray from above toward a random point of the objects' region. */
@@ -584,12 +575,10 @@ static void test_spawned(void **state)
         float tmax = n % 3 == 0 ? 2.0f : INFINITY;
         rays[n++] = (tb_ray){tb_spawn_ray_origin(p, perr, h.ng, w), 0.0f, w, tmax};
     }
-    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
-    assert_int_equal(tb_gpu_occluded(g, rays, N, occ, NULL), TB_OK);
-    int differ = 0, occ_differ = 0, hit = 0;
+    tb__batch_trace(g, &b);
+    int occ_differ = tb__occ_differ(s, &b), differ = 0, hit = 0;
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
-        occ_differ += occ[i] != tb_scene_occluded(s, &rays[i]);
         differ += c.object != hits[i].object || c.face != hits[i].face;
         hit += c.object != UINT32_MAX;
     }
@@ -598,10 +587,8 @@ static void test_spawned(void **state)
     assert_true(hit > N / 4);
     assert_true(differ <= N / 1000);
     assert_true(occ_differ <= N / 1000);
-    free(rays), free(hits), free(occ);
-    tb_gpu_scene_destroy(g);
-    tb_scene_free(s);
-    tb__close(&e);
+    tb__batch_free(&b);
+    tb__finish(&e, g, s);
 }
 
 int main(void)

@@ -5,16 +5,12 @@
 # must report nothing. Also checks the routing report and the usage errors.
 set -eu
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
+. "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
 out="$TB_TEST_TMPDIR/validate.out"
 n=0
 for scene in "$TB_SOURCE_DIR"/scenes/*.mid "$TB_SOURCE_DIR"/scenes/tests/*.mid; do
     [ -f "$scene" ] || continue
-    if ! TB_VK_VALIDATION=1 "$TESTBED" validate "$scene" --kernel all --rays 3000 --seed 3 >"$out" 2>&1; then
-        echo "FAIL: testbed validate $scene"
-        cat "$out"
-        exit 1
-    fi
-    grep -q "validation layer       0 errors, 0 warnings  ok" "$out" || { echo "no validation line: $scene"; cat "$out"; exit 1; }
+    validate_scene "$out" "$scene" --kernel all --rays 3000 --seed 3
     grep -q "^routing: " "$out" || { echo "no routing report: $scene"; exit 1; }
     n=$((n + 1))
 done
