@@ -12,6 +12,7 @@
 #include <string.h>
 #include <sys/resource.h>
 
+#include "bench_raysets.h"
 #include "commands.h"
 #include "host/gpu/intersect.h"
 #include "host/object/hit.h"
@@ -51,15 +52,6 @@ static void tb__gpu_usage(FILE *out)
             "              kernel except on a CPU driver such as lavapipe; tb_gpu_scene_desc)\n");
 }
 
-static tb_vec3 tb__gcosine_dir(tb_vec3 n, float u1, float u2)
-{
-    tb_vec3 a = fabsf(n.x) > 0.9f ? (tb_vec3){0.0f, 1.0f, 0.0f} : (tb_vec3){1.0f, 0.0f, 0.0f};
-    tb_vec3 t = tb_vec3_normalize(tb_vec3_cross(a, n)), b = tb_vec3_cross(n, t);
-    float r = sqrtf(u1), phi = 6.28318530717958648f * u2, z = sqrtf(fmaxf(0.0f, 1.0f - u1));
-    float x = r * cosf(phi), y = r * sinf(phi);
-    return (tb_vec3){x * t.x + y * b.x + z * n.x, x * t.y + y * b.y + z * n.y, x * t.z + y * b.z + z * n.z};
-}
-
 /* The three sets (as `testbed bench rays` makes them, but primary rays in
  * scanline order: a renderer's order, which keeps neighbouring rays, and
  * so a SIMD group of the kernel, coherent). Returns false when out of memory. */
@@ -82,34 +74,8 @@ static bool tb__gmake_sets(const tb_scene *s, size_t np, uint64_t seed, tb_ray *
     bool use_area = s->nemitters > 0 && tb_area_light_init(&area, s->emitters, s->nemitters) == TB_OK;
     tb_rng rng;
     tb_rng_seed(&rng, seed, 0);
-    for (size_t i = 0; i < np; i++) {
-        tb_ray r = sets[TB__GSET_PRIMARY][i];
-        tb_hit hit;
-        tb_vec3 p, perr;
-        if (!tb_scene_intersect(s, &r, &hit))
-            continue;
-        r.tmax = hit.t;
-        if (!tb_object_hit_point(s->objects[hit.object], &r, &hit, &p, &perr))
-            continue;
-        float u1 = tb_rng_float(&rng), u2 = tb_rng_float(&rng), u3 = tb_rng_float(&rng), u4 = tb_rng_float(&rng);
-        tb_light_sample ls;
-        bool ok = false;
-        if (use_area)
-            ok = tb_area_light_sample(&area, p, u1, u2, &ls);
-        else if (s->nlights > 0) {
-            int l = (int)(u1 * (float)s->nlights);
-            ok = tb_light_sample_li(&s->lights[l < s->nlights ? l : s->nlights - 1], p, &ls);
-        }
-        if (ok) {
-            tb_ray sh = ls.shadow;
-            sh.o = tb_spawn_ray_origin(p, perr, hit.ng, ls.wi);
-            sets[TB__GSET_SHADOW][n[TB__GSET_SHADOW]++] = sh;
-        }
-        tb_vec3 nn = tb_vec3_dot(hit.ng, r.d) > 0.0f ? tb_vec3_neg(hit.ng) : hit.ng;
-        tb_vec3 wd = tb__gcosine_dir(nn, u3, u4);
-        sets[TB__GSET_DIFFUSE][n[TB__GSET_DIFFUSE]++] =
-            tb_ray_make(tb_spawn_ray_origin(p, perr, hit.ng, wd), wd, 0.0f, INFINITY);
-    }
+    tb_bench_secondary_rays(s, use_area ? &area : NULL, sets[TB__GSET_PRIMARY], n[TB__GSET_PRIMARY], &rng,
+                            sets[TB__GSET_SHADOW], &n[TB__GSET_SHADOW], sets[TB__GSET_DIFFUSE], &n[TB__GSET_DIFFUSE]);
     tb_area_light_release(&area);
     return true;
 }
