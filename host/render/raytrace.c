@@ -353,13 +353,18 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             float cosi = tb_vec3_dot(n, ls.wi);
             if (cosi <= 0.0f || tb_channels_is_black(ls.L))
                 continue;
-            if (tb__shadowed(s, p, perr, ng, &ls))
-                continue;
             tb_channels f = tb_channels_scale(diffuse, (float)(1.0 / TB_PI));
             if (ggx)
                 f = tb_channels_add(f, tb_bsdf_eval(&lobe, wo_local, tb_frame_to_local(&frame, ls.wi)));
             else if (has_specular)
                 f = tb_channels_add_scaled(f, specular, (float)tb__lobe(m, n, wo, ls.wi));
+            /* A zero BRDF adds exactly +0 (ls.L is finite), so its shadow ray
+             * is not traced: mirrors and glass (no diffuse part, a lobe of
+             * exponent 10^4 that is 0 in float away from the reflection). */
+            if (tb_channels_is_black(f))
+                continue;
+            if (tb__shadowed(s, p, perr, ng, &ls))
+                continue;
             L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(f, ls.L), cosi));
         }
     }
