@@ -82,6 +82,25 @@ static bool tb__any_in_range(const tb__xbuf *b, double tmin, double tmax)
     return false;
 }
 
+/* True if no crossing of a node that lies inside the child with list b (an
+ * intersection's operand, a difference's first one) can have a float t in
+ * [tmin, tmax]. Such a node's crossings lie in the child's span [first,
+ * last] widened by the coincidence tolerance (a batch of ends that changes
+ * the node's membership also has the child inside just before or after
+ * it, and spans at most the tolerance); the margin here is 16 times it.
+ * This is what skips the other operands for a shadow ray that leaves the
+ * solid's surface: the solid lies behind its origin. */
+static bool tb__span_misses(const tb__xbuf *b, const tb_ray *ray, double tmin, double tmax)
+{
+    if (b->n == 0)
+        return false;
+    double scale = tb__t_scale(ray);
+    double lo = b->x[0].t, hi = b->x[b->n - 1].t;
+    double lo_pad = lo - 16.0 * TB_CSG_COINCIDENT_REL * (scale + fabs(lo));
+    double hi_pad = hi + 16.0 * TB_CSG_COINCIDENT_REL * (scale + fabs(hi));
+    return (float)hi_pad < tmin || (float)lo_pad > tmax;
+}
+
 /* The node's crossings as tb__csg_xings; with `range` (tmin, tmax), only the
  * first crossing in it matters (tb__csg_xings_in): the sweep is skipped when
  * no child crossing is in range (the node's crossings are some of its
@@ -112,6 +131,11 @@ static void tb__csg_node(const tb_object *node, const tb_ray *ray, tb__xbuf *out
         total += (size_t)lists[i].n;
         if (lists[i].n == 0 && !lists[i].oom && tb__empty_decides(node->kind, i)) {
             total = 0; /* the node is empty: the sweep below would find nothing */
+            break;
+        }
+        if (range && !lists[i].oom && tb__empty_decides(node->kind, i) &&
+            tb__span_misses(&lists[i], ray, range[0], range[1])) {
+            total = 0; /* no crossing of the node can be in range */
             break;
         }
         if (!any_in_range)
