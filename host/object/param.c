@@ -729,22 +729,52 @@ static void tb__arch_project(tb_prim_kind kind, const tb_geom_arch *g, int face,
 
 /* ---------------------------------------------------------------- polygons */
 
-/* A polygon's plane frame: origin o, unit axes e1 (along its first non-zero
- * edge), e2 = n x e1, unit normal n, and the bounding rectangle
- * [s0, s0 + ds] x [t0, t0 + dt] of its vertices in (e1, e2) coordinates. */
-typedef struct tb__poly_frame {
-    tb_dvec3 o, e1, e2, n;
-    double s0, ds, t0, dt;
-} tb__poly_frame;
+typedef tb_poly_frame tb__poly_frame;
+
+/* Corner i of a loop: v[idx[i]], or v[i] without idx. */
+static tb_dvec3 tb__cv(const tb_vec3 *v, const int *idx, int i) { return tb_vec3_to_d(v[idx ? idx[i] : i]); }
 
 static tb_dvec3 tb__pv(const tb_geom_polygons *g, int face, int i)
 {
-    int idx = g->indices[g->face_start[face] + i];
-    tb_vec3 p = g->vertices[idx];
-    return tb_vec3_to_d(p);
+    return tb__cv(g->vertices, g->indices + g->face_start[face], i);
 }
 
 static int tb__poly_nv(const tb_geom_polygons *g, int face) { return g->face_start[face + 1] - g->face_start[face]; }
+
+bool tb_poly_frame_make(const tb_vec3 *v, const int *idx, int nv, tb_poly_frame *f)
+{
+    /* Newell normal, relative to the first vertex. */
+    tb_dvec3 o = tb__cv(v, idx, 0), nn = {0, 0, 0};
+    for (int i = 0; i < nv; i++) {
+        tb_dvec3 a = tb_dvec3_sub(tb__cv(v, idx, i), o), b = tb_dvec3_sub(tb__cv(v, idx, (i + 1) % nv), o);
+        nn.x += (a.y - b.y) * (a.z + b.z);
+        nn.y += (a.z - b.z) * (a.x + b.x);
+        nn.z += (a.x - b.x) * (a.y + b.y);
+    }
+    double ln = tb_dvec3_length(nn);
+    if (!(ln > 0.0) || !isfinite(ln))
+        return false;
+    f->n = tb_dvec3_scale(nn, 1.0 / ln);
+    f->o = o;
+    tb_dvec3 e = {0, 0, 0};
+    for (int i = 1; i < nv; i++) {
+        e = tb_dvec3_sub(tb__cv(v, idx, i), o);
+        /* Keep only the part in the plane, so the frame is orthonormal. */
+        e = tb_dvec3_sub(e, tb_dvec3_scale(f->n, tb_dvec3_dot(e, f->n)));
+        if (tb_dvec3_length(e) > 0.0)
+            break;
+    }
+    f->e1 = tb_dvec3_normalize(e);
+    f->e2 = tb_dvec3_cross(f->n, f->e1);
+    double s0 = INFINITY, s1 = -INFINITY, t0 = INFINITY, t1 = -INFINITY;
+    for (int i = 0; i < nv; i++) {
+        tb_dvec3 d = tb_dvec3_sub(tb__cv(v, idx, i), o);
+        double s = tb_dvec3_dot(d, f->e1), t = tb_dvec3_dot(d, f->e2);
+        s0 = fmin(s0, s), s1 = fmax(s1, s), t0 = fmin(t0, t), t1 = fmax(t1, t);
+    }
+    f->s0 = s0, f->ds = s1 - s0, f->t0 = t0, f->dt = t1 - t0;
+    return true;
+}
 
 static tb_status tb__poly_frame_of(const tb_geom_polygons *g, int face, tb__poly_frame *f)
 {
@@ -756,36 +786,8 @@ static tb_status tb__poly_frame_of(const tb_geom_polygons *g, int face, tb__poly
         if (idx < 0 || idx >= g->nvertices)
             return tb_error(TB_ERR_ARG, "param: polygon %d: vertex index %d out of range", face, idx);
     }
-    /* Newell normal, relative to the first vertex. */
-    tb_dvec3 o = tb__pv(g, face, 0), nn = {0, 0, 0};
-    for (int i = 0; i < nv; i++) {
-        tb_dvec3 a = tb_dvec3_sub(tb__pv(g, face, i), o), b = tb_dvec3_sub(tb__pv(g, face, (i + 1) % nv), o);
-        nn.x += (a.y - b.y) * (a.z + b.z);
-        nn.y += (a.z - b.z) * (a.x + b.x);
-        nn.z += (a.x - b.x) * (a.y + b.y);
-    }
-    double ln = tb_dvec3_length(nn);
-    if (!(ln > 0.0) || !isfinite(ln))
+    if (!tb_poly_frame_make(g->vertices, g->indices + g->face_start[face], nv, f))
         return tb_error(TB_ERR_ARG, "param: polygon %d has no area", face);
-    f->n = tb_dvec3_scale(nn, 1.0 / ln);
-    f->o = o;
-    tb_dvec3 e = {0, 0, 0};
-    for (int i = 1; i < nv; i++) {
-        e = tb_dvec3_sub(tb__pv(g, face, i), o);
-        /* Keep only the part in the plane, so the frame is orthonormal. */
-        e = tb_dvec3_sub(e, tb_dvec3_scale(f->n, tb_dvec3_dot(e, f->n)));
-        if (tb_dvec3_length(e) > 0.0)
-            break;
-    }
-    f->e1 = tb_dvec3_normalize(e);
-    f->e2 = tb_dvec3_cross(f->n, f->e1);
-    double s0 = INFINITY, s1 = -INFINITY, t0 = INFINITY, t1 = -INFINITY;
-    for (int i = 0; i < nv; i++) {
-        tb_dvec3 d = tb_dvec3_sub(tb__pv(g, face, i), o);
-        double s = tb_dvec3_dot(d, f->e1), t = tb_dvec3_dot(d, f->e2);
-        s0 = fmin(s0, s), s1 = fmax(s1, s), t0 = fmin(t0, t), t1 = fmax(t1, t);
-    }
-    f->s0 = s0, f->ds = s1 - s0, f->t0 = t0, f->dt = t1 - t0;
     return TB_OK;
 }
 
@@ -796,18 +798,17 @@ static void tb__poly_st(const tb__poly_frame *f, tb_dvec3 p, double *s, double *
     *s = tb_dvec3_dot(d, f->e1), *t = tb_dvec3_dot(d, f->e2);
 }
 
-/* The point of the polygon (its projection on the frame's plane, filled by the
+/* The point of the loop (its projection on the frame's plane, filled by the
  * even-odd rule) nearest to (s, t). */
-static void tb__poly_closest(const tb_geom_polygons *g, int face, const tb__poly_frame *f, double *s, double *t)
+static void tb__poly_closest(const tb__poly_frame *f, const tb_vec3 *v, const int *idx, int nv, double *s, double *t)
 {
-    int nv = tb__poly_nv(g, face);
     bool in = false;
     double bd = INFINITY, bs = *s, bt = *t;
     double ps, pt;
-    tb__poly_st(f, tb__pv(g, face, nv - 1), &ps, &pt);
+    tb__poly_st(f, tb__cv(v, idx, nv - 1), &ps, &pt);
     for (int i = 0; i < nv; i++) {
         double qs, qt, cs, ct;
-        tb__poly_st(f, tb__pv(g, face, i), &qs, &qt);
+        tb__poly_st(f, tb__cv(v, idx, i), &qs, &qt);
         if ((qt > *t) != (pt > *t) && *s < ps + (*t - pt) * (qs - ps) / (qt - pt))
             in = !in;
         double d = tb__seg_closest(*s, *t, ps, pt, qs, qt, &cs, &ct);
@@ -817,6 +818,16 @@ static void tb__poly_closest(const tb_geom_polygons *g, int face, const tb__poly
     }
     if (!in)
         *s = bs, *t = bt;
+}
+
+void tb_poly_frame_uv(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, int nv, tb_dvec3 p, double *u,
+                      double *w)
+{
+    double s, t;
+    tb__poly_st(f, p, &s, &t);
+    tb__poly_closest(f, v, idx, nv, &s, &t);
+    *u = f->ds > 0.0 ? tb__clamp01((s - f->s0) / f->ds) : 0.0;
+    *w = f->dt > 0.0 ? tb__clamp01((t - f->t0) / f->dt) : 0.0;
 }
 
 /* A polygon's triangles as corner numbers (0 .. nv-1) into its loop: the fan
@@ -959,14 +970,15 @@ static tb_status tb__poly_project(const tb_geom_polygons *g, int face, tb_dvec3 
     tb_status st = tb__poly_frame_of(g, face, &f);
     if (st)
         return st;
-    double s, t;
-    tb__poly_st(&f, p, &s, &t);
-    tb__poly_closest(g, face, &f, &s, &t);
+    const int *idx = g->indices + g->face_start[face];
+    int nv = tb__poly_nv(g, face);
     if (!g->uvs) {
-        *u = f.ds > 0.0 ? tb__clamp01((s - f.s0) / f.ds) : 0.0;
-        *v = f.dt > 0.0 ? tb__clamp01((t - f.t0) / f.dt) : 0.0;
+        tb_poly_frame_uv(&f, g->vertices, idx, nv, p, u, v);
         return TB_OK;
     }
+    double s, t;
+    tb__poly_st(&f, p, &s, &t);
+    tb__poly_closest(&f, g->vertices, idx, nv, &s, &t);
     tb__poly_tris tr;
     if ((st = tb__poly_tris_of(g, face, &f, &tr)))
         return st;

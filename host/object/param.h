@@ -182,4 +182,25 @@ tb_status tb_param_eval_world(tb_prim_kind kind, const tb_mid_geometry *geom,
                               const tb_transform *to_world, int face, double u, double v,
                               tb_dvec3 *p, tb_dvec3 *n, tb_dvec3 *dpdu, tb_dvec3 *dpdv);
 
+/* A planar polygon's (u, v) frame: origin o (its first corner), unit axes
+ * e1 (along its first non-zero edge, in the plane) and e2 = n x e1, the unit
+ * Newell normal n, and the bounding rectangle [s0, s0 + ds] x [t0, t0 + dt]
+ * of its corners in (e1, e2) coordinates. Exposed so a caller may memoise
+ * it (host/render/scene_mesh.c) and still get tb_param_from_point's (u, v)
+ * bit for bit. */
+typedef struct tb_poly_frame {
+    tb_dvec3 o, e1, e2, n;
+    double s0, ds, t0, dt;
+} tb_poly_frame;
+
+/* The frame of the loop of nv >= 3 corners v[idx[i]] (v[i] when idx is NULL);
+ * false when the loop has no area (its Newell normal is zero or not finite). */
+bool tb_poly_frame_make(const tb_vec3 *v, const int *idx, int nv, tb_poly_frame *f);
+
+/* (u, v) of p for a polygon without uvs, as tb_param_from_point gives it:
+ * the nearest point of the loop (v, idx, nv as for tb_poly_frame_make) in
+ * the frame's plane, scaled to the frame's rectangle and clamped to [0, 1]. */
+void tb_poly_frame_uv(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, int nv, tb_dvec3 p, double *u,
+                      double *w);
+
 #endif

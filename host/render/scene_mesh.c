@@ -71,13 +71,12 @@ static bool tb__better(float t, uint32_t object, uint32_t face, uint32_t index)
  * tb_param_from_point recomputes the polygon's frame (Newell normal, in-plane
  * axes, the face's extent in them) on every call, which is most of the cost
  * of a hit's (u, v) on triangle scenes. For faces without per-vertex uvs the
- * code below does the same projection with the frame memoised per thread.
- * It repeats host/object/param.c's arithmetic (tb__poly_frame_of,
- * tb__poly_st, tb__poly_closest, tb__seg_closest) operation for operation
- * (the build has -ffp-contract=off), so (u, v) are the object level's bit
- * for bit; tests/render/test_scene_accel.c compares every hit with
- * tb_object_intersect's byte for byte and would catch any drift. Faces with
- * uvs or more than TB__UV_MAX_NV corners use tb_param_from_point. */
+ * code below memoises the frame per thread and projects with param.h's
+ * tb_poly_frame_make / tb_poly_frame_uv, the functions tb_param_from_point
+ * itself uses, so (u, v) are the object level's bit for bit
+ * (tests/render/test_scene_accel.c compares every hit with
+ * tb_object_intersect's byte for byte). Faces with uvs or more than
+ * TB__UV_MAX_NV corners use tb_param_from_point. */
 #define TB__UV_MAX_NV 8
 #define TB__UV_SLOTS 256u
 
@@ -85,68 +84,11 @@ typedef struct tb__uv_frame {
     const tb_geom_polygons *g; /* key: geometry, face, and the corners themselves */
     int face, nv;
     tb_vec3 corner[TB__UV_MAX_NV];
-    tb_dvec3 o, e1, e2, n;
-    double s0, ds, t0, dt;
+    tb_poly_frame frame;
     bool ok;                   /* the frame exists (else param's error path: u = v = 0) */
 } tb__uv_frame;
 
 static _Thread_local tb__uv_frame tb__uv_cache[TB__UV_SLOTS];
-
-static tb_dvec3 tb__uv_pv(const tb__uv_frame *f, int i) { return tb_vec3_to_d(f->corner[i]); }
-
-static double tb__uv_clamp01(double t) { return tb_clamp(t, 0.0, 1.0); }
-
-static double tb__uv_seg_closest(double px, double py, double ax, double ay, double bx, double by, double *cx,
-                                 double *cy)
-{
-    double ex = bx - ax, ey = by - ay, l2 = ex * ex + ey * ey;
-    double t = l2 > 0.0 ? tb__uv_clamp01(((px - ax) * ex + (py - ay) * ey) / l2) : 0.0;
-    *cx = ax + t * ex;
-    *cy = ay + t * ey;
-    double dx = px - *cx, dy = py - *cy;
-    return dx * dx + dy * dy;
-}
-
-/* param.c's tb__poly_frame_of on the cached corners. */
-static bool tb__uv_frame_make(tb__uv_frame *f)
-{
-    int nv = f->nv;
-    tb_dvec3 o = tb__uv_pv(f, 0), nn = {0, 0, 0};
-    for (int i = 0; i < nv; i++) {
-        tb_dvec3 a = tb_dvec3_sub(tb__uv_pv(f, i), o), b = tb_dvec3_sub(tb__uv_pv(f, (i + 1) % nv), o);
-        nn.x += (a.y - b.y) * (a.z + b.z);
-        nn.y += (a.z - b.z) * (a.x + b.x);
-        nn.z += (a.x - b.x) * (a.y + b.y);
-    }
-    double ln = tb_dvec3_length(nn);
-    if (!(ln > 0.0) || !isfinite(ln))
-        return false;
-    f->n = tb_dvec3_scale(nn, 1.0 / ln);
-    f->o = o;
-    tb_dvec3 e = {0, 0, 0};
-    for (int i = 1; i < nv; i++) {
-        e = tb_dvec3_sub(tb__uv_pv(f, i), o);
-        e = tb_dvec3_sub(e, tb_dvec3_scale(f->n, tb_dvec3_dot(e, f->n)));
-        if (tb_dvec3_length(e) > 0.0)
-            break;
-    }
-    f->e1 = tb_dvec3_normalize(e);
-    f->e2 = tb_dvec3_cross(f->n, f->e1);
-    double s0 = INFINITY, s1 = -INFINITY, t0 = INFINITY, t1 = -INFINITY;
-    for (int i = 0; i < nv; i++) {
-        tb_dvec3 d = tb_dvec3_sub(tb__uv_pv(f, i), o);
-        double s = tb_dvec3_dot(d, f->e1), t = tb_dvec3_dot(d, f->e2);
-        s0 = fmin(s0, s), s1 = fmax(s1, s), t0 = fmin(t0, t), t1 = fmax(t1, t);
-    }
-    f->s0 = s0, f->ds = s1 - s0, f->t0 = t0, f->dt = t1 - t0;
-    return true;
-}
-
-static void tb__uv_st(const tb__uv_frame *f, tb_dvec3 p, double *s, double *t)
-{
-    tb_dvec3 d = tb_dvec3_sub(p, f->o);
-    *s = tb_dvec3_dot(d, f->e1), *t = tb_dvec3_dot(d, f->e2);
-}
 
 /* The frame of face `face` of g, from this thread's memo when its corners match. */
 static const tb__uv_frame *tb__uv_frame_of(const tb_geom_polygons *g, int face)
@@ -174,35 +116,8 @@ static const tb__uv_frame *tb__uv_frame_of(const tb_geom_polygons *g, int face)
         f->corner[i] = g->vertices[idx];
     }
     f->g = g, f->face = face, f->nv = nv;
-    f->ok = tb__uv_frame_make(f);
+    f->ok = tb_poly_frame_make(f->corner, NULL, nv, &f->frame);
     return f;
-}
-
-/* param.c's polygon projection without uvs (tb__poly_st, tb__poly_closest,
- * the clamped extent) with frame f. */
-static void tb__uv_project(const tb__uv_frame *f, tb_dvec3 p, double *u, double *v)
-{
-    double s, t;
-    tb__uv_st(f, p, &s, &t);
-    int nv = f->nv;
-    bool in = false;
-    double bd = INFINITY, bs = s, bt = t;
-    double ps, pt;
-    tb__uv_st(f, tb__uv_pv(f, nv - 1), &ps, &pt);
-    for (int i = 0; i < nv; i++) {
-        double qs, qt, cs, ct;
-        tb__uv_st(f, tb__uv_pv(f, i), &qs, &qt);
-        if ((qt > t) != (pt > t) && s < ps + (t - pt) * (qs - ps) / (qt - pt))
-            in = !in;
-        double d = tb__uv_seg_closest(s, t, ps, pt, qs, qt, &cs, &ct);
-        if (d < bd)
-            bd = d, bs = cs, bt = ct;
-        ps = qs, pt = qt;
-    }
-    if (!in)
-        s = bs, t = bt;
-    *u = f->ds > 0.0 ? tb__uv_clamp01((s - f->s0) / f->ds) : 0.0;
-    *v = f->dt > 0.0 ? tb__uv_clamp01((t - f->t0) / f->dt) : 0.0;
 }
 
 void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
@@ -221,7 +136,7 @@ void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
     const tb__uv_frame *f = !g->uvs && tb_dvec3_isfinite(p) ? tb__uv_frame_of(g, (int)face) : NULL;
     if (f) {
         if (f->ok)
-            tb__uv_project(f, p, &u, &v);
+            tb_poly_frame_uv(&f->frame, f->corner, NULL, f->nv, p, &u, &v);
     } else if (tb_param_from_point(o->kind, &o->geom, p, (int)face, &pf, &u, &v) != TB_OK) {
         u = v = 0.0;
     }
