@@ -226,6 +226,49 @@ bool tb_bvh_ray_valid(tb_gpu_ray r)
            !(r.d.x == 0.0 && r.d.y == 0.0 && r.d.z == 0.0) && r.tmin <= r.tmax;
 }
 
+// The leaf loops of tb_bvh_traverse share these two bodies as macros (GLSL
+// has no generics, and a function taking the best-hit state inout would copy
+// it at every candidate in the hot loop).
+//
+// Takes candidate (T, object O, face F, reference RF) of leaf entry `ref` if
+// it beats the best hit so far (tb_better); an any-hit query stops at it.
+#define TB_BVH_TAKE(T, O, F, RF)                                                                                      \
+    if (tb_better(T, O, F, RF, have, bt, bo, bf, br)) {                                                               \
+        have = true;                                                                                                  \
+        bt = T;                                                                                                       \
+        bo = O;                                                                                                       \
+        bf = F;                                                                                                       \
+        br = RF;                                                                                                      \
+        bref = ref;                                                                                                   \
+    }                                                                                                                 \
+    if (any_hit) {                                                                                                    \
+        stop = true;                                                                                                  \
+        break;                                                                                                        \
+    }
+
+// The leaf's run of placed objects of kind KIND from entry k on (each leaf
+// lists cubes, then spheres, then revolved objects): the ray in the object's
+// frame (so, sd), its lower bound tlo, then HIT, which sets t and the face
+// offset cf (left 0 by kinds of one face).
+#define TB_BVH_PLACED_RUN(KIND, HIT)                                                                                  \
+    for (; k < end; ++k) {                                                                                            \
+        uint ref = tb_bvh_fetch_ref(k);                                                                               \
+        uint idx = ref & TB_GPU_REF_INDEX;                                                                            \
+        if ((ref & TB_GPU_REF_KIND) != KIND)                                                                          \
+            break;                                                                                                    \
+        tb_gpu_placed sp = TB_BVH_PLACED[idx];                                                                        \
+        precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);           \
+        precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));                                   \
+        float t;                                                                                                      \
+        float tlo = tb_bvh_placed_tmin(sp, r, so, sd);                                                                \
+        uint cf = 0u;                                                                                                 \
+        vec3 nobj;                                                                                                    \
+        if (!(HIT))                                                                                                   \
+            continue;                                                                                                 \
+        uint face = sp.face + cf;                                                                                     \
+        TB_BVH_TAKE(t, sp.object, face, sp.ref)                                                                       \
+    }
+
 // The traversal: with any_hit false the closest hit by the tie rule, with
 // any_hit true the first hit found (any t in [tmin, tmax]). nnodes is the
 // node count (0 for a scene with nothing on the GPU). False on a miss.
@@ -303,112 +346,19 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     if (!tb_tri_hit(w, v0, v1, v2, t) || t < r.tmin || t > r.tmax)
                         continue;
                     uvec3 keys = tb_bvh_fetch_tri_keys(ref);
-                    if (tb_better(t, keys.x, keys.y, keys.z, have, bt, bo, bf, br)) {
-                        have = true;
-                        bt = t;
-                        bo = keys.x;
-                        bf = keys.y;
-                        br = keys.z;
-                        bref = ref;
-                    }
-                    if (any_hit) {
-                        stop = true;
-                        break;
-                    }
+                    TB_BVH_TAKE(t, keys.x, keys.y, keys.z)
                 }
             }
             // Placed objects, one loop per kind (each leaf lists cubes, then
             // spheres, then revolved objects): a kind's code runs only while
             // some lane has that kind left.
-            if (TB_BVH_HAS_CUBES && !stop) {
-                for (; k < end; ++k) {
-                    uint ref = tb_bvh_fetch_ref(k);
-                    uint idx = ref & TB_GPU_REF_INDEX;
-                    if ((ref & TB_GPU_REF_KIND) != TB_GPU_REF_CUBE)
-                        break;
-                    tb_gpu_placed sp = TB_BVH_PLACED[idx];
-                    precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
-                    precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
-                    float t;
-                    uint face = sp.face;
-                    float tlo = tb_bvh_placed_tmin(sp, r, so, sd);
-                    uint cf;
-                    if (!tb_cube_hit(so, sd, tlo, r.tmax, t, cf))
-                        continue;
-                    face += cf;
-                    if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
-                        have = true;
-                        bt = t;
-                        bo = sp.object;
-                        bf = face;
-                        br = sp.ref;
-                        bref = ref;
-                    }
-                    if (any_hit) {
-                        stop = true;
-                        break;
-                    }
-                }
-            }
-            if (TB_BVH_HAS_SPHERES && !stop) {
-                for (; k < end; ++k) {
-                    uint ref = tb_bvh_fetch_ref(k);
-                    uint idx = ref & TB_GPU_REF_INDEX;
-                    if ((ref & TB_GPU_REF_KIND) != TB_GPU_REF_SPHERE)
-                        break;
-                    tb_gpu_placed sp = TB_BVH_PLACED[idx];
-                    precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
-                    precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
-                    float t;
-                    uint face = sp.face;
-                    float tlo = tb_bvh_placed_tmin(sp, r, so, sd);
-                    if (!tb_sphere_intersect(so, sd, 1.0, tlo, r.tmax, t))
-                        continue;
-                    if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
-                        have = true;
-                        bt = t;
-                        bo = sp.object;
-                        bf = face;
-                        br = sp.ref;
-                        bref = ref;
-                    }
-                    if (any_hit) {
-                        stop = true;
-                        break;
-                    }
-                }
-            }
-            if (TB_BVH_HAS_QUADRICS && !stop) {
-                for (; k < end; ++k) {
-                    uint ref = tb_bvh_fetch_ref(k);
-                    uint idx = ref & TB_GPU_REF_INDEX;
-                    if ((ref & TB_GPU_REF_KIND) != TB_GPU_REF_REVOLVED)
-                        break;
-                    tb_gpu_placed sp = TB_BVH_PLACED[idx];
-                    precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
-                    precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
-                    float t;
-                    uint face = sp.face;
-                    float tlo = tb_bvh_placed_tmin(sp, r, so, sd);
-                    uint cf;
-                    vec3 nobj;
-                    if (!tb_revolved_hit(so, sd, tb_bvh_revolved(idx), tlo, r.tmax, t, cf, nobj))
-                        continue;
-                    face += cf;
-                    if (tb_better(t, sp.object, face, sp.ref, have, bt, bo, bf, br)) {
-                        have = true;
-                        bt = t;
-                        bo = sp.object;
-                        bf = face;
-                        br = sp.ref;
-                        bref = ref;
-                    }
-                    if (any_hit) {
-                        stop = true;
-                        break;
-                    }
-                }
-            }
+            if (TB_BVH_HAS_CUBES && !stop)
+                TB_BVH_PLACED_RUN(TB_GPU_REF_CUBE, tb_cube_hit(so, sd, tlo, r.tmax, t, cf))
+            if (TB_BVH_HAS_SPHERES && !stop)
+                TB_BVH_PLACED_RUN(TB_GPU_REF_SPHERE, tb_sphere_intersect(so, sd, 1.0, tlo, r.tmax, t))
+            if (TB_BVH_HAS_QUADRICS && !stop)
+                TB_BVH_PLACED_RUN(TB_GPU_REF_REVOLVED,
+                                  tb_revolved_hit(so, sd, tb_bvh_revolved(idx), tlo, r.tmax, t, cf, nobj))
             if (stop)
                 break;
             // Leaf done: back to the stack.
