@@ -73,8 +73,20 @@ static tb_dvec3 tb__cross_point(tb_dvec3 a, double da, tb_dvec3 b, double db)
     return tb_dvec3_add(a, tb_dvec3_scale(tb_dvec3_sub(b, a), t));
 }
 
-double tb_ff_point_polygon(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly)
+/* Relative tolerance of "on a plane": the corners and p are floats, so a
+ * point meant to lie on a plane is off by up to half an ulp of its
+ * coordinates (6e-8 of their magnitude), and a float unit normal tilts a
+ * plane by ~6e-8 times the distance. Without the snap, noise of that size
+ * turns a receiver on a coplanar neighbour's edge into one an infinitesimal
+ * distance in front of the polygon with the polygon in its tangent plane,
+ * whose form factor is O(1) garbage, and makes a convex polygon cross the
+ * tangent plane more than twice. */
+#define TB__FF_PLANE_EPS 1e-7
+
+double tb__ff_point_polygon_ex(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly, tb_vec3 *seen)
 {
+    if (seen)
+        *seen = p;
     if (!poly || poly->n < 3 || poly->n > TB_FF_MAX_VERTS)
         return 0.0;
     tb_dvec3 pd = tb__ff_d(p), nd = tb__ff_d(n);
@@ -83,20 +95,36 @@ double tb_ff_point_polygon(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly)
         return 0.0;
     nd = tb_dvec3_scale(nd, 1.0 / nl);
     tb_dvec3 ns = tb__ff_newell(poly);
-    if (!(tb_dvec3_length2(ns) > 0.0) || !tb_dvec3_isfinite(ns))
+    double nsl = tb_dvec3_length(ns);
+    if (!(nsl > 0.0) || !isfinite(nsl))
         return 0.0;
+    ns = tb_dvec3_scale(ns, 1.0 / nsl);
 
-    /* Vertices relative to p; p must be strictly in front of the polygon. */
+    /* Vertices relative to p; the tolerance scales with the polygon's
+     * distance from p and with the coordinates' magnitude. */
     tb_dvec3 r[TB_FF_MAX_VERTS];
-    double d[TB_FF_MAX_VERTS], h = 0.0;
+    double d[TB_FF_MAX_VERTS], h = 0.0, size = 0.0;
+    double mag = fmax(fabs(pd.x), fmax(fabs(pd.y), fabs(pd.z)));
+    for (int k = 0; k < poly->n; k++) {
+        tb_dvec3 v = tb__ff_d(poly->v[k]);
+        mag = fmax(mag, fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z))));
+        r[k] = tb_dvec3_sub(v, pd);
+        d[k] = tb_dvec3_dot(r[k], nd);
+        h -= tb_dvec3_dot(r[k], ns) / poly->n;
+        size = fmax(size, tb_dvec3_length(r[k]));
+    }
+    double eps = TB__FF_PLANE_EPS * (size + mag);
+    /* p must be in front of the polygon's plane by more than the noise: on
+     * the plane (a coplanar neighbour, a point on an edge) it sees nothing. */
+    if (!(h > eps))
+        return 0.0;
     bool any_front = false;
     for (int k = 0; k < poly->n; k++) {
-        r[k] = tb_dvec3_sub(tb__ff_d(poly->v[k]), pd);
-        d[k] = tb_dvec3_dot(r[k], nd);
-        h -= tb_dvec3_dot(r[k], ns);
+        if (fabs(d[k]) <= eps)
+            d[k] = 0.0;
         any_front = any_front || d[k] > 0.0;
     }
-    if (!(h > 0.0) || !any_front)
+    if (!any_front)
         return 0.0;
 
     /* Clip to p's tangent plane (keep d >= 0): one plane turns 4 corners into
@@ -129,7 +157,22 @@ double tb_ff_point_polygon(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly)
     /* Counter-clockwise seen from the front, with p in front, the edge normals
      * a x b point away from n: the sum is negative. */
     double f = -sum / (2.0 * TB__PI);
-    return f > 0.0 ? f : 0.0;
+    if (!(f > 0.0))
+        return 0.0;
+    if (seen) {
+        /* The corners' mean is inside the convex clipped polygon. */
+        tb_dvec3 c0 = {0.0, 0.0, 0.0};
+        for (int k = 0; k < m; k++)
+            c0 = tb_dvec3_add(c0, c[k]);
+        c0 = tb_dvec3_add(pd, tb_dvec3_scale(c0, 1.0 / m));
+        *seen = (tb_vec3){(float)c0.x, (float)c0.y, (float)c0.z};
+    }
+    return f;
+}
+
+double tb_ff_point_polygon(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly)
+{
+    return tb__ff_point_polygon_ex(p, n, poly, NULL);
 }
 
 /* ------------------------------------------------------------ sample points */

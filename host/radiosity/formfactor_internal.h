@@ -17,4 +17,9 @@ tb_dvec3 tb__ff_newell(const tb_ff_polygon *poly);
  * negligible against its longest edge (area > 1e-12 * edge^2). */
 bool tb__ff_polygon_ok(const tb_ff_polygon *poly);
 
+/* tb_ff_point_polygon; when it is positive, *seen (if not NULL) is a point
+ * inside the part of the polygon in front of p's tangent plane (the mean of
+ * the clipped polygon's corners), else p. */
+double tb__ff_point_polygon_ex(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly, tb_vec3 *seen);
+
 #endif

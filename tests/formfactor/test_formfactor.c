@@ -144,6 +144,65 @@ static void test_point_zero_cases(void **state)
     assert_true(tb_ff_point_polygon(o, (tb_vec3){0, 0, 0}, &down) == 0.0); /* zero normal */
 }
 
+/* Rotation of v by the unit quaternion (w, x, y, z) plus an offset, in float
+ * (as a scene's transform leaves element corners: rounded off every plane). */
+static tb_vec3 rot(tb_vec3 v, const double q[4], tb_vec3 off)
+{
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    double m[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+                      {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+                      {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
+    double a[3] = {v.x, v.y, v.z}, r[3];
+    for (int i = 0; i < 3; i++)
+        r[i] = m[i][0] * a[0] + m[i][1] * a[1] + m[i][2] * a[2];
+    return (tb_vec3){(float)(r[0] + off.x), (float)(r[1] + off.y), (float)(r[2] + off.z)};
+}
+
+/* Float noise off the planes: receivers on a coplanar neighbour's corner or
+ * edge see nothing, and a polygon with corners on the receiver's tangent
+ * plane gives the value of the noise-free (axis-aligned) configuration. */
+static void test_point_noise(void **state)
+{
+    (void)state;
+    double q[4] = {0.8, 0.3, -0.4, 0.2};
+    double ql = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (int i = 0; i < 4; i++)
+        q[i] /= ql;
+    const float offs[3] = {0.0f, 3.7f, 250.0f};
+    const double scales[3] = {1.0, 1e-3, 1e3};
+    for (int o = 0; o < 3; o++)
+        for (int sc = 0; sc < 3; sc++) {
+            float s = (float)scales[sc];
+            tb_vec3 off = {offs[o] * s, -0.6f * offs[o] * s, 0.3f * offs[o] * s};
+            tb_vec3 up = rot((tb_vec3){0, 0, 1}, q, (tb_vec3){0, 0, 0});
+            /* Shooter on z = 0 facing +z; coplanar receivers at its corner,
+             * on its edge and beside it. */
+            tb_ff_polygon sh = ff_quad(rot((tb_vec3){0, 0, 0}, q, off), rot((tb_vec3){s, 0, 0}, q, off),
+                                       rot((tb_vec3){s, s, 0}, q, off), rot((tb_vec3){0, s, 0}, q, off));
+            tb_vec3 pc = rot((tb_vec3){s, s, 0}, q, off), pe = rot((tb_vec3){s, 0.37f * s, 0}, q, off);
+            tb_vec3 pb = rot((tb_vec3){1.5f * s, 0.5f * s, 0}, q, off);
+            assert_true(tb_ff_point_polygon(pc, up, &sh) == 0.0);
+            assert_true(tb_ff_point_polygon(pe, up, &sh) == 0.0);
+            assert_true(tb_ff_point_polygon(pb, up, &sh) == 0.0);
+            /* A wall on x = s facing -x beside the shooter (C-14's geometry):
+             * from points on z = 0 its bottom corners are on the tangent plane. */
+            tb_ff_polygon wall = ff_quad(rot((tb_vec3){s, 0, 0}, q, off), rot((tb_vec3){s, 0, s}, q, off),
+                                         rot((tb_vec3){s, s, s}, q, off), rot((tb_vec3){s, s, 0}, q, off));
+            tb_ff_polygon wall0 = ff_quad((tb_vec3){1, 0, 0}, (tb_vec3){1, 0, 1}, (tb_vec3){1, 1, 1}, (tb_vec3){1, 1, 0});
+            const float at[3][2] = {{0.5f, 0.5f}, {0.99f, 0.25f}, {0.999f, 0.5f}};
+            for (int k = 0; k < 3; k++) {
+                tb_vec3 p = rot((tb_vec3){at[k][0] * s, at[k][1] * s, 0}, q, off);
+                double ref = tb_ff_point_polygon((tb_vec3){at[k][0], at[k][1], 0}, (tb_vec3){0, 0, 1}, &wall0);
+                double f = tb_ff_point_polygon(p, up, &wall);
+                /* the float corners move by ~1e-7 of the coordinates: at
+                 * 250 units from the origin and 0.001 from the wall, ~1e-3 relative */
+                tb_assert_near(f, ref, (o == 2 ? 3e-3 : 1e-4) * ref);
+            }
+            /* The receiver on the wall's bottom edge is in its plane. */
+            assert_true(tb_ff_point_polygon(rot((tb_vec3){s, 0.5f * s, 0}, q, off), up, &wall) == 0.0);
+        }
+}
+
 /* A plate straddling the receiver's tangent plane: only the part above
  * counts. Reference: Gauss-Legendre quadrature of cos cos / (pi r^2) over
  * the upper half (smooth there). */
@@ -768,7 +827,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_frame),          cmocka_unit_test(test_point_b3),
-        cmocka_unit_test(test_point_offcenter), cmocka_unit_test(test_point_zero_cases),
+        cmocka_unit_test(test_point_offcenter), cmocka_unit_test(test_point_zero_cases), cmocka_unit_test(test_point_noise),
         cmocka_unit_test(test_point_straddle), cmocka_unit_test(test_closed_cube), cmocka_unit_test(test_hemicube_watertight), cmocka_unit_test(test_hemicube_close),
         cmocka_unit_test(test_howell_exact),   cmocka_unit_test(test_howell_raycast),
         cmocka_unit_test(test_howell_hemicube), cmocka_unit_test(test_reciprocity),
