@@ -441,6 +441,106 @@ typedef struct tb__plane {
  * and keeps every element. */
 #define TB__RAD_ENCLOSURE_WORK 50000000.0
 
+static inline int tb__elem_nv(const tb_rad_element *e) { return e->v[3] == TB_RAD_NONE ? 3 : 4; }
+
+static inline double tb__rad_coord(tb_vec3 p, int a) { return a == 0 ? p.x : a == 1 ? p.y : p.z; }
+
+/* Elements a and b in one plane (normals within 1.4e-3 rad of each other, b's
+ * centroid within eps of a's plane): float normals of one face's elements
+ * differ in the last bits. */
+static bool tb__rad_coplanar(const tb_rad_element *a, const tb_rad_element *b, double eps)
+{
+    if (!((double)tb_vec3_dot(a->normal, b->normal) >= 1.0 - 1e-6))
+        return false;
+    tb_vec3 d = tb_vec3_sub(b->centroid, a->centroid);
+    return fabs((double)tb_vec3_dot(d, a->normal)) <= eps;
+}
+
+/* The convex hull of the corners of elements idx[0..n) (one plane), when
+ * it is a triangle or quad whose area is the elements' total (so they tile
+ * it): written to *out, counter-clockwise seen from the elements' front. */
+static bool tb__rad_merge_face(const tb_rad_mesh *m, const uint32_t *idx, size_t n, tb_ff_polygon *out)
+{
+    const tb_rad_element *e0 = &m->elems[idx[0]];
+    /* project on the plane: drop the normal's largest axis */
+    double an[3] = {fabs(e0->normal.x), fabs(e0->normal.y), fabs(e0->normal.z)};
+    int ax = an[0] >= an[1] && an[0] >= an[2] ? 0 : an[1] >= an[2] ? 1 : 2;
+    int u = (ax + 1) % 3, w = (ax + 2) % 3;
+    size_t np = 0;
+    double total = 0.0;
+    for (size_t k = 0; k < n; k++)
+        np += (size_t)tb__elem_nv(&m->elems[idx[k]]), total += m->elems[idx[k]].area;
+    uint32_t *pv = malloc(2 * np * sizeof *pv);
+    if (!pv)
+        return false;
+    np = 0;
+    for (size_t k = 0; k < n; k++)
+        for (int c = 0; c < tb__elem_nv(&m->elems[idx[k]]); c++)
+            pv[np++] = m->elems[idx[k]].v[c];
+    /* sort by (u, w) (insertion sort: the groups are small) */
+#define TB__C(v, a) tb__rad_coord(m->verts[(v)].p, (a))
+    for (size_t k = 1; k < np; k++) {
+        uint32_t x = pv[k];
+        size_t j = k;
+        while (j > 0 && (TB__C(pv[j - 1], u) > TB__C(x, u) ||
+                         (TB__C(pv[j - 1], u) == TB__C(x, u) && TB__C(pv[j - 1], w) > TB__C(x, w))))
+            pv[j] = pv[j - 1], j--;
+        pv[j] = x;
+    }
+    double lo[2] = {TB__C(pv[0], u), TB__C(pv[0], w)}, hi[2] = {lo[0], lo[1]};
+    for (size_t k = 1; k < np; k++) {
+        lo[0] = fmin(lo[0], TB__C(pv[k], u)), hi[0] = fmax(hi[0], TB__C(pv[k], u));
+        lo[1] = fmin(lo[1], TB__C(pv[k], w)), hi[1] = fmax(hi[1], TB__C(pv[k], w));
+    }
+    double size = fmax(hi[0] - lo[0], hi[1] - lo[1]), tol = 1e-6 * size * size;
+    /* Andrew's monotone chain; nearly collinear corners (the grid's points
+     * along a side, off the line by float rounding) are dropped */
+    uint32_t *h = pv + np;
+    size_t nh = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        size_t base = nh;
+        for (size_t q = 0; q < np; q++) {
+            uint32_t c = pass ? pv[np - 1 - q] : pv[q];
+            while (nh >= base + 2) {
+                uint32_t a = h[nh - 2], b = h[nh - 1];
+                double cr = (TB__C(b, u) - TB__C(a, u)) * (TB__C(c, w) - TB__C(a, w)) -
+                            (TB__C(b, w) - TB__C(a, w)) * (TB__C(c, u) - TB__C(a, u));
+                if (cr > tol)
+                    break;
+                nh--;
+            }
+            h[nh++] = c;
+        }
+        nh--; /* the last point starts the other chain */
+    }
+#undef TB__C
+    bool ok = nh >= 3 && nh <= TB_FF_MAX_VERTS;
+    if (ok) {
+        out->n = (int)nh;
+        for (size_t k = 0; k < nh; k++)
+            out->v[k] = m->verts[h[k]].p;
+        tb_vec3 nn;
+        double area;
+        tb_ff_polygon_frame(out, &nn, &area);
+        ok = fabs(area - total) <= 1e-5 * total;
+        /* and truly flat: a twisted surface (the Cornell box's red wall) is
+         * left as its elements, whose receivers would otherwise end up behind
+         * (or in front of) the flattened face */
+        for (size_t k = 0; k < np && ok; k++) {
+            tb_vec3 a = out->v[0], b = m->verts[pv[k]].p;
+            double dd = nn.x * ((double)b.x - a.x) + nn.y * ((double)b.y - a.y) + nn.z * ((double)b.z - a.z);
+            ok = fabs(dd) <= 1e-6 * size;
+        }
+        if (ok && tb_vec3_dot(nn, e0->normal) < 0.0f)
+            for (size_t k = 0; k < nh / 2; k++) {
+                tb_vec3 t = out->v[k];
+                out->v[k] = out->v[nh - 1 - k], out->v[nh - 1 - k] = t;
+            }
+    }
+    free(pv);
+    return ok;
+}
+
 size_t tb_rad_mesh_occluders(const tb_rad_mesh *m, tb_ff_polygon *out)
 {
     size_t ne = m->nelems, nv = m->nverts, nout = 0;
@@ -483,9 +583,43 @@ size_t tb_rad_mesh_occluders(const tb_rad_mesh *m, tb_ff_polygon *out)
                 if (pl[q].n[0] * p.x + pl[q].n[1] * p.y + pl[q].n[2] * p.z < pl[q].d - eps)
                     pl[q].enclosing = false;
             }
-    for (size_t i = 0; i < ne; i++)
-        if (!ok || !pl[of[i]].enclosing)
+    if (!ok) {
+        for (size_t i = 0; i < ne; i++)
             tb_rad_mesh_polygon(m, i, &out[nout++]);
+        free(pl);
+        free(of);
+        return nout;
+    }
+    /* The kept elements of one object in one plane usually tile one convex
+     * face (a block's side cut into a grid): that face occludes exactly what
+     * its elements do, and one quad instead of dozens makes the visibility
+     * tree several levels shallower. Groups that do not tile a convex
+     * triangle or quad stay as their elements. */
+    uint32_t *idx = malloc((ne ? ne : 1) * sizeof *idx);
+    bool *done = calloc(ne ? ne : 1, sizeof *done);
+    if (!idx || !done) {
+        for (size_t i = 0; i < ne; i++)
+            if (!pl[of[i]].enclosing)
+                tb_rad_mesh_polygon(m, i, &out[nout++]);
+    } else {
+        for (size_t i = 0; i < ne; i++) {
+            if (done[i] || pl[of[i]].enclosing)
+                continue;
+            size_t ng = 0;
+            for (size_t j = i; j < ne; j++)
+                if (!done[j] && !pl[of[j]].enclosing && m->elems[j].object == m->elems[i].object &&
+                    tb__rad_coplanar(&m->elems[i], &m->elems[j], eps))
+                    idx[ng++] = (uint32_t)j, done[j] = true;
+            if (ng > 1 && tb__rad_merge_face(m, idx, ng, &out[nout])) {
+                nout++;
+                continue;
+            }
+            for (size_t k = 0; k < ng; k++)
+                tb_rad_mesh_polygon(m, idx[k], &out[nout++]);
+        }
+    }
+    free(idx);
+    free(done);
     free(pl);
     free(of);
     return nout;

@@ -126,7 +126,9 @@ void tb_rad_mesh_polygon(const tb_rad_mesh *m, size_t i, tb_ff_polygon *out);
  * as polygons, into out[0..nelems): all but those whose plane has every
  * vertex of the mesh on its front (within 1e-6 of the mesh's size): a
  * segment between two points in front of a plane cannot cross it, so the
- * walls of a room never occlude. The same visibility, fewer occluders.
+ * walls of a room never occlude. The kept elements of one object that tile
+ * a flat convex triangle or quad (a block's side cut into a grid) are
+ * written as that one polygon. The same visibility, fewer occluders.
  * Returns how many were written. Gives up (keeps all) when the mesh has so
  * many distinct planes that the check would cost more than 5e7 tests. */
 size_t tb_rad_mesh_occluders(const tb_rad_mesh *m, tb_ff_polygon *out);

@@ -40,6 +40,8 @@ struct tb_rad_solver {
     size_t *near_list;      /* ray cast: the elements gnear holds this shot */
     size_t nnear;
     double *dB;             /* nelems * nc: unshot radiosity */
+    double *up;             /* nelems: tb__unshot_power of each element, kept up to date with dB (the
+                               unshot fraction after every shot sums these, not nelems * nc values) */
     double *ff;             /* nrecv: form factors of one shot */
     tb_vec3 *rp, *rn;       /* ray cast: receiver positions and normals (the vertices) */
     tb_vec3 *pts;           /* ray cast: shooter sample points */
@@ -95,6 +97,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->near_list);
     free(s->vert_area);
     free(s->dB);
+    free(s->up);
     free(s->ff);
     free(s->vff);
     free(s->eff);
@@ -179,6 +182,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     s->He = tb__calloc(ne * (size_t)nc, sizeof *s->He, &ok);
     s->Hv = tb__calloc(nv * (size_t)nc, sizeof *s->Hv, &ok);
     s->dB = tb__calloc(ne * (size_t)nc, sizeof *s->dB, &ok);
+    s->up = tb__calloc(ne, sizeof *s->up, &ok);
     s->ff = tb__calloc(s->nrecv, sizeof *s->ff, &ok);
     s->vff = tb__calloc(nv, sizeof *s->vff, &ok);
     s->eff = tb__calloc(ne, sizeof *s->eff, &ok);
@@ -241,6 +245,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
             }
         }
         double p = tb__unshot_power(s, i);
+        s->up[i] = p;
         unshot += p;
         if (p > 0.0)
             tb_pqueue_set(&s->q, (uint32_t)i, p);
@@ -574,14 +579,19 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
             }
             received_all += rec;
             s->absorbed += abs_;
-            tb_pqueue_set(&s->q, (uint32_t)j, tb__unshot_power(s, j));
+            s->up[j] = tb__unshot_power(s, j);
+            tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
         }
     } else {
+        /* restrict: the arrays never overlap, which lets the channel loops
+         * vectorise (the same operations in the same order) */
+        double *restrict Hv = s->Hv, *restrict He = s->He, *restrict dB = s->dB;
+        const float *restrict rhos = s->m.rho;
         for (size_t v = 0; v < s->m.nverts; v++) {
             double f = s->vff[v];
             if (f != 0.0)
                 for (int c = 0; c < nc; c++)
-                    s->Hv[v * (size_t)nc + (size_t)c] += dBi[c] * f;
+                    Hv[v * (size_t)nc + (size_t)c] += dBi[c] * f;
         }
         for (size_t j = 0; j < s->m.nelems; j++) {
             if (j == i)
@@ -590,20 +600,22 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
             double g = s->eff[j];
             if (!(g > 0.0))
                 continue;
-            double rec = 0.0, abs_ = 0.0;
+            double rec = 0.0, abs_ = 0.0, aj = ej->area;
             for (int c = 0; c < nc; c++) {
-                double dh = dBi[c] * g, rho = s->m.rho[j * (size_t)nc + (size_t)c];
-                s->He[j * (size_t)nc + (size_t)c] += dh;
-                s->dB[j * (size_t)nc + (size_t)c] += rho * dh;
-                rec += dh * ej->area;
-                abs_ += (1.0 - rho) * dh * ej->area;
+                double dh = dBi[c] * g, rho = rhos[j * (size_t)nc + (size_t)c];
+                He[j * (size_t)nc + (size_t)c] += dh;
+                dB[j * (size_t)nc + (size_t)c] += rho * dh;
+                rec += dh * aj;
+                abs_ += (1.0 - rho) * dh * aj;
             }
             received_all += rec;
             s->absorbed += abs_;
-            tb_pqueue_set(&s->q, (uint32_t)j, tb__unshot_power(s, j));
+            s->up[j] = tb__unshot_power(s, j);
+            tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
         }
     }
     tb_pqueue_remove(&s->q, i);
+    s->up[i] = 0.0; /* = tb__unshot_power(s, i): its dB is 0 */
     s->escaped += shot_power - received_all;
     (void)tb_timer_stop(tt);
     s->shots++;
@@ -624,7 +636,7 @@ double tb_rad_unshot_fraction(const tb_rad_solver *s)
         return 0.0;
     double u = 0.0;
     for (size_t i = 0; i < s->m.nelems; i++)
-        u += tb__unshot_power(s, i);
+        u += s->up[i];
     return u / s->emitted;
 }
 
