@@ -202,6 +202,41 @@ static inline double ff_case_raycast_ex(const ff_case *c, int m, int nsamples, u
     return sum;
 }
 
+/* Area-to-area F12 by tb_ff_raycast_exact (exact unoccluded part times the
+ * samples' visible fraction): each shooter polygon sampled with `nsamples`
+ * jittered points (seed + polygon index), an m x m receiver grid, through
+ * tb_ff_raycast_exact_batch (occluders `occ`, may be NULL). -1 on failure. */
+static inline double ff_case_raycast_exact(const ff_case *c, int m, int nsamples, uint64_t seed, void *occ)
+{
+    size_t nr = (size_t)m * (size_t)m;
+    tb_vec3 *p = malloc(sizeof *p * nr), *n = malloc(sizeof *n * nr), *pts = malloc(sizeof *pts * (size_t)nsamples);
+    double *ff = malloc(sizeof *ff * nr);
+    double sum = -1.0;
+    if (p && n && pts && ff) {
+        for (size_t i = 0; i < nr; i++) {
+            p[i] = ff_case_receiver(c, m, (int)i);
+            n[i] = c->normal;
+        }
+        sum = 0.0;
+        for (int k = 0; k < c->nshooter; k++) {
+            if (tb_ff_sample_polygon(&c->shooter[k], nsamples, seed + (uint64_t)k, pts) ||
+                tb_ff_raycast_exact_batch(occ, &c->shooter[k], pts, nsamples, p, n, nr, ff)) {
+                sum = -1.0;
+                break;
+            }
+            for (size_t i = 0; i < nr; i++)
+                sum += ff[i];
+        }
+        if (sum >= 0.0)
+            sum /= (double)nr;
+    }
+    free(p);
+    free(n);
+    free(pts);
+    free(ff);
+    return sum;
+}
+
 /* Jittered ray casting (ff_case_raycast_ex). */
 static inline double ff_case_raycast(const ff_case *c, int m, int nsamples, uint64_t seed, void *occ)
 {

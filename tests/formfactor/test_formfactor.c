@@ -606,6 +606,200 @@ static void test_blocker(void **state)
     tb_hemicube_free(hc);
 }
 
+/* ------------------------------------------------------------ exact x visible fraction */
+
+/* The receiver surface of a rectangle case as a polygon facing its normal
+ * (an occluder the rays start on). */
+static tb_ff_polygon case_receiver_poly(const ff_case *c)
+{
+    tb_vec3 a = c->o, b = tb_vec3_add(c->o, c->ex), d = tb_vec3_add(c->o, c->ey);
+    return facing(ff_quad(a, b, tb_vec3_add(b, c->ey), d), c->normal);
+}
+
+/* Issue 7: 16 samples within 0.5% of Howell's C-11, C-14 and C-41, with
+ * visibility tested through occluders that hold both surfaces (rays start
+ * and end on them and must not be blocked by them). Against ray casting at
+ * the same samples, which is biased low by eq. 5's disk term. */
+static void test_exact_howell(void **state)
+{
+    (void)state;
+    static ff_case c;
+    static tb_ff_polygon polys[257];
+    for (int which = 0; which < 3; which++) {
+        if (which == 0)
+            ff_case_c11(&c, 1.0);
+        else if (which == 1)
+            ff_case_c14(&c, 1.0);
+        else
+            ff_case_c41(&c, 1.0, 64);
+        int np = c.nshooter;
+        memcpy(polys, c.shooter, sizeof polys[0] * (size_t)np);
+        if (!c.disk)
+            polys[np++] = case_receiver_poly(&c);
+        tb_ff_occluders *occ = NULL;
+        assert_int_equal(tb_ff_occluders_build(polys, (size_t)np, &occ), TB_OK);
+        double f = ff_case_raycast_exact(&c, 24, 16, 1, occ);
+        double w = ff_case_raycast(&c, 24, 16, 1, occ);
+        print_message("[ info     ] %s, 16 samples: exact x fraction %+.2e, Wallace %+.2e (relative)\n", c.name,
+                      (f - c.exact) / c.exact, (w - c.exact) / c.exact);
+        tb_assert_near(f, c.exact, 5e-3 * c.exact);
+        assert_true(fabs(f - c.exact) < fabs(w - c.exact));
+        /* with one sample per polygon too: nothing is hidden */
+        tb_assert_near(ff_case_raycast_exact(&c, 24, 1, 2, occ), f, 1e-12);
+        tb_ff_occluders_free(occ);
+    }
+}
+
+/* A wall in the plane x = 0 hides exactly the x < 0 half of the shooter from
+ * every receiver at x > 0: the answer is the exact form factor of the
+ * visible half. The fraction is Wallace's (weighted by the disk terms), so
+ * it carries their sampling error; it is far smaller than the disk term's
+ * bias of tb_ff_raycast. */
+static void test_exact_half_hidden(void **state)
+{
+    (void)state;
+    tb_vec3 up = {0, 0, 1};
+    tb_ff_polygon scene[2];
+    scene[0] = rect_z(-1, 1, -1, 1, 2, (tb_vec3){0, 0, -1}); /* shooter */
+    scene[1] = facing(ff_quad((tb_vec3){0, -10, -0.5f}, (tb_vec3){0, 10, -0.5f}, (tb_vec3){0, 10, 1.999f},
+                              (tb_vec3){0, -10, 1.999f}),
+                      (tb_vec3){1, 0, 0}); /* wall */
+    tb_ff_polygon half = rect_z(0, 1, -1, 1, 2, (tb_vec3){0, 0, -1});
+    tb_ff_occluders *occ = NULL;
+    assert_int_equal(tb_ff_occluders_build(scene, 2, &occ), TB_OK);
+    enum { M = 12 };
+    const int ns[3] = {4, 16, 64};
+    double err[3];
+    for (int s = 0; s < 3; s++) {
+        tb_vec3 pts[64], ns3;
+        double area, sum_e = 0.0, sum_x = 0.0, sum_w = 0.0;
+        tb_ff_polygon_frame(&scene[0], &ns3, &area);
+        for (int i = 0; i < M * M; i++) {
+            tb_vec3 p = {(float)(0.05 + 1.5 * (i % M + 0.5) / M), (float)(-0.75 + 1.5 * (i / M + 0.5) / M), 0};
+            assert_int_equal(tb_ff_sample_polygon(&scene[0], ns[s], (uint64_t)i, pts), TB_OK);
+            sum_e += tb_ff_raycast_exact(&scene[0], pts, ns[s], p, up, tb_ff_occluders_visible, occ);
+            sum_w += tb_ff_raycast(pts, ns[s], ns3, area, p, up, tb_ff_occluders_visible, occ);
+            sum_x += tb_ff_point_polygon(p, up, &half);
+        }
+        err[s] = (sum_e - sum_x) / sum_x;
+        print_message("[ info     ] half hidden, %d samples: exact x fraction %+.2e, Wallace %+.2e (relative)\n",
+                      ns[s], err[s], (sum_w - sum_x) / sum_x);
+        assert_true(fabs(err[s]) < fabs(sum_w - sum_x) / sum_x);
+    }
+    assert_true(fabs(err[1]) < 0.02);
+    assert_true(fabs(err[2]) < 0.005);
+    /* A wall that hides everything (the shooter wholly at x < 0). */
+    tb_ff_polygon left = rect_z(-1, -0.1, -1, 1, 1.5, (tb_vec3){0, 0, -1});
+    tb_vec3 pts[16];
+    assert_int_equal(tb_ff_sample_polygon(&left, 16, 3, pts), TB_OK);
+    tb_vec3 p = {0.5f, 0, 0};
+    assert_true(tb_ff_point_polygon(p, up, &left) > 0.0);
+    assert_true(tb_ff_raycast_exact(&left, pts, 16, p, up, tb_ff_occluders_visible, occ) == 0.0);
+    tb_ff_occluders_free(occ);
+}
+
+/* Visibility callbacks that count their calls. */
+static int vis_calls;
+static bool vis_count_yes(void *ctx, tb_vec3 a, tb_vec3 b)
+{
+    (void)ctx, (void)a, (void)b;
+    vis_calls++;
+    return true;
+}
+static bool vis_count_no(void *ctx, tb_vec3 a, tb_vec3 b)
+{
+    (void)ctx, (void)a, (void)b;
+    vis_calls++;
+    return false;
+}
+
+/* Receivers on the shooter's plane or edge (0, no rays), a tangent plane
+ * that leaves no sample in front (one ray decides), tiny and huge scales,
+ * determinism for any thread count. */
+static void test_exact_hard_cases(void **state)
+{
+    (void)state;
+    tb_vec3 up = {0, 0, 1};
+    tb_ff_polygon sh = rect_z(0, 1, 0, 1, 0, up);
+    tb_vec3 pts[16];
+    assert_int_equal(tb_ff_sample_polygon(&sh, 16, 1, pts), TB_OK);
+    const tb_vec3 on[3] = {{0.5f, 0, 0}, {1, 1, 0}, {2, 0.5f, 0}};
+    const tb_vec3 nrm[2] = {{0, 0, 1}, {0, 0.6f, 0.8f}};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 2; j++) {
+            vis_calls = 0;
+            assert_true(tb_ff_raycast_exact(&sh, pts, 16, on[i], nrm[j], vis_count_yes, NULL) == 0.0);
+            assert_int_equal(vis_calls, 0);
+        }
+    /* A receiver below the shooter's plane sees its back. */
+    vis_calls = 0;
+    assert_true(tb_ff_raycast_exact(&sh, pts, 16, (tb_vec3){0.5f, 0.5f, -1}, up, vis_count_yes, NULL) == 0.0);
+    assert_int_equal(vis_calls, 0);
+    /* Receiver above the shooter's x = 1 edge, normal tilted so its tangent
+     * plane leaves only x > 0.99 of the shooter in front: no sample there. */
+    tb_ff_polygon facing_up = rect_z(0, 1, 0, 1, 0, up);
+    tb_vec3 p = {1.0f, 0.5f, 0.01f};
+    tb_vec3 n = {(float)(1.0 / sqrt(2.0)), 0, (float)(-1.0 / sqrt(2.0))}; /* plane x - 1 = z - 0.01 */
+    double exact = tb_ff_point_polygon(p, n, &facing_up);
+    assert_true(exact > 0.0);
+    tb_vec3 ns;
+    double area;
+    tb_ff_polygon_frame(&facing_up, &ns, &area);
+    assert_true(tb_ff_raycast_visible_fraction(pts, 16, ns, area, p, n, NULL, NULL) == -1.0);
+    vis_calls = 0;
+    tb_assert_near(tb_ff_raycast_exact(&facing_up, pts, 16, p, n, vis_count_yes, NULL), exact, 1e-15);
+    assert_int_equal(vis_calls, 1);
+    vis_calls = 0;
+    assert_true(tb_ff_raycast_exact(&facing_up, pts, 16, p, n, vis_count_no, NULL) == 0.0);
+    assert_int_equal(vis_calls, 1);
+    /* Tiny and huge scales: the same relative answer. */
+    static ff_case c, small, big;
+    ff_case_c14(&c, 1.0);
+    ff_case_c14(&small, 1e-3);
+    ff_case_c14(&big, 1e4);
+    tb_ff_polygon ps[2] = {small.shooter[0], case_receiver_poly(&small)};
+    tb_ff_polygon pb[2] = {big.shooter[0], case_receiver_poly(&big)};
+    tb_ff_occluders *os = NULL, *ob = NULL;
+    assert_int_equal(tb_ff_occluders_build(ps, 2, &os), TB_OK);
+    assert_int_equal(tb_ff_occluders_build(pb, 2, &ob), TB_OK);
+    double f1 = ff_case_raycast_exact(&c, 8, 16, 5, NULL);
+    tb_assert_near(ff_case_raycast_exact(&small, 8, 16, 5, os), f1, 1e-5 * f1);
+    tb_assert_near(ff_case_raycast_exact(&big, 8, 16, 5, ob), f1, 1e-5 * f1);
+    tb_ff_occluders_free(os);
+    tb_ff_occluders_free(ob);
+    /* Determinism: the batch equals the single calls bit for bit, for 1 and 2 threads. */
+    tb_ff_polygon scene[2] = {rect_z(-1, 1, -1, 1, 2, (tb_vec3){0, 0, -1}), rect_z(-2, 0, -0.3, 2, 1, (tb_vec3){0, 0, -1})};
+    tb_ff_occluders *occ = NULL;
+    assert_int_equal(tb_ff_occluders_build(scene, 2, &occ), TB_OK);
+    enum { R = 300 };
+    static tb_vec3 rp[R], rn[R];
+    static double ff1[R], ff2[R];
+    for (int i = 0; i < R; i++) {
+        rp[i] = (tb_vec3){(float)(-1.5 + 3.0 * (i % 20) / 19.0), (float)(-1.5 + 3.0 * (i / 20) / 14.0), 0};
+        rn[i] = up;
+    }
+    assert_int_equal(tb_ff_sample_polygon(&scene[0], 16, 7, pts), TB_OK);
+    int nt = omp_get_max_threads();
+    omp_set_num_threads(1);
+    assert_int_equal(tb_ff_raycast_exact_batch(occ, &scene[0], pts, 16, rp, rn, R, ff1), TB_OK);
+    omp_set_num_threads(2);
+    assert_int_equal(tb_ff_raycast_exact_batch(occ, &scene[0], pts, 16, rp, rn, R, ff2), TB_OK);
+    omp_set_num_threads(nt);
+    int partial = 0;
+    for (int i = 0; i < R; i++) {
+        assert_memory_equal(&ff1[i], &ff2[i], sizeof ff1[i]);
+        double one = tb_ff_raycast_exact(&scene[0], pts, 16, rp[i], rn[i], tb_ff_occluders_visible, occ);
+        assert_memory_equal(&ff1[i], &one, sizeof one);
+        double full = tb_ff_point_polygon(rp[i], rn[i], &scene[0]);
+        partial += ff1[i] > 0.0 && ff1[i] < full;
+    }
+    assert_true(partial > 10); /* the blocker does hide part of the shooter from some receivers */
+    tb_ff_occluders_free(occ);
+    /* Errors: NULL arguments. */
+    assert_int_equal(tb_ff_raycast_exact_batch(NULL, NULL, pts, 16, rp, rn, 1, ff1), TB_ERR_ARG);
+    assert_int_equal(tb_ff_raycast_exact_batch(NULL, &scene[0], pts, -1, rp, rn, 1, ff1), TB_ERR_ARG);
+}
+
 /* ------------------------------------------------------------ sampling */
 
 /* True if q is in one of the triangles (v0, vk, vk+1) (the test polygons'
@@ -831,7 +1025,7 @@ int main(void)
         cmocka_unit_test(test_point_straddle), cmocka_unit_test(test_closed_cube), cmocka_unit_test(test_hemicube_watertight), cmocka_unit_test(test_hemicube_close),
         cmocka_unit_test(test_howell_exact),   cmocka_unit_test(test_howell_raycast),
         cmocka_unit_test(test_howell_hemicube), cmocka_unit_test(test_reciprocity),
-        cmocka_unit_test(test_blocker),        cmocka_unit_test(test_sample),
+        cmocka_unit_test(test_blocker), cmocka_unit_test(test_exact_howell), cmocka_unit_test(test_exact_half_hidden), cmocka_unit_test(test_exact_hard_cases),        cmocka_unit_test(test_sample),
         cmocka_unit_test(test_batch),          cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
