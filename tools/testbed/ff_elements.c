@@ -18,40 +18,46 @@ void tb_ffe_free(tb_ffe_set *e)
     memset(e, 0, sizeof *e);
 }
 
+/* Reallocates array P to N elements; on failure P keeps its old block and
+ * OK becomes false (so every array can be tried and freed later). */
+#define TB__RESIZE(P, N, OK)                                  \
+    do {                                                      \
+        void *tb__q = realloc((P), (N) * sizeof *(P));        \
+        if (tb__q)                                            \
+            (P) = tb__q;                                      \
+        else                                                  \
+            (OK) = false;                                     \
+    } while (0)
+
+/* The capacity (256, doubled) that holds `need` when `cap` does not. */
+static size_t tb__cap_for(size_t cap, size_t need)
+{
+    size_t c = cap ? 2 * cap : 256;
+    while (c < need)
+        c *= 2;
+    return c;
+}
+
 /* Grows the arrays to hold `need` elements / receivers. */
 static bool tb__grow(tb_ffe_set *e, size_t need, size_t *cap, size_t need_r, size_t *cap_r)
 {
     if (need > *cap) {
-        size_t c = *cap ? 2 * *cap : 256;
-        while (c < need)
-            c *= 2;
-        tb_ff_polygon *p = realloc(e->polys, c * sizeof *p);
-        if (p)
-            e->polys = p;
-        tb_vec3 *nn = realloc(e->normal, c * sizeof *nn);
-        if (nn)
-            e->normal = nn;
-        double *a = realloc(e->area, c * sizeof *a);
-        if (a)
-            e->area = a;
-        uint32_t *o = realloc(e->object, c * sizeof *o);
-        if (o)
-            e->object = o;
-        if (!p || !nn || !a || !o)
+        size_t c = tb__cap_for(*cap, need);
+        bool ok = true;
+        TB__RESIZE(e->polys, c, ok);
+        TB__RESIZE(e->normal, c, ok);
+        TB__RESIZE(e->area, c, ok);
+        TB__RESIZE(e->object, c, ok);
+        if (!ok)
             return false;
         *cap = c;
     }
     if (need_r > *cap_r) {
-        size_t c = *cap_r ? 2 * *cap_r : 256;
-        while (c < need_r)
-            c *= 2;
-        tb_vec3 *p = realloc(e->rp, c * sizeof *p);
-        if (p)
-            e->rp = p;
-        tb_vec3 *nn = realloc(e->rn, c * sizeof *nn);
-        if (nn)
-            e->rn = nn;
-        if (!p || !nn)
+        size_t c = tb__cap_for(*cap_r, need_r);
+        bool ok = true;
+        TB__RESIZE(e->rp, c, ok);
+        TB__RESIZE(e->rn, c, ok);
+        if (!ok)
             return false;
         *cap_r = c;
     }
