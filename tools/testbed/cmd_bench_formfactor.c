@@ -12,6 +12,7 @@
 #include <string.h>
 #include <sys/resource.h>
 
+#include "cli_util.h"
 #include "commands.h"
 #include "ff_elements.h"
 #include "host/gpu/formfactor.h"
@@ -40,17 +41,6 @@ static void tb__ffb_usage(FILE *out)
             "  --repeat R    timed runs per path (default 3)\n"
             "  --seed S      seed of the shooter choice and the sample points (default 1)\n"
             "  --device N    Vulkan device (testbed devices; default: the best one, lavapipe included)\n");
-}
-
-static bool tb__ffb_long(const char *s, long lo, long hi, long *out)
-{
-    errno = 0;
-    char *end;
-    long v = s ? strtol(s, &end, 10) : 0;
-    if (!s || errno || end == s || *end || v < lo || v > hi)
-        return false;
-    *out = v;
-    return true;
 }
 
 /* User + system CPU seconds of the whole process. */
@@ -121,7 +111,7 @@ int tb_cmd_bench_formfactor(int argc, char **argv)
                                               : NULL;
         if (dst) {
             long lo = dst == &seed || dst == &device ? 0 : 1, hi = dst == &seed ? 1L << 40 : 4096;
-            if (!tb__ffb_long(i + 1 < argc ? argv[++i] : NULL, lo, hi, dst)) {
+            if (!tb_cli_long(i + 1 < argc ? argv[++i] : NULL, lo, hi, dst)) {
                 fprintf(stderr, "testbed bench formfactor: %s needs a whole number in %ld..%ld\n", a, lo, hi);
                 return TB_EXIT_USAGE;
             }
@@ -139,17 +129,10 @@ int tb_cmd_bench_formfactor(int argc, char **argv)
         tb__ffb_usage(stderr);
         return TB_EXIT_USAGE;
     }
-    tb_scene *s = NULL;
-    if (tb_scene_load(path, NULL, &s)) {
-        fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
-        return TB_EXIT_FAIL;
-    }
+    tb_scene *s;
     tb_gpu_session sess;
-    if (tb_gpu_backend_choose(TB_GPU_MODE_VULKAN, (int)device, false, &sess)) {
-        fprintf(stderr, "testbed bench formfactor: %s\n", tb_last_error());
-        tb_scene_free(s);
+    if (!tb_cli_open_vulkan("testbed bench formfactor: ", path, device, &s, &sess))
         return TB_EXIT_FAIL;
-    }
     int rc = TB_EXIT_FAIL;
     tb_aabb b = s->bounds;
     double diag = sqrt(((double)b.hi.x - b.lo.x) * ((double)b.hi.x - b.lo.x) +

@@ -13,6 +13,7 @@
 #include <sys/resource.h>
 
 #include "bench_raysets.h"
+#include "cli_util.h"
 #include "commands.h"
 #include "host/gpu/intersect.h"
 #include "host/object/hit.h"
@@ -102,17 +103,6 @@ static double tb__gmedian(double *v, int n)
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-static bool tb__gcount(const char *s, long lo, long hi, long *out)
-{
-    errno = 0;
-    char *end;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi)
-        return false;
-    *out = v;
-    return true;
-}
-
 /* One timed pass of set k through the CPU path; wall seconds (CPU seconds in *cs). */
 static double tb__gcpu(const tb_scene *s, int k, const tb_ray *rays, size_t n, tb_hit *hits, uint8_t *occ, double *cs)
 {
@@ -178,13 +168,13 @@ int tb_cmd_bench_gpu(int argc, char **argv)
             }
             const char *v = argv[++i];
             if (!strcmp(a, "--rays"))
-                ok = tb__gcount(v, 1, 1L << 28, &nrays);
+                ok = tb_cli_long(v, 1, 1L << 28, &nrays);
             else if (!strcmp(a, "--repeat"))
-                ok = tb__gcount(v, 1, 1000, &repeat);
+                ok = tb_cli_long(v, 1, 1000, &repeat);
             else if (!strcmp(a, "--seed"))
-                ok = tb__gcount(v, 0, 1L << 62, &seed);
+                ok = tb_cli_long(v, 0, 1L << 62, &seed);
             else
-                ok = tb__gcount(v, 0, 1000, &device);
+                ok = tb_cli_long(v, 0, 1000, &device);
             if (!ok) {
                 fprintf(stderr, "testbed bench gpu: error: bad value '%s' for %s\n", v, a);
                 return TB_EXIT_USAGE;
@@ -204,17 +194,10 @@ int tb_cmd_bench_gpu(int argc, char **argv)
         tb__gpu_usage(stderr);
         return TB_EXIT_USAGE;
     }
-    tb_scene *s = NULL;
-    if (tb_scene_load(path, NULL, &s)) {
-        fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
-        return TB_EXIT_FAIL;
-    }
+    tb_scene *s;
     tb_gpu_session sess;
-    if (tb_gpu_backend_choose(TB_GPU_MODE_VULKAN, (int)device, false, &sess)) {
-        fprintf(stderr, "testbed bench gpu: error: %s\n", tb_last_error());
-        tb_scene_free(s);
+    if (!tb_cli_open_vulkan("testbed bench gpu: error: ", path, device, &s, &sess))
         return TB_EXIT_FAIL;
-    }
     int rc = TB_EXIT_FAIL;
     tb_ray *sets[TB__GSETS] = {NULL, NULL, NULL};
     size_t n[TB__GSETS];

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli_util.h"
 #include "commands.h"
 #include "ff_elements.h"
 #include "validate_shade.h"
@@ -56,19 +57,6 @@ static void tb__usage(FILE *out)
             "  --device N   Vulkan device (default: the best, lavapipe included)\n"
             "  --bench      intersect: also time both paths on the same rays (Mrays/s, excluding pipeline\n"
             "               creation); form factors: testbed bench formfactor\n");
-}
-
-static bool tb__parse_long(const char *s, long lo, long hi, long *out)
-{
-    if (!s || !*s)
-        return false;
-    errno = 0;
-    char *end;
-    long v = strtol(s, &end, 10);
-    if (errno || *end || v < lo || v > hi)
-        return false;
-    *out = v;
-    return true;
 }
 
 /* Random rays: camera rays and rays through the bounds. */
@@ -147,27 +135,27 @@ int tb_cmd_validate(int argc, char **argv)
                 return TB_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--rays")) {
-            if (!tb__parse_long(argv[++i], 1, 1L << 30, &nrays)) {
+            if (!tb_cli_long(argv[++i], 1, 1L << 30, &nrays)) {
                 fprintf(stderr, "testbed validate: error: --rays must be a whole number in 1..2^30\n");
                 return TB_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--seed")) {
-            if (!tb__parse_long(argv[++i], 0, LONG_MAX, &seed)) {
+            if (!tb_cli_long(argv[++i], 0, LONG_MAX, &seed)) {
                 fprintf(stderr, "testbed validate: error: --seed must be a whole number >= 0\n");
                 return TB_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--device")) {
-            if (!tb__parse_long(argv[++i], 0, 1000, &device)) {
+            if (!tb_cli_long(argv[++i], 0, 1000, &device)) {
                 fprintf(stderr, "testbed validate: error: --device must be a device index\n");
                 return TB_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--receivers")) {
-            if (!tb__parse_long(argv[++i], 1, 1L << 26, &receivers)) {
+            if (!tb_cli_long(argv[++i], 1, 1L << 26, &receivers)) {
                 fprintf(stderr, "testbed validate: error: --receivers must be a whole number in 1..2^26\n");
                 return TB_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--shooters") || !strcmp(a, "--samples")) {
-            if (!tb__parse_long(argv[++i], 1, 4096, a[3] == 'h' ? &shooters : &samples)) {
+            if (!tb_cli_long(argv[++i], 1, 4096, a[3] == 'h' ? &shooters : &samples)) {
                 fprintf(stderr, "testbed validate: error: %s must be a whole number in 1..4096\n", a);
                 return TB_EXIT_USAGE;
             }
@@ -188,17 +176,10 @@ int tb_cmd_validate(int argc, char **argv)
         tb__usage(stderr);
         return TB_EXIT_USAGE;
     }
-    tb_scene *s = NULL;
-    if (tb_scene_load(scene_path, NULL, &s)) {
-        fprintf(stderr, "testbed validate: error: %s\n", tb_last_error());
-        return TB_EXIT_FAIL;
-    }
+    tb_scene *s;
     tb_gpu_session sess;
-    if (tb_gpu_backend_choose(TB_GPU_MODE_VULKAN, (int)device, false, &sess)) {
-        fprintf(stderr, "testbed validate: error: %s\n", tb_last_error());
-        tb_scene_free(s);
+    if (!tb_cli_open_vulkan("testbed validate: error: ", scene_path, device, &s, &sess))
         return TB_EXIT_FAIL;
-    }
     int rc = TB_EXIT_FAIL;
     size_t n = (size_t)nrays;
     tb_ray *rays = malloc(n * sizeof *rays), *shadow = malloc(n * sizeof *shadow);

@@ -1,0 +1,35 @@
+/* Command-line pieces shared by the Vulkan commands (cli_util.h). */
+#include "cli_util.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+bool tb_cli_long(const char *s, long lo, long hi, long *out)
+{
+    if (!s)
+        return false;
+    errno = 0;
+    char *end;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi)
+        return false;
+    *out = v;
+    return true;
+}
+
+bool tb_cli_open_vulkan(const char *who, const char *path, long device, tb_scene **s, tb_gpu_session *sess)
+{
+    *s = NULL;
+    if (tb_scene_load(path, NULL, s)) {
+        fprintf(stderr, "%s%s\n", who, tb_last_error());
+        return false;
+    }
+    if (tb_gpu_backend_choose(TB_GPU_MODE_VULKAN, (int)device, false, sess)) {
+        fprintf(stderr, "%s%s\n", who, tb_last_error());
+        tb_scene_free(*s);
+        *s = NULL;
+        return false;
+    }
+    return true;
+}

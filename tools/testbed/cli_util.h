@@ -1,0 +1,20 @@
+/* Command-line pieces shared by the testbed commands that run a Vulkan
+ * kernel on a scene (bench gpu, bench formfactor, validate). */
+#ifndef TB_TOOLS_TESTBED_CLI_UTIL_H
+#define TB_TOOLS_TESTBED_CLI_UTIL_H
+
+#include <stdbool.h>
+
+#include "host/gpu/gpu.h"
+#include "host/render/scene.h"
+
+/* Parses s (may be NULL) as a whole decimal number in [lo, hi] into *out;
+ * false, *out untouched, for anything else (empty, trailing text, overflow). */
+bool tb_cli_long(const char *s, long lo, long hi, long *out);
+
+/* Loads the scene at `path` and opens Vulkan device `device` (the same
+ * choice as `--backend vulkan`). On failure prints `who` followed by the
+ * error message to stderr, frees what it made and returns false. */
+bool tb_cli_open_vulkan(const char *who, const char *path, long device, tb_scene **s, tb_gpu_session *sess);
+
+#endif
