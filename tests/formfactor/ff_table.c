@@ -7,9 +7,12 @@
  * accuracy: relative error against Howell's closed forms (C-11, C-14, C-41)
  * of the area-to-area form factor integrated over a grid of receiver points
  * with the exact point form factor, ray casting (1, 4, 16, 64 samples per
- * shooter polygon; mean and worst over 16 seeds) and hemicubes (32 .. 512).
+ * shooter polygon; mean and worst over 16 seeds), the exact form factor
+ * times the samples' visible fraction (tb_ff_raycast_exact; also with half
+ * the shooter hidden by a wall) and hemicubes (32 .. 512).
  * timing: CPU nanoseconds per receiver per sample of tb_ff_raycast (with and
- * without occluders) and CPU milliseconds per hemicube, one thread. */
+ * without occluders), per receiver of tb_ff_raycast and tb_ff_raycast_exact,
+ * and CPU milliseconds per hemicube, one thread. */
 #include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
@@ -89,6 +92,98 @@ static int accuracy(void)
             printf(" %+.2e |", (f - cases[c].exact) / cases[c].exact);
         }
         printf("\n");
+    }
+
+    /* tb_ff_raycast_exact: visibility through occluders holding both
+     * surfaces (rays start and end on them), so the rays are really cast. */
+    printf("\nExact x visible fraction (tb_ff_raycast_exact), %d x %d receivers, occluders = both surfaces; "
+           "relative error mean over %d seeds (signed) / largest |error|:\n\n",
+           grid_rc, grid_rc, nseeds);
+    printf("| case |");
+    for (int s = 0; s < 4; s++)
+        printf(" %d sample%s |", samples[s], samples[s] > 1 ? "s" : "");
+    printf("\n|---|---|---|---|---|\n");
+    for (int c = 0; c < 3; c++) {
+        static tb_ff_polygon polys[257];
+        int np = cases[c].nshooter;
+        memcpy(polys, cases[c].shooter, sizeof polys[0] * (size_t)np);
+        if (!cases[c].disk) {
+            tb_vec3 a = cases[c].o, b = tb_vec3_add(a, cases[c].ex), d = tb_vec3_add(a, cases[c].ey);
+            polys[np++] = ff_quad(a, b, tb_vec3_add(b, cases[c].ey), d); /* counter-clockwise about +z */
+        }
+        tb_ff_occluders *occ = NULL;
+        if (tb_ff_occluders_build(polys, (size_t)np, &occ)) {
+            fprintf(stderr, "ff_table: %s\n", tb_last_error());
+            return 1;
+        }
+        printf("| %s |", cases[c].name);
+        for (int s = 0; s < 4; s++) {
+            double mean = 0.0, worst = 0.0;
+            for (int seed = 1; seed <= nseeds; seed++) {
+                double f = ff_case_raycast_exact(&cases[c], grid_rc, samples[s], (uint64_t)seed * 1000, occ);
+                if (f < 0.0) {
+                    fprintf(stderr, "ff_table: %s\n", tb_last_error());
+                    return 1;
+                }
+                double e = (f - cases[c].exact) / cases[c].exact;
+                mean += e / nseeds;
+                worst = fmax(worst, fabs(e));
+            }
+            printf(" %+.2e / %.2e |", mean, worst);
+        }
+        printf("\n");
+        tb_ff_occluders_free(occ);
+    }
+    /* Partial occlusion: a wall in the plane x = 0 hides exactly the x < 0
+     * half of a 2 x 2 shooter at height 2 from receivers on [0.05, 1.55] x
+     * [-0.75, 0.75]; the answer is the exact form factor of the other half. */
+    {
+        tb_ff_polygon scene[2] = {
+            ff_quad((tb_vec3){-1, -1, 2}, (tb_vec3){-1, 1, 2}, (tb_vec3){1, 1, 2}, (tb_vec3){1, -1, 2}),
+            ff_quad((tb_vec3){0, -10, -0.5f}, (tb_vec3){0, 10, -0.5f}, (tb_vec3){0, 10, 1.999f},
+                    (tb_vec3){0, -10, 1.999f})};
+        tb_ff_polygon half = ff_quad((tb_vec3){0, -1, 2}, (tb_vec3){0, 1, 2}, (tb_vec3){1, 1, 2}, (tb_vec3){1, -1, 2});
+        tb_ff_occluders *occ = NULL;
+        if (tb_ff_occluders_build(scene, 2, &occ)) {
+            fprintf(stderr, "ff_table: %s\n", tb_last_error());
+            return 1;
+        }
+        const int m = 16;
+        tb_vec3 up = {0, 0, 1}, ns, pts[64];
+        double area, exact = 0.0;
+        tb_ff_polygon_frame(&scene[0], &ns, &area);
+        for (int i = 0; i < m * m; i++) {
+            tb_vec3 p = {(float)(0.05 + 1.5 * (i % m + 0.5) / m), (float)(-0.75 + 1.5 * (i / m + 0.5) / m), 0};
+            exact += tb_ff_point_polygon(p, up, &half);
+        }
+        printf("\nHalf of the shooter hidden by a wall (%d x %d receivers, exact answer %.6f), relative error "
+               "mean over %d seeds (signed) / largest |error|:\n\n| estimator |", m, m, exact / (m * m), nseeds);
+        for (int s = 0; s < 4; s++)
+            printf(" %d sample%s |", samples[s], samples[s] > 1 ? "s" : "");
+        printf("\n|---|---|---|---|---|\n");
+        for (int est = 0; est < 2; est++) {
+            printf("| %s |", est ? "tb_ff_raycast (Wallace)" : "tb_ff_raycast_exact");
+            for (int s = 0; s < 4; s++) {
+                double mean = 0.0, worst = 0.0;
+                for (int seed = 1; seed <= nseeds; seed++) {
+                    double sum = 0.0;
+                    for (int i = 0; i < m * m; i++) {
+                        tb_vec3 p = {(float)(0.05 + 1.5 * (i % m + 0.5) / m),
+                                     (float)(-0.75 + 1.5 * (i / m + 0.5) / m), 0};
+                        tb_ff_sample_polygon(&scene[0], samples[s], (uint64_t)seed * 1000 + (uint64_t)i, pts);
+                        sum += est ? tb_ff_raycast(pts, samples[s], ns, area, p, up, tb_ff_occluders_visible, occ)
+                                   : tb_ff_raycast_exact(&scene[0], pts, samples[s], p, up, tb_ff_occluders_visible,
+                                                         occ);
+                    }
+                    double e = (sum - exact) / exact;
+                    mean += e / nseeds;
+                    worst = fmax(worst, fabs(e));
+                }
+                printf(" %+.2e / %.2e |", mean, worst);
+            }
+            printf("\n");
+        }
+        tb_ff_occluders_free(occ);
     }
 
     printf("\nHemicube, %d x %d receivers, relative error by resolution against Howell / against the exact "
@@ -219,6 +314,24 @@ static int timing(void)
         }
         printf("| %d | %.1f | %.1f |\n", samples[s], t[0], t[1]);
     }
+    printf("\nPer receiver (all samples), with occluders: ray casting / exact x visible fraction "
+           "(tb_ff_raycast_exact):\n\n| samples | ns per receiver, tb_ff_raycast | tb_ff_raycast_exact |\n|---|---|---|\n");
+    for (int s = 0; s < 4; s++) {
+        tb_ff_sample_polygon(shooter, samples[s], 7, pts);
+        double t[2];
+        for (int o = 0; o < 2; o++) {
+            double t0 = now();
+            int reps = 0;
+            do {
+                for (size_t i = 0; i < nr; i++)
+                    ff[i] = o ? tb_ff_raycast_exact(shooter, pts, samples[s], p[i], n[i], tb_ff_occluders_visible, occ)
+                              : tb_ff_raycast(pts, samples[s], ns, area, p[i], n[i], tb_ff_occluders_visible, occ);
+                reps++;
+            } while (now() - t0 < 0.5);
+            t[o] = (now() - t0) / ((double)reps * nr) * 1e9;
+        }
+        printf("| %d | %.1f | %.1f |\n", samples[s], t[0], t[1]);
+    }
     /* The exact point form factor and the sample points. */
     {
         double t0 = now(), acc = 0.0;
@@ -301,9 +414,11 @@ int main(int argc, char **argv)
     fprintf(help ? stdout : stderr,
             "usage: ff_table accuracy|timing\n"
             "  accuracy  relative errors of the form factors against Howell's catalogue (C-11, C-14, C-41):\n"
-            "            exact point form factor, ray casting (1-64 samples), hemicube (32-512)\n"
+            "            exact point form factor, ray casting (1-64 samples), exact x visible fraction\n"
+            "            (tb_ff_raycast_exact, 1-64 samples; also half the shooter hidden), hemicube (32-512)\n"
             "  timing    CPU cost, one thread (run with OMP_NUM_THREADS=1): ray casting per receiver and\n"
-            "            sample with and without occluders, exact point form factor, sample points, hemicube\n"
+            "            sample with and without occluders, per receiver of ray casting and exact x visible\n"
+            "            fraction, exact point form factor, sample points, hemicube\n"
             "Tables for docs/accuracy.md and docs/performance.md, printed as Markdown.\n");
     return help ? 0 : 2;
 }
