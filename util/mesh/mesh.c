@@ -112,6 +112,37 @@ typedef struct tb__mctx {
     tb_status err;        /* first failure inside a helper without a status */
 } tb__mctx;
 
+tb_status tb_mesh_push_attributes(tb_mesh *m, int n, const uint32_t *idx, const double *w)
+{
+    tb_status st = TB_OK;
+    /* With w NULL the weight 1 multiplies exactly: plain sums, and the uv
+     * mean is one scaling at the end (as refine.c's midpoints always had). */
+    if (m->normals.len) {
+        double nx = 0, ny = 0, nz = 0;
+        for (int i = 0; i < n; i++) {
+            tb_vec3 q = TB_ARRAY_AT(&m->normals, tb_vec3, idx[i]);
+            double wi = w ? w[i] : 1.0;
+            nx += wi * q.x, ny += wi * q.y, nz += wi * q.z;
+        }
+        double len = sqrt(nx * nx + ny * ny + nz * nz);
+        tb_vec3 q = len > 0 ? (tb_vec3){(float)(nx / len), (float)(ny / len), (float)(nz / len)}
+                            : TB_ARRAY_AT(&m->normals, tb_vec3, idx[0]);
+        st = tb_array_push(&m->normals, &q);
+    }
+    if (!st && m->uvs.len) {
+        double u = 0, v = 0;
+        for (int i = 0; i < n; i++) {
+            tb_vec2 q = TB_ARRAY_AT(&m->uvs, tb_vec2, idx[i]);
+            double wi = w ? w[i] : 1.0;
+            u += wi * q.x, v += wi * q.y;
+        }
+        double s = w ? 1.0 : 1.0 / n;
+        tb_vec2 q = {(float)(u * s), (float)(v * s)};
+        st = tb_array_push(&m->uvs, &q);
+    }
+    return st;
+}
+
 /* A new vertex: the affine combination sum w[i] * vertex idx[i] of
  * position, normal (renormalised) and uv. Returns its index. */
 static uint32_t tb__vertex(tb__mctx *c, int n, const uint32_t *idx, const double *w)
@@ -134,26 +165,8 @@ static uint32_t tb__vertex(tb__mctx *c, int n, const uint32_t *idx, const double
     }
     tb_vec3 p = {(float)(p0.x + x), (float)(p0.y + y), (float)(p0.z + z)};
     tb_status st = tb_array_push(&m->positions, &p);
-    if (!st && m->normals.len) {
-        double nx = 0, ny = 0, nz = 0;
-        for (int i = 0; i < n; i++) {
-            tb_vec3 q = TB_ARRAY_AT(&m->normals, tb_vec3, idx[i]);
-            nx += w[i] * q.x, ny += w[i] * q.y, nz += w[i] * q.z;
-        }
-        double len = sqrt(nx * nx + ny * ny + nz * nz);
-        tb_vec3 q = len > 0 ? (tb_vec3){(float)(nx / len), (float)(ny / len), (float)(nz / len)}
-                            : TB_ARRAY_AT(&m->normals, tb_vec3, idx[0]);
-        st = tb_array_push(&m->normals, &q);
-    }
-    if (!st && m->uvs.len) {
-        double u = 0, v = 0;
-        for (int i = 0; i < n; i++) {
-            tb_vec2 q = TB_ARRAY_AT(&m->uvs, tb_vec2, idx[i]);
-            u += w[i] * q.x, v += w[i] * q.y;
-        }
-        tb_vec2 q = {(float)u, (float)v};
-        st = tb_array_push(&m->uvs, &q);
-    }
+    if (!st)
+        st = tb_mesh_push_attributes(m, n, idx, w);
     if (st && !c->err)
         c->err = st;
     return (uint32_t)(m->positions.len - 1);

@@ -105,4 +105,10 @@ tb_status tb_mesh_adjacency(const tb_mesh *m, tb_fed **out);
  * degrees, in radians (0 for a rectangle; lower is better). */
 bool tb_mesh_quad_check(const tb_vec3 q[4], double rel_tol, double *score);
 
+/* Appends a new vertex's normal and uv (for whichever of the two arrays m
+ * has) as the combination of vertices idx[0..n): weights w[i], or equal weights
+ * 1/n when w is NULL; the normal is renormalised (vertex idx[0]'s when the sum
+ * is zero). Shared by meshing and refinement so both interpolate alike. */
+tb_status tb_mesh_push_attributes(tb_mesh *m, int n, const uint32_t *idx, const double *w);
+
 #endif

@@ -139,26 +139,8 @@ static uint32_t tb__mean_vertex(tb_mesh_refiner *r, int n, const uint32_t *idx)
         return 0;
     }
     tb_status st = tb_array_push(&m->positions, &p);
-    if (!st && m->normals.len) {
-        double nx = 0, ny = 0, nz = 0;
-        for (int i = 0; i < n; i++) {
-            tb_vec3 q = TB_ARRAY_AT(&m->normals, tb_vec3, idx[i]);
-            nx += q.x, ny += q.y, nz += q.z;
-        }
-        double len = sqrt(nx * nx + ny * ny + nz * nz);
-        tb_vec3 q = len > 0 ? (tb_vec3){(float)(nx / len), (float)(ny / len), (float)(nz / len)}
-                            : TB_ARRAY_AT(&m->normals, tb_vec3, idx[0]);
-        st = tb_array_push(&m->normals, &q);
-    }
-    if (!st && m->uvs.len) {
-        double u = 0, v = 0;
-        for (int i = 0; i < n; i++) {
-            tb_vec2 q = TB_ARRAY_AT(&m->uvs, tb_vec2, idx[i]);
-            u += q.x, v += q.y;
-        }
-        tb_vec2 q = {(float)(u * w), (float)(v * w)};
-        st = tb_array_push(&m->uvs, &q);
-    }
+    if (!st)
+        st = tb_mesh_push_attributes(m, n, idx, NULL);
     tb__fail(r, st);
     r->st.new_vertices++;
     return (uint32_t)(m->positions.len - 1);
