@@ -253,6 +253,25 @@ __attribute__((noinline)) static tb_status tb__string(tb__mid_lexer *lx)
     tb_mid_loc start = lx->loc;
     char *o = lx->str;
     char *limit = lx->str + TB_MID_MAX_TOKEN;
+    /* Fast path: printable ASCII without escapes up to a closing quote in
+     * the buffer is copied as it is. Anything else (escapes, UTF-8, control
+     * bytes, the buffer end, an overlong string) takes the loop below from
+     * the opening quote, which gives the messages. */
+    {
+        const char *b = lx->buf + lx->pos + 1, *q = b;
+        while ((unsigned char)*q >= 0x20 && (unsigned char)*q < 0x7F && *q != '"' && *q != '\\')
+            q++;
+        size_t n = (size_t)(q - b);
+        if (*q == '"' && n <= TB_MID_MAX_TOKEN) {
+            memcpy(o, b, n);
+            o[n] = '\0';
+            lx->pos += n + 2;
+            lx->type = TB__T_STRING;
+            lx->text = lx->str;
+            lx->len = n;
+            return TB_OK;
+        }
+    }
     lx->pos++;
     for (;;) {
         lx->keep = lx->pos;
