@@ -226,7 +226,7 @@ bool tb_bvh_ray_valid(tb_gpu_ray r)
            !(r.d.x == 0.0 && r.d.y == 0.0 && r.d.z == 0.0) && r.tmin <= r.tmax;
 }
 
-// The leaf loops of tb_bvh_traverse share these two bodies as macros (GLSL
+// The loops of tb_bvh_traverse share these bodies as macros (GLSL
 // has no generics, and a function taking the best-hit state inout would copy
 // it at every candidate in the hot loop).
 //
@@ -245,6 +245,19 @@ bool tb_bvh_ray_valid(tb_gpu_ray r)
         stop = true;                                                                                                  \
         break;                                                                                                        \
     }
+
+// Pops stacked children until one's box is within [lo_t, hi_t] (its node
+// becomes the current one); done when the stack runs out.
+#define TB_BVH_POP()                                                                                                  \
+    bool found = false;                                                                                               \
+    while (sp > 0 && !found) {                                                                                        \
+        vec3 plo, phi;                                                                                                \
+        uint slot = stack[--sp];                                                                                      \
+        tb_bvh_fetch_node(slot, plo, phi, cur_off, cur_count);                                                        \
+        cur_count &= 0xffffu;                                                                                         \
+        found = tb_aabb_slab(plo, phi, r.o, r.d, inv, lo_t, hi_t, t0, t1);                                            \
+    }                                                                                                                 \
+    done = !found;
 
 // The leaf's run of placed objects of kind KIND from entry k on (each leaf
 // lists cubes, then spheres, then revolved objects): the ray in the object's
@@ -319,15 +332,7 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     cur_count = (take1 ? cnt1 : cnt0) & 0xffffu;
                 } else {
                     // Pop children until one is still within reach.
-                    bool found = false;
-                    while (sp > 0 && !found) {
-                        vec3 plo, phi;
-                        uint slot = stack[--sp];
-                        tb_bvh_fetch_node(slot, plo, phi, cur_off, cur_count);
-                        cur_count &= 0xffffu;
-                        found = tb_aabb_slab(plo, phi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
-                    }
-                    done = !found;
+                    TB_BVH_POP()
                 }
             }
             if (done)
@@ -363,17 +368,9 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                 break;
             // Leaf done: back to the stack.
             cur_count = 0u;
-            bool found = false;
             float hi_t = bt + abs(bt) * TB_T_TOL;
             float t0, t1;
-            while (sp > 0 && !found) {
-                vec3 plo, phi;
-                uint slot = stack[--sp];
-                tb_bvh_fetch_node(slot, plo, phi, cur_off, cur_count);
-                cur_count &= 0xffffu;
-                found = tb_aabb_slab(plo, phi, r.o, r.d, inv, lo_t, hi_t, t0, t1);
-            }
-            done = !found;
+            TB_BVH_POP()
             if (done)
                 break;
         }
