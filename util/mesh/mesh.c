@@ -636,8 +636,7 @@ static void tb__triangle(tb__mctx *c, const tb__side s[3], uint32_t face)
     tb__general(c, s, &three, 1, face);
 }
 
-/* Is the quad a b c d strictly convex about its Newell normal? */
-static bool tb__convex_quad(const tb_mesh *m, const uint32_t v[4])
+bool tb_mesh_quad_convex(const tb_mesh *m, const uint32_t v[4])
 {
     tb_vec3 q[4];
     for (int k = 0; k < 4; k++)
@@ -691,7 +690,7 @@ static void tb__face(tb__mctx *c, uint32_t f)
             }
             return;
         }
-        if (s[0].k == s[2].k && s[1].k == s[3].k && tb__convex_quad(c->out, v)) {
+        if (s[0].k == s[2].k && s[1].k == s[3].k && tb_mesh_quad_convex(c->out, v)) {
             tb__grid_quad(c, s, f);
             return;
         }

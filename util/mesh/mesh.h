@@ -111,4 +111,9 @@ bool tb_mesh_quad_check(const tb_vec3 q[4], double rel_tol, double *score);
  * is zero). Shared by meshing and refinement so both interpolate alike. */
 tb_status tb_mesh_push_attributes(tb_mesh *m, int n, const uint32_t *idx, const double *w);
 
+/* Is the quad of vertices v[0..3] of m strictly convex about its Newell
+ * normal? (Slightly non-planar quads pass: refinement splits them as
+ * bilinear patches.) */
+bool tb_mesh_quad_convex(const tb_mesh *m, const uint32_t v[4]);
+
 #endif

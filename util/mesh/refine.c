@@ -462,25 +462,6 @@ static void tb__rebuild(tb_mesh_refiner *r, tb_array *old_of_new)
 
 /* ------------------------------------------------------------------ public */
 
-/* Strictly convex about its Newell normal. Slightly non-planar quads (a
- * grid over the Cornell box's red wall) are fine: red splits subdivide them
- * as bilinear patches, greens are triangles. */
-static bool tb__convex_quad(const tb_mesh *m, const uint32_t v[4])
-{
-    tb_vec3 q[4];
-    for (int k = 0; k < 4; k++)
-        q[k] = TB_ARRAY_AT(&m->positions, tb_vec3, v[k]);
-    tb_dvec3 n = tb_polygon_newell(q, NULL, 4);
-    for (int i = 0; i < 4; i++) {
-        tb_vec3 a = q[(i + 3) % 4], b = q[i], d = q[(i + 1) % 4];
-        double ux = (double)b.x - a.x, uy = (double)b.y - a.y, uz = (double)b.z - a.z;
-        double wx = (double)d.x - b.x, wy = (double)d.y - b.y, wz = (double)d.z - b.z;
-        if (!((uy * wz - uz * wy) * n.x + (uz * wx - ux * wz) * n.y + (ux * wy - uy * wx) * n.z > 0))
-            return false;
-    }
-    return true;
-}
-
 void tb_mesh_refiner_free(tb_mesh_refiner *r)
 {
     if (!r)
@@ -515,7 +496,7 @@ tb_status tb_mesh_refiner_create(const tb_mesh *base, tb_mesh_refiner **out)
         return tb_error_context(st, "mesh refinement: base mesh");
     for (size_t i = 0; i < ne; i++) {
         const tb_mesh_elem *e = tb_mesh_elem_at(base, i);
-        if (e->v[3] != TB_MESH_NONE && !tb__convex_quad(base, e->v))
+        if (e->v[3] != TB_MESH_NONE && !tb_mesh_quad_convex(base, e->v))
             return tb_error(TB_ERR_FORMAT, "mesh refinement: base element %zu is a quad that is not strictly convex", i);
     }
     tb_mesh_refiner *r = calloc(1, sizeof *r);
