@@ -81,6 +81,17 @@ static void tb__batch_free(tb__batch *b)
     free(b->rays), free(b->hits), free(b->occ);
 }
 
+/* Ends a random test: at most 1 ray in 1000 may differ from the CPU in object
+ * or face (`differ`) or in the any-hit answer (rays within float error of an
+ * edge, silhouette or rim); then frees the batch and closes as tb__finish. */
+static void tb__finish_batch(gpu_test_env *e, tb_gpu_scene *g, tb_scene *s, tb__batch *b, int differ, int occ_differ)
+{
+    assert_true(differ <= b->n / 1000);
+    assert_true(occ_differ <= b->n / 1000);
+    tb__batch_free(b);
+    tb__finish(e, g, s);
+}
+
 static tb_hit tb__cpu(const tb_scene *s, const tb_ray *r)
 {
     tb_hit h = {INFINITY, UINT32_MAX, UINT32_MAX, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
@@ -240,10 +251,7 @@ static void test_random_mixed(void **state)
     print_message("[ info     ] %d routed-object hits, %d triangle, sphere and cube hits, %d differ, %d occlusion differ\n", routed,
                   tri, differ, occ_differ);
     assert_true(routed > 20 && tri > 50);
-    assert_true(differ <= N / 1000);
-    assert_true(occ_differ <= N / 1000);
-    tb__batch_free(&b);
-    tb__finish(&e, g, s);
+    tb__finish_batch(&e, g, s, &b, differ, occ_differ);
 }
 
 /* A scene with no triangles: no dispatch, every object routed, CPU records. */
@@ -396,10 +404,7 @@ static void test_deep_mixed(void **state)
     print_message("[ info     ] %d field hits, %d sphere and cube hits, %d differ, %d occlusion differ\n", field, placed,
                   differ, occ_differ);
     assert_true(field > N / 4 && placed > 50);
-    assert_true(differ <= N / 1000);
-    assert_true(occ_differ <= N / 1000);
-    tb__batch_free(&b);
-    tb__finish(&e, g, s);
+    tb__finish_batch(&e, g, s, &b, differ, occ_differ);
 }
 
 /* Cylinders, cones and conics (lib/revolved.glsl) against host/object's
@@ -513,10 +518,7 @@ static void test_revolved(void **state)
     for (int k = 0; k < 7; ++k)
         assert_true(on[k] > 20);
     assert_true(caps > 50);
-    assert_true(differ <= N / 1000);
-    assert_true(occ_differ <= N / 1000);
-    tb__batch_free(&b);
-    tb__finish(&e, g, s);
+    tb__finish_batch(&e, g, s, &b, differ, occ_differ);
 }
 
 /* Rays spawned off the GPU's analytic surfaces the way a renderer spawns
@@ -585,10 +587,7 @@ static void test_spawned(void **state)
     print_message("[ info     ] %d spawned rays, %d hit on the CPU, %d differ, %d occlusion differ\n", N, hit, differ,
                   occ_differ);
     assert_true(hit > N / 4);
-    assert_true(differ <= N / 1000);
-    assert_true(occ_differ <= N / 1000);
-    tb__batch_free(&b);
-    tb__finish(&e, g, s);
+    tb__finish_batch(&e, g, s, &b, differ, occ_differ);
 }
 
 int main(void)
