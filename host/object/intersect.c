@@ -34,17 +34,11 @@ TB_STAT_COUNTER(tb__n_intersection, "Intersect/intersection");
 TB_STAT_COUNTER(tb__n_difference, "Intersect/difference");
 TB_STAT_COUNTER(tb__n_invalid, "Intersect/invalid rays");
 
-static tb_stat *const tb__counters[TB_PRIM_COUNT] = {
+tb_stat *const tb__kind_counters[TB_PRIM_COUNT] = {
     &tb__n_sphere, &tb__n_cube, &tb__n_cylinder, &tb__n_cone, &tb__n_pyramid,
     &tb__n_prism, &tb__n_torus, &tb__n_polygons, &tb__n_conic, &tb__n_square_arch,
     &tb__n_round_arch, &tb__n_union, &tb__n_intersection, &tb__n_difference,
 };
-
-void tb__count_kind(tb_prim_kind k)
-{
-    if ((int)k >= 0 && (int)k < TB_PRIM_COUNT)
-        tb_stat_add(tb__counters[k], 1);
-}
 
 /* ------------------------------------------------------------------ crossings */
 

@@ -12,6 +12,7 @@
 #include "host/object/object.h"
 #include "util/math/mat.h"
 #include "util/math/vec.h"
+#include "util/stats/stats.h"
 
 /* A ray in object space, in double: the world ray's origin and direction
  * mapped by the inverse transform without rounding (the direction is not
@@ -114,8 +115,16 @@ void tb__csg_xings(const tb_object *node, const tb_ray *world_ray, tb__xbuf *out
  * there, and is skipped when no child has a crossing in range (csg.c). */
 void tb__csg_xings_in(const tb_object *node, const tb_ray *world_ray, double tmin, double tmax, tb__xbuf *out);
 
-/* Adds one to the "Intersect/<kind>" counter. */
-void tb__count_kind(tb_prim_kind k);
+/* The "Intersect/<kind>" counters, by kind (intersect.c). */
+extern tb_stat *const tb__kind_counters[TB_PRIM_COUNT];
+
+/* Adds one to the "Intersect/<kind>" counter (inline: once per primitive
+ * or node a ray tests). */
+static inline void tb__count_kind(tb_prim_kind k)
+{
+    if ((int)k >= 0 && (int)k < TB_PRIM_COUNT)
+        tb_stat_add(tb__kind_counters[k], 1);
+}
 
 /* The world ray in o's object space (inline: it runs for every primitive a
  * ray tests). */
