@@ -416,62 +416,6 @@ static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i)
     return st;
 }
 
-/* The exact point-to-polygon form factor (as tb_ff_point_polygon), made
- * safe for what the near field meets all the time: p in the polygon's plane
- * or a corner on p's tangent plane. Corners within a relative 1e-7 of the
- * tangent plane count as on it (float noise would otherwise make a convex
- * polygon cross the plane more than twice). */
-static double tb__point_polygon(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly)
-{
-    double r[TB_FF_MAX_VERTS][3], d[TB_FF_MAX_VERTS], size = 0.0, dmax = 0.0;
-    for (int k = 0; k < poly->n; k++) {
-        r[k][0] = (double)poly->v[k].x - p.x, r[k][1] = (double)poly->v[k].y - p.y, r[k][2] = (double)poly->v[k].z - p.z;
-        d[k] = r[k][0] * n.x + r[k][1] * n.y + r[k][2] * n.z;
-        size = fmax(size, sqrt(r[k][0] * r[k][0] + r[k][1] * r[k][1] + r[k][2] * r[k][2]));
-    }
-    for (int k = 0; k < poly->n; k++) {
-        if (fabs(d[k]) <= 1e-7 * size)
-            d[k] = 0.0;
-        dmax = fmax(dmax, d[k]);
-    }
-    if (!(dmax > 0.0))
-        return 0.0;
-    /* p must see the polygon's front */
-    tb_vec3 pn;
-    double area;
-    tb_ff_polygon_frame(poly, &pn, &area);
-    if (!(-(r[0][0] * pn.x + r[0][1] * pn.y + r[0][2] * pn.z) > 1e-7 * size))
-        return 0.0;
-    double c[2 * TB_FF_MAX_VERTS][3];
-    int m = 0;
-    for (int k = 0; k < poly->n; k++) {
-        int k1 = (k + 1) % poly->n;
-        if (d[k] >= 0.0) {
-            memcpy(c[m++], r[k], sizeof r[k]);
-        }
-        if ((d[k] > 0.0 && d[k1] < 0.0) || (d[k] < 0.0 && d[k1] > 0.0)) {
-            double t = d[k] / (d[k] - d[k1]);
-            for (int a = 0; a < 3; a++)
-                c[m][a] = r[k][a] + t * (r[k1][a] - r[k][a]);
-            m++;
-        }
-    }
-    if (m < 3)
-        return 0.0;
-    double sum = 0.0;
-    for (int k = 0; k < m; k++) {
-        const double *a = c[k], *b = c[(k + 1) % m];
-        double g[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-        double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-        if (!(gl > 0.0))
-            continue;
-        double gamma = atan2(gl, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
-        sum += gamma * ((n.x * g[0] + n.y * g[1] + n.z * g[2]) / gl);
-    }
-    double f = -sum / (2.0 * TB_PI);
-    return f > 0.0 ? f : 0.0;
-}
-
 /* Near the shooter the sampled estimate (a disk per sample point) is poor:
  * a receiver at a shared edge sees the shooter at distances down to zero.
  * There (within TB__RAD_NEAR shooter radii of its centroid)
@@ -498,7 +442,7 @@ static void tb__near_field(tb_rad_solver *s, size_t i)
         tb_vec3 d = tb_vec3_sub(s->rp[v], e->centroid);
         if ((double)tb_vec3_length2(d) >= near2)
             continue;
-        double exact = tb__point_polygon(s->rp[v], s->rn[v], poly);
+        double exact = tb_ff_point_polygon(s->rp[v], s->rn[v], poly);
         if (!(exact >= 0.0) || !isfinite(exact))
             continue;
         double open = tb_ff_raycast(s->pts, s->opt.samples, e->normal, e->area, s->rp[v], s->rn[v], NULL, NULL);
@@ -521,7 +465,7 @@ static void tb__near_field(tb_rad_solver *s, size_t i)
             continue;
         double f = 0.0;
         for (int k = 0; k < s->opt.samples; k++) {
-            double x = tb__point_polygon(s->pts[k], e->normal, pj);
+            double x = tb_ff_point_polygon(s->pts[k], e->normal, pj);
             if (x > 0.0 && isfinite(x))
                 f += x;
         }
