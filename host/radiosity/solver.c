@@ -47,6 +47,8 @@ struct tb_rad_solver {
     tb_vec3 *pts;           /* ray cast: shooter sample points */
     tb_ff_polygon *polys;   /* every element */
     tb_ff_occluders *occ;   /* the CPU backend's, when the solver built it */
+    float (*boxes)[6];      /* with occ: bounds of clusters of touching occluders (lo xyz, hi xyz, padded) */
+    size_t nboxes;
     tb_hemicube *hc;
     tb_pqueue q;            /* elements by unshot power */
     float *vff, *eff;       /* one shooter's form factors: F(v -> i) per vertex (ray cast), F_ji per element */
@@ -108,6 +110,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->polys);
     free(s->rho_mean);
     tb_ff_occluders_free(s->occ);
+    free(s->boxes);
     tb_hemicube_free(s->hc);
     tb_pqueue_free(&s->q);
     free(s);
@@ -121,6 +124,103 @@ static void *tb__calloc(size_t n, size_t size, bool *ok)
     if (!p)
         *ok = false;
     return p;
+}
+
+/* Bounds of the occluders in a few boxes: each polygon's box, padded by
+ * 1e-5 of the scene's size, merged with every box it touches until none
+ * touch (the Cornell box: one per block, the light, the red wall). A
+ * segment that misses them all is visible without a trip through the BVH,
+ * whose ray set-up costs more than the test (most segments in a room miss
+ * the few things in it). */
+static tb_status tb__occluder_boxes(tb_rad_solver *s, const tb_ff_polygon *occ, size_t nocc)
+{
+    if (nocc == 0)
+        return TB_OK;
+    tb_vec3 lo = s->m.verts[0].p, hi = lo;
+    for (size_t v = 1; v < s->m.nverts; v++)
+        lo = tb_vec3_min(lo, s->m.verts[v].p), hi = tb_vec3_max(hi, s->m.verts[v].p);
+    float pad = 1e-5f * tb_vec3_length(tb_vec3_sub(hi, lo));
+    float(*b)[6] = malloc(nocc * sizeof *b);
+    if (!b)
+        return tb_error(TB_ERR_NOMEM, "radiosity: out of memory");
+    for (size_t k = 0; k < nocc; k++) {
+        tb_vec3 l = occ[k].v[0], h = l;
+        for (int q = 1; q < occ[k].n; q++)
+            l = tb_vec3_min(l, occ[k].v[q]), h = tb_vec3_max(h, occ[k].v[q]);
+        b[k][0] = l.x - pad, b[k][1] = l.y - pad, b[k][2] = l.z - pad;
+        b[k][3] = h.x + pad, b[k][4] = h.y + pad, b[k][5] = h.z + pad;
+    }
+    size_t n = nocc;
+    for (bool merged = true; merged;) {
+        merged = false;
+        for (size_t a = 0; a < n; a++)
+            for (size_t c = a + 1; c < n; c++) {
+                bool touch = true;
+                for (int x = 0; x < 3; x++)
+                    touch = touch && b[a][x] <= b[c][x + 3] && b[c][x] <= b[a][x + 3];
+                if (!touch)
+                    continue;
+                for (int x = 0; x < 3; x++)
+                    b[a][x] = fminf(b[a][x], b[c][x]), b[a][x + 3] = fmaxf(b[a][x + 3], b[c][x + 3]);
+                memcpy(b[c], b[--n], sizeof b[c]);
+                c = a; /* a grew: look again from a + 1 */
+                merged = true;
+            }
+    }
+    s->boxes = b;
+    s->nboxes = n;
+    return TB_OK;
+}
+
+/* Does the segment a -> b touch the box (slab test over t in [0, 1])? */
+static inline bool tb__segment_box(tb_vec3 a, tb_vec3 b, const float *box)
+{
+    float t0 = 0.0f, t1 = 1.0f;
+    float pa[3] = {a.x, a.y, a.z}, d[3] = {b.x - a.x, b.y - a.y, b.z - a.z};
+    for (int x = 0; x < 3; x++) {
+        if (d[x] == 0.0f) {
+            if (pa[x] < box[x] || pa[x] > box[x + 3])
+                return false;
+            continue;
+        }
+        float inv = 1.0f / d[x];
+        float u0 = (box[x] - pa[x]) * inv, u1 = (box[x + 3] - pa[x]) * inv;
+        if (u0 > u1) {
+            float t = u0;
+            u0 = u1, u1 = t;
+        }
+        /* widen by float rounding: the test must never miss a box the segment touches */
+        u0 -= 1e-5f, u1 += 1e-5f;
+        t0 = u0 > t0 ? u0 : t0;
+        t1 = u1 < t1 ? u1 : t1;
+        if (t0 > t1)
+            return false;
+    }
+    return true;
+}
+
+/* A tb_ff_visible_fn over the solver's occluders: the boxes first, then
+ * the BVH (the same answer as tb_ff_occluders_visible alone). */
+static bool tb__visible(void *ctx, tb_vec3 a, tb_vec3 b)
+{
+    const tb_rad_solver *s = ctx;
+    for (size_t k = 0; k < s->nboxes; k++)
+        if (tb__segment_box(a, b, s->boxes[k]))
+            return tb_ff_occluders_visible(s->occ, a, b);
+    return true;
+}
+
+/* The CPU form factors of shooter i to every vertex: tb_ff_raycast_batch
+ * over the solver's occluders, through tb__visible. */
+static tb_status tb__batch(tb_rad_solver *s, size_t i)
+{
+    const tb_rad_element *e = &s->m.elems[i];
+    ptrdiff_t cnt = (ptrdiff_t)s->m.nverts;
+    /* each receiver's value depends only on its own inputs: any schedule gives the same results */
+#pragma omp parallel for schedule(dynamic, 64)
+    for (ptrdiff_t v = 0; v < cnt; v++)
+        s->ff[v] = tb_ff_raycast(s->pts, s->opt.samples, e->normal, e->area, s->rp[v], s->rn[v], tb__visible, s);
+    return TB_OK;
 }
 
 tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *state, const tb_rad_options *opt,
@@ -320,6 +420,8 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
                 }
                 size_t nocc = tb_rad_mesh_occluders(&s->m, occ);
                 tb_status st = tb_ff_occluders_build(occ, nocc, &s->occ);
+                if (!st)
+                    st = tb__occluder_boxes(s, occ, nocc);
                 free(occ);
                 if (st) {
                     tb_rad_solver_free(s);
@@ -405,8 +507,9 @@ static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i)
     } else {
         st = tb_ff_sample_polygon(&s->polys[i], s->opt.samples, tb__shot_seed(s->opt.seed, i), s->pts);
         if (!st)
-            st = s->opt.batch(s->opt.batch_ctx, s->pts, s->opt.samples, e->normal, e->area, s->rp, s->rn,
-                              s->m.nverts, s->ff);
+            st = s->boxes ? tb__batch(s, i)
+                          : s->opt.batch(s->opt.batch_ctx, s->pts, s->opt.samples, e->normal, e->area, s->rp,
+                                         s->rn, s->m.nverts, s->ff);
         tb_stat_add(&tb__rad_rays, (int64_t)s->m.nverts * s->opt.samples);
         if (!st)
             tb__near_field(s, i);
