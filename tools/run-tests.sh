@@ -23,5 +23,6 @@ if [[ "${1:-}" != "--quick" ]]; then
   echo "== unit tests and fuzzers under sanitizers"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:quarantine_size_mb=256 UBSAN_OPTIONS=print_stacktrace=1 \
     LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp \
+    LD_PRELOAD=$PWD/build/asan/tests/libtb_keep_loaded.so \
     ctest --test-dir build/asan --output-on-failure -j "$jobs" -L 'unit|fuzz' --timeout 900
 fi
