@@ -14,6 +14,7 @@
  * each old element's unshot power is kept exactly (children of an undone
  * green closure straddle two old elements). */
 #include "host/radiosity/adaptive.h"
+#include "host/radiosity/lights.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -155,6 +156,51 @@ static tb_status tb__from_refiner(const tb_mesh_refiner *r, const tb_rad_mesh *p
     tb_status st = tb_rad_mesh_update_geometry(out);
     if (st)
         tb_rad_mesh_free(out);
+    return st;
+}
+
+/* New receivers also get the direct light of the lights already shot
+ * (host/radiosity/lights.h): new vertices (ray cast) or new elements at
+ * their centroid (hemicube), through the same occluders. */
+static tb_status tb__carry_lights(const tb_rad_solver *s, const tb_rad_mesh *nm, const tb_mesh_refiner *r,
+                                  const tb_rad_options *opt, double *H)
+{
+    tb_rad_state os = tb_rad_solver_state(s);
+    bool any = false;
+    for (int k = 0; k < opt->nlights && os.lights_shot; k++)
+        any |= os.lights_shot[k] != 0;
+    if (!any)
+        return TB_OK;
+    const tb_rad_mesh *om = tb_rad_solver_mesh(s);
+    int nc = om->nchannels;
+    bool hemi = opt->ff == TB_RAD_FF_HEMICUBE;
+    size_t nmax = hemi ? nm->nelems : nm->nverts, cnt = 0;
+    tb_vec3 *p = malloc(sizeof *p * (nmax ? nmax : 1)), *n = malloc(sizeof *n * (nmax ? nmax : 1));
+    size_t *row = malloc(sizeof *row * (nmax ? nmax : 1));
+    double *e = malloc(sizeof *e * (nmax ? nmax : 1) * (size_t)nc);
+    tb_rad_lights *L = NULL;
+    tb_status st = p && n && row && e ? TB_OK : tb_error(TB_ERR_NOMEM, "adaptive subdivision: out of memory");
+    if (!st && hemi) {
+        const tb_mesh *rm = tb_mesh_refiner_mesh(r);
+        for (size_t i = 0; i < nm->nelems; i++)
+            if (tb_mesh_elem_at(rm, i)->parent != TB_MESH_NONE)
+                p[cnt] = nm->elems[i].centroid, n[cnt] = nm->elems[i].normal, row[cnt++] = i;
+    } else if (!st) {
+        for (size_t v = om->nverts; v < nm->nverts; v++)
+            p[cnt] = nm->verts[v].p, n[cnt] = nm->verts[v].n, row[cnt++] = v;
+    }
+    if (!st && cnt)
+        st = tb_rad_lights_create(om, opt->lights, opt->nlights, &L);
+    for (int k = 0; k < opt->nlights && !st && cnt; k++) {
+        if (!os.lights_shot[k])
+            continue;
+        st = tb_rad_lights_irradiance(L, k, p, n, cnt, e);
+        for (size_t q = 0; q < cnt && !st; q++)
+            for (int c = 0; c < nc; c++)
+                H[row[q] * (size_t)nc + (size_t)c] += e[q * (size_t)nc + (size_t)c];
+    }
+    tb_rad_lights_free(L);
+    free(p), free(n), free(row), free(e);
     return st;
 }
 
@@ -304,6 +350,8 @@ static tb_status tb__carry(const tb_rad_solver *s, const tb_rad_mesh *nm, const 
     tb_ff_occluders_free(occ);
     free(p), free(n), free(pts), free(ff);
 out:
+    if (!st)
+        st = tb__carry_lights(s, nm, r, opt, H);
     if (!st && !hemi) {
         /* Element irradiance (ray cast): kept elements keep theirs (the
          * solver's estimate, exact next to a shooter); new ones start
@@ -414,7 +462,8 @@ tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const
         tb_rad_solver *ns = NULL;
         if (!st) {
             tb_rad_state state = {.gathered = H, .unshot = dB,
-                                  .gathered_elems = o.ff == TB_RAD_FF_HEMICUBE ? NULL : He};
+                                  .gathered_elems = o.ff == TB_RAD_FF_HEMICUBE ? NULL : He,
+                                  .lights_shot = tb_rad_solver_state(s).lights_shot};
             st = tb_rad_solver_create(&nm, &state, &o, &ns);
         }
         free(H), free(dB), free(He);

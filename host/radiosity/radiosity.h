@@ -150,6 +150,9 @@ typedef struct tb_rad_options {
     bool no_occlusion;    /* ray cast with the CPU backend: no visibility test (convex enclosures, tests) */
     bool no_cache;        /* do not keep each shooter's form factors for its next shots (up to 512 MB are
                              kept by default; the answer is the same either way) */
+    const tb_light *lights; /* point, spot and directional lights shot as sources (host/radiosity/lights.h),
+                               copied at create; an IES table they point to must outlive the solver */
+    int nlights;            /* how many */
 } tb_rad_options;
 
 /* Initial state (e.g. carried over a refinement); NULL arrays mean zero H
@@ -158,6 +161,7 @@ typedef struct tb_rad_state {
     const double *gathered;       /* nverts * nchannels: H_v (ray cast) -- or nelems * nchannels: H_e (hemicube) */
     const double *unshot;         /* nelems * nchannels: dB_e */
     const double *gathered_elems; /* ray cast: nelems * nchannels: H_e; NULL: the mean of the corners' H_v */
+    const unsigned char *lights_shot; /* nlights: nonzero for a light already shot; NULL: none yet */
 } tb_rad_state;
 
 /* A solver (opaque). */
@@ -175,8 +179,10 @@ void tb_rad_solver_free(tb_rad_solver *s);
 /* The solver's copy of the mesh. */
 const tb_rad_mesh *tb_rad_solver_mesh(const tb_rad_solver *s);
 
-/* Shoots the element with the most unshot power once. *shot (may be NULL)
- * is false if nothing was left to shoot. */
+/* Shoots the element with the most unshot power once, or a light not yet
+ * shot whose power is at least that (each light shoots once, directly:
+ * host/radiosity/lights.h). *shot (may be NULL) is false if nothing was
+ * left to shoot. */
 tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot);
 
 /* When to stop tb_rad_solver_run (any condition that is set). */
@@ -206,9 +212,10 @@ double tb_rad_solver_seconds(const tb_rad_solver *s);
 double tb_rad_unshot_fraction(const tb_rad_solver *s);
 
 /* Power bookkeeping, summed over channels (W, or W/nm per band, times the
- * scene's units^2): emitted (sum E A), absorbed (sum over shots of the
- * received power times 1 - rho), unshot (sum dB A) and escaped (shot power
- * that reached no element: leaves an open scene, or form-factor error). */
+ * scene's units^2): emitted (sum E A, plus the lights' power), absorbed
+ * (sum over shots of the received power times 1 - rho), unshot (sum dB A,
+ * plus the power of lights not yet shot) and escaped (shot power that
+ * reached no element: leaves an open scene, or form-factor error). */
 typedef struct tb_rad_energy {
     double emitted, absorbed, unshot, escaped;
 } tb_rad_energy;

@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "host/radiosity/lights.h"
 #include "host/radiosity/radiosity.h"
 #include "util/base/progress.h"
 #include "util/container/pqueue.h"
@@ -59,7 +60,15 @@ struct tb_rad_solver {
     double emitted, absorbed, escaped;
     double total_area;
     double *rho_mean;       /* nc: area-weighted mean reflectance */
+    /* point, spot and directional lights (the block at the end of this file) */
+    tb_rad_lights *lights;  /* NULL: none */
+    unsigned char *lshot;   /* nlights: shot yet */
+    double *lpower;         /* nlights: power summed over channels */
+    double lpending;        /* power of the lights not yet shot */
 };
+
+static tb_status tb__lights_init(tb_rad_solver *s, const tb_rad_state *state);
+static tb_status tb__lights_step(tb_rad_solver *s, bool *shot);
 
 static double tb__now(void) { return 1e-9 * (double)tb_stats_now_ns(); }
 
@@ -113,6 +122,9 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->boxes);
     tb_hemicube_free(s->hc);
     tb_pqueue_free(&s->q);
+    tb_rad_lights_free(s->lights);
+    free(s->lshot);
+    free(s->lpower);
     free(s);
 }
 
@@ -352,6 +364,14 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     }
     for (int c = 0; c < nc; c++)
         s->rho_mean[c] /= s->total_area;
+    if (o.nlights > 0) {
+        tb_status st = tb__lights_init(s, state);
+        if (st) {
+            tb_rad_solver_free(s);
+            return st;
+        }
+        unshot += s->lpending;
+    }
     /* what is no longer unshot has been absorbed (the bookkeeping of a continued solution) */
     s->absorbed = s->emitted > unshot ? s->emitted - unshot : 0.0;
     if (hemi) {
@@ -588,6 +608,15 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
 {
     if (shot)
         *shot = false;
+    if (s->lights && s->lpending > 0.0) {
+        bool done = false;
+        tb_status st = tb__lights_step(s, &done);
+        if (st || done) {
+            if (shot)
+                *shot = done;
+            return st;
+        }
+    }
     uint32_t i;
     double pri;
     if (!tb_pqueue_peek(&s->q, &i, &pri) || !(pri > 0.0))
@@ -681,7 +710,7 @@ double tb_rad_unshot_fraction(const tb_rad_solver *s)
 {
     if (!(s->emitted > 0.0))
         return 0.0;
-    double u = 0.0;
+    double u = s->lpending;
     for (size_t i = 0; i < s->m.nelems; i++)
         u += s->up[i];
     return u / s->emitted;
@@ -689,7 +718,7 @@ double tb_rad_unshot_fraction(const tb_rad_solver *s)
 
 tb_rad_energy tb_rad_solver_energy(const tb_rad_solver *s)
 {
-    tb_rad_energy e = {.emitted = s->emitted, .absorbed = s->absorbed, .escaped = s->escaped};
+    tb_rad_energy e = {.emitted = s->emitted, .absorbed = s->absorbed, .escaped = s->escaped, .unshot = s->lpending};
     for (size_t i = 0; i < s->m.nelems; i++)
         e.unshot += tb__unshot_power(s, i);
     return e;
@@ -796,7 +825,8 @@ void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambie
 tb_rad_state tb_rad_solver_state(const tb_rad_solver *s)
 {
     bool hemi = s->opt.ff == TB_RAD_FF_HEMICUBE;
-    tb_rad_state st = {.gathered = hemi ? s->He : s->Hv, .gathered_elems = hemi ? NULL : s->He, .unshot = s->dB};
+    tb_rad_state st = {.gathered = hemi ? s->He : s->Hv, .gathered_elems = hemi ? NULL : s->He, .unshot = s->dB,
+                       .lights_shot = s->lshot};
     return st;
 }
 
@@ -813,5 +843,107 @@ tb_status tb_rad_formfactor(tb_rad_solver *s, size_t i, size_t j, double *f)
     if (st)
         return st;
     *f = (double)s->eff[j] * ej->area / ei->area;
+    return TB_OK;
+}
+
+/* ------------------------------------------------------------------ lights
+ * Point, spot and directional lights (host/radiosity/lights.h): each holds
+ * its power until it is shot, once, straight to the receivers. */
+
+/* The lights of the options over the solver's mesh; their power enters the
+ * emitted power, and the unshot power until they are shot. */
+static tb_status tb__lights_init(tb_rad_solver *s, const tb_rad_state *state)
+{
+    int n = s->opt.nlights, nc = s->nc;
+    if (n < 0 || !s->opt.lights)
+        return tb_error(TB_ERR_ARG, "radiosity: bad light list (%d lights)", n);
+    tb_status st = tb_rad_lights_create(&s->m, s->opt.lights, n, &s->lights);
+    if (st)
+        return st;
+    s->lshot = calloc((size_t)n, 1);
+    s->lpower = calloc((size_t)n, sizeof *s->lpower);
+    if (!s->lshot || !s->lpower)
+        return tb_error(TB_ERR_NOMEM, "radiosity: out of memory");
+    for (int k = 0; k < n; k++) {
+        double p[TB_CHANNELS_MAX];
+        tb_rad_lights_power(s->lights, k, p);
+        for (int c = 0; c < nc; c++)
+            s->lpower[k] += p[c];
+        s->lshot[k] = state && state->lights_shot && state->lights_shot[k];
+        s->emitted += s->lpower[k];
+        if (!s->lshot[k])
+            s->lpending += s->lpower[k];
+    }
+    s->opt.lights = NULL; /* copied into s->lights: the caller's array need not outlive the solver */
+    return TB_OK;
+}
+
+/* Shoots the light not yet shot with the most power (ties: the lower index)
+ * if that is at least the most unshot power of an element; *shot says if it did. */
+static tb_status tb__lights_step(tb_rad_solver *s, bool *shot)
+{
+    *shot = false;
+    int n = tb_rad_lights_count(s->lights), k = -1;
+    for (int q = 0; q < n; q++)
+        if (!s->lshot[q] && (k < 0 || s->lpower[q] > s->lpower[k]))
+            k = q;
+    uint32_t top;
+    double pri;
+    if (k < 0 || (tb_pqueue_peek(&s->q, &top, &pri) && pri > s->lpower[k]))
+        return TB_OK;
+    double t0 = tb__now();
+    int nc = s->nc;
+    size_t nv = s->m.nverts, ne = s->m.nelems;
+    double *ev = malloc(sizeof *ev * nv * (size_t)nc), *ee = malloc(sizeof *ee * ne * (size_t)nc);
+    tb_status st = ev && ee ? TB_OK : tb_error(TB_ERR_NOMEM, "radiosity: out of memory");
+    tb_timer_token tt = tb_timer_start(&tb__rad_ff_time);
+    if (!st)
+        st = tb_rad_lights_shoot(s->lights, k, ev, ee);
+    (void)tb_timer_stop(tt);
+    if (st) {
+        free(ev), free(ee);
+        return st;
+    }
+    tt = tb_timer_start(&tb__rad_update_time);
+    bool hemi = s->opt.ff == TB_RAD_FF_HEMICUBE;
+    double received = 0.0;
+    for (size_t j = 0; j < ne; j++) {
+        const tb_rad_element *ej = &s->m.elems[j];
+        double rec = 0.0, abs_ = 0.0, aj = ej->area;
+        for (int c = 0; c < nc; c++) {
+            size_t x = j * (size_t)nc + (size_t)c;
+            double dh = ee[x], rho = s->m.rho[x];
+            if (!(dh > 0.0))
+                continue;
+            s->He[x] += dh;
+            s->dB[x] += rho * dh;
+            rec += dh * aj;
+            abs_ += (1.0 - rho) * dh * aj;
+            if (hemi) /* H_v: the area-weighted mean of the elements around v, as a hemicube shot keeps it */
+                for (int q = 0; q < tb__elem_size(ej); q++)
+                    s->Hv[ej->v[q] * (size_t)nc + (size_t)c] += dh * aj / s->vert_area[ej->v[q]];
+        }
+        if (!(rec > 0.0))
+            continue;
+        received += rec;
+        s->absorbed += abs_;
+        s->up[j] = tb__unshot_power(s, j);
+        tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
+    }
+    if (!hemi)
+        for (size_t x = 0; x < nv * (size_t)nc; x++)
+            s->Hv[x] += ev[x];
+    free(ev), free(ee);
+    s->lshot[k] = 1;
+    s->lpending = 0.0; /* summed afresh: no rounding drift */
+    for (int q = 0; q < n; q++)
+        if (!s->lshot[q])
+            s->lpending += s->lpower[q];
+    s->escaped += s->lpower[k] - received;
+    (void)tb_timer_stop(tt);
+    s->shots++;
+    tb_stat_add(&tb__rad_shots, 1);
+    s->seconds += tb__now() - t0;
+    *shot = true;
     return TB_OK;
 }

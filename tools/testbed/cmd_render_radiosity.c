@@ -26,7 +26,8 @@ static void tb__rad_usage(FILE *out)
             "usage: testbed render SCENE.mid --method radiosity [-o IMAGE] [--patches FILE.csv] [--mesh-out FILE.ply]\n"
             "                      [options]\n"
             "Progressive-refinement radiosity (docs/radiosity.md). -o is optional when --patches or\n"
-            "--mesh-out is given (scenes without a camera).\n"
+            "--mesh-out is given (scenes without a camera). Light comes from emitting surfaces and from the\n"
+            "scene's point, spot and directional lights (IES included), each shot once, directly, with shadows.\n"
             "  -o IMAGE              the solution from the scene camera (.png, .exr, .pfm, .rle), Gouraud-shaded\n"
             "  --patches FILE.csv    one row per element: element,object,area,cx,cy,cz,nx,ny,nz, the radiosity\n"
             "                        per channel (b_r,b_g,b_b or b_<nm>), then the unshot radiosity (u_...); W/m^2\n"
@@ -382,13 +383,13 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     bool emits = false;
     for (size_t k = 0; k < mesh.nelems * (size_t)mesh.nchannels && !emits; k++)
         emits = mesh.emission[k] > 0.0f;
-    if (!emits)
-        fprintf(stderr, "testbed render: note: no surface of %s emits: the solution is black\n", scene_path);
+    if (!emits && scene->nlights == 0)
+        fprintf(stderr, "testbed render: note: no surface or light of %s emits: the solution is black\n", scene_path);
+    ro.lights = scene->lights; /* the scene outlives the solver (IES tables) */
+    ro.nlights = scene->nlights;
     if (scene->nlights > 0)
-        fprintf(stderr,
-                "testbed render: note: radiosity light comes from emitting surfaces only; the scene's %d point, "
-                "spot or directional light%s ignored\n",
-                scene->nlights, scene->nlights == 1 ? " is" : "s are");
+        fprintf(stderr, "testbed render: %d point, spot or directional light%s shot directly (docs/radiosity.md)\n",
+                scene->nlights, scene->nlights == 1 ? "" : "s");
     if (ao.threshold > 0) {
         /* host/radiosity/adaptive.h: mesh becomes the refined mesh */
         if ((st = tb_rad_adapt_solve(&mesh, &ro, &stop, &ao, &solver, &as)))
