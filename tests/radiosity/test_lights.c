@@ -2,7 +2,7 @@
  * (host/radiosity/lights.h) against exact answers: a point light over a
  * plane (element means against an independent quadrature, corners against
  * I cos / r^2), a spot light's cone and falloff, a directional light with an
- * occluder, energy in a closed box, a light outside a closed box, spectral
+ * occluder, an IES distribution, energy in a closed box, a light outside a closed box, spectral
  * bands, the hemicube path, adaptive refinement and thread independence. */
 #include <math.h>
 #include <setjmp.h>
@@ -217,6 +217,57 @@ static void test_spot_cone(void **state)
     assert_true(outside == 0.0);
     tb_rad_solver_free(s);
     tb_rad_mesh_free(&m);
+}
+
+/* A point light with an IES distribution: tests/render/data/lambertian.ies
+ * tabulates I = I0 cos(gamma) (5 degree steps, linearly interpolated), so on
+ * the floor below E = I0 cos(gamma) cos(theta) / r^2 = I0 h^2 / r^4 at every
+ * corner and in the element means (independent quadrature of the exact
+ * cosine), to the table's interpolation error (at most about 1e-3). */
+static double tb__E_ies(double x, double y, double h) { return h * h / pow(x * x + y * y + h * h, 2.0); }
+
+static void test_ies(void **state)
+{
+    (void)state;
+    tb_ies *ies = NULL;
+    if (tb_ies_read(TB_SOURCE_DIR "/tests/render/data/lambertian.ies", &ies))
+        fail_msg("%s", tb_last_error());
+    tb_rad_mesh m;
+    tb__mesh(&m, 3);
+    tb__floor(&m, 16, 0.5f);
+    assert_int_equal(tb_rad_mesh_update_geometry(&m), TB_OK);
+    const double h = 0.8, I0 = 2.0;
+    tb_light l = tb_light_point(tb_vec3_make(0, 0, (float)h), tb_channels_splat(3, (float)I0));
+    l.ies = ies;
+    tb_rad_solver *s = tb__create(&m, &l, 1, TB_RAD_FF_RAYCAST);
+    tb__run(s, 1e-3, 1);
+    double b[TB_CHANNELS_MAX], worst_c = 0.0, worst_e = 0.0;
+    for (size_t e = 0; e < m.nelems; e++) {
+        for (int k = 0; k < 4; k++) {
+            tb_rad_corner_radiosity(s, e, k, false, b);
+            tb_vec3 p = m.verts[m.elems[e].v[k]].p;
+            double w = 0.5 * I0 * tb__E_ies(p.x, p.y, h);
+            worst_c = fmax(worst_c, fabs(b[0] - w) / w);
+        }
+        const tb_rad_element *el = &m.elems[e];
+        tb_vec3 a = m.verts[el->v[0]].p, c = m.verts[el->v[2]].p;
+        double sum = 0.0;
+        for (int j = 0; j < 128; j++)
+            for (int i = 0; i < 128; i++)
+                sum += tb__E_ies(a.x + (c.x - a.x) * (i + 0.5) / 128, a.y + (c.y - a.y) * (j + 0.5) / 128, h);
+        double want = 0.5 * I0 * sum / (128.0 * 128.0);
+        tb_rad_element_radiosity(s, e, false, b);
+        worst_e = fmax(worst_e, fabs(b[0] - want) / want);
+    }
+    print_message("IES point light: corners %.2e, element means %.2e (relative)\n", worst_c, worst_e);
+    assert_true(worst_c < 1.5e-3);
+    assert_true(worst_e < 1.5e-3);
+    /* its power: I0 x the table's flux over its maximum (about pi I0) */
+    tb_rad_energy en = tb_rad_solver_energy(s);
+    assert_true(fabs(en.emitted - 3.0 * I0 * TB__PI) < 1e-3 * en.emitted);
+    tb_rad_solver_free(s);
+    tb_rad_mesh_free(&m);
+    tb_ies_free(ies);
 }
 
 /* Directional light straight down (E = 2) onto a floor (rho 0.5, [-1, 1]^2,
@@ -511,7 +562,8 @@ static void test_errors(void **state)
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_point_plane), cmocka_unit_test(test_spot_cone), cmocka_unit_test(test_directional_shadow),
+        cmocka_unit_test(test_point_plane), cmocka_unit_test(test_spot_cone),  cmocka_unit_test(test_ies),
+        cmocka_unit_test(test_directional_shadow),
         cmocka_unit_test(test_energy_box),  cmocka_unit_test(test_spectral),  cmocka_unit_test(test_hemicube),
         cmocka_unit_test(test_adaptive),    cmocka_unit_test(test_threads),   cmocka_unit_test(test_errors),
     };
