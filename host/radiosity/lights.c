@@ -22,6 +22,7 @@
 
 TB_STAT_COUNTER(tb__radl_shots, "Radiosity/light shots");
 TB_STAT_COUNTER(tb__radl_rays, "Radiosity/light shadow rays");
+TB_STAT_TIMER(tb__radl_time, "Radiosity/light shot time");
 
 struct tb_rad_lights {
     const tb_rad_mesh *m;   /* not owned: the caller's mesh (the solver's copy) */
@@ -328,6 +329,7 @@ tb_status tb_rad_lights_shoot(const tb_rad_lights *L, int k, double *ev, double 
         free(need), free(vis);
         return tb_error(TB_ERR_NOMEM, "radiosity lights: out of memory");
     }
+    tb_timer_token tt = tb_timer_start(&tb__radl_time);
     /* visibility is needed at the corners of every element facing the light
      * (for its interpolated visibility) and at vertices facing it */
     for (size_t j = 0; j < ne; j++) {
@@ -359,6 +361,7 @@ tb_status tb_rad_lights_shoot(const tb_rad_lights *L, int k, double *ev, double 
     for (ptrdiff_t j = 0; j < cnt; j++)
         tb__element_irradiance(L, l, (size_t)j, vis, ee + (size_t)j * (size_t)nc);
     free(need), free(vis);
+    (void)tb_timer_stop(tt);
     tb_stat_add(&tb__radl_shots, 1);
     tb_stat_add(&tb__radl_rays, rays);
     return TB_OK;
