@@ -160,8 +160,9 @@ static tb_status tb__from_refiner(const tb_mesh_refiner *r, const tb_rad_mesh *p
 }
 
 /* New receivers also get the direct light of the lights already shot
- * (host/radiosity/lights.h): new vertices (ray cast) or new elements at
- * their centroid (hemicube), through the same occluders. */
+ * (host/radiosity/lights.h): a light shot over the new mesh gives new
+ * vertices (ray cast) their irradiance and new elements (hemicube) their
+ * mean irradiance, exactly what a solver on the new mesh would have given. */
 static tb_status tb__carry_lights(const tb_rad_solver *s, const tb_rad_mesh *nm, const tb_mesh_refiner *r,
                                   const tb_rad_options *opt, double *H)
 {
@@ -171,36 +172,29 @@ static tb_status tb__carry_lights(const tb_rad_solver *s, const tb_rad_mesh *nm,
         any |= os.lights_shot[k] != 0;
     if (!any)
         return TB_OK;
-    const tb_rad_mesh *om = tb_rad_solver_mesh(s);
-    int nc = om->nchannels;
+    size_t nv0 = tb_rad_solver_mesh(s)->nverts, nc = (size_t)nm->nchannels;
     bool hemi = opt->ff == TB_RAD_FF_HEMICUBE;
-    size_t nmax = hemi ? nm->nelems : nm->nverts, cnt = 0;
-    tb_vec3 *p = malloc(sizeof *p * (nmax ? nmax : 1)), *n = malloc(sizeof *n * (nmax ? nmax : 1));
-    size_t *row = malloc(sizeof *row * (nmax ? nmax : 1));
-    double *e = malloc(sizeof *e * (nmax ? nmax : 1) * (size_t)nc);
+    double *ev = malloc(sizeof *ev * nm->nverts * nc), *ee = malloc(sizeof *ee * nm->nelems * nc);
     tb_rad_lights *L = NULL;
-    tb_status st = p && n && row && e ? TB_OK : tb_error(TB_ERR_NOMEM, "adaptive subdivision: out of memory");
-    if (!st && hemi) {
-        const tb_mesh *rm = tb_mesh_refiner_mesh(r);
-        for (size_t i = 0; i < nm->nelems; i++)
-            if (tb_mesh_elem_at(rm, i)->parent != TB_MESH_NONE)
-                p[cnt] = nm->elems[i].centroid, n[cnt] = nm->elems[i].normal, row[cnt++] = i;
-    } else if (!st) {
-        for (size_t v = om->nverts; v < nm->nverts; v++)
-            p[cnt] = nm->verts[v].p, n[cnt] = nm->verts[v].n, row[cnt++] = v;
-    }
-    if (!st && cnt)
-        st = tb_rad_lights_create(om, opt->lights, opt->nlights, &L);
-    for (int k = 0; k < opt->nlights && !st && cnt; k++) {
-        if (!os.lights_shot[k])
+    tb_status st = ev && ee ? TB_OK : tb_error(TB_ERR_NOMEM, "adaptive subdivision: out of memory");
+    if (!st)
+        st = tb_rad_lights_create(nm, opt->lights, opt->nlights, &L);
+    const tb_mesh *rm = tb_mesh_refiner_mesh(r);
+    for (int k = 0; k < opt->nlights && !st; k++) {
+        if (!os.lights_shot[k] || (st = tb_rad_lights_shoot(L, k, ev, ee)))
             continue;
-        st = tb_rad_lights_irradiance(L, k, p, n, cnt, e);
-        for (size_t q = 0; q < cnt && !st; q++)
-            for (int c = 0; c < nc; c++)
-                H[row[q] * (size_t)nc + (size_t)c] += e[q * (size_t)nc + (size_t)c];
+        if (hemi) {
+            for (size_t i = 0; i < nm->nelems; i++)
+                if (tb_mesh_elem_at(rm, i)->parent != TB_MESH_NONE)
+                    for (size_t c = 0; c < nc; c++)
+                        H[i * nc + c] += ee[i * nc + c];
+        } else {
+            for (size_t x = nv0 * nc; x < nm->nverts * nc; x++)
+                H[x] += ev[x];
+        }
     }
     tb_rad_lights_free(L);
-    free(p), free(n), free(row), free(e);
+    free(ev), free(ee);
     return st;
 }
 

@@ -366,21 +366,3 @@ tb_status tb_rad_lights_shoot(const tb_rad_lights *L, int k, double *ev, double 
     tb_stat_add(&tb__radl_rays, rays);
     return TB_OK;
 }
-
-tb_status tb_rad_lights_irradiance(const tb_rad_lights *L, int k, const tb_vec3 *p, const tb_vec3 *n, size_t count,
-                                   double *out)
-{
-    if (!L || k < 0 || k >= L->n)
-        return tb_error(TB_ERR_ARG, "radiosity lights: no light %d", k);
-    const tb_light *l = &L->l[k];
-    int nc = L->nc;
-    ptrdiff_t cnt = (ptrdiff_t)count;
-#pragma omp parallel for schedule(dynamic, 64)
-    for (ptrdiff_t v = 0; v < cnt; v++) {
-        double *o = out + (size_t)v * (size_t)nc;
-        if (tb__point_irradiance(l, nc, p[v], n[v], o) && !tb__lit(L, l, p[v]))
-            for (int c = 0; c < nc; c++)
-                o[c] = 0.0;
-    }
-    return TB_OK;
-}

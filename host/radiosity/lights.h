@@ -57,12 +57,4 @@ void tb_rad_lights_power(const tb_rad_lights *L, int k, double *out);
  * (see the file comment). OpenMP inside. */
 tb_status tb_rad_lights_shoot(const tb_rad_lights *L, int k, double *ev, double *ee);
 
-/* Irradiance from light k at count arbitrary receivers (points p, unit
- * normals n) through the same occluders, out[count * nchannels]: for new
- * vertices of a refined mesh (host/radiosity/adaptive.h). The points must
- * lie on the mesh's surfaces (the occluder set assumes segments between
- * mesh points and lights). */
-tb_status tb_rad_lights_irradiance(const tb_rad_lights *L, int k, const tb_vec3 *p, const tb_vec3 *n, size_t count,
-                                   double *out);
-
 #endif

@@ -118,6 +118,31 @@ static double tb__E_mean(const tb_rad_mesh *m, size_t e, int q, double lx, doubl
     return sum / ((double)q * q);
 }
 
+/* The same mean over any element (triangle or convex quad, in z = 0): q x q
+ * sub-triangles of (v0 v1 v2) and (v0 v2 v3), centroid rule. */
+static double tb__E_mean_poly(const tb_rad_mesh *m, size_t e, int q, double lx, double ly, double h, double I)
+{
+    const tb_rad_element *el = &m->elems[e];
+    int nk = el->v[3] == TB_RAD_NONE ? 3 : 4;
+    double sum = 0.0, area = 0.0;
+    for (int t = 0; t + 2 < nk; t++) {
+        tb_vec3 p0 = m->verts[el->v[0]].p, p1 = m->verts[el->v[t + 1]].p, p2 = m->verts[el->v[t + 2]].p;
+        double ux = p1.x - p0.x, uy = p1.y - p0.y, vx = p2.x - p0.x, vy = p2.y - p0.y;
+        double at = 0.5 * fabs(ux * vy - uy * vx), cell = at / ((double)q * q);
+        for (int i = 0; i < q; i++)
+            for (int j = 0; j < q - i; j++)
+                for (int d = 0; d < 2; d++) {
+                    if (d && i + j >= q - 1)
+                        continue;
+                    double u = d ? (i + 2.0 / 3.0) / q : (i + 1.0 / 3.0) / q;
+                    double v = d ? (j + 2.0 / 3.0) / q : (j + 1.0 / 3.0) / q;
+                    sum += cell * tb__E(p0.x + u * ux + v * vx, p0.y + u * uy + v * vy, lx, ly, h, I, -2, 0);
+                }
+        area += at;
+    }
+    return sum / area;
+}
+
 /* Point light over a plane: every element's B = rho x the element mean of
  * I cos / r^2 (independent 128 x 128 midpoint quadrature), per channel;
  * every corner value rho I cos / r^2 at the vertex (the receiver sits 1e-3
@@ -463,18 +488,18 @@ static void test_hemicube(void **state)
     tb_rad_mesh_free(&m);
 }
 
-/* Adaptive refinement: the new vertices get the light too (every corner
- * value of the refined floor is rho I cos / r^2 at its vertex). */
-static void test_adaptive(void **state)
+/* Adaptive refinement: the new receivers get the light too. Ray cast: every
+ * corner value of the refined floor is rho I cos / r^2 at its vertex;
+ * hemicube: every element (new ones included) is rho x its exact mean. */
+static void tb__adaptive(tb_rad_ff_method ff)
 {
-    (void)state;
     tb_rad_mesh m;
     tb__mesh(&m, 3);
     tb__floor(&m, 8, 0.5f);
     assert_int_equal(tb_rad_mesh_update_geometry(&m), TB_OK);
     size_t n0 = m.nelems;
     tb_light l = tb_light_point(tb_vec3_make(0.1f, -0.2f, 0.6f), tb_channels_splat(3, 1.0f));
-    tb_rad_options o = {.samples = 4, .lights = &l, .nlights = 1};
+    tb_rad_options o = {.ff = ff, .samples = 4, .hemicube_res = 32, .lights = &l, .nlights = 1};
     tb_rad_stop stop = {.threshold = 1e-3};
     tb_rad_adapt_options ao = {.threshold = 0.05, .max_levels = 2};
     tb_rad_solver *s = NULL;
@@ -483,20 +508,35 @@ static void test_adaptive(void **state)
         fail_msg("%s", tb_last_error());
     const tb_rad_mesh *sm = tb_rad_solver_mesh(s);
     double b[TB_CHANNELS_MAX], worst = 0.0;
-    for (size_t e = 0; e < sm->nelems; e++)
+    for (size_t e = 0; e < sm->nelems; e++) {
+        if (ff == TB_RAD_FF_HEMICUBE) {
+            tb_rad_element_radiosity(s, e, false, b);
+            double want = 0.5 * tb__E_mean_poly(sm, e, 64, 0.1, -0.2, 0.6, 1.0);
+            worst = fmax(worst, fabs(b[0] - want) / want);
+            continue;
+        }
         for (int k = 0; k < (sm->elems[e].v[3] == TB_RAD_NONE ? 3 : 4); k++) {
             tb_rad_corner_radiosity(s, e, k, false, b);
             tb_vec3 p = sm->verts[sm->elems[e].v[k]].p;
             double w = 0.5 * tb__E(p.x, p.y, 0.1, -0.2, 0.6, 1.0, -2, 0);
             worst = fmax(worst, fabs(b[0] - w) / w);
         }
-    print_message("adaptive: %zu -> %zu elements, corners within %.2e\n", n0, sm->nelems, worst);
+    }
+    print_message("adaptive %s: %zu -> %zu elements, %s within %.2e\n", ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "ray cast",
+                  n0, sm->nelems, ff == TB_RAD_FF_HEMICUBE ? "elements" : "corners", worst);
     assert_true(sm->nelems > n0);
-    assert_true(worst < 2e-3);
+    assert_true(worst < (ff == TB_RAD_FF_HEMICUBE ? 2e-5 : 2e-3));
     tb_rad_energy en = tb_rad_solver_energy(s);
     assert_true(en.unshot < 1e-3 * en.emitted);
     tb_rad_solver_free(s);
     tb_rad_mesh_free(&m);
+}
+
+static void test_adaptive(void **state)
+{
+    (void)state;
+    tb__adaptive(TB_RAD_FF_RAYCAST);
+    tb__adaptive(TB_RAD_FF_HEMICUBE);
 }
 
 /* 1 and 2 threads: identical bits (all three kinds, an occluder, a box). */
