@@ -1,15 +1,18 @@
-/* Radiosity outputs: the --patches CSV and the PLY mesh (docs/radiosity.md,
- * "Outputs"). */
+/* Radiosity outputs: the --patches CSV, the PLY mesh and the display colours
+ * shared with the glTF writer (output_gltf.c) (docs/radiosity.md, "Outputs"). */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
+#include "host/radiosity/output_internal.h"
 #include "host/radiosity/radiosity.h"
 #include "util/base/outfile.h"
 #include "util/color/srgb.h"
 #include "util/math/float.h"
+#include "util/stats/provenance.h"
 
 /* Column suffix of channel c: r, g, b, or the band's wavelength. */
 static void tb__channel_name(const tb_rad_mesh *m, int c, char *buf, size_t n)
@@ -170,43 +173,124 @@ static void tb__to_rgb(const tb_rad_mesh *m, const double *b, double rgb[3])
     }
 }
 
-tb_status tb_rad_write_ply(const tb_rad_solver *s, const char *path, double scale)
+void tb__rad_corner_colour(const tb_rad_solver *s, size_t i, int k, double scale, float radiance[3], float display[3],
+                           unsigned char u8[3])
+{
+    double b[TB_CHANNELS_MAX], rgb[3];
+    tb_rad_corner_radiosity(s, i, k, true, b);
+    tb__to_rgb(tb_rad_solver_mesh(s), b, rgb);
+    for (int c = 0; c < 3; c++) {
+        double x = rgb[c] * scale;
+        x = x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x; /* NaN stays NaN: the solution would be broken */
+        radiance[c] = (float)rgb[c];
+        display[c] = (float)x;
+        double e = tb_srgb_encode((float)x);
+        e = e < 0.0 ? 0.0 : e > 1.0 ? 1.0 : e;
+        u8[c] = (unsigned char)lround(e * 255.0);
+    }
+}
+
+char *tb__rad_provenance_json(const tb_provenance *p, int indent, size_t *len)
+{
+    char *buf = NULL;
+    size_t n = 0;
+    if (!p)
+        return NULL;
+    FILE *fp = open_memstream(&buf, &n);
+    if (!fp)
+        return NULL;
+    tb_provenance_write_json(fp, p, indent);
+    if (fclose(fp) != 0) {
+        free(buf);
+        return NULL;
+    }
+    if (len)
+        *len = n;
+    return buf;
+}
+
+double tb_rad_display_scale(const tb_rad_solver *s)
+{
+    const tb_rad_mesh *m = tb_rad_solver_mesh(s);
+    double sum = 0.0, area = 0.0, b[TB_CHANNELS_MAX];
+    for (size_t i = 0; i < m->nelems; i++) {
+        bool emits = false;
+        for (int c = 0; c < m->nchannels; c++)
+            emits |= m->emission[i * (size_t)m->nchannels + (size_t)c] > 0.0f;
+        if (emits)
+            continue;
+        tb_rad_element_radiosity(s, i, true, b);
+        double y = 0.0;
+        if (m->spectral) {
+            double xyz[3];
+            tb_bands_to_xyz(&m->bands, b, xyz);
+            y = xyz[1];
+        } else
+            y = 0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2];
+        sum += y / TB_PI * m->elems[i].area;
+        area += m->elems[i].area;
+    }
+    double mean = area > 0.0 ? sum / area : 0.0, scale = mean > 0.0 ? 0.18 / mean : 1.0;
+    return isfinite(scale) ? scale : 1.0;
+}
+
+tb_rad_mesh_format tb_rad_mesh_format_from_path(const char *path)
+{
+    const char *dot = path ? strrchr(path, '.') : NULL;
+    if (!dot || strchr(dot, '/'))
+        return TB_RAD_MESH_UNKNOWN;
+    if (!strcasecmp(dot, ".ply"))
+        return TB_RAD_MESH_PLY;
+    if (!strcasecmp(dot, ".gltf"))
+        return TB_RAD_MESH_GLTF;
+    if (!strcasecmp(dot, ".glb"))
+        return TB_RAD_MESH_GLB;
+    return TB_RAD_MESH_UNKNOWN;
+}
+
+tb_status tb_rad_write_ply(const tb_rad_solver *s, const char *path, double scale, const tb_provenance *prov)
 {
     const tb_rad_mesh *m = tb_rad_solver_mesh(s);
     size_t ncorners = 0;
     for (size_t i = 0; i < m->nelems; i++)
         ncorners += m->elems[i].v[3] == TB_RAD_NONE ? 3 : 4;
+    char *pj = tb__rad_provenance_json(prov, 0, NULL);
+    if (prov && !pj)
+        return tb_error(TB_ERR_NOMEM, "%s: out of memory", path);
+    /* one comment line: JSON's own newlines are only layout */
+    for (char *c = pj; c && *c; c++)
+        if (*c == '\n' || *c == '\r')
+            *c = ' ';
     tb_outfile of;
     tb_status st = tb_outfile_open(&of, path);
-    if (st)
+    if (st) {
+        free(pj);
         return st;
+    }
     FILE *fp = of.fp;
     fprintf(fp,
             "ply\nformat binary_little_endian 1.0\ncomment testbed radiosity solution: colour = radiance B/pi in "
-            "linear sRGB (r g b floats) and 8-bit sRGB times %g (red green blue)\n"
+            "linear sRGB (r g b floats) and 8-bit sRGB times %.9g (red green blue)\n",
+            scale);
+    if (pj)
+        fprintf(fp, "comment testbed provenance %s\n", pj);
+    free(pj);
+    fprintf(fp,
             "element vertex %zu\nproperty float x\nproperty float y\nproperty float z\n"
             "property float nx\nproperty float ny\nproperty float nz\n"
             "property float r\nproperty float g\nproperty float b\n"
             "property uchar red\nproperty uchar green\nproperty uchar blue\n"
             "element face %zu\nproperty list uchar uint vertex_indices\nproperty uint object\nend_header\n",
-            scale, ncorners, m->nelems);
-    double b[TB_CHANNELS_MAX];
+            ncorners, m->nelems);
     for (size_t i = 0; i < m->nelems; i++) {
         const tb_rad_element *e = &m->elems[i];
         int n = e->v[3] == TB_RAD_NONE ? 3 : 4;
         for (int k = 0; k < n; k++) {
             const tb_rad_vertex *v = &m->verts[e->v[k]];
-            tb_rad_corner_radiosity(s, i, k, true, b);
-            double rgb[3];
-            tb__to_rgb(m, b, rgb);
-            float f[9] = {v->p.x, v->p.y, v->p.z, e->normal.x, e->normal.y, e->normal.z,
-                          (float)rgb[0], (float)rgb[1], (float)rgb[2]};
+            float rad[3], disp[3];
             unsigned char u8[3];
-            for (int c = 0; c < 3; c++) {
-                double x = tb_srgb_encode(rgb[c] * scale);
-                x = x < 0.0 ? 0.0 : x > 1.0 ? 1.0 : x;
-                u8[c] = (unsigned char)lround(x * 255.0);
-            }
+            tb__rad_corner_colour(s, i, k, scale, rad, disp, u8);
+            float f[9] = {v->p.x, v->p.y, v->p.z, e->normal.x, e->normal.y, e->normal.z, rad[0], rad[1], rad[2]};
             fwrite(f, sizeof f, 1, fp);
             fwrite(u8, 1, 3, fp);
         }

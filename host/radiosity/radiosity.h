@@ -51,6 +51,7 @@
 #include "util/math/vec.h"
 
 struct tb_image;
+struct tb_provenance;
 
 /* "No vertex / no element" in radiosity mesh indices. */
 #define TB_RAD_NONE UINT32_MAX
@@ -258,12 +259,41 @@ tb_status tb_rad_write_patches(const tb_rad_solver *s, const char *path);
  * *ncols radiosity values (the b_ columns), row-major, malloc'd into *b. */
 tb_status tb_rad_read_patches(const char *path, size_t *nrows, int *ncols, double **b);
 
+/* Mesh file formats of the solved mesh (tb_rad_mesh_format_from_path). */
+typedef enum tb_rad_mesh_format {
+    TB_RAD_MESH_UNKNOWN = 0,
+    TB_RAD_MESH_PLY,  /* .ply: binary little-endian PLY (tb_rad_write_ply) */
+    TB_RAD_MESH_GLTF, /* .gltf: glTF 2.0 JSON, the buffer embedded as a base64 data URI (tb_rad_write_gltf) */
+    TB_RAD_MESH_GLB,  /* .glb: binary glTF 2.0 (tb_rad_write_gltf) */
+} tb_rad_mesh_format;
+
+/* The format named by a path's extension (case-insensitive), or TB_RAD_MESH_UNKNOWN. */
+tb_rad_mesh_format tb_rad_mesh_format_from_path(const char *path);
+
+/* The display scale of the mesh outputs' 8-bit / clamped colours: 0.18 over
+ * the area-weighted mean luminance of the radiance B / pi (ambient term
+ * included) of the elements that do not emit; 1 if that mean is 0. */
+double tb_rad_display_scale(const tb_rad_solver *s);
+
 /* The solved mesh as binary PLY with per-vertex linear RGB colours (float
  * r,g,b properties and 8-bit sRGB red,green,blue), one vertex per element
  * corner (so colours can differ across materials), the ambient term
- * included, radiosity scaled by `scale` before the 8-bit conversion.
+ * included, radiosity scaled by `scale` before the 8-bit conversion;
+ * `prov` (may be NULL) as a `comment testbed provenance {JSON}` line.
  * Written all-or-nothing. */
-tb_status tb_rad_write_ply(const tb_rad_solver *s, const char *path, double scale);
+tb_status tb_rad_write_ply(const tb_rad_solver *s, const char *path, double scale, const struct tb_provenance *prov);
+
+/* The solved mesh as glTF 2.0: `binary` false writes one .gltf JSON file
+ * with the buffer as a base64 data URI, true a .glb. The same vertices in
+ * the same order as tb_rad_write_ply (one per element corner), triangles
+ * (v0 v1 v2) and, for quads, (v0 v2 v3); POSITION (with min/max), NORMAL
+ * (the element's), COLOR_0 = the PLY's display colour before sRGB encoding
+ * (linear radiance times `scale`, clamped to [0, 1]), _RADIANCE = the PLY's
+ * float r g b; one KHR_materials_unlit material; `prov` (may be NULL) in
+ * asset.extras. Coordinates are the scene's, unscaled. Written
+ * all-or-nothing; TB_ERR_UNSUPPORTED if a .glb would exceed 4 GB. */
+tb_status tb_rad_write_gltf(const tb_rad_solver *s, const char *path, double scale, bool binary,
+                            const struct tb_provenance *prov);
 
 /* The solution seen from the scene's camera at its resolution: spp rays
  * per pixel on a regular sub-pixel grid (spp rounded up to a square) against

@@ -23,15 +23,17 @@
 static void tb__rad_usage(FILE *out)
 {
     fprintf(out,
-            "usage: testbed render SCENE.mid --method radiosity [-o IMAGE] [--patches FILE.csv] [--mesh-out FILE.ply]\n"
-            "                      [options]\n"
+            "usage: testbed render SCENE.mid --method radiosity [-o IMAGE] [--patches FILE.csv]\n"
+            "                      [--mesh-out FILE.ply|.gltf|.glb] [options]\n"
             "Progressive-refinement radiosity (docs/radiosity.md). -o is optional when --patches or\n"
             "--mesh-out is given (scenes without a camera). Light comes from emitting surfaces and from the\n"
             "scene's point, spot and directional lights (IES included), each shot once, directly, with shadows.\n"
             "  -o IMAGE              the solution from the scene camera (.png, .exr, .pfm, .rle), Gouraud-shaded\n"
             "  --patches FILE.csv    one row per element: element,object,area,cx,cy,cz,nx,ny,nz, the radiosity\n"
             "                        per channel (b_r,b_g,b_b or b_<nm>), then the unshot radiosity (u_...); W/m^2\n"
-            "  --mesh-out FILE.ply   the solved mesh with vertex colours (binary PLY)\n"
+            "  --mesh-out FILE       the solved mesh with vertex colours, by extension: .ply (binary PLY), .gltf\n"
+            "                        (glTF 2.0, buffer embedded as base64) or .glb (binary glTF); colours are\n"
+            "                        radiance B/pi scaled so the mean non-emitting luminance is 0.18, clamped\n"
             "  --formfactor M        raycast (default; Wallace et al. 1989, receivers at vertices) | hemicube\n"
             "  --backend B           ray-cast form factors on cpu (default), vulkan (the form-factor kernel,\n"
             "                        lavapipe included; fails if there is no device) or auto (Vulkan on a real GPU)\n"
@@ -84,17 +86,6 @@ static bool tb__rad_double(const char *s, double lo, double hi, double *out)
     if (end == s || *end || !(v >= lo && v <= hi))
         return false;
     *out = v;
-    return true;
-}
-
-static bool tb__ends_with(const char *s, const char *suf)
-{
-    size_t n = strlen(s), m = strlen(suf);
-    if (n < m)
-        return false;
-    for (size_t i = 0; i < m; i++)
-        if ((s[n - m + i] | 0x20) != (suf[i] | 0x20))
-            return false;
     return true;
 }
 
@@ -285,13 +276,14 @@ int tb_cmd_render_radiosity(int argc, char **argv)
         return TB_EXIT_USAGE;
     }
     if (!out_path && !patches_path && !mesh_path)
-        return tb__rad_fail("%s", "nothing to write: give -o IMAGE, --patches FILE.csv or --mesh-out FILE.ply"),
+        return tb__rad_fail("%s", "nothing to write: give -o IMAGE, --patches FILE.csv or --mesh-out FILE.ply|.gltf|.glb"),
                TB_EXIT_USAGE;
     tb_image_format fmt = TB_IMAGE_UNKNOWN;
     if (out_path && (fmt = tb_image_format_from_path(out_path)) == TB_IMAGE_UNKNOWN)
         return tb__rad_fail("unknown image format of '%s' (.png, .exr, .pfm, .rle)", out_path), TB_EXIT_USAGE;
-    if (mesh_path && !tb__ends_with(mesh_path, ".ply"))
-        return tb__rad_fail("--mesh-out '%s': only .ply is written", mesh_path), TB_EXIT_USAGE;
+    tb_rad_mesh_format mesh_fmt = mesh_path ? tb_rad_mesh_format_from_path(mesh_path) : TB_RAD_MESH_UNKNOWN;
+    if (mesh_path && mesh_fmt == TB_RAD_MESH_UNKNOWN)
+        return tb__rad_fail("--mesh-out '%s': unknown mesh format (.ply, .gltf, .glb)", mesh_path), TB_EXIT_USAGE;
     if (!report_path != !ref_path)
         return tb__rad_fail("%s", "--report and --reference go together"), TB_EXIT_USAGE;
     if (!(ao.threshold > 0) && (ao.max_levels || ao.min_area > 0))
@@ -465,37 +457,31 @@ int tb_cmd_render_radiosity(int argc, char **argv)
         if (!st)
             st = tb_stats_write_json_file(stats_path, &prov);
     }
-    tb_provenance_free(&prov);
     if (st)
-        goto fail;
+        goto fail_prov;
 
     /* outputs, each all-or-nothing */
     if (patches_path && (st = tb_rad_write_patches(solver, patches_path)))
-        goto fail;
+        goto fail_prov;
     if (mesh_path) {
-        /* 8-bit colours: mean non-emitting radiance (luminance) to 0.18 */
-        double sum = 0.0, area = 0.0, b[TB_CHANNELS_MAX];
-        for (size_t i = 0; i < mesh.nelems; i++) {
-            bool emits = false;
-            for (int c = 0; c < mesh.nchannels; c++)
-                emits |= mesh.emission[i * (size_t)mesh.nchannels + (size_t)c] > 0.0f;
-            if (emits)
-                continue;
-            tb_rad_element_radiosity(solver, i, true, b);
-            double y = 0.0;
-            if (mesh.spectral) {
-                double xyz[3];
-                tb_bands_to_xyz(&mesh.bands, b, xyz);
-                y = xyz[1];
-            } else
-                y = 0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2];
-            sum += y / 3.14159265358979323846 * mesh.elems[i].area;
-            area += mesh.elems[i].area;
+        /* colours: mean non-emitting radiance (luminance) to 0.18 */
+        double scale = tb_rad_display_scale(solver);
+        switch (mesh_fmt) {
+        case TB_RAD_MESH_PLY:
+            st = tb_rad_write_ply(solver, mesh_path, scale, &prov);
+            break;
+        case TB_RAD_MESH_GLTF:
+        case TB_RAD_MESH_GLB:
+            st = tb_rad_write_gltf(solver, mesh_path, scale, mesh_fmt == TB_RAD_MESH_GLB, &prov);
+            break;
+        case TB_RAD_MESH_UNKNOWN:
+            st = tb_error(TB_ERR_ARG, "%s: unknown mesh format", mesh_path);
+            break;
         }
-        double mean = area > 0.0 ? sum / area : 0.0;
-        if ((st = tb_rad_write_ply(solver, mesh_path, mean > 0.0 ? 0.18 / mean : 1.0)))
-            goto fail;
+        if (st)
+            goto fail_prov;
     }
+    tb_provenance_free(&prov);
     if (report_path &&
         (st = tb__write_text(report_path, "seconds,shots,shots_per_n,unshot_fraction,nrmse,nrmse_ambient\n", rep.buf,
                              rep.len)))
@@ -530,6 +516,8 @@ int tb_cmd_render_radiosity(int argc, char **argv)
            mesh.spectral ? "spectral" : "rgb", ro.batch ? "vulkan" : "cpu");
     rc = TB_EXIT_OK;
     goto done;
+fail_prov:
+    tb_provenance_free(&prov);
 fail:
     fprintf(stderr, "testbed render: %s\n", tb_last_error());
 done:
