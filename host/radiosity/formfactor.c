@@ -127,9 +127,11 @@ double tb__ff_point_polygon_ex(tb_vec3 p, tb_vec3 n, const tb_ff_polygon *poly, 
     if (!any_front)
         return 0.0;
 
-    /* Clip to p's tangent plane (keep d >= 0): one plane turns 4 corners into
-     * at most 5. */
-    tb_dvec3 c[TB_FF_MAX_VERTS + 1];
+    /* Clip to p's tangent plane (keep d >= 0): one plane turns 4 corners of
+     * a planar convex polygon into at most 5, but a slightly twisted quad (a
+     * whole Cornell box face) seen from near its plane can alternate sides,
+     * d = (+ - + -): every corner and every edge's crossing, 2n points. */
+    tb_dvec3 c[2 * TB_FF_MAX_VERTS];
     int m = 0;
     for (int k = 0; k < poly->n; k++) {
         int k1 = (k + 1) % poly->n;

@@ -161,6 +161,19 @@ static tb_vec3 rot(tb_vec3 v, const double q[4], tb_vec3 off)
 /* Float noise off the planes: receivers on a coplanar neighbour's corner or
  * edge see nothing, and a polygon with corners on the receiver's tangent
  * plane gives the value of the noise-free (axis-aligned) configuration. */
+/* A twisted quad (corners alternately 0 and 1.5 high) seen from a point at
+ * height 1 looking down: its tangent plane puts the corners alternately in
+ * front and behind, so clipping keeps 2 corners and adds 4 crossings, six
+ * points (a whole, slightly twisted Cornell box face did this and overran
+ * the clip buffer, crashing `--max-edge 0`). Finite and in (0, 1). */
+static void test_point_twisted(void **state)
+{
+    (void)state;
+    tb_ff_polygon q = {.n = 4, .v = {{0, 0, 0}, {1, 0, 1.5f}, {1, 1, 0}, {0, 1, 1.5f}}};
+    double f = tb_ff_point_polygon((tb_vec3){0.5f, 0.5f, 1}, (tb_vec3){0, 0, -1}, &q);
+    assert_true(f > 0.0 && f < 1.0);
+}
+
 static void test_point_noise(void **state)
 {
     (void)state;
@@ -1021,7 +1034,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_frame),          cmocka_unit_test(test_point_b3),
-        cmocka_unit_test(test_point_offcenter), cmocka_unit_test(test_point_zero_cases), cmocka_unit_test(test_point_noise),
+        cmocka_unit_test(test_point_offcenter), cmocka_unit_test(test_point_zero_cases), cmocka_unit_test(test_point_noise), cmocka_unit_test(test_point_twisted),
         cmocka_unit_test(test_point_straddle), cmocka_unit_test(test_closed_cube), cmocka_unit_test(test_hemicube_watertight), cmocka_unit_test(test_hemicube_close),
         cmocka_unit_test(test_howell_exact),   cmocka_unit_test(test_howell_raycast),
         cmocka_unit_test(test_howell_hemicube), cmocka_unit_test(test_reciprocity),
