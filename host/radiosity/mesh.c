@@ -381,6 +381,15 @@ done:
     return st;
 }
 
+double tb_rad_default_max_edge(const tb_scene *scene)
+{
+    tb_vec3 ext = tb_vec3_sub(scene->bounds.hi, scene->bounds.lo);
+    double diag = tb_vec3_length(ext);
+    if (!(ext.x >= 0 && ext.y >= 0 && ext.z >= 0) || !isfinite(diag) || !(diag > 0.0))
+        return 0.0;
+    return diag / TB_RAD_DEFAULT_EDGE_DIVISIONS;
+}
+
 tb_status tb_rad_mesh_from_scene(const tb_scene *scene, const tb_rad_mesh_options *opt, tb_rad_mesh *out)
 {
     tb_rad_mesh_options o = {0};

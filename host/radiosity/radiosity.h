@@ -95,12 +95,22 @@ typedef struct tb_rad_mesh {
     float *emission;        /* nelems * nchannels: emitted radiosity (W/m^2 per channel) */
 } tb_rad_mesh;
 
-/* How to mesh a scene; zeroed means defaults. */
+/* How to mesh a scene; zeroed means faces whole (the command's default
+ * element size is tb_rad_default_max_edge). */
 typedef struct tb_rad_mesh_options {
     double max_edge;  /* > 0: longest element edge (world units); 0: none */
     double max_area;  /* > 0: largest element area (world units^2); 0: none */
     double max_angle; /* curved surfaces: polygonization angle (radians); 0: the object level's default */
 } tb_rad_mesh_options;
+
+/* The element size `testbed render --method radiosity` uses when neither
+ * --max-edge nor --max-area is given: the scene's bounding-box diagonal over
+ * this (the Cornell box: 960.7 / 24 = 40 mm, 1322 elements). */
+#define TB_RAD_DEFAULT_EDGE_DIVISIONS 24
+
+/* The diagonal of `scene`'s bounds over TB_RAD_DEFAULT_EDGE_DIVISIONS; 0
+ * (faces whole) when the bounds are empty, flat to a point or not finite. */
+double tb_rad_default_max_edge(const tb_scene *scene);
 
 /* An empty mesh. */
 void tb_rad_mesh_init(tb_rad_mesh *m);

@@ -3,7 +3,7 @@
 # white furnace through --patches (every element B = E / (1 - rho) = 2 with
 # the ambient term left out, to the threshold and the form-factor error),
 # the exact CSV columns, the same bytes with 1 and 2 threads, --report with
-# --reference, --mesh-out PLY, and bad options: a clear message, a non-zero
+# --reference, --mesh-out PLY, the default element size, and bad options: a clear message, a non-zero
 # exit and no file left behind.
 set -u
 T="${TB_TEST_TMPDIR:-/tmp}/radiosity_cli.$$"
@@ -38,6 +38,27 @@ rad "$FURNACE" --max-edge 0.25 --samples 8 --threshold 1e-2 --patches "$T/c.csv"
 head -1 "$T/r.csv" | grep -qx 'seconds,shots,shots_per_n,unshot_fraction,nrmse,nrmse_ambient' || fail "report header"
 awk -F, 'NR == 2 { first = $5; f0 = $4 } NR > 2 { last = $5; fl = $4 }
 END { if (!(NR >= 3 && last < first && fl < f0 && f0 == 1)) exit 1 }' "$T/r.csv" || { cat "$T/r.csv"; fail "report rows"; }
+
+# --- default element size: the bounding-box diagonal / 24 (Cornell box: 40.03 mm, 1322 elements) unless
+# --max-edge or --max-area is given; --max-edge 0 keeps faces whole (16 elements)
+CORNELL="$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid"
+nelem() { sed -n 's/.*radiosity on .*: \([0-9]*\) elements.*/\1/p' "$1"; }
+rad "$CORNELL" --samples 4 --threshold 0.05 --patches "$T/d.csv" > "$T/d.out" 2>&1 || { cat "$T/d.out"; fail "default run"; }
+grep -q "max edge 40.0309 (default: bounding-box diagonal / 24)" "$T/d.out" || { cat "$T/d.out"; fail "default size"; }
+n=$(nelem "$T/d.out")
+[ "$n" -ge 1000 ] && [ "$n" -le 2000 ] || fail "default Cornell mesh: $n elements"
+rad "$CORNELL" --max-edge 40.0309 --max-shots 1 --patches "$T/e.csv" > "$T/e.out" 2>&1 || fail "--max-edge 40.0309 run"
+[ "$(nelem "$T/e.out")" = "$n" ] || fail "--max-edge 40.0309: $(nelem "$T/e.out") elements, default $n"
+rad "$CORNELL" --max-edge 0 --samples 4 --patches "$T/e.csv" > "$T/e.out" 2>&1 || fail "--max-edge 0 run (whole, slightly twisted faces)"
+[ "$(nelem "$T/e.out")" = 16 ] && grep -q "faces whole" "$T/e.out" || { cat "$T/e.out"; fail "--max-edge 0"; }
+rad "$CORNELL" --max-area 10000 --max-shots 1 --patches "$T/e.csv" > "$T/e.out" 2>&1 || fail "--max-area run"
+grep -q "elements (max area 10000)" "$T/e.out" || { cat "$T/e.out"; fail "--max-area alone keeps the default edge"; }
+# the default mesh resolves light and shadow on the floor (faces whole: one value); elements
+# under the blocks see nothing, so count only lit ones: a spread from 10% to 100% of the brightest
+awk -F, 'NR > 1 && $8 > 0.99 && $5 < 1 { b = $10 + $11 + $12; n++; v[n] = b; if (b > mx) mx = b }
+END { for (i = 1; i <= n; i++) { if (v[i] > 0.1 * mx && v[i] < 0.5 * mx) dim++; if (v[i] > 0.9 * mx) lit++ }
+      if (!(n > 150 && dim >= 10 && lit >= 10)) { print n " floor elements, " dim " dim, " lit " lit"; exit 1 } }' \
+    "$T/d.csv" || fail "default Cornell floor is not resolved"
 
 # --- errors: message, exit status, no files
 expect_fail() {

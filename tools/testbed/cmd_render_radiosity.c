@@ -20,6 +20,9 @@
 #include "util/stats/provenance.h"
 #include "util/stats/stats.h"
 
+#define TB__RAD_STR2(x) #x
+#define TB__RAD_STR(x) TB__RAD_STR2(x)
+
 static void tb__rad_usage(FILE *out)
 {
     fprintf(out,
@@ -43,8 +46,9 @@ static void tb__rad_usage(FILE *out)
             "  --threshold X         stop when the unshot fraction of emitted power is below X (default %g)\n"
             "  --time-budget S       stop after S seconds of shooting\n"
             "  --max-shots N         stop after N shots\n"
-            "  --max-edge L          longest element edge, scene units (default: faces whole)\n"
-            "  --max-area A          largest element area, scene units^2\n"
+            "  --max-edge L          longest element edge, scene units (default, when neither --max-edge nor\n"
+            "                        --max-area is given: the scene's bounding-box diagonal / %d; 0: faces whole)\n"
+            "  --max-area A          largest element area, scene units^2 (alone: no edge limit besides sqrt(A))\n"
             "  --adapt X             adaptive subdivision (Cohen et al. 1986): after solving, split elements whose\n"
             "                        corners' reflected luminance differs by more than X times the brightest\n"
             "                        element's, keep the mesh conforming, gather for the new vertices, continue\n"
@@ -58,7 +62,8 @@ static void tb__rad_usage(FILE *out)
             "                        seconds,shots,shots_per_n,unshot_fraction,nrmse,nrmse_ambient (the RMS\n"
             "                        error over the reference's RMS reflected radiosity B - E)\n"
             "  --stats FILE.json     counters, times and provenance\n",
-            TB_RAD_DEFAULT_SAMPLES, TB_RAD_DEFAULT_HEMICUBE_RES, TB_RAD_DEFAULT_THRESHOLD, TB_RAD_ADAPT_DEFAULT_LEVELS);
+            TB_RAD_DEFAULT_SAMPLES, TB_RAD_DEFAULT_HEMICUBE_RES, TB_RAD_DEFAULT_THRESHOLD, TB_RAD_DEFAULT_EDGE_DIVISIONS,
+            TB_RAD_ADAPT_DEFAULT_LEVELS);
 }
 
 static int tb__rad_fail(const char *fmt, const char *arg)
@@ -169,6 +174,7 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     int threads = 0, spp = 4, gdevice = -1;
     const char *backend = "cpu";
     double exposure = NAN;
+    bool size_given = false; /* --max-edge or --max-area: else the default element size */
     long v;
     double d;
     for (int i = 1; i < argc; i++) {
@@ -213,13 +219,13 @@ int tb_cmd_render_radiosity(int argc, char **argv)
                 return tb__rad_fail("bad --max-shots '%s'", nx), TB_EXIT_USAGE;
             stop.max_shots = (uint64_t)v, i++;
         } else if (!strcmp(a, "--max-edge") && has) {
-            if (!tb__rad_double(nx, 1e-300, 1e30, &d))
-                return tb__rad_fail("bad --max-edge '%s' (> 0)", nx), TB_EXIT_USAGE;
-            mo.max_edge = d, i++;
+            if (!tb__rad_double(nx, 0, 1e30, &d))
+                return tb__rad_fail("bad --max-edge '%s' (>= 0; 0: faces whole)", nx), TB_EXIT_USAGE;
+            mo.max_edge = d, size_given = true, i++;
         } else if (!strcmp(a, "--max-area") && has) {
             if (!tb__rad_double(nx, 1e-300, 1e30, &d))
                 return tb__rad_fail("bad --max-area '%s' (> 0)", nx), TB_EXIT_USAGE;
-            mo.max_area = d, i++;
+            mo.max_area = d, size_given = true, i++;
         } else if (!strcmp(a, "--threads") && has) {
             if (!tb__rad_long(nx, 0, 4096, &v))
                 return tb__rad_fail("bad --threads '%s' (0..4096)", nx), TB_EXIT_USAGE;
@@ -325,6 +331,8 @@ int tb_cmd_render_radiosity(int argc, char **argv)
         tb__rad_fail("%s: the scene has no camera: use --patches or --mesh-out instead of -o", scene_path);
         goto done;
     }
+    if (!size_given)
+        mo.max_edge = tb_rad_default_max_edge(scene);
     double t_mesh = 1e-9 * (double)tb_stats_now_ns();
     if ((st = tb_rad_mesh_from_scene(scene, &mo, &mesh)))
         goto fail;
@@ -369,8 +377,18 @@ int tb_cmd_render_radiosity(int argc, char **argv)
             ro.batch_ctx = gscene;
         }
     }
-    fprintf(stderr, "testbed render: radiosity on %s: %zu elements, %zu vertices, %d channels (%s), %s\n", scene_path,
-            mesh.nelems, mesh.nverts, mesh.nchannels, mesh.spectral ? "spectral" : "rgb",
+    char size[96];
+    if (mo.max_edge > 0 && mo.max_area > 0)
+        snprintf(size, sizeof size, "max edge %g, max area %g", mo.max_edge, mo.max_area);
+    else if (mo.max_area > 0)
+        snprintf(size, sizeof size, "max area %g", mo.max_area);
+    else if (mo.max_edge > 0)
+        snprintf(size, sizeof size, "max edge %g%s", mo.max_edge,
+                 size_given ? "" : " (default: bounding-box diagonal / " TB__RAD_STR(TB_RAD_DEFAULT_EDGE_DIVISIONS) ")");
+    else
+        snprintf(size, sizeof size, "faces whole");
+    fprintf(stderr, "testbed render: radiosity on %s: %zu elements (%s), %zu vertices, %d channels (%s), %s\n",
+            scene_path, mesh.nelems, size, mesh.nverts, mesh.nchannels, mesh.spectral ? "spectral" : "rgb",
             ro.ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "ray cast");
     bool emits = false;
     for (size_t k = 0; k < mesh.nelems * (size_t)mesh.nchannels && !emits; k++)
