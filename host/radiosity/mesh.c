@@ -381,13 +381,14 @@ done:
     return st;
 }
 
-double tb_rad_default_max_edge(const tb_scene *scene)
+tb_rad_mesh_options tb_rad_default_mesh_options(const tb_scene *scene)
 {
+    tb_rad_mesh_options o = {.max_angle = TB_POLY_DEFAULT_ANGLE};
     tb_vec3 ext = tb_vec3_sub(scene->bounds.hi, scene->bounds.lo);
     double diag = tb_vec3_length(ext);
-    if (!(ext.x >= 0 && ext.y >= 0 && ext.z >= 0) || !isfinite(diag) || !(diag > 0.0))
-        return 0.0;
-    return diag / TB_RAD_DEFAULT_EDGE_DIVISIONS;
+    if (ext.x >= 0 && ext.y >= 0 && ext.z >= 0 && isfinite(diag) && diag > 0.0)
+        o.max_edge = diag / TB_RAD_DEFAULT_EDGE_DIVISIONS;
+    return o;
 }
 
 tb_status tb_rad_mesh_from_scene(const tb_scene *scene, const tb_rad_mesh_options *opt, tb_rad_mesh *out)
@@ -403,10 +404,14 @@ tb_status tb_rad_mesh_from_scene(const tb_scene *scene, const tb_rad_mesh_option
     out->spectral = scene->spectral;
     out->bands = scene->bands;
     tb__mb b = {.m = out};
-    /* CSG boundary resolution: the element size, else 1/50 of the scene */
+    /* CSG boundary resolution: the element size, but never coarser than
+     * 1/50 of the scene (elements of 1/24 of it, the command's default, lost
+     * the showcase's small CSG pieces that faces-whole meshing kept) */
     tb_vec3 ext = tb_vec3_sub(scene->bounds.hi, scene->bounds.lo);
     double diag = tb_vec3_length(ext);
     double csg_edge = o.max_edge > 0.0 ? o.max_edge : (o.max_area > 0 ? sqrt(o.max_area) : diag / 50.0);
+    if (diag / 50.0 > 0.0 && isfinite(diag))
+        csg_edge = fmin(csg_edge, diag / 50.0);
     if (!(csg_edge > 0.0))
         csg_edge = 1.0;
     tb_status st = TB_OK;

@@ -96,7 +96,7 @@ typedef struct tb_rad_mesh {
 } tb_rad_mesh;
 
 /* How to mesh a scene; zeroed means faces whole (the command's default
- * element size is tb_rad_default_max_edge). */
+ * meshing is tb_rad_default_mesh_options). */
 typedef struct tb_rad_mesh_options {
     double max_edge;  /* > 0: longest element edge (world units); 0: none */
     double max_area;  /* > 0: largest element area (world units^2); 0: none */
@@ -108,9 +108,12 @@ typedef struct tb_rad_mesh_options {
  * this (the Cornell box: 960.7 / 24 = 40 mm, 1322 elements). */
 #define TB_RAD_DEFAULT_EDGE_DIVISIONS 24
 
-/* The diagonal of `scene`'s bounds over TB_RAD_DEFAULT_EDGE_DIVISIONS; 0
- * (faces whole) when the bounds are empty, flat to a point or not finite. */
-double tb_rad_default_max_edge(const tb_scene *scene);
+/* The command's default meshing of `scene`: max_edge = the diagonal of its
+ * bounds over TB_RAD_DEFAULT_EDGE_DIVISIONS (0, faces whole, when the
+ * bounds are empty or not finite) and max_angle = the polygonizer's default
+ * angle (TB_POLY_DEFAULT_ANGLE, 15 degrees), which an edge limit alone
+ * would turn off: curved surfaces stay as round as with faces whole. */
+tb_rad_mesh_options tb_rad_default_mesh_options(const tb_scene *scene);
 
 /* An empty mesh. */
 void tb_rad_mesh_init(tb_rad_mesh *m);

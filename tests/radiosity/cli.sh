@@ -60,6 +60,21 @@ END { for (i = 1; i <= n; i++) { if (v[i] > 0.1 * mx && v[i] < 0.5 * mx) dim++; 
       if (!(n > 150 && dim >= 10 && lit >= 10)) { print n " floor elements, " dim " dim, " lit " lit"; exit 1 } }' \
     "$T/d.csv" || fail "default Cornell floor is not resolved"
 
+# the default keeps curved surfaces at the polygonizer's 15 degrees: a unit sphere on a 100 x 100 floor
+# (edge 100 * sqrt(2) / 24 = 5.9, larger than the sphere) stays round, not an octahedron
+cat > "$T/ball.mid" <<'MID'
+mid 1
+material "m" { diffuse = 0.5 emission = 1 }
+polygons "floor" {
+    geometry = { vertices = [[0 0 0] [100 0 0] [100 100 0] [0 100 0]] faces = [[0 1 2 3]] }
+    rendering = { material = "m" }
+}
+sphere "ball" { transform = [translate([50 50 1])] rendering = { material = "m" } }
+MID
+rad "$T/ball.mid" --max-shots 1 --patches "$T/e.csv" > "$T/e.out" 2>&1 || { cat "$T/e.out"; fail "ball run"; }
+nball=$(awk -F, 'NR > 1 && $2 == 1' "$T/e.csv" | wc -l)
+[ "$nball" -ge 200 ] || fail "default mesh: the sphere has $nball elements"
+
 # --- errors: message, exit status, no files
 expect_fail() {
     want="$1"; shift

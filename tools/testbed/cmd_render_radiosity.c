@@ -332,7 +332,7 @@ int tb_cmd_render_radiosity(int argc, char **argv)
         goto done;
     }
     if (!size_given)
-        mo.max_edge = tb_rad_default_max_edge(scene);
+        mo = tb_rad_default_mesh_options(scene);
     double t_mesh = 1e-9 * (double)tb_stats_now_ns();
     if ((st = tb_rad_mesh_from_scene(scene, &mo, &mesh)))
         goto fail;
@@ -436,10 +436,10 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     char opts[512];
     snprintf(opts, sizeof opts,
              "method=radiosity formfactor=%s samples=%d hemicube_res=%d threshold=%g time_budget=%g max_edge=%g "
-             "max_area=%g spp=%d threads=%d colour=%s backend=%s adapt=%g adapt_levels=%d min_area=%g",
+             "max_area=%g max_angle=%g spp=%d threads=%d colour=%s backend=%s adapt=%g adapt_levels=%d min_area=%g",
              ro.ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "raycast", ro.samples ? ro.samples : TB_RAD_DEFAULT_SAMPLES,
              ro.hemicube_res ? ro.hemicube_res : TB_RAD_DEFAULT_HEMICUBE_RES, stop.threshold, stop.time_budget,
-             mo.max_edge, mo.max_area, spp, nthreads, mesh.spectral ? "spectral" : "rgb",
+             mo.max_edge, mo.max_area, mo.max_angle, spp, nthreads, mesh.spectral ? "spectral" : "rgb",
              ro.batch ? "vulkan" : "cpu", ao.threshold,
              ao.threshold > 0 ? (ao.max_levels ? ao.max_levels : TB_RAD_ADAPT_DEFAULT_LEVELS) : 0, ao.min_area);
     tb_provenance_set_seed(&prov, ro.seed);
