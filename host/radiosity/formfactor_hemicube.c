@@ -80,8 +80,13 @@ void tb_hemicube_free(tb_hemicube *hc)
     free(hc);
 }
 
-/* Most corners after clipping a quad by the five planes of a face's frustum. */
-#define TB__HC_MAX_CLIP (TB_FF_MAX_VERTS + 5)
+/* Most corners after clipping a polygon by the five planes of a face's
+ * frustum. A clip outputs the inside corners plus two points per run of
+ * outside corners, so m corners become at most m + floor(m / 2): a convex
+ * polygon gains one per plane, but a twisted (non-planar) quad, which a
+ * plane can cross four times, goes 4 -> 6 -> 9 -> 13 -> 19 -> 28. */
+#define TB__HC_MAX_CLIP 28
+_Static_assert(TB_FF_MAX_VERTS <= 4, "TB__HC_MAX_CLIP is the bound for quads");
 
 /* Point where edge a-b crosses a plane (signed distances da > 0 > db or the
  * reverse), computed from the lexicographically smaller end so that an edge

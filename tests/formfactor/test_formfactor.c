@@ -428,6 +428,38 @@ static void test_hemicube_close(void **state)
     tb_hemicube_free(hc);
 }
 
+/* Twisted (non-planar) quads around the hemicube: a plane can cross such a
+ * quad four times, so the frustum clipping grows it by up to half its
+ * corners per plane (4 -> 28), not one per plane as for convex polygons.
+ * The sanitizer build catches an overflow of the clip buffers; here every
+ * answer must also be a form factor. */
+static void test_hemicube_twisted(void **state)
+{
+    (void)state;
+    tb_hemicube *hc = tb_hemicube_create(32);
+    assert_non_null(hc);
+    uint64_t x = 0x9e3779b97f4a7c15u;
+    double sum_max = 0.0;
+    for (int trial = 0; trial < 20000; trial++) {
+        tb_ff_polygon q = {.n = 4};
+        for (int k = 0; k < 4; k++) {
+            float c[3];
+            for (int a = 0; a < 3; a++) {
+                x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+                c[a] = (float)((double)(x >> 11) * 0x1.0p-53 * 4.0 - 2.0);
+            }
+            q.v[k] = (tb_vec3){c[0], c[1], c[2] + 0.6f};
+        }
+        double ff = -1.0;
+        assert_int_equal(tb_hemicube_formfactors(hc, (tb_vec3){0, 0, 0}, (tb_vec3){0, 0, 1}, &q, 1, TB_FF_NONE, &ff),
+                         TB_OK);
+        assert_true(ff >= 0.0 && ff <= 1.0 + 1e-9);
+        sum_max = ff > sum_max ? ff : sum_max;
+    }
+    assert_true(sum_max > 0.05); /* the quads were seen */
+    tb_hemicube_free(hc);
+}
+
 /* ------------------------------------------------------------ Howell, area to area */
 
 /* Integrating the exact point form factor over a receiver grid reproduces
@@ -1035,7 +1067,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_frame),          cmocka_unit_test(test_point_b3),
         cmocka_unit_test(test_point_offcenter), cmocka_unit_test(test_point_zero_cases), cmocka_unit_test(test_point_noise), cmocka_unit_test(test_point_twisted),
-        cmocka_unit_test(test_point_straddle), cmocka_unit_test(test_closed_cube), cmocka_unit_test(test_hemicube_watertight), cmocka_unit_test(test_hemicube_close),
+        cmocka_unit_test(test_point_straddle), cmocka_unit_test(test_closed_cube), cmocka_unit_test(test_hemicube_watertight), cmocka_unit_test(test_hemicube_close), cmocka_unit_test(test_hemicube_twisted),
         cmocka_unit_test(test_howell_exact),   cmocka_unit_test(test_howell_raycast),
         cmocka_unit_test(test_howell_hemicube), cmocka_unit_test(test_reciprocity),
         cmocka_unit_test(test_blocker), cmocka_unit_test(test_exact_howell), cmocka_unit_test(test_exact_half_hidden), cmocka_unit_test(test_exact_hard_cases),        cmocka_unit_test(test_sample),
