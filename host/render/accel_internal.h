@@ -24,6 +24,30 @@
 #define TB__BVH_SAH_MAX_DEPTH 64
 #define TB__BVH_STACK 128
 
+/* One node of the 4-wide BVH the CPU queries traverse (bvh4.c, docs/accel.md
+ * "4-wide traversal"): the binary tree collapsed so that a node holds up to
+ * four children, whose boxes are stored by coordinate (structure of arrays)
+ * for one SSE slab test. The binary nodes stay as they are (host/gpu converts
+ * them for the Vulkan kernels). 128 bytes, two cache lines. */
+typedef struct tb__bvh4_node {
+    /* Rows lo x, hi x, lo y, hi y, lo z, hi z; column i is child i. An unused
+     * slot holds lo = +inf, hi = -inf, which no valid ray meets. */
+    _Alignas(16) float box[6][4];
+    uint32_t child[4]; /* inner child: its wide node; leaf child: its first stored reference */
+    uint8_t count[4];  /* leaf child: its references (1..255); 0: an inner child or an unused slot */
+    /* Per ray octant (bit a set: the direction's sign bit is set along axis
+     * a), the children in traversal order far to near, 2 bits each from bit
+     * 0: the binary tree's near-child-first order below this node. */
+    uint8_t order[8];
+    uint8_t n;         /* children used, 1..4 (slots 0 .. n-1) */
+    uint8_t pad[3];
+} tb__bvh4_node;
+
+_Static_assert(sizeof(tb__bvh4_node) == 128, "tb__bvh4_node is 128 bytes");
+
+/* Wide levels are at most the binary depth, each pushing at most 3 children. */
+#define TB__BVH4_STACK (3 * TB__BVH_STACK)
+
 /* The uniform grid (grid.c). Voxel (x, y, z) is cell x + res[0] (y + res[1] z)
  * and covers lo + (x, y, z) * cell .. lo + (x + 1, y + 1, z + 1) * cell. */
 typedef struct tb__grid {
@@ -45,8 +69,10 @@ struct tb_accel {
     uint32_t *index;       /* input index of each stored reference (the tie rule's last key) */
     tb_aabb bounds;        /* union of the stored boxes */
     tb_accel_stats stats;  /* filled at build */
-    tb_bvh_node *nodes;    /* BVH: depth-first nodes */
+    tb_bvh_node *nodes;    /* BVH: depth-first binary nodes (the layout tb_accel_bvh_nodes exposes) */
     size_t nnodes;
+    tb__bvh4_node *wide;   /* BVH: the binary tree collapsed 4-wide, depth-first (what the CPU traverses) */
+    size_t nwide;
     tb__grid grid;         /* grid */
 };
 
@@ -165,6 +191,12 @@ static inline bool tb__accel_test_any(const tb_accel *acc, size_t k, const tb_ra
  * filling the kind's part of acc->stats; then closest hit and any hit for
  * valid rays. */
 tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt);
+/* Collapses acc->nodes into acc->wide (bvh4.c; called by tb__bvh_build). */
+tb_status tb__bvh4_build(tb_accel *acc);
+/* The 4-wide node test on its own, for tests: bit i of the result is set if
+ * child i's box meets [tmin, tmax] under tb__accel_slab_t's arithmetic (the
+ * same bits per child), and tnear[i] is then that test's entry distance. */
+unsigned tb__bvh4_slab_test(const tb__bvh4_node *nd, const tb_ray *ray, float tmin, float tmax, float tnear[4]);
 bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best);
 bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray);
 void tb__bvh_free(tb_accel *acc);

@@ -1,9 +1,8 @@
 /* Bounding volume hierarchy over primitive references (docs/accel.md, "BVH"):
  * binned SAH build (Wald 2007, "On fast construction of SAH-based bounding
  * volume hierarchies"), subtrees built as OpenMP tasks, flattened depth-first
- * into 32-byte nodes; traversal near child first with the robust slab test
- * (tb__accel_slab, the util/math test in a branch-free form), children
- * tested at the parent for closest hits, an occluder cache for any hits. */
+ * into 32-byte nodes (the layout tb_accel_bvh_nodes exposes), then collapsed
+ * into the 4-wide tree that the CPU queries traverse (bvh4.c). */
 #include <omp.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -12,10 +11,6 @@
 #include "host/render/accel_internal.h"
 #include "util/stats/stats.h"
 
-TB_STAT_COUNTER(tb__bvh_rays, "BVH/rays");
-TB_STAT_COUNTER(tb__bvh_shadow_rays, "BVH/occlusion rays");
-TB_STAT_COUNTER(tb__bvh_nodes_visited, "BVH/nodes visited");
-TB_STAT_COUNTER(tb__bvh_prims_tested, "BVH/primitives tested");
 TB_STAT_TIMER(tb__bvh_build_time, "BVH/build");
 TB_STAT_MEMORY(tb__bvh_memory, "BVH/memory");
 
@@ -402,6 +397,12 @@ tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt)
     acc->stats.bvh_sah_cost = f.sah;
     acc->stats.memory_bytes += (size_t)nnodes * sizeof(tb_bvh_node);
     tb_stat_add(&tb__bvh_memory, (int64_t)((size_t)nnodes * sizeof(tb_bvh_node)));
+    st = tb__bvh4_build(acc);
+    if (st == TB_OK) {
+        acc->stats.bvh_wide_nodes = acc->nwide;
+        acc->stats.memory_bytes += acc->nwide * sizeof(tb__bvh4_node);
+        tb_stat_add(&tb__bvh_memory, (int64_t)(acc->nwide * sizeof(tb__bvh4_node)));
+    }
 
 done:
     free(nodes);
@@ -418,188 +419,12 @@ void tb__bvh_free(tb_accel *acc)
 {
     if (acc->nodes)
         tb_stat_add(&tb__bvh_memory, -(int64_t)(acc->nnodes * sizeof(tb_bvh_node)));
+    if (acc->wide)
+        tb_stat_add(&tb__bvh_memory, -(int64_t)(acc->nwide * sizeof(tb__bvh4_node)));
     free(acc->nodes);
+    free(acc->wide);
     acc->nodes = NULL;
     acc->nnodes = 0;
-}
-
-/* The closest-hit traversal tests the two children of an inner node
- * together and descends only into those the ray meets, so a box that is
- * missed is never pushed. It goes to the near child along the split axis
- * and pushes the other with its entry distance; a popped node whose entry
- * distance lies beyond the best hit found since is dropped without another
- * test: its slab test with the shrunken range would fail exactly then
- * (tb__accel_slab_t). The order changes only which boxes are tested, never
- * the answer (the tie rule makes the closest hit order-independent).
- * "BVH/nodes visited" counts the box tests. */
-bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best)
-{
-    const tb_bvh_node *nodes = acc->nodes;
-    tb_vec3 inv = {1.0f / ray->d.x, 1.0f / ray->d.y, 1.0f / ray->d.z};
-    bool neg[3] = {signbit(inv.x) != 0, signbit(inv.y) != 0, signbit(inv.z) != 0};
-    float lo_t = tb__accel_widen_lo(ray->tmin);
-    float hi_t = tb__accel_widen_hi(ray->tmax);
-    uint32_t stack[TB__BVH_STACK];
-    float stack_t[TB__BVH_STACK];
-    int sp = 0;
-    uint32_t node = 0;
-    int64_t visited = 1, tested = 0;
-    float t0, t1;
-    if (tb__accel_slab_t(&nodes[0].bounds, ray->o, inv, neg, lo_t, hi_t, &t0)) {
-        for (;;) {
-            const tb_bvh_node *nd = &nodes[node];
-            if (nd->count == 0) {
-                uint32_t c0 = node + 1, c1 = nd->offset;
-                bool h0 = tb__accel_slab_t(&nodes[c0].bounds, ray->o, inv, neg, lo_t, hi_t, &t0);
-                bool h1 = tb__accel_slab_t(&nodes[c1].bounds, ray->o, inv, neg, lo_t, hi_t, &t1);
-                visited += 2;
-                if (h0 && h1) {
-                    /* Near child first along the split axis (the first child holds the lower
-                     * centroids): rays that start inside both boxes (entry distances equal)
-                     * still go the right way, which ordering by entry distance does not. */
-                    if (neg[nd->axis]) {
-                        stack[sp] = c0;
-                        stack_t[sp++] = t0;
-                        node = c1;
-                    } else {
-                        stack[sp] = c1;
-                        stack_t[sp++] = t1;
-                        node = c0;
-                    }
-                    continue;
-                }
-                if (h0 || h1) {
-                    node = h0 ? c0 : c1;
-                    continue;
-                }
-            } else {
-                for (uint32_t k = nd->offset, e = nd->offset + nd->count; k < e; k++) {
-                    tested++;
-                    if (tb__accel_test(acc, k, best))
-                        hi_t = tb__accel_widen_hi(best->ray.tmax);
-                }
-            }
-            while (sp > 0 && stack_t[sp - 1] > hi_t)
-                sp--;
-            if (sp == 0)
-                break;
-            node = stack[--sp];
-        }
-    }
-    TB_STAT_INC(tb__bvh_rays);
-    tb_stat_add(&tb__bvh_nodes_visited, visited);
-    tb_stat_add(&tb__bvh_prims_tested, tested);
-    return best->found;
-}
-
-/* The occluder cache (POV-Ray's "shadow cache"): per thread, a small table
- * of the references that last blocked a shadow ray, indexed by the ray's
- * coarse direction, so that the next shadow ray toward the same light from a
- * nearby point tests that reference first and skips the traversal when it
- * still blocks. The answer cannot change: a ray is occluded if any
- * reference blocks it, whichever is tested first, so the cache holds only
- * hints (a stale entry, even one left by another structure at the same
- * address, costs one test, and an index out of range is ignored). */
-#define TB__OCC_SLOTS 64u
-
-typedef struct tb__occ_cache {
-    const tb_accel *acc;          /* the structure the hints are for */
-    uint32_t k[TB__OCC_SLOTS];    /* stored reference numbers; UINT32_MAX: none */
-} tb__occ_cache;
-
-static _Thread_local tb__occ_cache tb__occ;
-
-TB_STAT_COUNTER(tb__bvh_occ_hits, "BVH/occluder cache hits");
-
-/* Slot of the ray's direction: each component of d / |d|_1 in 8 steps. */
-static unsigned tb__occ_slot(tb_vec3 d)
-{
-    float l = fabsf(d.x) + fabsf(d.y) + fabsf(d.z);
-    float s = l > 0.0f ? 3.999f / l : 0.0f;
-    unsigned qx = (unsigned)(int)(d.x * s + 4.0f), qy = (unsigned)(int)(d.y * s + 4.0f);
-    unsigned qz = (unsigned)(int)(d.z * s + 4.0f);
-    return ((qx * 73856093u) ^ (qy * 19349663u) ^ (qz * 83492791u)) % TB__OCC_SLOTS;
-}
-
-static bool tb__bvh_traverse_any(const tb_accel *acc, const tb_ray *ray, uint32_t *who);
-
-/* The traversal's conservative box test of one box against the whole ray. */
-static bool tb__bvh_box_hit(const tb_aabb *b, const tb_ray *ray)
-{
-    tb_vec3 inv = {1.0f / ray->d.x, 1.0f / ray->d.y, 1.0f / ray->d.z};
-    bool neg[3] = {signbit(inv.x) != 0, signbit(inv.y) != 0, signbit(inv.z) != 0};
-    return tb__accel_slab(b, ray->o, inv, neg, tb__accel_widen_lo(ray->tmin), tb__accel_widen_hi(ray->tmax));
-}
-
-bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
-{
-    tb__occ_cache *c = &tb__occ;
-    if (c->acc != acc) {
-        c->acc = acc;
-        memset(c->k, 0xff, sizeof c->k);
-    }
-    unsigned slot = tb__occ_slot(ray->d);
-    uint32_t k = c->k[slot];
-    /* The hint's box first: a miss there costs a slab test, not a callback. */
-    if (k < acc->n && tb__bvh_box_hit(&acc->prims[k].bounds, ray)) {
-        tb_stat_add(&tb__bvh_prims_tested, 1);
-        if (tb__accel_test_any(acc, k, ray)) {
-            TB_STAT_INC(tb__bvh_shadow_rays);
-            TB_STAT_INC(tb__bvh_occ_hits);
-            return true;
-        }
-    }
-    uint32_t who = UINT32_MAX;
-    bool hit = tb__bvh_traverse_any(acc, ray, &who);
-    if (hit)
-        c->k[slot] = who;
-    return hit;
-}
-
-/* Any-hit traversal; *who is the blocking reference. Unlike the closest-hit
- * query it tests a node's box when the node is popped, not both children at
- * the parent: once an occluder is found the boxes still on the stack are
- * never tested, which the parent-side test would have paid for. */
-static bool tb__bvh_traverse_any(const tb_accel *acc, const tb_ray *ray, uint32_t *who)
-{
-    const tb_bvh_node *nodes = acc->nodes;
-    tb_vec3 inv = {1.0f / ray->d.x, 1.0f / ray->d.y, 1.0f / ray->d.z};
-    bool neg[3] = {signbit(inv.x) != 0, signbit(inv.y) != 0, signbit(inv.z) != 0};
-    float lo_t = tb__accel_widen_lo(ray->tmin);
-    float hi_t = tb__accel_widen_hi(ray->tmax);
-    uint32_t stack[TB__BVH_STACK];
-    int sp = 0;
-    uint32_t node = 0;
-    int64_t visited = 0, tested = 0;
-    bool hit = false;
-    for (;;) {
-        const tb_bvh_node *nd = &nodes[node];
-        visited++;
-        if (tb__accel_slab(&nd->bounds, ray->o, inv, neg, lo_t, hi_t)) {
-            if (nd->count == 0) {
-                if (neg[nd->axis]) {
-                    stack[sp++] = node + 1;
-                    node = nd->offset;
-                } else {
-                    stack[sp++] = nd->offset;
-                    node = node + 1;
-                }
-                continue;
-            }
-            for (uint32_t k = nd->offset, e = nd->offset + nd->count; k < e && !hit; k++) {
-                tested++;
-                hit = tb__accel_test_any(acc, k, ray);
-                *who = k;
-            }
-            if (hit)
-                break;
-        }
-        if (sp == 0)
-            break;
-        node = stack[--sp];
-    }
-    TB_STAT_INC(tb__bvh_shadow_rays);
-    tb_stat_add(&tb__bvh_nodes_visited, visited);
-    tb_stat_add(&tb__bvh_prims_tested, tested);
-    return hit;
+    acc->wide = NULL;
+    acc->nwide = 0;
 }

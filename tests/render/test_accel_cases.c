@@ -472,6 +472,172 @@ static void test_slab_matches_util(void **state)
     assert_true(agree_hit < 360000);
 }
 
+/* The 4-wide node test (one SSE test for four children) answers, lane for
+ * lane, exactly as the scalar tb__accel_slab_t: the same met/missed bit and,
+ * when met, the same entry distance bit for bit, on random boxes with flat
+ * sides, origins on the planes of a child's box, signed zero directions and
+ * random ranges; an unused slot (lo +inf, hi -inf) is never met. */
+static void test_bvh4_slab_matches_scalar(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("slab4", 23);
+    tb_rng r;
+    tb_rng_seed(&r, seed, 4);
+    const float vals[] = {-2, -1, -0.5f, 0, 0.5f, 1, 2};
+    long met = 0, lanes = 0;
+    for (long i = 0; i < 100000; i++) {
+        tb__bvh4_node nd;
+        memset(&nd, 0, sizeof nd);
+        tb_aabb b[4];
+        int used = 1 + (int)tb_rng_below(&r, 4);
+        for (int c = 0; c < 4; c++) {
+            float lo[3], hi[3];
+            for (int a = 0; a < 3; a++) {
+                lo[a] = vals[tb_rng_below(&r, 7)];
+                hi[a] = tb_rng_below(&r, 4) == 0 ? lo[a] : lo[a] + tp_uniform(&r, 0, 2);
+            }
+            b[c] = (tb_aabb){{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+            if (c >= used)
+                b[c] = (tb_aabb){{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+            nd.box[0][c] = b[c].lo.x, nd.box[1][c] = b[c].hi.x;
+            nd.box[2][c] = b[c].lo.y, nd.box[3][c] = b[c].hi.y;
+            nd.box[4][c] = b[c].lo.z, nd.box[5][c] = b[c].hi.z;
+        }
+        nd.n = (uint8_t)used;
+        float o[3], d[3];
+        const tb_aabb *on = &b[tb_rng_below(&r, (uint32_t)used)];
+        for (int a = 0; a < 3; a++) {
+            o[a] = tb_rng_below(&r, 3) == 0 ? (tb_rng_below(&r, 2) ? tb_vec3_get(on->lo, a) : tb_vec3_get(on->hi, a))
+                                            : tp_uniform(&r, -3, 3);
+            unsigned m = tb_rng_below(&r, 6);
+            d[a] = m == 0 ? 0.0f : m == 1 ? -0.0f : tp_uniform(&r, -1, 1);
+        }
+        if (tb_rng_below(&r, 2)) /* aimed at a point of one child's box (zero components stay zero) */
+            for (int a = 0; a < 3; a++)
+                if (d[a] != 0.0f)
+                    d[a] = tb_vec3_get(on->lo, a) + (tb_vec3_get(on->hi, a) - tb_vec3_get(on->lo, a)) * tb_rng_float(&r) - o[a];
+        if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f)
+            d[0] = -1.0f;
+        tb_ray ry = ray(o[0], o[1], o[2], d[0], d[1], d[2], 0.0f, INFINITY);
+        tb_vec3 inv = {1.0f / d[0], 1.0f / d[1], 1.0f / d[2]};
+        bool neg[3] = {signbit(inv.x) != 0, signbit(inv.y) != 0, signbit(inv.z) != 0};
+        float tmin = tb_rng_below(&r, 2) ? 0.0f : tp_uniform(&r, -3, 3);
+        float tmax = tb_rng_below(&r, 2) ? INFINITY : tmin + tp_uniform(&r, 0, 3);
+        float tn4[4];
+        unsigned mask = tb__bvh4_slab_test(&nd, &ry, tmin, tmax, tn4);
+        assert_true(mask < 16u);
+        for (int c = 0; c < 4; c++) {
+            float tn;
+            bool want = tb__accel_slab_t(&b[c], ry.o, inv, neg, tmin, tmax, &tn);
+            bool got = (mask >> c & 1u) != 0;
+            if (c >= used)
+                assert_false(got);
+            if (want != got || (want && memcmp(&tn, &tn4[c], sizeof tn) != 0))
+                fail_msg("case %ld child %d: box (%a %a %a)..(%a %a %a) o %a %a %a d %a %a %a [%a, %a]: scalar %d "
+                         "t %a, wide %d t %a",
+                         i, c, (double)b[c].lo.x, (double)b[c].lo.y, (double)b[c].lo.z, (double)b[c].hi.x,
+                         (double)b[c].hi.y, (double)b[c].hi.z, (double)o[0], (double)o[1], (double)o[2], (double)d[0],
+                         (double)d[1], (double)d[2], (double)tmin, (double)tmax, want, (double)tn, got,
+                         (double)tn4[c]);
+            met += want;
+            lanes += c < used;
+        }
+    }
+    assert_true(met > lanes / 20); /* both answers occur often */
+    assert_true(met < lanes * 9 / 10);
+}
+
+/* Checks the 4-wide tree against the binary one it collapses: nodes in
+ * depth-first order, reached once each; every reference in exactly one leaf
+ * child, leaves as the binary ones (same ranges); each child's box exactly
+ * the union of what lies below it; unused slots empty; each octant's order a
+ * permutation of the children; fewer nodes than the binary inner nodes. */
+static void check_bvh4(const tb_accel *acc, int max_leaf)
+{
+    tb_accel_stats st;
+    tb_accel_get_stats(acc, &st);
+    assert_int_equal(st.bvh_wide_nodes, acc->nwide);
+    assert_true(acc->nwide >= 1 && acc->nwide <= (st.bvh_nodes - st.bvh_leaves > 0 ? st.bvh_nodes - st.bvh_leaves : 1));
+    assert_true(((uintptr_t)acc->wide & 63u) == 0);
+    /* Binary leaves by first reference: the wide leaves must be exactly these. */
+    uint16_t *bin_count = calloc(acc->n, sizeof *bin_count);
+    char *seen = calloc(acc->n, 1), *reached = calloc(acc->nwide, 1);
+    assert_true(bin_count && seen && reached);
+    for (size_t i = 0; i < acc->nnodes; i++)
+        if (acc->nodes[i].count)
+            bin_count[acc->nodes[i].offset] = acc->nodes[i].count;
+    for (size_t w = 0; w < acc->nwide; w++) {
+        const tb__bvh4_node *nd = &acc->wide[w];
+        assert_true(nd->n >= 1 && nd->n <= 4);
+        if (w > 0)
+            assert_true(reached[w]); /* parents come first (depth-first) */
+        for (unsigned oct = 0; oct < 8; oct++) {
+            unsigned used = 0;
+            for (unsigned j = 0; j < nd->n; j++)
+                used |= 1u << (nd->order[oct] >> (2 * j) & 3u);
+            assert_int_equal(used, (1u << nd->n) - 1u);
+        }
+        for (int c = 0; c < 4; c++) {
+            tb_aabb box = {{nd->box[0][c], nd->box[2][c], nd->box[4][c]}, {nd->box[1][c], nd->box[3][c], nd->box[5][c]}};
+            if (c >= nd->n) {
+                assert_true(box.lo.x == INFINITY && box.lo.y == INFINITY && box.lo.z == INFINITY);
+                assert_true(box.hi.x == -INFINITY && box.hi.y == -INFINITY && box.hi.z == -INFINITY);
+                assert_int_equal(nd->count[c], 0);
+                continue;
+            }
+            tb_aabb u = tb_aabb_empty();
+            if (nd->count[c]) {
+                assert_true(nd->count[c] <= max_leaf);
+                assert_true(nd->child[c] + nd->count[c] <= acc->n);
+                assert_int_equal(bin_count[nd->child[c]], nd->count[c]);
+                for (uint32_t k = nd->child[c]; k < nd->child[c] + nd->count[c]; k++) {
+                    assert_int_equal(seen[k], 0);
+                    seen[k] = 1;
+                    u = tb_aabb_union(u, acc->prims[k].bounds);
+                }
+            } else {
+                uint32_t ch = nd->child[c];
+                assert_true(ch > w && ch < acc->nwide);
+                assert_int_equal(reached[ch], 0);
+                reached[ch] = 1;
+                const tb__bvh4_node *cn = &acc->wide[ch];
+                for (int j = 0; j < cn->n; j++)
+                    u = tb_aabb_union(u, (tb_aabb){{cn->box[0][j], cn->box[2][j], cn->box[4][j]},
+                                                  {cn->box[1][j], cn->box[3][j], cn->box[5][j]}});
+            }
+            assert_true(tb_vec3_equal(u.lo, box.lo) && tb_vec3_equal(u.hi, box.hi));
+        }
+    }
+    for (size_t k = 0; k < acc->n; k++)
+        assert_int_equal(seen[k], 1);
+    free(bin_count);
+    free(seen);
+    free(reached);
+}
+
+static void test_bvh4_structure(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("bvh4", 24);
+    tb_rng r;
+    tb_rng_seed(&r, seed, 5);
+    const size_t sizes[] = {1, 2, 3, 5, 17, 1000, 20000};
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++)
+        for (int max_leaf = 1; max_leaf <= 8; max_leaf += 7) {
+            tp_scene s = {0};
+            tp_random_scene(&s, &r, sizes[i], 1.0f, 0.0f);
+            tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = max_leaf});
+            check_bvh4(acc, max_leaf);
+            tb_accel_stats st;
+            tb_accel_get_stats(acc, &st);
+            /* Collapsing 4-wide keeps about a third of the binary inner nodes. */
+            if (sizes[i] >= 1000)
+                assert_true(3 * st.bvh_wide_nodes < 2 * (st.bvh_nodes - st.bvh_leaves));
+            tb_accel_free(acc);
+            tp_free(&s);
+        }
+}
+
 static void test_build_errors(void **state)
 {
     (void)state;
@@ -595,6 +761,8 @@ int main(void)
         cmocka_unit_test(test_callback_range_not_trusted),
         cmocka_unit_test(test_t_tolerance),
         cmocka_unit_test(test_slab_matches_util),
+        cmocka_unit_test(test_bvh4_slab_matches_scalar),
+        cmocka_unit_test(test_bvh4_structure),
         cmocka_unit_test(test_build_errors),
         cmocka_unit_test(test_kind_names),
         cmocka_unit_test(test_grid_resolution),

@@ -1,0 +1,452 @@
+/* The 4-wide BVH the CPU queries traverse (docs/accel.md, "4-wide
+ * traversal"): bvh.c's binary SAH tree collapsed so that a node holds up to
+ * four children (the inner child of largest surface area is replaced by its
+ * two children until there are four), the children's boxes stored by
+ * coordinate and tested by one SSE slab test with tb__accel_slab_t's
+ * arithmetic (so every box is met or missed exactly as the binary traversal
+ * decided it). Closest hit goes near child first by a per-octant order table
+ * (the binary tree's split-axis order), any hit tries the occluder cache
+ * first. The order never changes the answer (the tie rule). */
+#include <stdlib.h>
+#include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include "host/render/accel_internal.h"
+#include "util/stats/stats.h"
+
+TB_STAT_COUNTER(tb__bvh_rays, "BVH/rays");
+TB_STAT_COUNTER(tb__bvh_shadow_rays, "BVH/occlusion rays");
+TB_STAT_COUNTER(tb__bvh_nodes_visited, "BVH/nodes visited");
+TB_STAT_COUNTER(tb__bvh_prims_tested, "BVH/primitives tested");
+TB_STAT_COUNTER(tb__bvh_occ_hits, "BVH/occluder cache hits");
+
+/* ------------------------------------------------------------ collapse */
+
+typedef struct tb__collapse {
+    const tb_bvh_node *bin;
+    tb__bvh4_node *out;
+    uint32_t next;
+} tb__collapse;
+
+/* Half surface area in double, the build's measure (only compared here). */
+static double tb__bvh4_area(const tb_aabb *b)
+{
+    double ex = (double)b->hi.x - b->lo.x, ey = (double)b->hi.y - b->lo.y, ez = (double)b->hi.z - b->lo.z;
+    return ex * ey + ey * ez + ez * ex;
+}
+
+/* Appends to seq the positions in kids[] of the children below binary node
+ * b, in the binary traversal's order for octant `oct`: a node that was
+ * collapsed away visits its first child first unless the ray goes toward -axis. */
+static void tb__bvh4_order(const tb_bvh_node *bin, uint32_t b, const uint32_t *kids, int nk, unsigned oct,
+                           uint8_t *seq, int *len)
+{
+    for (int i = 0; i < nk; i++)
+        if (kids[i] == b) {
+            seq[(*len)++] = (uint8_t)i;
+            return;
+        }
+    uint32_t first = b + 1, second = bin[b].offset;
+    if (oct >> bin[b].axis & 1u) {
+        tb__bvh4_order(bin, second, kids, nk, oct, seq, len);
+        tb__bvh4_order(bin, first, kids, nk, oct, seq, len);
+    } else {
+        tb__bvh4_order(bin, first, kids, nk, oct, seq, len);
+        tb__bvh4_order(bin, second, kids, nk, oct, seq, len);
+    }
+}
+
+/* Writes the wide node for binary node b (an inner node, or the root when
+ * it is a leaf) and, depth-first, those of its inner children; returns its index. */
+static uint32_t tb__bvh4_collapse(tb__collapse *c, uint32_t b)
+{
+    const tb_bvh_node *bin = c->bin;
+    uint32_t kids[4];
+    int nk;
+    if (bin[b].count) {
+        kids[0] = b;
+        nk = 1;
+    } else {
+        kids[0] = b + 1;
+        kids[1] = bin[b].offset;
+        nk = 2;
+        /* Open the inner child of largest area (the first on a tie) in place,
+         * so kids[] keeps the binary tree's left-to-right order. */
+        while (nk < 4) {
+            int best = -1;
+            double best_area = -1.0;
+            for (int i = 0; i < nk; i++) {
+                double a = tb__bvh4_area(&bin[kids[i]].bounds);
+                if (bin[kids[i]].count == 0 && a > best_area) {
+                    best = i;
+                    best_area = a;
+                }
+            }
+            if (best < 0)
+                break;
+            uint32_t k = kids[best];
+            memmove(&kids[best + 2], &kids[best + 1], (size_t)(nk - best - 1) * sizeof kids[0]);
+            kids[best] = k + 1;
+            kids[best + 1] = bin[k].offset;
+            nk++;
+        }
+    }
+    uint32_t me = c->next++;
+    tb__bvh4_node *o = &c->out[me];
+    memset(o, 0, sizeof *o);
+    o->n = (uint8_t)nk;
+    for (int i = 0; i < 4; i++) {
+        tb_aabb bx = i < nk ? bin[kids[i]].bounds : (tb_aabb){{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+        o->box[0][i] = bx.lo.x;
+        o->box[1][i] = bx.hi.x;
+        o->box[2][i] = bx.lo.y;
+        o->box[3][i] = bx.hi.y;
+        o->box[4][i] = bx.lo.z;
+        o->box[5][i] = bx.hi.z;
+    }
+    for (unsigned oct = 0; oct < 8; oct++) {
+        uint8_t seq[4];
+        int len = 0;
+        tb__bvh4_order(bin, b, kids, nk, oct, seq, &len);
+        unsigned packed = 0;
+        for (int j = 0; j < len; j++) /* far to near */
+            packed |= (unsigned)seq[len - 1 - j] << (2 * j);
+        o->order[oct] = (uint8_t)packed;
+    }
+    for (int i = 0; i < nk; i++) {
+        const tb_bvh_node *k = &bin[kids[i]];
+        if (k->count) {
+            o->child[i] = k->offset;
+            o->count[i] = (uint8_t)k->count; /* leaves hold at most 255 references */
+        } else {
+            uint32_t w = tb__bvh4_collapse(c, kids[i]);
+            c->out[me].child[i] = w; /* `o` stays valid: the array does not move */
+        }
+    }
+    return me;
+}
+
+tb_status tb__bvh4_build(tb_accel *acc)
+{
+    /* Every wide node but a leaf root consumes at least one binary inner node. */
+    size_t bound = acc->nnodes / 2 + 1;
+    tb__bvh4_node *tmp = malloc(bound * sizeof *tmp);
+    if (!tmp)
+        return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the 4-wide nodes");
+    tb__collapse c = {acc->nodes, tmp, 0};
+    tb__bvh4_collapse(&c, 0);
+    /* Exact size, 64-byte aligned so a node is two whole cache lines. */
+    tb__bvh4_node *wide = aligned_alloc(64, (size_t)c.next * sizeof *wide);
+    if (!wide) {
+        free(tmp);
+        return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the 4-wide nodes");
+    }
+    memcpy(wide, tmp, (size_t)c.next * sizeof *wide);
+    free(tmp);
+    acc->wide = wide;
+    acc->nwide = c.next;
+    return TB_OK;
+}
+
+/* ------------------------------------------------------------ node test */
+
+/* A query ray prepared for the node test. */
+typedef struct tb__bvh4_ray {
+#if defined(__SSE2__)
+    __m128 o[3], inv[3];  /* broadcasts */
+#endif
+    tb_vec3 ov, invv;
+    bool neg[3];
+    unsigned near[3], far[3]; /* per axis, the box row of the near and far plane */
+    unsigned oct;             /* the direction's octant: bit a set when inv_d along a has its sign bit set */
+} tb__bvh4_ray;
+
+static inline void tb__bvh4_ray_init(tb__bvh4_ray *r, const tb_ray *ray)
+{
+    r->ov = ray->o;
+    r->invv = (tb_vec3){1.0f / ray->d.x, 1.0f / ray->d.y, 1.0f / ray->d.z};
+    r->neg[0] = signbit(r->invv.x) != 0;
+    r->neg[1] = signbit(r->invv.y) != 0;
+    r->neg[2] = signbit(r->invv.z) != 0;
+    r->oct = 0;
+    for (unsigned a = 0; a < 3; a++) {
+        r->near[a] = 2 * a + r->neg[a];
+        r->far[a] = 2 * a + 1 - r->neg[a];
+        r->oct |= (unsigned)r->neg[a] << a;
+    }
+#if defined(__SSE2__)
+    r->o[0] = _mm_set1_ps(ray->o.x);
+    r->o[1] = _mm_set1_ps(ray->o.y);
+    r->o[2] = _mm_set1_ps(ray->o.z);
+    r->inv[0] = _mm_set1_ps(r->invv.x);
+    r->inv[1] = _mm_set1_ps(r->invv.y);
+    r->inv[2] = _mm_set1_ps(r->invv.z);
+#endif
+}
+
+#if defined(__SSE2__)
+typedef __m128 tb__f4;
+static inline tb__f4 tb__f4_set1(float x) { return _mm_set1_ps(x); }
+
+/* The four children's slab tests at once, lane for lane the arithmetic of
+ * tb__accel_slab_t: (plane - o) * inv, widened outward by the factor
+ * 1 -+ copysign(2 gamma(3), t), then `x > t ? x : t` (MAXPS returns its
+ * second operand when either is NaN, exactly that rule) and the mirror for
+ * the far planes. Returns the mask of children met; *tnear their entry distances. */
+static inline __attribute__((always_inline)) unsigned tb__bvh4_test(const tb__bvh4_node *nd, const tb__bvh4_ray *r,
+                                                                    tb__f4 tmin, tb__f4 tmax, tb__f4 *tnear)
+{
+    const __m128 sign = _mm_set1_ps(-0.0f), k = _mm_set1_ps(2.0f * tb_gamma(3)), one = _mm_set1_ps(1.0f);
+    for (int a = 0; a < 3; a++) {
+        __m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd->box[r->near[a]]), r->o[a]), r->inv[a]);
+        __m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd->box[r->far[a]]), r->o[a]), r->inv[a]);
+        tn = _mm_mul_ps(tn, _mm_sub_ps(one, _mm_or_ps(_mm_and_ps(tn, sign), k)));
+        tf = _mm_mul_ps(tf, _mm_add_ps(one, _mm_or_ps(_mm_and_ps(tf, sign), k)));
+        tmin = _mm_max_ps(tn, tmin);
+        tmax = _mm_min_ps(tf, tmax);
+    }
+    *tnear = tmin;
+    return (unsigned)_mm_movemask_ps(_mm_cmple_ps(tmin, tmax));
+}
+
+static inline float tb__f4_get(tb__f4 v, unsigned i)
+{
+    float f[4];
+    _mm_storeu_ps(f, v);
+    return f[i];
+}
+#else
+/* Without SSE2: the same test one child at a time. */
+typedef struct tb__f4 {
+    float v[4];
+} tb__f4;
+static inline tb__f4 tb__f4_set1(float x) { return (tb__f4){{x, x, x, x}}; }
+
+static inline unsigned tb__bvh4_test(const tb__bvh4_node *nd, const tb__bvh4_ray *r, tb__f4 tmin, tb__f4 tmax,
+                                     tb__f4 *tnear)
+{
+    unsigned m = 0;
+    for (int i = 0; i < 4; i++) {
+        tb_aabb b = {{nd->box[0][i], nd->box[2][i], nd->box[4][i]}, {nd->box[1][i], nd->box[3][i], nd->box[5][i]}};
+        if (tb__accel_slab_t(&b, r->ov, r->invv, r->neg, tmin.v[i], tmax.v[i], &tnear->v[i]))
+            m |= 1u << i;
+        else
+            tnear->v[i] = tmin.v[i];
+    }
+    return m;
+}
+
+static inline float tb__f4_get(tb__f4 v, unsigned i) { return v.v[i]; }
+#endif
+
+unsigned tb__bvh4_slab_test(const tb__bvh4_node *nd, const tb_ray *ray, float tmin, float tmax, float tnear[4])
+{
+    tb__bvh4_ray r;
+    tb__bvh4_ray_init(&r, ray);
+    tb__f4 tn;
+    unsigned m = tb__bvh4_test(nd, &r, tb__f4_set1(tmin), tb__f4_set1(tmax), &tn);
+    for (unsigned i = 0; i < 4; i++)
+        tnear[i] = tb__f4_get(tn, i);
+    return m;
+}
+
+/* ------------------------------------------------------------ closest hit */
+
+/* A pending child: a wide node (count 0) or a leaf's references, with the
+ * distance where the widened ray enters its box. */
+typedef struct tb__bvh4_item {
+    uint32_t child;
+    uint32_t count;
+    float t;
+} tb__bvh4_item;
+
+/* Closest hit. At a node the four children's boxes are tested together over
+ * the widened [tmin, best t]; the traversal goes on with the nearest child
+ * met (octant order, see tb__bvh4_node.order) and pushes the others far
+ * first with their entry distances. A popped child whose entry distance lies
+ * beyond the widened best t found since is dropped without a test: its slab
+ * test with the shrunken range fails exactly then. "BVH/nodes visited"
+ * counts the wide nodes whose children were tested. */
+bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best)
+{
+    const tb__bvh4_node *nodes = acc->wide;
+    tb__bvh4_ray r;
+    tb__bvh4_ray_init(&r, ray);
+    const tb__f4 lo4 = tb__f4_set1(tb__accel_widen_lo(ray->tmin));
+    float hi_t = tb__accel_widen_hi(ray->tmax);
+    tb__f4 hi4 = tb__f4_set1(hi_t);
+    tb__bvh4_item stack[TB__BVH4_STACK];
+    int sp = 0;
+    uint32_t cur = 0, cur_count = 0;
+    int64_t visited = 0, tested = 0;
+    for (;;) {
+        if (cur_count == 0) {
+            const tb__bvh4_node *nd = &nodes[cur];
+            tb__f4 tn4;
+            visited++;
+            unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4);
+            if (m) {
+                float tn[4];
+#if defined(__SSE2__)
+                _mm_storeu_ps(tn, tn4);
+#else
+                memcpy(tn, tn4.v, sizeof tn);
+#endif
+                /* Far to near: each child met is pushed when a nearer one follows. */
+                unsigned ord = nd->order[r.oct], pend = 4;
+                for (unsigned i = 0; i < nd->n; i++, ord >>= 2) {
+                    unsigned c = ord & 3u;
+                    if (!(m >> c & 1u))
+                        continue;
+                    if (pend < 4)
+                        stack[sp++] = (tb__bvh4_item){nd->child[pend], nd->count[pend], tn[pend]};
+                    pend = c;
+                }
+                cur = nd->child[pend];
+                cur_count = nd->count[pend];
+                continue;
+            }
+        } else {
+            for (uint32_t k = cur, e = cur + cur_count; k < e; k++) {
+                tested++;
+                if (tb__accel_test(acc, k, best)) {
+                    hi_t = tb__accel_widen_hi(best->ray.tmax);
+                    hi4 = tb__f4_set1(hi_t);
+                }
+            }
+        }
+        while (sp > 0 && stack[sp - 1].t > hi_t)
+            sp--;
+        if (sp == 0)
+            break;
+        sp--;
+        cur = stack[sp].child;
+        cur_count = stack[sp].count;
+    }
+    TB_STAT_INC(tb__bvh_rays);
+    tb_stat_add(&tb__bvh_nodes_visited, visited);
+    tb_stat_add(&tb__bvh_prims_tested, tested);
+    return best->found;
+}
+
+/* ------------------------------------------------------------ any hit */
+
+/* The occluder cache (POV-Ray's "shadow cache"): per thread, a small table
+ * of the references that last blocked a shadow ray, indexed by the ray's
+ * coarse direction, so that the next shadow ray toward the same light from a
+ * nearby point tests that reference first and skips the traversal when it
+ * still blocks. The answer cannot change: a ray is occluded if any
+ * reference blocks it, whichever is tested first, so the cache holds only
+ * hints (a stale entry, even one left by another structure at the same
+ * address, costs one test, and an index out of range is ignored). */
+#define TB__OCC_SLOTS 64u
+
+typedef struct tb__occ_cache {
+    const tb_accel *acc;          /* the structure the hints are for */
+    uint32_t k[TB__OCC_SLOTS];    /* stored reference numbers; UINT32_MAX: none */
+} tb__occ_cache;
+
+static _Thread_local tb__occ_cache tb__occ;
+
+/* Slot of the ray's direction: each component of d / |d|_1 in 8 steps. */
+static unsigned tb__occ_slot(tb_vec3 d)
+{
+    float l = fabsf(d.x) + fabsf(d.y) + fabsf(d.z);
+    float s = l > 0.0f ? 3.999f / l : 0.0f;
+    unsigned qx = (unsigned)(int)(d.x * s + 4.0f), qy = (unsigned)(int)(d.y * s + 4.0f);
+    unsigned qz = (unsigned)(int)(d.z * s + 4.0f);
+    return ((qx * 73856093u) ^ (qy * 19349663u) ^ (qz * 83492791u)) % TB__OCC_SLOTS;
+}
+
+/* The traversal's conservative box test of one box against the whole ray. */
+static bool tb__bvh_box_hit(const tb_aabb *b, const tb_ray *ray)
+{
+    tb_vec3 inv = {1.0f / ray->d.x, 1.0f / ray->d.y, 1.0f / ray->d.z};
+    bool neg[3] = {signbit(inv.x) != 0, signbit(inv.y) != 0, signbit(inv.z) != 0};
+    return tb__accel_slab(b, ray->o, inv, neg, tb__accel_widen_lo(ray->tmin), tb__accel_widen_hi(ray->tmax));
+}
+
+/* Any-hit traversal; *who is the blocking reference. Children met are
+ * followed near first (the same octant order as the closest hit) and the
+ * first reference that blocks ends the query. */
+static bool tb__bvh4_traverse_any(const tb_accel *acc, const tb_ray *ray, uint32_t *who)
+{
+    const tb__bvh4_node *nodes = acc->wide;
+    tb__bvh4_ray r;
+    tb__bvh4_ray_init(&r, ray);
+    const tb__f4 lo4 = tb__f4_set1(tb__accel_widen_lo(ray->tmin));
+    const tb__f4 hi4 = tb__f4_set1(tb__accel_widen_hi(ray->tmax));
+    uint32_t stack[TB__BVH4_STACK], stack_n[TB__BVH4_STACK];
+    int sp = 0;
+    uint32_t cur = 0, cur_count = 0;
+    int64_t visited = 0, tested = 0;
+    bool hit = false;
+    for (;;) {
+        if (cur_count == 0) {
+            const tb__bvh4_node *nd = &nodes[cur];
+            tb__f4 tn4;
+            visited++;
+            unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4);
+            if (m) {
+                unsigned ord = nd->order[r.oct], pend = 4;
+                for (unsigned i = 0; i < nd->n; i++, ord >>= 2) {
+                    unsigned c = ord & 3u;
+                    if (!(m >> c & 1u))
+                        continue;
+                    if (pend < 4) {
+                        stack[sp] = nd->child[pend];
+                        stack_n[sp++] = nd->count[pend];
+                    }
+                    pend = c;
+                }
+                cur = nd->child[pend];
+                cur_count = nd->count[pend];
+                continue;
+            }
+        } else {
+            for (uint32_t k = cur, e = cur + cur_count; k < e && !hit; k++) {
+                tested++;
+                hit = tb__accel_test_any(acc, k, ray);
+                *who = k;
+            }
+            if (hit)
+                break;
+        }
+        if (sp == 0)
+            break;
+        sp--;
+        cur = stack[sp];
+        cur_count = stack_n[sp];
+    }
+    TB_STAT_INC(tb__bvh_shadow_rays);
+    tb_stat_add(&tb__bvh_nodes_visited, visited);
+    tb_stat_add(&tb__bvh_prims_tested, tested);
+    return hit;
+}
+
+bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
+{
+    tb__occ_cache *c = &tb__occ;
+    if (c->acc != acc) {
+        c->acc = acc;
+        memset(c->k, 0xff, sizeof c->k);
+    }
+    unsigned slot = tb__occ_slot(ray->d);
+    uint32_t k = c->k[slot];
+    /* The hint's box first: a miss there costs a slab test, not a callback. */
+    if (k < acc->n && tb__bvh_box_hit(&acc->prims[k].bounds, ray)) {
+        tb_stat_add(&tb__bvh_prims_tested, 1);
+        if (tb__accel_test_any(acc, k, ray)) {
+            TB_STAT_INC(tb__bvh_shadow_rays);
+            TB_STAT_INC(tb__bvh_occ_hits);
+            return true;
+        }
+    }
+    uint32_t who = UINT32_MAX;
+    bool hit = tb__bvh4_traverse_any(acc, ray, &who);
+    if (hit)
+        c->k[slot] = who;
+    return hit;
+}
