@@ -156,10 +156,11 @@ tb_status tb__bvh4_build(tb_accel *acc)
 typedef struct tb__bvh4_ray {
 #if defined(__SSE2__)
     __m128 o[3], inv[3];  /* broadcasts */
+    __m128 sign, k, one;  /* constants of the test, kept here so no node step rebuilds them */
 #endif
     tb_vec3 ov, invv;
     bool neg[3];
-    unsigned near[3], far[3]; /* per axis, the box row of the near and far plane */
+    size_t near[3], far[3];   /* per axis, the byte offset in a node of the near and far planes' row */
     unsigned oct;             /* the direction's octant: bit a set when inv_d along a has its sign bit set */
 } tb__bvh4_ray;
 
@@ -172,8 +173,8 @@ static inline void tb__bvh4_ray_init(tb__bvh4_ray *r, const tb_ray *ray)
     r->neg[2] = signbit(r->invv.z) != 0;
     r->oct = 0;
     for (unsigned a = 0; a < 3; a++) {
-        r->near[a] = 2 * a + r->neg[a];
-        r->far[a] = 2 * a + 1 - r->neg[a];
+        r->near[a] = (2 * a + r->neg[a]) * sizeof(((tb__bvh4_node *)0)->box[0]);
+        r->far[a] = (2 * a + 1 - r->neg[a]) * sizeof(((tb__bvh4_node *)0)->box[0]);
         r->oct |= (unsigned)r->neg[a] << a;
     }
 #if defined(__SSE2__)
@@ -183,6 +184,9 @@ static inline void tb__bvh4_ray_init(tb__bvh4_ray *r, const tb_ray *ray)
     r->inv[0] = _mm_set1_ps(r->invv.x);
     r->inv[1] = _mm_set1_ps(r->invv.y);
     r->inv[2] = _mm_set1_ps(r->invv.z);
+    r->sign = _mm_set1_ps(-0.0f);
+    r->k = _mm_set1_ps(2.0f * tb_gamma(3));
+    r->one = _mm_set1_ps(1.0f);
 #endif
 }
 
@@ -195,21 +199,29 @@ static inline tb__f4 tb__f4_set1(float x) { return _mm_set1_ps(x); }
  * 1 -+ copysign(2 gamma(3), t), then `x > t ? x : t` (MAXPS returns its
  * second operand when either is NaN, exactly that rule) and the mirror for
  * the far planes. Returns the mask of children met; *tnear their entry distances. */
+/* One axis: near planes raise tmin, far planes lower tmax. */
+#define TB__BVH4_AXIS(a)                                                                                          \
+    do {                                                                                                          \
+        __m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)((const char *)nd + r->near[a])), r->o[a]), r->inv[a]);              \
+        __m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)((const char *)nd + r->far[a])), r->o[a]), r->inv[a]);               \
+        tn = _mm_mul_ps(tn, _mm_sub_ps(r->one, _mm_or_ps(_mm_and_ps(tn, r->sign), r->k)));                      \
+        tf = _mm_mul_ps(tf, _mm_add_ps(r->one, _mm_or_ps(_mm_and_ps(tf, r->sign), r->k)));                      \
+        tmin = _mm_max_ps(tn, tmin);                                                                              \
+        tmax = _mm_min_ps(tf, tmax);                                                                              \
+    } while (0)
+
 static inline __attribute__((always_inline)) unsigned tb__bvh4_test(const tb__bvh4_node *nd, const tb__bvh4_ray *r,
                                                                     tb__f4 tmin, tb__f4 tmax, tb__f4 *tnear)
 {
-    const __m128 sign = _mm_set1_ps(-0.0f), k = _mm_set1_ps(2.0f * tb_gamma(3)), one = _mm_set1_ps(1.0f);
-    for (int a = 0; a < 3; a++) {
-        __m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd->box[r->near[a]]), r->o[a]), r->inv[a]);
-        __m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd->box[r->far[a]]), r->o[a]), r->inv[a]);
-        tn = _mm_mul_ps(tn, _mm_sub_ps(one, _mm_or_ps(_mm_and_ps(tn, sign), k)));
-        tf = _mm_mul_ps(tf, _mm_add_ps(one, _mm_or_ps(_mm_and_ps(tf, sign), k)));
-        tmin = _mm_max_ps(tn, tmin);
-        tmax = _mm_min_ps(tf, tmax);
-    }
+    /* Unrolled by hand, in the scalar test's axis order (x, y, z: it decides
+     * which NaN-free value wins, so the order is part of "the same bits"). */
+    TB__BVH4_AXIS(0);
+    TB__BVH4_AXIS(1);
+    TB__BVH4_AXIS(2);
     *tnear = tmin;
     return (unsigned)_mm_movemask_ps(_mm_cmple_ps(tmin, tmax));
 }
+#undef TB__BVH4_AXIS
 
 static inline float tb__f4_get(tb__f4 v, unsigned i)
 {
@@ -287,6 +299,12 @@ bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *b
             tb__f4 tn4;
             visited++;
             unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4);
+            if (m && !(m & (m - 1))) { /* one child met: nothing to order or push */
+                unsigned c = (unsigned)__builtin_ctz(m);
+                cur = nd->child[c];
+                cur_count = nd->count[c];
+                continue;
+            }
             if (m) {
                 float tn[4];
 #if defined(__SSE2__)
@@ -389,6 +407,12 @@ static bool tb__bvh4_traverse_any(const tb_accel *acc, const tb_ray *ray, uint32
             tb__f4 tn4;
             visited++;
             unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4);
+            if (m && !(m & (m - 1))) {
+                unsigned c = (unsigned)__builtin_ctz(m);
+                cur = nd->child[c];
+                cur_count = nd->count[c];
+                continue;
+            }
             if (m) {
                 unsigned ord = nd->order[r.oct], pend = 4;
                 for (unsigned i = 0; i < nd->n; i++, ord >>= 2) {
