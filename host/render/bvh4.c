@@ -156,7 +156,7 @@ tb_status tb__bvh4_build(tb_accel *acc)
 typedef struct tb__bvh4_ray {
 #if defined(__SSE2__)
     __m128 o[3], inv[3];  /* broadcasts */
-    __m128 sign, k, one;  /* constants of the test, kept here so no node step rebuilds them */
+    __m128 sign, k, one, minus_inf, plus_inf; /* constants of the test, kept here so no node step rebuilds them */
 #endif
     tb_vec3 ov, invv;
     bool neg[3];
@@ -187,6 +187,8 @@ static inline void tb__bvh4_ray_init(tb__bvh4_ray *r, const tb_ray *ray)
     r->sign = _mm_set1_ps(-0.0f);
     r->k = _mm_set1_ps(2.0f * tb_gamma(3));
     r->one = _mm_set1_ps(1.0f);
+    r->minus_inf = _mm_set1_ps(-INFINITY);
+    r->plus_inf = _mm_set1_ps(INFINITY);
 #endif
 }
 
@@ -199,29 +201,36 @@ static inline tb__f4 tb__f4_set1(float x) { return _mm_set1_ps(x); }
  * 1 -+ copysign(2 gamma(3), t), then `x > t ? x : t` (MAXPS returns its
  * second operand when either is NaN, exactly that rule) and the mirror for
  * the far planes. Returns the mask of children met; *tnear their entry distances. */
-/* One axis: near planes raise tmin, far planes lower tmax. */
-#define TB__BVH4_AXIS(a)                                                                                          \
-    do {                                                                                                          \
-        __m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)((const char *)nd + r->near[a])), r->o[a]), r->inv[a]);              \
-        __m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)((const char *)nd + r->far[a])), r->o[a]), r->inv[a]);               \
-        tn = _mm_mul_ps(tn, _mm_sub_ps(r->one, _mm_or_ps(_mm_and_ps(tn, r->sign), r->k)));                      \
-        tf = _mm_mul_ps(tf, _mm_add_ps(r->one, _mm_or_ps(_mm_and_ps(tf, r->sign), r->k)));                      \
-        tmin = _mm_max_ps(tn, tmin);                                                                              \
-        tmax = _mm_min_ps(tf, tmax);                                                                              \
-    } while (0)
-
 static inline __attribute__((always_inline)) unsigned tb__bvh4_test(const tb__bvh4_node *nd, const tb__bvh4_ray *r,
                                                                     tb__f4 tmin, tb__f4 tmax, tb__f4 *tnear)
 {
-    /* Unrolled by hand, in the scalar test's axis order (x, y, z: it decides
-     * which NaN-free value wins, so the order is part of "the same bits"). */
-    TB__BVH4_AXIS(0);
-    TB__BVH4_AXIS(1);
-    TB__BVH4_AXIS(2);
+    /* The plane distances, unwidened. */
+    const char *b = (const char *)nd;
+    __m128 nx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->near[0])), r->o[0]), r->inv[0]);
+    __m128 fx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->far[0])), r->o[0]), r->inv[0]);
+    __m128 ny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->near[1])), r->o[1]), r->inv[1]);
+    __m128 fy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->far[1])), r->o[1]), r->inv[1]);
+    __m128 nz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->near[2])), r->o[2]), r->inv[2]);
+    __m128 fz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->far[2])), r->o[2]), r->inv[2]);
+    /* The largest near and smallest far distance, then widened once: the
+     * widening t -> fl(t (1 -+ copysign(k, t))) is non-decreasing (one
+     * constant factor per sign, rounding is monotone) and keeps a zero's
+     * sign, so widening the maximum gives the maximum of the widened values
+     * that the scalar test takes, bit for bit (both keep the first of equal
+     * operands, the range's bound last here and first there, which ties
+     * also keep). MAXPS/MINPS return the second operand when the first is
+     * NaN: a NaN distance (origin on a plane, zero direction) is skipped as
+     * the scalar `x > t ? x : t` skips it; with all three NaN the -inf /
+     * +inf start leaves the ray's own range. */
+    __m128 n = _mm_max_ps(nz, _mm_max_ps(ny, _mm_max_ps(nx, r->minus_inf)));
+    __m128 f = _mm_min_ps(fz, _mm_min_ps(fy, _mm_min_ps(fx, r->plus_inf)));
+    n = _mm_mul_ps(n, _mm_sub_ps(r->one, _mm_or_ps(_mm_and_ps(n, r->sign), r->k)));
+    f = _mm_mul_ps(f, _mm_add_ps(r->one, _mm_or_ps(_mm_and_ps(f, r->sign), r->k)));
+    tmin = _mm_max_ps(n, tmin);
+    tmax = _mm_min_ps(f, tmax);
     *tnear = tmin;
     return (unsigned)_mm_movemask_ps(_mm_cmple_ps(tmin, tmax));
 }
-#undef TB__BVH4_AXIS
 
 static inline float tb__f4_get(tb__f4 v, unsigned i)
 {
