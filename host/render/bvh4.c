@@ -152,11 +152,23 @@ tb_status tb__bvh4_build(tb_accel *acc)
 
 /* ------------------------------------------------------------ node test */
 
+#if defined(__SSE2__)
+/* v, with its value unknown to the optimiser (an empty asm that may change it). */
+static inline __m128 tb__f4_opaque(__m128 v)
+{
+    __asm__("" : "+x"(v));
+    return v;
+}
+#endif
+
 /* A query ray prepared for the node test. */
 typedef struct tb__bvh4_ray {
 #if defined(__SSE2__)
     __m128 o[3], inv[3];  /* broadcasts */
-    __m128 sign, k, one, minus_inf, plus_inf; /* constants of the test, kept here so no node step rebuilds them */
+    /* The test's constants, made once per ray and hidden from the optimiser
+     * (tb__f4_opaque): as known constants GCC rebuilt each of them (load +
+     * shuffle) in every node step. */
+    __m128 sign, k, one, minus_inf, plus_inf;
 #endif
     tb_vec3 ov, invv;
     bool neg[3];
@@ -184,16 +196,17 @@ static inline void tb__bvh4_ray_init(tb__bvh4_ray *r, const tb_ray *ray)
     r->inv[0] = _mm_set1_ps(r->invv.x);
     r->inv[1] = _mm_set1_ps(r->invv.y);
     r->inv[2] = _mm_set1_ps(r->invv.z);
-    r->sign = _mm_set1_ps(-0.0f);
-    r->k = _mm_set1_ps(2.0f * tb_gamma(3));
-    r->one = _mm_set1_ps(1.0f);
-    r->minus_inf = _mm_set1_ps(-INFINITY);
-    r->plus_inf = _mm_set1_ps(INFINITY);
+    r->sign = tb__f4_opaque(_mm_set1_ps(-0.0f));
+    r->k = tb__f4_opaque(_mm_set1_ps(2.0f * tb_gamma(3)));
+    r->one = tb__f4_opaque(_mm_set1_ps(1.0f));
+    r->minus_inf = tb__f4_opaque(_mm_set1_ps(-INFINITY));
+    r->plus_inf = tb__f4_opaque(_mm_set1_ps(INFINITY));
 #endif
 }
 
 #if defined(__SSE2__)
 typedef __m128 tb__f4;
+
 static inline tb__f4 tb__f4_set1(float x) { return _mm_set1_ps(x); }
 
 /* The four children's slab tests at once, lane for lane the arithmetic of
@@ -222,10 +235,11 @@ static inline __attribute__((always_inline)) unsigned tb__bvh4_test(const tb__bv
      * NaN: a NaN distance (origin on a plane, zero direction) is skipped as
      * the scalar `x > t ? x : t` skips it; with all three NaN the -inf /
      * +inf start leaves the ray's own range. */
+    const __m128 sign = r->sign, k = r->k, one = r->one;
     __m128 n = _mm_max_ps(nz, _mm_max_ps(ny, _mm_max_ps(nx, r->minus_inf)));
     __m128 f = _mm_min_ps(fz, _mm_min_ps(fy, _mm_min_ps(fx, r->plus_inf)));
-    n = _mm_mul_ps(n, _mm_sub_ps(r->one, _mm_or_ps(_mm_and_ps(n, r->sign), r->k)));
-    f = _mm_mul_ps(f, _mm_add_ps(r->one, _mm_or_ps(_mm_and_ps(f, r->sign), r->k)));
+    n = _mm_mul_ps(n, _mm_sub_ps(one, _mm_or_ps(_mm_and_ps(n, sign), k)));
+    f = _mm_mul_ps(f, _mm_add_ps(one, _mm_or_ps(_mm_and_ps(f, sign), k)));
     tmin = _mm_max_ps(n, tmin);
     tmax = _mm_min_ps(f, tmax);
     *tnear = tmin;
