@@ -40,7 +40,9 @@ typedef struct tb__bvh4_node {
      * 0: the binary tree's near-child-first order below this node. */
     uint8_t order[8];
     uint8_t n;         /* children used, 1..4 (slots 0 .. n-1) */
-    uint8_t pad[3];
+    uint8_t used;      /* (1 << n) - 1: the node test's mask is cut to it, so an unused slot is never followed
+                        * even if a ray met its empty box (it cannot: docs/accel.md, "4-wide nodes") */
+    uint8_t pad[2];
 } tb__bvh4_node;
 
 _Static_assert(sizeof(tb__bvh4_node) == 128, "tb__bvh4_node is 128 bytes");

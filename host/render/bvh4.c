@@ -97,6 +97,7 @@ static uint32_t tb__bvh4_collapse(tb__collapse *c, uint32_t b)
     tb__bvh4_node *o = &c->out[me];
     memset(o, 0, sizeof *o);
     o->n = (uint8_t)nk;
+    o->used = (uint8_t)((1u << nk) - 1u);
     for (int i = 0; i < 4; i++) {
         tb_aabb bx = i < nk ? bin[kids[i]].bounds : (tb_aabb){{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
         o->box[0][i] = bx.lo.x;
@@ -321,7 +322,7 @@ bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *b
             const tb__bvh4_node *nd = &nodes[cur];
             tb__f4 tn4;
             visited++;
-            unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4);
+            unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4) & nd->used;
             if (m && !(m & (m - 1))) { /* one child met: nothing to order or push */
                 unsigned c = (unsigned)__builtin_ctz(m);
                 cur = nd->child[c];
@@ -429,7 +430,7 @@ static bool tb__bvh4_traverse_any(const tb_accel *acc, const tb_ray *ray, uint32
             const tb__bvh4_node *nd = &nodes[cur];
             tb__f4 tn4;
             visited++;
-            unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4);
+            unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4) & nd->used;
             if (m && !(m & (m - 1))) {
                 unsigned c = (unsigned)__builtin_ctz(m);
                 cur = nd->child[c];

@@ -569,6 +569,7 @@ static void check_bvh4(const tb_accel *acc, int max_leaf)
     for (size_t w = 0; w < acc->nwide; w++) {
         const tb__bvh4_node *nd = &acc->wide[w];
         assert_true(nd->n >= 1 && nd->n <= 4);
+        assert_int_equal(nd->used, (1u << nd->n) - 1u);
         if (w > 0)
             assert_true(reached[w]); /* parents come first (depth-first) */
         for (unsigned oct = 0; oct < 8; oct++) {
