@@ -10,9 +10,14 @@
 //    drew from the sample's own stream (emitter chosen by the double CDF),
 //    the point on the emitter, its solid-angle density and the Lambert
 //    estimate, one shadow ray each;
+//  - the GGX lobe of model ggx (shading.c's tb_bsdf_ggx with Schlick
+//    Fresnel, F0 = the specular colour): its value for every light and
+//    light sample, the light samples weighted by the power heuristic
+//    against the glossy rays, and the glossy rays themselves (Heitz's VNDF
+//    sampling from the host's numbers, weight F G2 / G1, density);
 //  - the secondary rays: Fresnel-weighted mirror and refracted rays of a
 //    smooth dielectric (total internal reflection: R = 1), or the perfect
-//    mirror weighted by the specular colour.
+//    mirror weighted by the specular colour, or the glossy rays.
 // Shadow contributions are written unoccluded as two scalars a, b per shadow
 // ray (the contribution is (diffuse a + specular b) x the light's colour):
 // the host traces the shadow rays through the occlusion kernel and applies
@@ -23,7 +28,8 @@
 //
 // Specialization constants switch on only what the scene uses: the number of
 // channels (3 RGB or the spectral bands), delta lights, light samples, spot
-// cones, Phong highlights, mirrors, dielectrics, emission, emitter kinds.
+// cones, Phong highlights, mirrors, dielectrics, emission, emitter kinds,
+// IES tables, GGX lobes and their glossy rays.
 #version 450
 #extension GL_GOOGLE_include_directive : require
 
@@ -41,10 +47,13 @@ layout(constant_id = 7) const bool HAS_DIELECTRIC = false; // some material tran
 layout(constant_id = 8) const bool HAS_EMISSION = false;   // some material emits
 layout(constant_id = 9) const uint EMITTER_KINDS = 1u;  // bit k: an emitter of kind k exists
 layout(constant_id = 10) const bool HAS_IES = false;    // some light has an IES distribution
+layout(constant_id = 11) const bool HAS_GGX = false;    // some material has a GGX lobe
+layout(constant_id = 12) const int NGLOSSY = 0;         // most glossy rays per item (0: no GGX)
 
 const int S = NLIGHTS + NSAMPLES;  // shadow rays per item
-const int NRAYS = S + 2;           // TB_GPU_SHADE_RAYS
+const int SW = HAS_GGX ? 4 : 3;    // words per shadow ray: flag, a, b (and c with GGX)
 const int SLOT = NCH + 1;          // floats per colour slot (flag and channels)
+const float PI = 3.14159265358979323846;
 const float INV_PI = 0.318309886183790671537767526745028724;
 const float TWO_PI = 6.28318530717958647692528676655900576;
 const float PI_4 = 0.785398163397448309615660845819875721;
@@ -92,10 +101,11 @@ vec3 spawn_origin(vec3 p, vec3 perr, vec3 ng, vec3 w)
     return po;
 }
 
-// tb_dvec3_basis (util/math/vec.h): Duff et al.'s orthonormal basis.
+// tb_dvec3_basis (util/math/vec.h): Duff et al.'s orthonormal basis; the
+// sign is copysign's (-0 counts as negative), as in the C code.
 void basis(vec3 n, out vec3 b1, out vec3 b2)
 {
-    float sgn = n.z >= 0.0 ? 1.0 : -1.0;
+    float sgn = (floatBitsToUint(n.z) & 0x80000000u) != 0u ? -1.0 : 1.0;
     float a = -1.0 / (sgn + n.z);
     float b = n.x * n.y * a;
     b1 = vec3(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
@@ -190,6 +200,91 @@ float fresnel_dielectric(float cos_i, float eta)
     return 0.5 * (r_parl * r_parl + r_perp * r_perp);
 }
 
+// ---------------------------------------------------------------- GGX
+// shading.c's GGX functions in float (the C code works in double): D,
+// Smith's Lambda, Heitz's visible-normal sampling and its density, and the
+// value of the Schlick lobe. Tested against the C functions in tests/gpu
+// (ggx_kernel.c).
+
+// tb__ggx_D: the denominator as (x^2 + y^2) + z^2 alpha^2 (no cancellation).
+float ggx_D(float a, vec3 m)
+{
+    if (!(m.z > 0.0))
+        return 0.0;
+    float a2 = a * a;
+    float t = (m.x * m.x + m.y * m.y) + m.z * m.z * a2;
+    return a2 / (PI * t * t);
+}
+
+// tb__ggx_lambda, in the form without cancellation for small tan.
+float ggx_lambda(float a, vec3 w)
+{
+    float z2 = w.z * w.z;
+    if (z2 == 0.0)
+        return 1.0 / 0.0;
+    float x = a * a * (w.x * w.x + w.y * w.y) / z2;
+    return x / (2.0 * (sqrt(1.0 + x) + 1.0));
+}
+
+// tb__ggx_sample_vndf (Heitz 2018, listing 1), w flipped to z >= 0.
+vec3 ggx_sample_vndf(float a, vec3 w, float u1, float u2)
+{
+    if (w.z < 0.0)
+        w = -w;
+    vec3 vh = normalize(vec3(a * w.x, a * w.y, w.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) / sqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u1), phi = TWO_PI * u2;
+    float p1 = r * cos(phi), p2 = r * sin(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
+    float pz = sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2));
+    vec3 nh = t1 * p1 + t2 * p2 + vh * pz;
+    return normalize(vec3(a * nh.x, a * nh.y, max(1e-12, nh.z)));
+}
+
+// tb__ggx_vndf_pdf: density of m seen from w (w flipped to z >= 0).
+float ggx_vndf_pdf(float a, vec3 w, vec3 m)
+{
+    if (w.z < 0.0)
+        w = -w;
+    float wm = dot(w, m);
+    if (!(wm > 0.0) || !(w.z > 0.0))
+        return 0.0;
+    return wm * ggx_D(a, m) / ((1.0 + ggx_lambda(a, w)) * w.z);
+}
+
+// The GGX (Schlick) lobe for unit local wo, wi (tb__evaluate's TB_BSDF_GGX):
+// x = the scalar D G2 / (4 |cos_o cos_i|), y = Schlick's m^5 (the lobe's
+// value per channel is (F0 (1 - y) + y) x), z = the sampling density.
+vec3 ggx_eval(float a, vec3 wo, vec3 wi)
+{
+    float co = wo.z, ci = wi.z;
+    if (co == 0.0 || ci == 0.0 || (co > 0.0) != (ci > 0.0))
+        return vec3(0.0);
+    if (co < 0.0) { // two-sided: the upper side
+        wo = -wo;
+        wi = -wi;
+        co = -co;
+        ci = -ci;
+    }
+    vec3 h = wo + wi;
+    float len = length(h);
+    if (!(len > 0.0))
+        return vec3(0.0);
+    h /= len;
+    float oh = dot(wo, h);
+    float D = ggx_D(a, h);
+    float G = 1.0 / (1.0 + ggx_lambda(a, wo) + ggx_lambda(a, wi));
+    float m = 1.0 - min(1.0, abs(oh)), m2 = m * m;
+    float pdf = oh > 0.0 ? ggx_vndf_pdf(a, wo, h) / (4.0 * oh) : 0.0;
+    return vec3(D * G / (4.0 * co * ci), m2 * m2 * m, pdf);
+}
+
+// The power heuristic (raytrace.c's tb__power).
+float power_heuristic(float a, float b) { return a > 0.0 ? a * a / (a * a + b * b) : 0.0; }
+
 // Outputs are stored slot-major (slot k of item i at k * items + i), so that
 // neighbouring invocations write neighbouring words: contiguous stores on a
 // SIMD CPU driver such as lavapipe instead of scatters 1 KiB apart.
@@ -205,10 +300,13 @@ void write_ray(int k, vec3 o, vec3 d, float tmax)
 // Word c of shadow slot s (c = 0: the validity flag, 1: a, 2: b; the
 // contribution is (diffuse a + specular b) times the light's colour, applied
 // by the host when the shadow ray is unblocked).
-void sput(int s, int c, float x) { out_values[uint(s * 3 + c) * pc.items + g_item] = x; }
-// Word c of colour slot k (0 emission, 1 mirror, 2 refracted; c = 0: the
-// validity flag, 1 + channel: the values), after the shadow slots.
-void put(int k, int c, float x) { out_values[uint(3 * S + k * SLOT + c) * pc.items + g_item] = x; }
+void sput(int s, int c, float x) { out_values[uint(s * SW + c) * pc.items + g_item] = x; }
+// Word c of colour slot k (0 emission, 1 mirror, 2 refracted, 3 + k glossy
+// ray k; c = 0: the validity flag, 1 + channel: the values), after the
+// shadow slots.
+void put(int k, int c, float x) { out_values[uint(SW * S + k * SLOT + c) * pc.items + g_item] = x; }
+// The density of glossy ray k, after the colour slots.
+void gput(int k, float x) { out_values[uint(SW * S + (3 + NGLOSSY) * SLOT + k) * pc.items + g_item] = x; }
 
 // A point on emitter e seen from p (tb__sample_emitter in host/render/lights.c):
 // false if it gives no light.
@@ -282,7 +380,7 @@ void main()
     tb_gpu_shade_item it = items[i];
     for (int k = 0; k < S; k++)
         sput(k, 0, 0.0);
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < 3 + NGLOSSY; k++)
         put(k, 0, 0.0);
 
     tb_gpu_shade_material m = materials[it.material];
@@ -299,6 +397,15 @@ void main()
     bool has_diffuse = (m.flags & TB_GPU_MAT_DIFFUSE) != 0u;
     bool has_specular = (m.flags & TB_GPU_MAT_SPECULAR) != 0u;
     bool has_transmission = (m.flags & TB_GPU_MAT_TRANSMISSION) != 0u;
+    // The GGX lobe in the frame of the shading normal (tb_frame_from_normal).
+    bool ggx = HAS_GGX && (m.flags & TB_GPU_MAT_GGX) != 0u;
+    vec3 fs = vec3(0.0), ft = vec3(0.0), wol = vec3(0.0, 0.0, 1.0);
+    if (ggx) {
+        basis(n, fs, ft);
+        wol = vec3(dot(wo, fs), dot(wo, ft), dot(wo, n));
+        wol = normalize(wol);
+    }
+    int nglossy = ggx ? int(it.glossy) : 0;
 
     // Emission: one-sided emitters, M / pi on the front.
     if (HAS_EMISSION && (m.flags & TB_GPU_MAT_EMITS) != 0u && front) {
@@ -342,8 +449,12 @@ void main()
             float cosi = dot(n, wi);
             if (cosi <= 0.0)
                 continue;
-            float spec = 0.0;
-            if (HAS_PHONG && has_specular) {
+            float spec = 0.0, white = 0.0;
+            if (ggx) {
+                vec3 e = ggx_eval(m.alpha, wol, normalize(vec3(dot(wi, fs), dot(wi, ft), dot(wi, n))));
+                spec = e.x * (1.0 - e.y);
+                white = e.x * e.y;
+            } else if (HAS_PHONG && has_specular) {
                 float ca;
                 if ((m.flags & TB_GPU_MAT_BLINN) != 0u) {
                     // exactly normalised Blinn-Phong: the half vector (raytrace.c's tb__lobe)
@@ -361,6 +472,8 @@ void main()
             sput(l, 0, 1.0);
             sput(l, 1, INV_PI * scale * cosi);
             sput(l, 2, spec * scale * cosi);
+            if (HAS_GGX)
+                sput(l, 3, white * scale * cosi);
             vec3 o = spawn_origin(p, perr, ng, wi);
             write_ray(l, o, lt.kind == TB_GPU_LIGHT_DIRECTIONAL ? wi : lt.position - o, tmax);
         }
@@ -389,6 +502,19 @@ void main()
             sput(NLIGHTS + k, 0, 1.0);
             sput(NLIGHTS + k, 1, w * norm);
             sput(NLIGHTS + k, 2, 0.0);
+            if (HAS_GGX) {
+                float spec = 0.0, white = 0.0;
+                if (ggx) {
+                    // the lobe, weighted against the glossy rays (power heuristic)
+                    vec3 e = ggx_eval(m.alpha, wol, normalize(vec3(dot(wi, fs), dot(wi, ft), dot(wi, n))));
+                    float mw = power_heuristic(float(NSAMPLES) * pdf, float(nglossy) * e.z);
+                    float k2 = w * mw / float(NSAMPLES);
+                    spec = e.x * (1.0 - e.y) * k2;
+                    white = e.x * e.y * k2;
+                }
+                sput(NLIGHTS + k, 2, spec);
+                sput(NLIGHTS + k, 3, white);
+            }
             vec3 o = spawn_origin(p, perr, ng, wi);
             write_ray(NLIGHTS + k, o, q - o, 1.0 - SHADOW_EPSILON);
         }
@@ -423,6 +549,33 @@ void main()
             put(vt, 0, 1.0);
             for (int k = 0; k < NCH; k++)
                 put(vt, 1 + k, colours[mc + uint(2 * NCH + k)] * T);
+        }
+    } else if (HAS_GGX && ggx) {
+        // Glossy rays from the host's numbers (tb_bsdf_sample of the lobe,
+        // then raytrace.c's test that the ray leaves on the viewer's side).
+        for (int k = 0; k < NGLOSSY; k++) {
+            if (k >= nglossy)
+                break;
+            tb_gpu_light_u gu = lightu[it.light_base + uint(NSAMPLES + k)];
+            float side = wol.z > 0.0 ? 1.0 : -1.0;
+            vec3 mh = ggx_sample_vndf(m.alpha, wol, gu.u1, gu.u2) * side;
+            vec3 wil = normalize(2.0 * dot(wol, mh) * mh - wol);
+            if (wil.z == 0.0)
+                continue;
+            vec3 e = ggx_eval(m.alpha, wol, wil);
+            if (!(e.z > 0.0) || !(e.x > 0.0) || isinf(e.z))
+                continue;
+            vec3 w = normalize(fs * wil.x + ft * wil.y + n * wil.z);
+            if ((dot(w, ng) > 0.0) != front)
+                continue; // a bumped normal can send the ray into the surface
+            write_ray(S + 2 + k, spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
+            float q = e.x * abs(wil.z) / e.z; // F G2 / G1 without F
+            put(3 + k, 0, 1.0);
+            for (int c = 0; c < NCH; c++) {
+                float f0 = colours[mc + uint(NCH + c)];
+                put(3 + k, 1 + c, (f0 * (1.0 - e.y) + e.y) * q);
+            }
+            gput(k, e.z);
         }
     } else if (HAS_MIRROR && has_specular) {
         vec3 w = normalize(2.0 * dot(wo, n) * n - wo);

@@ -36,9 +36,13 @@ struct tb_gpu_renderer {
     int nlights;          /* delta lights */
     int nsamples;         /* area-light samples per point (0: no area light) */
     int S;                /* shadow slots per item */
+    int sw;               /* words per shadow slot (3, or 4 with GGX: shared/shade.h) */
+    int nglossy;          /* most glossy rays per item (0: no GGX material) */
+    int lu_per;           /* light-sample buffer entries per item: nsamples + nglossy */
+    int cap_stack;        /* stack entries per path */
     char **route;         /* per material: why it is routed, or NULL */
     uint8_t *mflags;      /* per material: TB_GPU_MAT_* */
-    tb_gpu_spec_constant spec[10];
+    tb_gpu_spec_constant spec[12];
     tb_gpu_buffer *b_items, *b_lightu, *b_emitters, *b_lights, *b_materials, *b_colours, *b_rays, *b_values;
     size_t chunk;         /* items per shade dispatch */
     uint32_t light_col, emitter_col;
@@ -150,7 +154,7 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         else
             kinds |= 1u << e->kind;
     }
-    bool any_phong = false, any_mirror = false, any_dielectric = false, any_emission = false;
+    bool any_phong = false, any_mirror = false, any_dielectric = false, any_emission = false, any_ggx = false;
     for (int i = 0; i < nm; i++) {
         const tb_material *m = &s->materials[i];
         uint8_t f = 0;
@@ -161,6 +165,8 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
             f |= TB_GPU_MAT_SPECULAR;
         if (m->model == TB_MID_MODEL_BLINN)
             f |= TB_GPU_MAT_BLINN;
+        if (m->model == TB_MID_MODEL_GGX && (f & TB_GPU_MAT_SPECULAR))
+            f |= TB_GPU_MAT_GGX;
         if (!tb_channels_is_black(m->transmission))
             f |= TB_GPU_MAT_TRANSMISSION;
         if (m->emits)
@@ -173,11 +179,10 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
             why = "procedural pattern";
         else if (m->bump.kind)
             why = "bump map";
-        else if (m->model == TB_MID_MODEL_GGX && (f & TB_GPU_MAT_SPECULAR))
-            why = "GGX lobe (glossy rays)";
-        else if (m->model != TB_MID_MODEL_PHONG && m->model != TB_MID_MODEL_BLINN && m->model != TB_MID_MODEL_LAMBERT)
+        else if (m->model != TB_MID_MODEL_PHONG && m->model != TB_MID_MODEL_BLINN &&
+                 m->model != TB_MID_MODEL_LAMBERT && m->model != TB_MID_MODEL_GGX)
             why = "reflection model";
-        else if (bad_emitter && (f & TB_GPU_MAT_DIFFUSE))
+        else if (bad_emitter && (f & (TB_GPU_MAT_DIFFUSE | TB_GPU_MAT_GGX)))
             why = "lit by an emitter the kernel does not sample (custom or two-sided sphere)";
         if (why) {
             char buf[sizeof r->st.routed_reason];
@@ -189,17 +194,27 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
                 memcpy(r->st.routed_reason, buf, sizeof buf);
             continue;
         }
-        any_phong = any_phong || ((f & TB_GPU_MAT_SPECULAR) && s->nlights > 0);
-        any_mirror = any_mirror || ((f & TB_GPU_MAT_SPECULAR) && !(f & TB_GPU_MAT_TRANSMISSION));
+        any_phong = any_phong || ((f & TB_GPU_MAT_SPECULAR) && !(f & TB_GPU_MAT_GGX) && s->nlights > 0);
+        any_mirror = any_mirror ||
+                     ((f & TB_GPU_MAT_SPECULAR) && !(f & TB_GPU_MAT_TRANSMISSION) && !(f & TB_GPU_MAT_GGX));
+        any_ggx = any_ggx || (f & TB_GPU_MAT_GGX);
         any_dielectric = any_dielectric || (f & TB_GPU_MAT_TRANSMISSION);
         any_emission = any_emission || (f & TB_GPU_MAT_EMITS);
     }
     if (!kinds)
         kinds = 1; /* no emitter: the constant only prunes code */
-    tb_gpu_spec_constant spec[10] = {{1, (uint32_t)nch},  {2, (uint32_t)r->nlights}, {3, (uint32_t)r->nsamples},
+    /* GGX: a fourth word per shadow ray (Schlick's white part) and up to
+     * glossy_samples glossy rays per item (at a camera ray's hit) */
+    r->sw = any_ggx ? 4 : 3;
+    r->nglossy = any_ggx ? r->rt.glossy_samples : 0;
+    r->lu_per = r->nsamples + r->nglossy;
+    /* a hit pushes at most 2 rays (dielectric) and nets +1 per level, the
+     * camera ray's GGX hit nglossy */
+    r->cap_stack = r->rt.max_depth + 2 + (r->nglossy > 1 ? r->nglossy - 1 : 0);
+    tb_gpu_spec_constant spec[12] = {{1, (uint32_t)nch},  {2, (uint32_t)r->nlights}, {3, (uint32_t)r->nsamples},
                                      {4, spot},           {5, any_phong},            {6, any_mirror},
                                      {7, any_dielectric}, {8, any_emission},         {9, kinds},
-                                     {10, ies}};
+                                     {10, ies},           {11, any_ggx},             {12, (uint32_t)r->nglossy}};
     memcpy(r->spec, spec, sizeof spec);
 
     /* Tables: materials (scalars), colours (materials' 4 x nch, lights' and
@@ -226,7 +241,8 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         const tb_material *m = &s->materials[i];
         tb_bsdf_kind lobe = m->model == TB_MID_MODEL_BLINN ? TB_BSDF_BLINN_NORMALIZED_EXACT : TB_BSDF_PHONG_NORMALIZED;
         mats[i] = (tb_gpu_shade_material){m->exponent, m->ior, (float)tb_bsdf_lobe_norm(lobe, m->exponent),
-                                           r->mflags[i]};
+                                           r->mflags[i], (float)fmax((double)m->roughness, TB_GGX_ALPHA_MIN),
+                                           0.0f, 0.0f, 0.0f};
         const tb_channels *c4[4] = {&m->diffuse, &m->specular, &m->transmission, &m->emission};
         for (int k = 0; k < 4; k++)
             for (int c = 0; c < nch; c++)
@@ -295,16 +311,17 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         goto fail;
 
     /* Chunk buffers. */
-    size_t per = (size_t)TB_GPU_SHADE_RAYS((size_t)r->S) * sizeof(tb_gpu_ray) +
-                 (size_t)TB_GPU_SHADE_VALUES((size_t)r->S, (size_t)nch) * sizeof(float) +
-                 sizeof(tb_gpu_shade_item) + (size_t)r->nsamples * sizeof(tb_gpu_light_u);
+    const size_t NR = TB_GPU_SHADE_RAYS((size_t)r->S, (size_t)r->nglossy),
+                 NV = TB_GPU_SHADE_VALUES((size_t)r->S, (size_t)nch, (size_t)r->sw, (size_t)r->nglossy);
+    size_t per = NR * sizeof(tb_gpu_ray) + NV * sizeof(float) + sizeof(tb_gpu_shade_item) +
+                 (size_t)r->lu_per * sizeof(tb_gpu_light_u);
     r->chunk = TB__GR_CHUNK_BYTES / per;
     if (r->chunk > 65536)
         r->chunk = 65536;
     if (r->chunk < 64)
         r->chunk = 64;
-    size_t nr = r->chunk * TB_GPU_SHADE_RAYS((size_t)r->S), nv = r->chunk * TB_GPU_SHADE_VALUES((size_t)r->S, (size_t)nch);
-    size_t nlu = r->chunk * (size_t)(r->nsamples > 0 ? r->nsamples : 1);
+    size_t nr = r->chunk * NR, nv = r->chunk * NV;
+    size_t nlu = r->chunk * (size_t)(r->lu_per > 0 ? r->lu_per : 1);
     r->items = malloc(r->chunk * sizeof *r->items);
     r->lightu = calloc(nlu, sizeof *r->lightu); /* items without area samples leave theirs unset */
     r->orays = malloc(nr * sizeof *r->orays);
@@ -345,6 +362,7 @@ typedef struct tb__paths {
     tb_ray *ray;        /* [path * cap + k] */
     int *depth;
     float *thr;         /* [(path * cap + k) * nch + c] */
+    tb_rt_mis *mis;     /* a glossy ray's weighting context (nb = 0: not a glossy ray) */
     int *top;           /* entries on each stack */
     tb_rng *rng;        /* the paths' streams (caller's) */
     float *L;           /* [path * nch + c] (caller's) */
@@ -355,12 +373,16 @@ typedef struct tb__paths {
     const tb_rng *rng0;
 } tb__paths;
 
-static void tb__push(tb__paths *P, size_t p, const tb_ray *ray, int depth, const float *thr)
+static void tb__push(tb__paths *P, size_t p, const tb_ray *ray, int depth, const float *thr, const tb_rt_mis *mis)
 {
     int k = P->top[p]++;
     size_t e = p * (size_t)P->cap + (size_t)k;
     P->ray[e] = *ray;
     P->depth[e] = depth;
+    if (mis)
+        P->mis[e] = *mis;
+    else
+        P->mis[e].nb = 0.0;
     memcpy(P->thr + e * (size_t)P->nch, thr, sizeof(float) * (size_t)P->nch);
 }
 
@@ -371,6 +393,7 @@ typedef struct tb__wave {
     tb_ray *ray;
     int *depth;
     float *thr;       /* [a * nch + c] */
+    tb_rt_mis *mis;   /* glossy rays' weighting (nb = 0: none) */
     tb_hit *hit;
     size_t *item_of;  /* items: index into the wave */
     size_t *routed;   /* routed hits: index into the wave */
@@ -386,9 +409,9 @@ typedef struct tb__wave {
 static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, size_t base, size_t ni,
                                  size_t nlu)
 {
-    const int nch = r->nch, S = r->S;
-    const size_t NR = TB_GPU_SHADE_RAYS((size_t)S), NV = TB_GPU_SHADE_VALUES((size_t)S, (size_t)nch),
-                 SL = (size_t)nch + 1;
+    const int nch = r->nch, S = r->S, G = r->nglossy;
+    const size_t SW = (size_t)r->sw, NR = TB_GPU_SHADE_RAYS((size_t)S, (size_t)G),
+                 NV = TB_GPU_SHADE_VALUES((size_t)S, (size_t)nch, SW, (size_t)G), SL = (size_t)nch + 1;
     double w0 = tb__now();
     tb_status st = tb_gpu_buffer_upload(r->b_items, 0, r->items, ni * sizeof *r->items);
     if (!st && nlu)
@@ -399,7 +422,7 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
                                                                         .buffers = 8,
                                                                         .push_size = sizeof(tb_gpu_shade_push),
                                                                         .spec = r->spec,
-                                                                        .spec_count = 10});
+                                                                        .spec_count = 12});
     if (!k)
         return TB_ERR_DEVICE;
     tb_gpu_shade_push push = {(uint32_t)ni, 0, 0, 0};
@@ -419,16 +442,18 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
 
     /* Emission, secondary rays; shadow rays collected. The outputs are
      * word-major (shared/shade.h): word w of item j at w ni + j; shadow slot
-     * s's words (flag, a, b) are 3 s .. 3 s + 2, colour slot k's (flag,
-     * channels) follow from 3 S + k SL; ray slot k at k ni + j. */
+     * s's words (flag, a, b[, c]) are SW s .. SW s + SW - 1, colour slot k's
+     * (flag, channels) follow from SW S + k SL, the glossy densities from
+     * SW S + (3 + G) SL; ray slot k at k ni + j. */
 #define TB__W(j, w) r->ovals[(size_t)(w) * ni + (j)]
-#define TB__C(j, k, c) TB__W(j, 3 * (size_t)S + (size_t)(k) * SL + (size_t)(c))
+#define TB__C(j, k, c) TB__W(j, SW * (size_t)S + (size_t)(k) * SL + (size_t)(c))
+#define TB__PDF(j, k) TB__W(j, SW * (size_t)S + (3 + (size_t)G) * SL + (size_t)(k))
     /* shadow rays of the chunk in item order (sequential: it compacts) */
     size_t ns = 0;
     for (size_t j = 0; j < ni; j++) {
         w->sstart[j] = ns;
         for (int s = 0; s < S; s++)
-            if (TB__W(j, 3 * s) != 0.0f) {
+            if (TB__W(j, SW * (size_t)s) != 0.0f) {
                 w->shadow[ns] = r->orays[(size_t)s * ni + j];
                 w->shadow_src[ns++] = j * (size_t)S + (size_t)s;
             }
@@ -442,16 +467,39 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
         const float *thr = w->thr + a * (size_t)nch;
         float *L = P->L + p * (size_t)nch;
         float tmp[TB_CHANNELS_MAX];
-        if (TB__C(j, 0, 0) != 0.0f)
+        if (TB__C(j, 0, 0) != 0.0f) {
+            /* a glossy ray's emission is weighted against the light samples
+             * of the point it left (power heuristic), in double as on the
+             * CPU path */
+            float wm = w->mis[a].nb > 0.0 ? (float)tb_rt_mis_weight(&r->rt, &w->mis[a]) : 1.0f;
             for (int c = 0; c < nch; c++)
-                L[c] += thr[c] * TB__C(j, 0, 1 + c);
+                L[c] += thr[c] * (TB__C(j, 0, 1 + c) * wm);
+        }
         /* refracted first, so the mirror ray is on top (the CPU traces it first) */
         for (int k = 2; k >= 1; k--) {
             if (TB__C(j, k, 0) == 0.0f)
                 continue;
             for (int c = 0; c < nch; c++)
                 tmp[c] = thr[c] * TB__C(j, k, 1 + c);
-            tb__push(P, p, &r->orays[(size_t)(S + k - 1) * ni + j], w->depth[a] + 1, tmp);
+            tb__push(P, p, &r->orays[(size_t)(S + k - 1) * ni + j], w->depth[a] + 1, tmp, NULL);
+        }
+        /* glossy rays, the last first so that ray 0 is on top (the CPU
+         * traces them in order), each weighted 1 / (rays sampled) */
+        const tb_gpu_shade_item *it = &r->items[j];
+        if (it->glossy > 0) {
+            tb_rt_mis mis = {.p = tb_vec3_add(it->o, tb_vec3_scale(it->d, it->t)),
+                             .nb = (double)it->glossy, .nl = (double)r->rt.light_samples};
+            float inv = 1.0f / (float)it->glossy;
+            for (int k = (int)it->glossy - 1; k >= 0; k--) {
+                if (TB__C(j, 3 + k, 0) == 0.0f)
+                    continue;
+                const tb_ray *gr = &r->orays[(size_t)(S + 2 + k) * ni + j];
+                for (int c = 0; c < nch; c++)
+                    tmp[c] = thr[c] * (TB__C(j, 3 + k, 1 + c) * inv);
+                mis.w = gr->d;
+                mis.pdf = TB__PDF(j, k);
+                tb__push(P, p, gr, w->depth[a] + 1, tmp, &mis);
+            }
         }
     }
     if (ns) {
@@ -480,12 +528,13 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
                         ? r->col + r->light_col + k * (size_t)nch
                         : r->col + r->emitter_col +
                               (size_t)r->lightu[it->light_base + (k - (size_t)r->nlights)].emitter * (size_t)nch;
-                float ca = TB__W(j, 3 * k + 1), cb = TB__W(j, 3 * k + 2);
+                float ca = TB__W(j, SW * k + 1), cb = TB__W(j, SW * k + 2), cc = SW > 3 ? TB__W(j, SW * k + 3) : 0.0f;
                 for (int c = 0; c < nch; c++)
-                    L[c] += thr[c] * ((dif[c] * ca + spec[c] * cb) * lc[c]);
+                    L[c] += thr[c] * ((dif[c] * ca + spec[c] * cb + cc) * lc[c]);
             }
         }
     }
+#undef TB__PDF
 #undef TB__C
 #undef TB__W
     return TB_OK;
@@ -502,6 +551,7 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
     w.ray = malloc(n * sizeof *w.ray);
     w.depth = malloc(n * sizeof *w.depth);
     w.thr = malloc(n * (size_t)nch * sizeof *w.thr);
+    w.mis = malloc(n * sizeof *w.mis);
     w.hit = malloc(n * sizeof *w.hit);
     w.item_of = malloc(n * sizeof *w.item_of);
     w.routed = malloc(n * sizeof *w.routed);
@@ -511,7 +561,7 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
     w.shadow_src = malloc(r->chunk * (S ? S : 1) * sizeof *w.shadow_src);
     w.occl = malloc(r->chunk * (S ? S : 1));
     tb_status st = TB_OK;
-    if (!w.path || !w.ray || !w.depth || !w.thr || !w.hit || !w.item_of || !w.routed || !w.mat || !w.sstart ||
+    if (!w.path || !w.ray || !w.depth || !w.thr || !w.mis || !w.hit || !w.item_of || !w.routed || !w.mat || !w.sstart ||
         !w.shadow || !w.shadow_src || !w.occl)
         st = tb_error(TB_ERR_NOMEM, "GPU render: out of memory for %zu paths", n);
     const int nthreads = r->threads > 0 ? r->threads : omp_get_max_threads();
@@ -526,6 +576,7 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
             w.path[w.n] = p;
             w.ray[w.n] = P->ray[e];
             w.depth[w.n] = P->depth[e];
+            w.mis[w.n] = P->mis[e];
             memcpy(w.thr + w.n * (size_t)nch, P->thr + e * (size_t)nch, sizeof(float) * (size_t)nch);
             w.n++;
         }
@@ -567,9 +618,8 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
                 tb_rt_sample(&r->rt, P->xy[2 * p], P->xy[2 * p + 1], &rng0, tmp);
                 P->rng[p] = rng0;
             } else {
-                tb_raytracer sub = r->rt; /* shallow copy: only the depth limit differs */
-                sub.max_depth = r->rt.max_depth - w.depth[a];
-                tb_channels Lc = tb_rt_radiance(&sub, &w.ray[a], &P->rng[p]);
+                tb_channels Lc = tb_rt_radiance_at(&r->rt, &w.ray[a], &P->rng[p], w.depth[a],
+                                                   w.mis[a].nb > 0.0 ? &w.mis[a] : NULL);
                 memcpy(tmp, Lc.v, sizeof(float) * (size_t)nch);
             }
             float *L = P->L + p * (size_t)nch;
@@ -593,10 +643,11 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
                 int mi = w.mat[a];
                 tb_gpu_shade_item *item = &r->items[j];
                 *item = (tb_gpu_shade_item){.o = w.ray[a].o, .t = h->t, .d = w.ray[a].d, .material = (uint32_t)mi,
-                                            .ng = h->ng, .light_base = (uint32_t)(j * (size_t)r->nsamples)};
+                                            .ng = h->ng, .light_base = (uint32_t)(j * (size_t)r->lu_per)};
                 if (w.depth[a] < r->rt.max_depth)
                     item->flags |= TB_GPU_SHADE_SPAWN;
-                if (r->nsamples > 0 && (r->mflags[mi] & TB_GPU_MAT_DIFFUSE)) {
+                const uint8_t mf = r->mflags[mi];
+                if (r->nsamples > 0 && (mf & (TB_GPU_MAT_DIFFUSE | TB_GPU_MAT_GGX))) {
                     /* the CPU path's numbers: strata from the sample's stream, the
                      * emitter by the double CDF (tb_area_light_sample) */
                     float u[2 * TB__GR_MAX_LIGHT_SAMPLES];
@@ -612,13 +663,25 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
                             (tb_gpu_light_u){(uint32_t)e, u1r, u[2 * k + 1], (float)pmf};
                     }
                 }
+                /* glossy rays (raytrace.c): below the depth limit, not on a
+                 * dielectric; glossy_samples of them at a camera ray's hit,
+                 * one deeper; their strata drawn after the light samples */
+                if ((mf & TB_GPU_MAT_GGX) && !(mf & TB_GPU_MAT_TRANSMISSION) && w.depth[a] < r->rt.max_depth) {
+                    float u[2 * TB__GR_MAX_LIGHT_SAMPLES];
+                    int nx = w.depth[a] == 0 ? r->rt.gsx : 1, ny = w.depth[a] == 0 ? r->rt.gsy : 1;
+                    item->glossy = (uint32_t)(nx * ny);
+                    tb_stratified_2d(&P->rng[p], nx, ny, u);
+                    for (int k = 0; k < nx * ny; k++)
+                        r->lightu[item->light_base + (uint32_t)(r->nsamples + k)] =
+                            (tb_gpu_light_u){0, u[2 * k], u[2 * k + 1], 0.0f};
+                }
             }
-            st = tb__shade_chunk(r, P, &w, base, ni, ni * (size_t)r->nsamples);
+            st = tb__shade_chunk(r, P, &w, base, ni, ni * (size_t)r->lu_per);
         }
     }
     r->st.wave_seconds += tb__now() - wave0;
     free(w.path), free(w.ray), free(w.depth), free(w.thr), free(w.hit), free(w.item_of), free(w.shadow),
-        free(w.shadow_src), free(w.occl), free(w.routed), free(w.mat), free(w.sstart);
+        free(w.shadow_src), free(w.occl), free(w.routed), free(w.mat), free(w.sstart), free(w.mis);
     return st;
 }
 
@@ -632,21 +695,22 @@ static tb_status tb__paths_alloc(tb__paths *P, size_t n, int cap, int nch)
     P->ray = malloc(n * (size_t)cap * sizeof *P->ray);
     P->depth = malloc(n * (size_t)cap * sizeof *P->depth);
     P->thr = malloc(n * (size_t)cap * (size_t)nch * sizeof *P->thr);
+    P->mis = malloc(n * (size_t)cap * sizeof *P->mis);
     P->top = calloc(n ? n : 1, sizeof *P->top);
-    if (!P->ray || !P->depth || !P->thr || !P->top)
+    if (!P->ray || !P->depth || !P->thr || !P->mis || !P->top)
         return tb_error(TB_ERR_NOMEM, "GPU render: out of memory for %zu paths", n);
     return TB_OK;
 }
 
 static void tb__paths_free(tb__paths *P)
 {
-    free(P->ray), free(P->depth), free(P->thr), free(P->top);
+    free(P->ray), free(P->depth), free(P->thr), free(P->mis), free(P->top);
 }
 
 tb_status tb_gpu_radiance(tb_gpu_renderer *r, const tb_ray *rays, tb_rng *rngs, size_t n, float *out)
 {
     tb__paths P;
-    tb_status st = tb__paths_alloc(&P, n, r->rt.max_depth + 2, r->nch);
+    tb_status st = tb__paths_alloc(&P, n, r->cap_stack, r->nch);
     float one[TB_CHANNELS_MAX];
     for (int c = 0; c < TB_CHANNELS_MAX; c++)
         one[c] = 1.0f;
@@ -655,7 +719,7 @@ tb_status tb_gpu_radiance(tb_gpu_renderer *r, const tb_ray *rays, tb_rng *rngs, 
         P.L = out;
         memset(out, 0, n * (size_t)r->nch * sizeof *out);
         for (size_t i = 0; i < n; i++)
-            tb__push(&P, i, &rays[i], 0, one);
+            tb__push(&P, i, &rays[i], 0, one, NULL);
         st = tb__wavefront(r, &P);
     }
     tb__paths_free(&P);
@@ -704,12 +768,12 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
     int spp = o->aa.spp;
     tb_tile_rect t0r = film ? tb_film_tile_rect(film, 0) : (tb_tile_rect){0};
     const size_t tw = (size_t)(t0r.x1 - t0r.x0), th = (size_t)(t0r.y1 - t0r.y0);
-    const int cap_stack = r->rt.max_depth + 2;
+    const int cap_stack = r->cap_stack;
     /* bytes per path: stack entries (ray, depth, throughput), streams, film
      * position, radiance, and the wave's copies */
-    size_t per_path = (size_t)cap_stack * (sizeof(tb_ray) + sizeof(int) + (size_t)nch * sizeof(float)) +
+    size_t per_path = (size_t)cap_stack * (sizeof(tb_ray) + sizeof(int) + sizeof(tb_rt_mis) + (size_t)nch * sizeof(float)) +
                       2 * sizeof(tb_rng) + 2 * sizeof(double) + 2 * (size_t)nch * sizeof(float) + sizeof(tb_ray) +
-                      sizeof(tb_hit) + 4 * sizeof(size_t) + 2 * sizeof(int);
+                      sizeof(tb_hit) + sizeof(tb_rt_mis) + 4 * sizeof(size_t) + 2 * sizeof(int);
     size_t budget = TB__GR_BATCH_BYTES / per_path;
     if (budget > TB__GR_BATCH_MAX)
         budget = TB__GR_BATCH_MAX;
@@ -819,7 +883,7 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
                             }
                             tb_ray ray = tb_camera_ray(cam, x, y, lu, lv);
                             P.top[q] = 0;
-                            tb__push(&P, q, &ray, 0, one);
+                            tb__push(&P, q, &ray, 0, one, NULL);
                         }
                     }
             }

@@ -221,12 +221,7 @@ static tb_channels tb__textured(const tb_raytracer *rt, const tb_material *m, in
 
 /* What a glossy ray needs to weight the emission it finds against the light
  * samples of the same point (multiple importance sampling, power heuristic). */
-typedef struct tb__mis {
-    tb_vec3 p;       /* the shading point the ray left, where the light samples are taken from */
-    tb_vec3 w;       /* the ray's unit direction */
-    double pdf;      /* the lobe's density of w */
-    double nb, nl;   /* glossy rays and light samples taken there */
-} tb__mis;
+typedef tb_rt_mis tb__mis;
 
 /* Solid-angle density with which the area light's sampler, called at p,
  * returns direction w: the sum over the emitters the line crosses. */
@@ -311,8 +306,8 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
     /* Emitters are one-sided: M / pi on the front side only. */
     if (m->emits && front) {
         double w = 1.0;
-        if (mis && rt->has_area)
-            w = tb__power(mis->nb * mis->pdf, mis->nl * tb__area_pdf_dir(rt, mis->p, mis->w));
+        if (mis)
+            w = tb_rt_mis_weight(rt, mis);
         L = tb_channels_add_scaled(
             L, tb_radiance_from_exitance(tb__textured(rt, m, TB__RT_SLOT_EMISSION, m->emission, &hit, fp)),
             (float)w);
@@ -456,6 +451,19 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
 tb_channels tb_rt_radiance(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng)
 {
     return tb__trace(rt, ray, NULL, rng, 0, NULL);
+}
+
+tb_channels tb_rt_radiance_at(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng, int depth,
+                              const tb_rt_mis *mis)
+{
+    return tb__trace(rt, ray, NULL, rng, depth, mis);
+}
+
+double tb_rt_mis_weight(const tb_raytracer *rt, const tb_rt_mis *mis)
+{
+    if (!rt->has_area)
+        return 1.0;
+    return tb__power(mis->nb * mis->pdf, mis->nl * tb__area_pdf_dir(rt, mis->p, mis->w));
 }
 
 void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)

@@ -84,6 +84,26 @@ void tb_rt_release(tb_raytracer *rt);
  * the light-sample jitter. Black on a miss. */
 tb_channels tb_rt_radiance(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng);
 
+/* What a glossy (GGX) ray carries to weight the emission it finds against
+ * the area-light samples of the point it left (power heuristic). */
+typedef struct tb_rt_mis {
+    tb_vec3 p;       /* the shading point the ray left, where the light samples are taken from */
+    tb_vec3 w;       /* the ray's unit direction */
+    double pdf;      /* the lobe's density of w */
+    double nb, nl;   /* glossy rays and light samples taken there */
+} tb_rt_mis;
+
+/* tb_rt_radiance for a ray at recursion depth `depth` (camera ray: 0), with
+ * `mis` set for a glossy ray (NULL otherwise): what the tracer computes for
+ * that ray inside its recursion (the wavefront renderer hands such rays
+ * over, host/gpu/render.c). */
+tb_channels tb_rt_radiance_at(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng, int depth,
+                              const tb_rt_mis *mis);
+
+/* The power-heuristic weight of emission found by the glossy ray `mis`
+ * (1 when the scene has no area light). */
+double tb_rt_mis_weight(const tb_raytracer *rt, const tb_rt_mis *mis);
+
 /* A tb_aa_sample_fn (host/render/antialias.h): ctx is a tb_raytracer; the
  * camera ray of film point (x, y) (pinhole, or the lens point from rng),
  * radiance written to out[0 .. scene->nchannels). */

@@ -6,15 +6,19 @@
  * and the material) and, when the point samples the area light, light
  * samples (tb_gpu_light_u: the emitter chosen and the remapped numbers, drawn
  * on the host from the sample's own stream so that the GPU uses exactly the
- * CPU path's numbers). The kernel writes, per item, TB_GPU_SHADE_RAYS(S)
- * output rays (S shadow rays, then the mirror and the refracted ray) and
- * TB_GPU_SHADE_VALUES(S, channels) floats: per shadow ray a validity flag
- * and two scalars a, b (its unblocked contribution is (diffuse a +
- * specular b) times the light's or emitter's colour), then three colour
- * slots (emission, mirror weight, refraction weight) of a validity flag and
- * the channel values. Everything is stored word-major for n items (word w
- * of item j at w n + j; ray slot k at k n + j), so neighbouring invocations
- * write neighbouring words. */
+ * CPU path's numbers), followed by the numbers of its glossy (GGX) rays,
+ * drawn likewise (u1, u2 of a tb_gpu_light_u). The kernel writes, per item,
+ * TB_GPU_SHADE_RAYS(S, G) output rays (S shadow rays, the mirror and the
+ * refracted ray, then G glossy rays) and TB_GPU_SHADE_VALUES(S, channels,
+ * SW, G) floats: per shadow ray SW words, a validity flag and scalars a, b
+ * (and c when the scene has GGX materials: SW = 4; its unblocked
+ * contribution is (diffuse a + specular b + c) times the light's or
+ * emitter's colour; c is the Schlick Fresnel's white part), then 3 + G
+ * colour slots (emission, mirror weight, refraction weight, glossy weights)
+ * of a validity flag and the channel values, then G glossy densities.
+ * Everything is stored word-major for n items (word w of item j at w n + j;
+ * ray slot k at k n + j), so neighbouring invocations write neighbouring
+ * words. */
 #ifndef TB_SHADERS_SHARED_SHADE_H
 #define TB_SHADERS_SHARED_SHADE_H
 
@@ -32,6 +36,9 @@
 #define TB_GPU_MAT_EMITS 8u
 /* tb_gpu_shade_material.flags: the highlight is Blinn-Phong (half vector), else Phong. */
 #define TB_GPU_MAT_BLINN 16u
+/* tb_gpu_shade_material.flags: the specular lobe is GGX (Schlick Fresnel, F0 = specular;
+ * glossy rays instead of the mirror ray). */
+#define TB_GPU_MAT_GGX 32u
 
 /* Emitter kinds (the order of host/render/lights.h's tb_emitter_kind). */
 #define TB_GPU_EMITTER_TRIANGLE 0u
@@ -61,7 +68,8 @@ struct tb_gpu_shade_item {
     TB_GPU_VEC3 ng;          /* unit geometric normal of the hit (offset 32) */
     TB_GPU_UINT flags;       /* TB_GPU_SHADE_* (offset 44) */
     TB_GPU_UINT light_base;  /* first of its light samples in the light-sample buffer (offset 48) */
-    TB_GPU_UINT pad0, pad1, pad2;
+    TB_GPU_UINT glossy;      /* glossy rays to sample (GGX), their numbers after the light samples (offset 52) */
+    TB_GPU_UINT pad1, pad2;
 };
 
 /* One area-light sample: the emitter chosen on the host (double CDF, as
@@ -106,12 +114,14 @@ struct tb_gpu_delta_light {
     TB_GPU_UINT pad0, pad1;
 };
 
-/* The scalar part of a material (its colours are in the colour table); size 16. */
+/* The scalar part of a material (its colours are in the colour table); size 32. */
 struct tb_gpu_shade_material {
     float exponent; /* Phong exponent */
     float ior;      /* index of refraction of the inside (offset 4) */
     float knorm;    /* lobe normalisation: Phong (n + 2) / (2 pi), or Blinn's exact one, from the host's double (offset 8) */
     TB_GPU_UINT flags; /* TB_GPU_MAT_* (offset 12) */
+    float alpha;    /* GGX width, clamped below to TB_GGX_ALPHA_MIN as shading.c does (offset 16) */
+    float pad0, pad1, pad2;
 };
 
 /* Push constants of the shade kernel; size 16. */
@@ -122,18 +132,21 @@ typedef struct tb_gpu_shade_push {
 } tb_gpu_shade_push;
 #endif
 
-/* Output slots per item for S shadow rays: S, a mirror and a refracted ray. */
-#define TB_GPU_SHADE_RAYS(S) ((S) + 2u)
-/* Output floats per item for S shadow rays and `ch` channels: 3 per shadow
- * ray (flag, a, b), then 3 colour slots (emission, mirror, refracted) of a
- * flag and the channels. */
-#define TB_GPU_SHADE_VALUES(S, ch) (3u * (S) + 3u * ((ch) + 1u))
+/* Output slots per item for S shadow rays and G glossy rays: S, a mirror and
+ * a refracted ray, G glossy rays. */
+#define TB_GPU_SHADE_RAYS(S, G) ((S) + 2u + (G))
+/* Output floats per item for S shadow rays of SW words, `ch` channels and G
+ * glossy rays: SW per shadow ray (flag, a, b[, c]), then 3 + G colour slots
+ * (emission, mirror, refracted, glossy) of a flag and the channels, then G
+ * glossy densities. */
+#define TB_GPU_SHADE_VALUES(S, ch, SW, G) ((SW) * (S) + (3u + (G)) * ((ch) + 1u) + (G))
 
 #ifndef TB_GPU_GLSL
 _Static_assert(sizeof(tb_gpu_shade_item) == 64, "tb_gpu_shade_item is 64 bytes");
 _Static_assert(offsetof(tb_gpu_shade_item, t) == 12 && offsetof(tb_gpu_shade_item, d) == 16 &&
                    offsetof(tb_gpu_shade_item, material) == 28 && offsetof(tb_gpu_shade_item, ng) == 32 &&
-                   offsetof(tb_gpu_shade_item, flags) == 44 && offsetof(tb_gpu_shade_item, light_base) == 48,
+                   offsetof(tb_gpu_shade_item, flags) == 44 && offsetof(tb_gpu_shade_item, light_base) == 48 &&
+                   offsetof(tb_gpu_shade_item, glossy) == 52,
                "tb_gpu_shade_item follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_light_u) == 16 && offsetof(tb_gpu_light_u, u1) == 4 &&
                    offsetof(tb_gpu_light_u, u2) == 8 && offsetof(tb_gpu_light_u, pmf) == 12,
@@ -148,8 +161,9 @@ _Static_assert(sizeof(tb_gpu_delta_light) == 64 && offsetof(tb_gpu_delta_light, 
                    offsetof(tb_gpu_delta_light, xaxis) == 32 && offsetof(tb_gpu_delta_light, cos_falloff) == 44 &&
                    offsetof(tb_gpu_delta_light, black) == 48 && offsetof(tb_gpu_delta_light, ies) == 52,
                "tb_gpu_delta_light follows the std430 offsets of its GLSL twin");
-_Static_assert(sizeof(tb_gpu_shade_material) == 16 && offsetof(tb_gpu_shade_material, ior) == 4 &&
-                   offsetof(tb_gpu_shade_material, knorm) == 8 && offsetof(tb_gpu_shade_material, flags) == 12,
+_Static_assert(sizeof(tb_gpu_shade_material) == 32 && offsetof(tb_gpu_shade_material, ior) == 4 &&
+                   offsetof(tb_gpu_shade_material, knorm) == 8 && offsetof(tb_gpu_shade_material, flags) == 12 &&
+                   offsetof(tb_gpu_shade_material, alpha) == 16,
                "tb_gpu_shade_material follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_shade_push) == 16, "tb_gpu_shade_push is 16 bytes");
 #endif

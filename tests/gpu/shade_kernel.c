@@ -185,12 +185,41 @@ static void test_lambert_model(void **state)
                 "model lamb.", (tb__want){.channels = 3, .no_secondary = true});
 }
 
-/* What the kernel does not do runs on the CPU path: GGX (glossy rays),
- * procedural patterns, bump maps. */
-static void test_routed_models(void **state)
+/* The GGX lobe: its value for the point light and the light samples (the
+ * samples weighted against the glossy rays by the power heuristic), and the
+ * glossy rays (4 at the camera ray's hit, one deeper), whose emission found
+ * on the lamp is weighted against the light samples; plastic, a rough and a
+ * nearly smooth metal (no diffuse part: the light samples are taken for the
+ * lobe alone), spectral bands, and a GGX sphere whose glossy rays find the
+ * floor and the lamp. */
+static void test_ggx(void **state)
 {
     tb__compare(*state, tb__load("diffuse = 0.2 specular = 0.6 model = ggx roughness = 0.3", tb__point, true, NULL),
-                "ggx", (tb__want){.channels = 3, .routed = "GGX"});
+                "ggx", (tb__want){.channels = 3, .secondary = true});
+    tb__compare(*state,
+                tb__load("diffuse = 0 specular = [1 0.78 0.34] model = ggx roughness = 0.45", tb__point, true, NULL),
+                "ggx metal", (tb__want){.channels = 3, .secondary = true});
+    tb__compare(*state,
+                tb__load("diffuse = 0 specular = [0.9 0.9 0.8] model = ggx roughness = 0.02", tb__point, true, NULL),
+                "ggx mirror", (tb__want){.channels = 3, .secondary = true});
+    tb_scene *sp = tb__load("diffuse = 0.3 specular = spectrum([400 550 700], [0.3 0.9 0.5]) model = ggx "
+                            "roughness = 0.2",
+                            "point_light { position = [1 1 2] intensity = spectrum([400 700], [1 5]) }\n", true, NULL);
+    assert_true(sp->spectral);
+    tb__compare(*state, sp, "ggx spectral", (tb__want){.channels = sp->nchannels, .secondary = true});
+    tb__compare(*state,
+                tb__load("diffuse = 0.5",
+                         "material \"gold\" { diffuse = 0 specular = [1 0.78 0.34] model = ggx roughness = 0.15 }\n"
+                         "sphere \"ball\" { transform = [scale(0.6) translate([-0.8 -1.5 0.6])] "
+                         "rendering = { material = \"gold\" } }\n",
+                         true, NULL),
+                "ggx sphere", (tb__want){.channels = 3, .secondary = true});
+}
+
+/* What the kernel does not do runs on the CPU path: procedural patterns,
+ * bump maps. */
+static void test_routed_models(void **state)
+{
     tb__compare(*state, tb__load("diffuse = 1 diffuse_pattern = checker(1, 0.2, 0.8)", tb__point, true, NULL),
                 "checker", (tb__want){.channels = 3, .routed = "procedural pattern"});
     tb__compare(*state, tb__load("diffuse = 0.7 bump = noise(3, 2, 0.05)", tb__point, true, NULL), "bump",
@@ -285,7 +314,7 @@ int main(void)
         cmocka_unit_test(test_lambert),     cmocka_unit_test(test_phong_mirror),   cmocka_unit_test(test_spot),
         cmocka_unit_test(test_directional), cmocka_unit_test(test_glass),          cmocka_unit_test(test_spectral),
         cmocka_unit_test(test_sphere_emitter), cmocka_unit_test(test_routed_texture), cmocka_unit_test(test_blinn),
-        cmocka_unit_test(test_lambert_model),  cmocka_unit_test(test_routed_models),  cmocka_unit_test(test_ies),
+        cmocka_unit_test(test_lambert_model),  cmocka_unit_test(test_routed_models), cmocka_unit_test(test_ggx),  cmocka_unit_test(test_ies),
     };
     return cmocka_run_group_tests(tests, tb__setup, tb__teardown);
 }
