@@ -35,6 +35,7 @@
 
 #include "shared/ray.h"
 #include "shared/shade.h"
+#include "lib/ggx.glsl"
 
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const int NCH = 3;              // channels (RGB or render bands)
@@ -49,10 +50,14 @@ layout(constant_id = 9) const uint EMITTER_KINDS = 1u;  // bit k: an emitter of 
 layout(constant_id = 10) const bool HAS_IES = false;    // some light has an IES distribution
 layout(constant_id = 11) const bool HAS_GGX = false;    // some material has a GGX lobe
 layout(constant_id = 12) const int NGLOSSY = 0;         // most glossy rays per item (0: no GGX)
+layout(constant_id = 13) const bool HAS_COLOR_PATTERN = false; // some material has a diffuse or specular pattern
+layout(constant_id = 14) const bool HAS_BUMP = false;   // some material has a (noise) bump map
+layout(constant_id = 15) const uint PATTERN_KINDS = 0u; // bit k: a pattern or bump of kind k (TB_GPU_PATTERN_*) exists
 
 const int S = NLIGHTS + NSAMPLES;  // shadow rays per item
 const int SW = HAS_GGX ? 4 : 3;    // words per shadow ray: flag, a, b (and c with GGX)
 const int SLOT = NCH + 1;          // floats per colour slot (flag and channels)
+const int PW = HAS_COLOR_PATTERN ? 2 : 0; // pattern words per item: the diffuse and specular blend factors
 const float PI = 3.14159265358979323846;
 const float INV_PI = 0.318309886183790671537767526745028724;
 const float TWO_PI = 6.28318530717958647692528676655900576;
@@ -68,11 +73,16 @@ layout(std430, binding = 4) readonly buffer Materials { tb_gpu_shade_material ma
 layout(std430, binding = 5) readonly buffer Colours { float colours[]; };
 layout(std430, binding = 6) writeonly buffer OutRays { tb_gpu_ray out_rays[]; };
 layout(std430, binding = 7) writeonly buffer OutValues { float out_values[]; };
+layout(std430, binding = 8) readonly buffer Surfaces { tb_gpu_surface surfaces[]; };
 
 layout(push_constant) uniform Push {
     uint items;
-    uint pad0, pad1, pad2;
+    uint perm; // float offset of the noise permutation in the colour table
+    uint pad1, pad2;
 } pc;
+
+int tb__perm(int i) { return int(colours[pc.perm + uint(i & 255)]); }
+#include "lib/pattern.glsl"
 
 // The next float above / below x (x finite).
 float next_up(float x)
@@ -200,88 +210,6 @@ float fresnel_dielectric(float cos_i, float eta)
     return 0.5 * (r_parl * r_parl + r_perp * r_perp);
 }
 
-// ---------------------------------------------------------------- GGX
-// shading.c's GGX functions in float (the C code works in double): D,
-// Smith's Lambda, Heitz's visible-normal sampling and its density, and the
-// value of the Schlick lobe. Tested against the C functions in tests/gpu
-// (ggx_kernel.c).
-
-// tb__ggx_D: the denominator as (x^2 + y^2) + z^2 alpha^2 (no cancellation).
-float ggx_D(float a, vec3 m)
-{
-    if (!(m.z > 0.0))
-        return 0.0;
-    float a2 = a * a;
-    float t = (m.x * m.x + m.y * m.y) + m.z * m.z * a2;
-    return a2 / (PI * t * t);
-}
-
-// tb__ggx_lambda, in the form without cancellation for small tan.
-float ggx_lambda(float a, vec3 w)
-{
-    float z2 = w.z * w.z;
-    if (z2 == 0.0)
-        return 1.0 / 0.0;
-    float x = a * a * (w.x * w.x + w.y * w.y) / z2;
-    return x / (2.0 * (sqrt(1.0 + x) + 1.0));
-}
-
-// tb__ggx_sample_vndf (Heitz 2018, listing 1), w flipped to z >= 0.
-vec3 ggx_sample_vndf(float a, vec3 w, float u1, float u2)
-{
-    if (w.z < 0.0)
-        w = -w;
-    vec3 vh = normalize(vec3(a * w.x, a * w.y, w.z));
-    float lensq = vh.x * vh.x + vh.y * vh.y;
-    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) / sqrt(lensq) : vec3(1.0, 0.0, 0.0);
-    vec3 t2 = cross(vh, t1);
-    float r = sqrt(u1), phi = TWO_PI * u2;
-    float p1 = r * cos(phi), p2 = r * sin(phi);
-    float s = 0.5 * (1.0 + vh.z);
-    p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
-    float pz = sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2));
-    vec3 nh = t1 * p1 + t2 * p2 + vh * pz;
-    return normalize(vec3(a * nh.x, a * nh.y, max(1e-12, nh.z)));
-}
-
-// tb__ggx_vndf_pdf: density of m seen from w (w flipped to z >= 0).
-float ggx_vndf_pdf(float a, vec3 w, vec3 m)
-{
-    if (w.z < 0.0)
-        w = -w;
-    float wm = dot(w, m);
-    if (!(wm > 0.0) || !(w.z > 0.0))
-        return 0.0;
-    return wm * ggx_D(a, m) / ((1.0 + ggx_lambda(a, w)) * w.z);
-}
-
-// The GGX (Schlick) lobe for unit local wo, wi (tb__evaluate's TB_BSDF_GGX):
-// x = the scalar D G2 / (4 |cos_o cos_i|), y = Schlick's m^5 (the lobe's
-// value per channel is (F0 (1 - y) + y) x), z = the sampling density.
-vec3 ggx_eval(float a, vec3 wo, vec3 wi)
-{
-    float co = wo.z, ci = wi.z;
-    if (co == 0.0 || ci == 0.0 || (co > 0.0) != (ci > 0.0))
-        return vec3(0.0);
-    if (co < 0.0) { // two-sided: the upper side
-        wo = -wo;
-        wi = -wi;
-        co = -co;
-        ci = -ci;
-    }
-    vec3 h = wo + wi;
-    float len = length(h);
-    if (!(len > 0.0))
-        return vec3(0.0);
-    h /= len;
-    float oh = dot(wo, h);
-    float D = ggx_D(a, h);
-    float G = 1.0 / (1.0 + ggx_lambda(a, wo) + ggx_lambda(a, wi));
-    float m = 1.0 - min(1.0, abs(oh)), m2 = m * m;
-    float pdf = oh > 0.0 ? ggx_vndf_pdf(a, wo, h) / (4.0 * oh) : 0.0;
-    return vec3(D * G / (4.0 * co * ci), m2 * m2 * m, pdf);
-}
-
 // The power heuristic (raytrace.c's tb__power).
 float power_heuristic(float a, float b) { return a > 0.0 ? a * a / (a * a + b * b) : 0.0; }
 
@@ -307,6 +235,91 @@ void sput(int s, int c, float x) { out_values[uint(s * SW + c) * pc.items + g_it
 void put(int k, int c, float x) { out_values[uint(SW * S + k * SLOT + c) * pc.items + g_item] = x; }
 // The density of glossy ray k, after the colour slots.
 void gput(int k, float x) { out_values[uint(SW * S + (3 + NGLOSSY) * SLOT + k) * pc.items + g_item] = x; }
+// Pattern word k (0: diffuse, 1: specular blend factor, -1 without a pattern), after the densities.
+void fput(int k, float x) { out_values[uint(SW * S + (3 + NGLOSSY) * SLOT + NGLOSSY + k) * pc.items + g_item] = x; }
+
+// ---------------------------------------------------------------- patterns
+
+// The value of pattern pt (raytrace_pattern.c's one-channel texture: a blend
+// factor in [0, 1]; a noise bump's fBm in [-1, 1]) at (u, v) with footprint
+// fp (du/dx, dv/dx, du/dy, dv/dy; zero: none) or, in object space, at po
+// with its change per pixel dpdx, dpdy (tb_texture_eval).
+float pattern_value(tb_gpu_pattern pt, bool bump, float u, float v, vec4 fp, vec3 po, vec3 dpdx, vec3 dpdy)
+{
+    float s = pt.su * u, r = pt.sv * v;
+    vec4 f4 = vec4(pt.su * fp.x, pt.sv * fp.y, pt.su * fp.z, pt.sv * fp.w);
+    if ((PATTERN_KINDS & (1u << TB_GPU_PATTERN_CHECKER)) != 0u && pt.kind == TB_GPU_PATTERN_CHECKER) {
+        // box-filtered: the footprint's bounding box (in cells)
+        if (pt.solid != 0u) {
+            vec3 c = po * pt.su;
+            vec3 h = (abs(dpdx) + abs(dpdy)) * (0.5 * abs(pt.su));
+            return tb_checker3_box_average(c - h, c + h);
+        }
+        float hs = 0.5 * (abs(f4.x) + abs(f4.z)), ht = 0.5 * (abs(f4.y) + abs(f4.w));
+        return tb_checker_box_average(s - hs, s + hs, r - ht, r + ht);
+    }
+    if ((PATTERN_KINDS & (1u << TB_GPU_PATTERN_NOISE)) != 0u && pt.kind == TB_GPU_PATTERN_NOISE) {
+        vec3 p = vec3(s, r, 0.0), dx = vec3(f4.x, f4.y, 0.0), dy = vec3(f4.z, f4.w, 0.0);
+        if (pt.solid != 0u) {
+            p = po * pt.su;
+            dx = dpdx * pt.su;
+            dy = dpdy * pt.su;
+        }
+        float f = clamp(0.5 + 0.5 * tb_fbm3(p, dx, dy, 0.5, pt.octaves), 0.0, 1.0);
+        return bump ? -1.0 + f * 2.0 : f;
+    }
+    return 0.0;
+}
+
+// The bump-mapped shading normal (texture_proc.c's tb_bump_map through
+// raytrace_pattern.c's tb__rt_bump): the height at the point and one step
+// along u and v (the footprint's size, else 1/2048), the tangents tilted by
+// the differences; on n's side; n itself for degenerate steps or tangents.
+vec3 bump_normal(tb_gpu_pattern pt, tb_gpu_surface g, vec3 n)
+{
+    vec3 bn = dot(cross(g.dpdu, g.dpdv), n) < 0.0 ? -n : n;
+    vec4 fp = vec4(g.fp0, g.fp1, g.fp2, g.fp3);
+    float du = 0.5 * (abs(fp.x) + abs(fp.z)), dv = 0.5 * (abs(fp.y) + abs(fp.w));
+    if (!(du > 0.0) || isinf(du))
+        du = 1.0 / 2048.0;
+    if (!(dv > 0.0) || isinf(dv))
+        dv = 1.0 / 2048.0;
+    bool solid = pt.solid != 0u;
+    vec3 P = solid ? g.po : vec3(0.0), dx = solid ? g.po_dx : vec3(0.0), dy = solid ? g.po_dy : vec3(0.0);
+    bool tsp = solid && (any(notEqual(g.po_du, vec3(0.0))) || any(notEqual(g.po_dv, vec3(0.0))));
+    vec3 tdu = tsp ? g.po_du : g.dpdu, tdv = tsp ? g.po_dv : g.dpdv;
+    float uu = g.u + du, vv = g.v + dv;
+    float du_eff = uu - g.u, dv_eff = vv - g.v;
+    if (du_eff == 0.0 || dv_eff == 0.0)
+        return n;
+    float h = pt.height * pattern_value(pt, true, g.u, g.v, fp, P, dx, dy);
+    float hu = pt.height * pattern_value(pt, true, uu, g.v, fp, P + tdu * du, dx, dy);
+    float hv = pt.height * pattern_value(pt, true, g.u, vv, fp, P + tdv * dv, dx, dy);
+    vec3 pu = g.dpdu + bn * ((hu - h) / du_eff);
+    vec3 pv = g.dpdv + bn * ((hv - h) / dv_eff);
+    vec3 nn = cross(pu, pv);
+    float len = length(nn);
+    if (!(len > 0.0) || isinf(len))
+        return n;
+    nn /= len;
+    if (dot(nn, bn) < 0.0)
+        nn = -nn;
+    return dot(nn, n) < 0.0 ? -nn : nn;
+}
+
+// The specular colour of the item in channel c: the material's, or its
+// pattern's blend a + f (b - a).
+uint g_mc;       // the material's colours in the colour table
+float g_fs;      // the specular pattern's blend factor (-1: none)
+uint g_spec_col; // the pattern's colours
+float spec_colour(int c)
+{
+    if (HAS_COLOR_PATTERN && g_fs >= 0.0) {
+        float a = colours[g_spec_col + uint(c)], b = colours[g_spec_col + uint(NCH + c)];
+        return a + g_fs * (b - a);
+    }
+    return colours[g_mc + uint(NCH + c)];
+}
 
 // A point on emitter e seen from p (tb__sample_emitter in host/render/lights.c):
 // false if it gives no light.
@@ -382,6 +395,8 @@ void main()
         sput(k, 0, 0.0);
     for (int k = 0; k < 3 + NGLOSSY; k++)
         put(k, 0, 0.0);
+    for (int k = 0; k < PW; k++)
+        fput(k, -1.0);
 
     tb_gpu_shade_material m = materials[it.material];
     uint mc = it.material * uint(4 * NCH); // diffuse, specular, transmission, emission
@@ -394,6 +409,31 @@ void main()
     vec3 ng = it.ng;
     bool front = dot(dir, ng) < 0.0;
     vec3 n = front ? ng : -ng;
+    g_mc = mc;
+    g_fs = -1.0;
+    if ((HAS_COLOR_PATTERN || HAS_BUMP) && (it.flags & TB_GPU_SHADE_SURFACE) != 0u) {
+        tb_gpu_surface g = surfaces[i];
+        if (HAS_BUMP && m.pattern[TB_GPU_PATTERN_BUMP].kind != TB_GPU_PATTERN_NONE)
+            n = bump_normal(m.pattern[TB_GPU_PATTERN_BUMP], g, n); // rays still leave by ng
+        if (HAS_COLOR_PATTERN) {
+            vec4 fp = vec4(g.fp0, g.fp1, g.fp2, g.fp3);
+            float fd = -1.0;
+            for (int k = 0; k < 2; k++) {
+                tb_gpu_pattern pt = m.pattern[k];
+                if (pt.kind == TB_GPU_PATTERN_NONE)
+                    continue;
+                float f = clamp(pattern_value(pt, false, g.u, g.v, fp, g.po, g.po_dx, g.po_dy), 0.0, 1.0);
+                if (k == 0) {
+                    fd = f;
+                } else {
+                    g_fs = f;
+                    g_spec_col = pt.col;
+                }
+            }
+            fput(0, fd);
+            fput(1, g_fs);
+        }
+    }
     bool has_diffuse = (m.flags & TB_GPU_MAT_DIFFUSE) != 0u;
     bool has_specular = (m.flags & TB_GPU_MAT_SPECULAR) != 0u;
     bool has_transmission = (m.flags & TB_GPU_MAT_TRANSMISSION) != 0u;
@@ -451,7 +491,7 @@ void main()
                 continue;
             float spec = 0.0, white = 0.0;
             if (ggx) {
-                vec3 e = ggx_eval(m.alpha, wol, normalize(vec3(dot(wi, fs), dot(wi, ft), dot(wi, n))));
+                vec3 e = tb_ggx_eval(m.alpha, wol, normalize(vec3(dot(wi, fs), dot(wi, ft), dot(wi, n))));
                 spec = e.x * (1.0 - e.y);
                 white = e.x * e.y;
             } else if (HAS_PHONG && has_specular) {
@@ -506,7 +546,7 @@ void main()
                 float spec = 0.0, white = 0.0;
                 if (ggx) {
                     // the lobe, weighted against the glossy rays (power heuristic)
-                    vec3 e = ggx_eval(m.alpha, wol, normalize(vec3(dot(wi, fs), dot(wi, ft), dot(wi, n))));
+                    vec3 e = tb_ggx_eval(m.alpha, wol, normalize(vec3(dot(wi, fs), dot(wi, ft), dot(wi, n))));
                     float mw = power_heuristic(float(NSAMPLES) * pdf, float(nglossy) * e.z);
                     float k2 = w * mw / float(NSAMPLES);
                     spec = e.x * (1.0 - e.y) * k2;
@@ -558,11 +598,11 @@ void main()
                 break;
             tb_gpu_light_u gu = lightu[it.light_base + uint(NSAMPLES + k)];
             float side = wol.z > 0.0 ? 1.0 : -1.0;
-            vec3 mh = ggx_sample_vndf(m.alpha, wol, gu.u1, gu.u2) * side;
+            vec3 mh = tb_ggx_sample_vndf(m.alpha, wol, gu.u1, gu.u2) * side;
             vec3 wil = normalize(2.0 * dot(wol, mh) * mh - wol);
             if (wil.z == 0.0)
                 continue;
-            vec3 e = ggx_eval(m.alpha, wol, wil);
+            vec3 e = tb_ggx_eval(m.alpha, wol, wil);
             if (!(e.z > 0.0) || !(e.x > 0.0) || isinf(e.z))
                 continue;
             vec3 w = normalize(fs * wil.x + ft * wil.y + n * wil.z);
@@ -572,7 +612,7 @@ void main()
             float q = e.x * abs(wil.z) / e.z; // F G2 / G1 without F
             put(3 + k, 0, 1.0);
             for (int c = 0; c < NCH; c++) {
-                float f0 = colours[mc + uint(NCH + c)];
+                float f0 = spec_colour(c);
                 put(3 + k, 1 + c, (f0 * (1.0 - e.y) + e.y) * q);
             }
             gput(k, e.z);
@@ -584,6 +624,6 @@ void main()
         write_ray(S, spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
         put(vm, 0, 1.0);
         for (int k = 0; k < NCH; k++)
-            put(vm, 1 + k, colours[mc + uint(NCH + k)]);
+            put(vm, 1 + k, spec_colour(k));
     }
 }

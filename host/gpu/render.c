@@ -8,9 +8,12 @@
 #include <string.h>
 #include <time.h>
 
+#include "host/object/intersect.h"
+#include "host/render/camera.h"
 #include "host/render/raytrace.h"
 #include "host/render/sampling.h"
 #include "host/render/shading.h"
+#include "host/render/texture.h"
 #include "shaders/shared/hit.h"
 #include "shaders/shared/ray.h"
 #include "shaders/shared/shade.h"
@@ -40,17 +43,24 @@ struct tb_gpu_renderer {
     int nglossy;          /* most glossy rays per item (0: no GGX material) */
     int lu_per;           /* light-sample buffer entries per item: nsamples + nglossy */
     int cap_stack;        /* stack entries per path */
+    int pw;               /* pattern words per item (2 with colour patterns, else 0) */
+    bool any_surface;     /* some material has a pattern or a bump map: items carry surface records */
+    uint8_t *mpat;        /* per material: it has a pattern or bump map (its hits need a surface record) */
+    uint32_t *pat_col;    /* per material: colour-table offsets of its diffuse and specular pattern colours
+                             (a, then b; 0: no pattern) */
     char **route;         /* per material: why it is routed, or NULL */
     uint8_t *mflags;      /* per material: TB_GPU_MAT_* */
-    tb_gpu_spec_constant spec[12];
+    tb_gpu_spec_constant spec[15];
+    tb_gpu_buffer *b_surf;  /* surface records of one chunk (item j's at j) */
     tb_gpu_buffer *b_items, *b_lightu, *b_emitters, *b_lights, *b_materials, *b_colours, *b_rays, *b_values;
     size_t chunk;         /* items per shade dispatch */
-    uint32_t light_col, emitter_col;
+    uint32_t light_col, emitter_col, perm_col;
     float *col;           /* the colour table (as uploaded): the host applies the shadow rays' colours */
     int threads;          /* OpenMP threads of the host's loops (0: OpenMP's default) */
     /* host staging of one chunk */
     tb_gpu_shade_item *items;
     tb_gpu_light_u *lightu;
+    tb_gpu_surface *surf;
     tb_ray *orays;
     float *ovals;
     tb_gpu_render_stats st;
@@ -75,6 +85,7 @@ void tb_gpu_renderer_destroy(tb_gpu_renderer *r)
     tb_gpu_buffer_destroy(r->b_colours);
     tb_gpu_buffer_destroy(r->b_rays);
     tb_gpu_buffer_destroy(r->b_values);
+    tb_gpu_buffer_destroy(r->b_surf);
     tb_gpu_scene_destroy(r->gscene);
     tb_rt_release(&r->rt);
     if (r->route)
@@ -82,6 +93,9 @@ void tb_gpu_renderer_destroy(tb_gpu_renderer *r)
             free(r->route[i]);
     free(r->route);
     free(r->mflags);
+    free(r->mpat);
+    free(r->pat_col);
+    free(r->surf);
     free(r->col);
     free(r->items);
     free(r->lightu);
@@ -110,6 +124,26 @@ static char *tb__strdup(const char *s)
     return d;
 }
 
+/* Whether a colour pattern's blend a + f (b - a), f in [0, 1], is black:
+ * 0 everywhere (a and b black), 1 nowhere (a and b both positive in some
+ * channel), -1 in some places only (it could be black at some f). */
+static int tb__pattern_class(const tb_material_pattern *p)
+{
+    bool black = true;
+    for (int c = 0; c < p->a.n; c++) {
+        if (p->a.v[c] > 0.0f && p->b.v[c] > 0.0f)
+            return 1;
+        black = black && p->a.v[c] == 0.0f && p->b.v[c] == 0.0f;
+    }
+    return black ? 0 : -1;
+}
+
+/* A colour pattern the kernel evaluates: none, checker or noise. */
+static bool tb__pattern_ok(const tb_material_pattern *p)
+{
+    return p->kind == TB_MID_PATTERN_NONE || p->kind == TB_MID_PATTERN_CHECKER || p->kind == TB_MID_PATTERN_NOISE;
+}
+
 const char *tb_gpu_renderer_material_route(const tb_gpu_renderer *r, int m)
 {
     return m >= 0 && m < r->scene->nmaterials ? r->route[m] : NULL;
@@ -136,7 +170,9 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
     r->S = r->nlights + r->nsamples;
     r->route = calloc((size_t)(nm > 0 ? nm : 1), sizeof *r->route);
     r->mflags = calloc((size_t)(nm > 0 ? nm : 1), 1);
-    if (!r->route || !r->mflags)
+    r->mpat = calloc((size_t)(nm > 0 ? nm : 1), 1);
+    r->pat_col = calloc((size_t)(nm > 0 ? nm : 1) * 2, sizeof *r->pat_col);
+    if (!r->route || !r->mflags || !r->mpat || !r->pat_col)
         goto nomem;
 
     /* What the kernel cannot do, scene-wide. */
@@ -155,13 +191,22 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
             kinds |= 1u << e->kind;
     }
     bool any_phong = false, any_mirror = false, any_dielectric = false, any_emission = false, any_ggx = false;
+    bool any_colour_pattern = false, any_bump = false;
+    uint32_t pattern_kinds = 0;
     for (int i = 0; i < nm; i++) {
         const tb_material *m = &s->materials[i];
         uint8_t f = 0;
-        if (!tb_channels_is_black(m->diffuse))
+        /* a colour pattern replaces the colour; whether it is black decides
+         * which numbers the point draws, so it must not depend on the hit */
+        const bool lambert = m->model == TB_MID_MODEL_LAMBERT;
+        int dcls = m->diffuse_pattern.kind ? tb__pattern_class(&m->diffuse_pattern) : !tb_channels_is_black(m->diffuse);
+        int scls = lambert ? 0
+                   : m->specular_pattern.kind ? tb__pattern_class(&m->specular_pattern)
+                                              : !tb_channels_is_black(m->specular);
+        if (dcls == 1)
             f |= TB_GPU_MAT_DIFFUSE;
         /* model lambert: the specular colour is ignored (raytrace.c) */
-        if (!tb_channels_is_black(m->specular) && m->model != TB_MID_MODEL_LAMBERT)
+        if (scls == 1)
             f |= TB_GPU_MAT_SPECULAR;
         if (m->model == TB_MID_MODEL_BLINN)
             f |= TB_GPU_MAT_BLINN;
@@ -175,10 +220,12 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         const char *why = NULL;
         if (m->diffuse_texture || m->specular_texture || m->transmission_texture || m->emission_texture)
             why = "image texture";
-        else if (m->diffuse_pattern.kind || m->specular_pattern.kind)
-            why = "procedural pattern";
-        else if (m->bump.kind)
-            why = "bump map";
+        else if (!tb__pattern_ok(&m->diffuse_pattern) || (!lambert && !tb__pattern_ok(&m->specular_pattern)))
+            why = "procedural pattern of an unknown kind";
+        else if (dcls < 0 || scls < 0)
+            why = "colour pattern black in some places only (the numbers a point draws would depend on it)";
+        else if (m->bump.kind && m->bump.kind != TB_MID_PATTERN_NOISE)
+            why = m->bump.kind == TB_MID_PATTERN_IMAGE ? "bump map from an image" : "bump map of an unknown kind";
         else if (m->model != TB_MID_MODEL_PHONG && m->model != TB_MID_MODEL_BLINN &&
                  m->model != TB_MID_MODEL_LAMBERT && m->model != TB_MID_MODEL_GGX)
             why = "reflection model";
@@ -198,6 +245,17 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         any_mirror = any_mirror ||
                      ((f & TB_GPU_MAT_SPECULAR) && !(f & TB_GPU_MAT_TRANSMISSION) && !(f & TB_GPU_MAT_GGX));
         any_ggx = any_ggx || (f & TB_GPU_MAT_GGX);
+        const tb_material_pattern *pats[3] = {&m->diffuse_pattern, lambert ? NULL : &m->specular_pattern, &m->bump};
+        for (int k = 0; k < 3; k++)
+            if (pats[k] && pats[k]->kind) {
+                r->mpat[i] = 1;
+                pattern_kinds |= 1u << (pats[k]->kind == TB_MID_PATTERN_CHECKER ? TB_GPU_PATTERN_CHECKER
+                                                                                : TB_GPU_PATTERN_NOISE);
+                if (k < 2)
+                    any_colour_pattern = true;
+                else
+                    any_bump = true;
+            }
         any_dielectric = any_dielectric || (f & TB_GPU_MAT_TRANSMISSION);
         any_emission = any_emission || (f & TB_GPU_MAT_EMITS);
     }
@@ -211,15 +269,27 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
     /* a hit pushes at most 2 rays (dielectric) and nets +1 per level, the
      * camera ray's GGX hit nglossy */
     r->cap_stack = r->rt.max_depth + 2 + (r->nglossy > 1 ? r->nglossy - 1 : 0);
-    tb_gpu_spec_constant spec[12] = {{1, (uint32_t)nch},  {2, (uint32_t)r->nlights}, {3, (uint32_t)r->nsamples},
+    r->pw = any_colour_pattern ? 2 : 0;
+    r->any_surface = any_colour_pattern || any_bump;
+    tb_gpu_spec_constant spec[15] = {{1, (uint32_t)nch},  {2, (uint32_t)r->nlights}, {3, (uint32_t)r->nsamples},
                                      {4, spot},           {5, any_phong},            {6, any_mirror},
                                      {7, any_dielectric}, {8, any_emission},         {9, kinds},
-                                     {10, ies},           {11, any_ggx},             {12, (uint32_t)r->nglossy}};
+                                     {10, ies},           {11, any_ggx},             {12, (uint32_t)r->nglossy},
+                                     {13, any_colour_pattern}, {14, any_bump},       {15, pattern_kinds}};
     memcpy(r->spec, spec, sizeof spec);
 
     /* Tables: materials (scalars), colours (materials' 4 x nch, lights' and
      * emitters' nch each), lights, emitters. */
     size_t ncol = (size_t)nm * 4 * (size_t)nch + (size_t)s->nlights * (size_t)nch + (size_t)s->nemitters * (size_t)nch;
+    size_t pat_at = ncol; /* pattern colours follow: a, b of each diffuse and specular pattern */
+    for (int i = 0; i < nm; i++)
+        for (int k = 0; k < 2; k++)
+            if (!r->route[i] && r->mpat[i] && (k == 0 ? s->materials[i].diffuse_pattern.kind
+                                                       : s->materials[i].specular_pattern.kind))
+                ncol += 2 * (size_t)nch;
+    r->perm_col = (uint32_t)ncol; /* the noise permutation follows */
+    if (pattern_kinds & (1u << TB_GPU_PATTERN_NOISE))
+        ncol += 256;
     size_t ies_at = ncol; /* IES records follow (shared/shade.h), one per distinct table */
     for (int i = 0; i < s->nlights; i++) {
         const tb_ies *t = s->lights[i].ies;
@@ -242,8 +312,33 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         tb_bsdf_kind lobe = m->model == TB_MID_MODEL_BLINN ? TB_BSDF_BLINN_NORMALIZED_EXACT : TB_BSDF_PHONG_NORMALIZED;
         mats[i] = (tb_gpu_shade_material){m->exponent, m->ior, (float)tb_bsdf_lobe_norm(lobe, m->exponent),
                                            r->mflags[i], (float)fmax((double)m->roughness, TB_GGX_ALPHA_MIN),
-                                           0.0f, 0.0f, 0.0f};
+                                           0.0f, 0.0f, 0.0f, {{0}}};
+        if (!r->route[i] && r->mpat[i]) {
+            const tb_material_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+            for (int k = 0; k < 3; k++) {
+                const tb_material_pattern *pt = pats[k];
+                if (!pt->kind || (k == 1 && m->model == TB_MID_MODEL_LAMBERT))
+                    continue;
+                tb_gpu_pattern *g = &mats[i].pattern[k];
+                *g = (tb_gpu_pattern){.kind = pt->kind == TB_MID_PATTERN_CHECKER ? TB_GPU_PATTERN_CHECKER
+                                                                                 : TB_GPU_PATTERN_NOISE,
+                                      .su = pt->scale, .sv = pt->scale_v, .solid = pt->object_space,
+                                      .octaves = pt->octaves, .height = pt->height};
+                if (k < 2) {
+                    g->col = (uint32_t)pat_at;
+                    r->pat_col[2 * i + k] = (uint32_t)pat_at;
+                    for (int c = 0; c < nch; c++) {
+                        col[pat_at + (size_t)c] = pt->a.v[c];
+                        col[pat_at + (size_t)nch + (size_t)c] = pt->b.v[c];
+                    }
+                    pat_at += 2 * (size_t)nch;
+                }
+            }
+        }
         const tb_channels *c4[4] = {&m->diffuse, &m->specular, &m->transmission, &m->emission};
+        if (i == 0 && (pattern_kinds & (1u << TB_GPU_PATTERN_NOISE)))
+            for (int k = 0; k < 256; k++)
+                col[r->perm_col + (size_t)k] = (float)tb_noise_permutation()[k];
         for (int k = 0; k < 4; k++)
             for (int c = 0; c < nch; c++)
                 col[((size_t)i * 4 + (size_t)k) * (size_t)nch + (size_t)c] =
@@ -312,9 +407,10 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
 
     /* Chunk buffers. */
     const size_t NR = TB_GPU_SHADE_RAYS((size_t)r->S, (size_t)r->nglossy),
-                 NV = TB_GPU_SHADE_VALUES((size_t)r->S, (size_t)nch, (size_t)r->sw, (size_t)r->nglossy);
+                 NV = TB_GPU_SHADE_VALUES((size_t)r->S, (size_t)nch, (size_t)r->sw, (size_t)r->nglossy,
+                                          (size_t)r->pw);
     size_t per = NR * sizeof(tb_gpu_ray) + NV * sizeof(float) + sizeof(tb_gpu_shade_item) +
-                 (size_t)r->lu_per * sizeof(tb_gpu_light_u);
+                 (size_t)r->lu_per * sizeof(tb_gpu_light_u) + (r->any_surface ? sizeof(tb_gpu_surface) : 0);
     r->chunk = TB__GR_CHUNK_BYTES / per;
     if (r->chunk > 65536)
         r->chunk = 65536;
@@ -326,13 +422,15 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
     r->lightu = calloc(nlu, sizeof *r->lightu); /* items without area samples leave theirs unset */
     r->orays = malloc(nr * sizeof *r->orays);
     r->ovals = malloc(nv * sizeof *r->ovals);
-    if (!r->items || !r->lightu || !r->orays || !r->ovals)
+    r->surf = r->any_surface ? calloc(r->chunk, sizeof *r->surf) : NULL;
+    if (!r->items || !r->lightu || !r->orays || !r->ovals || (r->any_surface && !r->surf))
         goto nomem;
     r->b_items = tb_gpu_buffer_create(dev, r->chunk * sizeof *r->items);
     r->b_lightu = r->b_items ? tb_gpu_buffer_create(dev, nlu * sizeof *r->lightu) : NULL;
     r->b_rays = r->b_lightu ? tb_gpu_buffer_create(dev, nr * sizeof(tb_gpu_ray)) : NULL;
     r->b_values = r->b_rays ? tb_gpu_buffer_create(dev, nv * sizeof(float)) : NULL;
-    if (!r->b_values)
+    r->b_surf = r->b_values ? tb_gpu_buffer_create(dev, r->any_surface ? r->chunk * sizeof *r->surf : 16) : NULL;
+    if (!r->b_surf)
         goto fail;
     r->gscene = tb_gpu_scene_create(dev, s);
     if (!r->gscene)
@@ -399,6 +497,8 @@ typedef struct tb__wave {
     size_t *routed;   /* routed hits: index into the wave */
     int *mat;         /* material of each hit */
     size_t *sstart;   /* item j's shadow rays are shadow[sstart[j] .. sstart[j + 1]) */
+    tb_gpu_surface *surf; /* surface records of hits on patterned materials (any_surface only) */
+    uint8_t *sok;     /* 1: surf[a] is set; 0: none needed; 2: needed but the hit has no tangents (routed) */
     tb_ray *shadow;   /* shadow rays of one chunk */
     size_t *shadow_src; /* value slot index (chunk-local) of each shadow ray */
     uint8_t *occl;
@@ -411,24 +511,27 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
 {
     const int nch = r->nch, S = r->S, G = r->nglossy;
     const size_t SW = (size_t)r->sw, NR = TB_GPU_SHADE_RAYS((size_t)S, (size_t)G),
-                 NV = TB_GPU_SHADE_VALUES((size_t)S, (size_t)nch, SW, (size_t)G), SL = (size_t)nch + 1;
+                 NV = TB_GPU_SHADE_VALUES((size_t)S, (size_t)nch, SW, (size_t)G, (size_t)r->pw),
+                 SL = (size_t)nch + 1;
     double w0 = tb__now();
     tb_status st = tb_gpu_buffer_upload(r->b_items, 0, r->items, ni * sizeof *r->items);
     if (!st && nlu)
         st = tb_gpu_buffer_upload(r->b_lightu, 0, r->lightu, nlu * sizeof *r->lightu);
+    if (!st && r->any_surface) /* records of items without the flag are not read */
+        st = tb_gpu_buffer_upload(r->b_surf, 0, r->surf, ni * sizeof *r->surf);
     if (st)
         return st;
     tb_gpu_kernel *k = tb_gpu_kernel_get(r->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("shade"),
-                                                                        .buffers = 8,
+                                                                        .buffers = 9,
                                                                         .push_size = sizeof(tb_gpu_shade_push),
                                                                         .spec = r->spec,
-                                                                        .spec_count = 12});
+                                                                        .spec_count = 15});
     if (!k)
         return TB_ERR_DEVICE;
-    tb_gpu_shade_push push = {(uint32_t)ni, 0, 0, 0};
+    tb_gpu_shade_push push = {(uint32_t)ni, r->perm_col, 0, 0};
     tb_gpu_dispatch d = {k,
                          {r->b_items, r->b_lightu, r->b_emitters, r->b_lights, r->b_materials, r->b_colours,
-                          r->b_rays, r->b_values},
+                          r->b_rays, r->b_values, r->b_surf},
                          &push,
                          ni,
                          0.0};
@@ -448,6 +551,7 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
 #define TB__W(j, w) r->ovals[(size_t)(w) * ni + (j)]
 #define TB__C(j, k, c) TB__W(j, SW * (size_t)S + (size_t)(k) * SL + (size_t)(c))
 #define TB__PDF(j, k) TB__W(j, SW * (size_t)S + (3 + (size_t)G) * SL + (size_t)(k))
+#define TB__PAT(j, k) TB__W(j, SW * (size_t)S + (3 + (size_t)G) * SL + (size_t)G + (size_t)(k))
     /* shadow rays of the chunk in item order (sequential: it compacts) */
     size_t ns = 0;
     for (size_t j = 0; j < ni; j++) {
@@ -518,6 +622,22 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
             const tb_gpu_shade_item *it = &r->items[j];
             const float *thr = w->thr + a * (size_t)nch;
             const float *dif = r->col + (size_t)it->material * 4 * (size_t)nch, *spec = dif + nch;
+            /* colour patterns: the blend a + f (b - a) of the kernel's
+             * factors, in double as the CPU tracer blends */
+            float pdif[TB_CHANNELS_MAX], pspec[TB_CHANNELS_MAX];
+            for (int k = 0; k < r->pw; k++) {
+                float f = TB__PAT(j, k);
+                if (f < 0.0f)
+                    continue;
+                const float *pa = r->col + r->pat_col[2 * (size_t)it->material + (size_t)k], *pb = pa + nch;
+                float *out = k == 0 ? pdif : pspec;
+                for (int c = 0; c < nch; c++)
+                    out[c] = (float)((double)pa[c] + (double)f * ((double)pb[c] - (double)pa[c]));
+                if (k == 0)
+                    dif = pdif;
+                else
+                    spec = pspec;
+            }
             float *L = P->L + p * (size_t)nch;
             for (size_t q = w->sstart[j]; q < w->sstart[j + 1]; q++) {
                 if (w->occl[q])
@@ -534,10 +654,56 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
             }
         }
     }
+#undef TB__PAT
 #undef TB__PDF
 #undef TB__C
 #undef TB__W
     return TB_OK;
+}
+
+/* The surface record of wave entry a (a hit on a patterned material), as
+ * the CPU tracer builds it at that hit: the hit point from the object,
+ * the camera ray's differentials for a camera ray of the renderer (the
+ * lens numbers again from the sample's stream). 1 if set, 2 if the hit has
+ * no tangents (the CPU then shades without the patterns: the hit is routed). */
+static uint8_t tb__surface(const tb_gpu_renderer *r, const tb__paths *P, tb__wave *w, size_t a)
+{
+    const tb_scene *s = r->scene;
+    const tb_hit *h = &w->hit[a];
+    const tb_ray *ray = &w->ray[a];
+    tb_vec3 p, perr;
+    if (!tb_object_hit_point(s->objects[h->object], ray, h, &p, &perr))
+        p = tb_vec3_add(ray->o, tb_vec3_scale(ray->d, h->t)); /* raytrace.c's fallback */
+    tb_vec3 d = tb_vec3_normalize(ray->d);
+    tb_vec3 n = tb_vec3_dot(d, h->ng) < 0.0f ? h->ng : tb_vec3_neg(h->ng);
+    tb_vec3 rd[4];
+    const tb_vec3 *rdp = NULL;
+    size_t path = w->path[a];
+    if (w->depth[a] == 0 && P->xy) {
+        tb_rng rng0 = P->rng0[path];
+        float lu = 0.5f, lv = 0.5f;
+        if (s->camera.lens_radius > 0.0) {
+            lu = tb_rng_float(&rng0);
+            lv = tb_rng_float(&rng0);
+        }
+        tb_camera_ray_diff cd;
+        tb_camera_ray_differential(&s->camera, P->xy[2 * path], P->xy[2 * path + 1], lu, lv, &cd);
+        rd[0] = cd.rx_o, rd[1] = cd.rx_d, rd[2] = cd.ry_o, rd[3] = cd.ry_d;
+        rdp = rd;
+    }
+    tb__rt_surface g;
+    if (!tb__rt_hit_surface(&r->rt, h, p, h->ng, n, rdp, &g))
+        return 2;
+    w->surf[a] = (tb_gpu_surface){.po = g.po, .u = g.u, .po_du = g.po_du, .v = g.v, .po_dv = g.po_dv,
+                                  .has_fp = g.has_fp, .po_dx = g.po_dx, .po_dy = g.po_dy, .dpdu = g.dpdu,
+                                  .dpdv = g.dpdv};
+    if (g.has_fp) {
+        w->surf[a].fp0 = g.fp[0];
+        w->surf[a].fp1 = g.fp[1];
+        w->surf[a].fp2 = g.fp[2];
+        w->surf[a].fp3 = g.fp[3];
+    }
+    return 1;
 }
 
 /* Traces every path's stack empty. */
@@ -552,6 +718,8 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
     w.depth = malloc(n * sizeof *w.depth);
     w.thr = malloc(n * (size_t)nch * sizeof *w.thr);
     w.mis = malloc(n * sizeof *w.mis);
+    w.surf = r->any_surface ? malloc(n * sizeof *w.surf) : NULL;
+    w.sok = r->any_surface ? malloc(n ? n : 1) : NULL;
     w.hit = malloc(n * sizeof *w.hit);
     w.item_of = malloc(n * sizeof *w.item_of);
     w.routed = malloc(n * sizeof *w.routed);
@@ -561,7 +729,7 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
     w.shadow_src = malloc(r->chunk * (S ? S : 1) * sizeof *w.shadow_src);
     w.occl = malloc(r->chunk * (S ? S : 1));
     tb_status st = TB_OK;
-    if (!w.path || !w.ray || !w.depth || !w.thr || !w.mis || !w.hit || !w.item_of || !w.routed || !w.mat || !w.sstart ||
+    if (!w.path || !w.ray || !w.depth || !w.thr || !w.mis || (r->any_surface && (!w.surf || !w.sok)) || !w.hit || !w.item_of || !w.routed || !w.mat || !w.sstart ||
         !w.shadow || !w.shadow_src || !w.occl)
         st = tb_error(TB_ERR_NOMEM, "GPU render: out of memory for %zu paths", n);
     const int nthreads = r->threads > 0 ? r->threads : omp_get_max_threads();
@@ -590,17 +758,22 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
             break;
         r->st.rays += w.n;
         tb_stat_add(&tb__gr_rays, (int64_t)w.n);
+        /* Materials, and the surface records of patterned hits (in parallel:
+         * each entry its own). */
+#pragma omp parallel for schedule(dynamic, 64) num_threads(nthreads)
+        for (size_t a = 0; a < w.n; a++) {
+            const tb_hit *h = &w.hit[a];
+            const tb_material *m = h->object == TB_GPU_NO_HIT ? NULL : tb_scene_hit_material(s, h);
+            w.mat[a] = m ? (int)(m - s->materials) : -1;
+            if (r->any_surface)
+                w.sok[a] = m && !r->route[w.mat[a]] && r->mpat[w.mat[a]] ? tb__surface(r, P, &w, a) : 0;
+        }
         /* Classify the hits: kernel items and routed hits (wave indices). */
         size_t nit = 0, nrt = 0;
         for (size_t a = 0; a < w.n; a++) {
-            const tb_hit *h = &w.hit[a];
-            if (h->object == TB_GPU_NO_HIT)
+            if (w.mat[a] < 0)
                 continue;
-            const tb_material *m = tb_scene_hit_material(s, h);
-            if (!m)
-                continue;
-            w.mat[a] = (int)(m - s->materials);
-            if (r->route[w.mat[a]])
+            if (r->route[w.mat[a]] || (r->any_surface && w.sok[a] == 2))
                 w.routed[nrt++] = a;
             else
                 w.item_of[nit++] = a;
@@ -646,6 +819,10 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
                                             .ng = h->ng, .light_base = (uint32_t)(j * (size_t)r->lu_per)};
                 if (w.depth[a] < r->rt.max_depth)
                     item->flags |= TB_GPU_SHADE_SPAWN;
+                if (r->any_surface && w.sok[a] == 1) {
+                    item->flags |= TB_GPU_SHADE_SURFACE;
+                    r->surf[j] = w.surf[a];
+                }
                 const uint8_t mf = r->mflags[mi];
                 if (r->nsamples > 0 && (mf & (TB_GPU_MAT_DIFFUSE | TB_GPU_MAT_GGX))) {
                     /* the CPU path's numbers: strata from the sample's stream, the
@@ -681,7 +858,7 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
     }
     r->st.wave_seconds += tb__now() - wave0;
     free(w.path), free(w.ray), free(w.depth), free(w.thr), free(w.hit), free(w.item_of), free(w.shadow),
-        free(w.shadow_src), free(w.occl), free(w.routed), free(w.mat), free(w.sstart), free(w.mis);
+        free(w.shadow_src), free(w.occl), free(w.routed), free(w.mat), free(w.sstart), free(w.mis), free(w.surf), free(w.sok);
     return st;
 }
 

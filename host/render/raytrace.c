@@ -162,6 +162,40 @@ static bool tb__hit_tangents(const tb_scene *s, const tb_hit *hit, tb_vec3 *dpdu
     return true;
 }
 
+/* The surface record of patterns and bump maps at a hit (leaf: its CSG
+ * leaf; fp, dpdxy: the footprint or NULL). */
+static void tb__surface_fill(const tb_object *leaf, const tb_hit *hit, tb_vec3 p, tb_vec3 n, tb_vec3 dpdu,
+                             tb_vec3 dpdv, const float *fp, const tb_vec3 dpdxy[2], tb__rt_surface *g)
+{
+    const tb_transform inv = tb_transform_inverse(&leaf->to_world);
+    *g = (tb__rt_surface){.u = hit->u, .v = hit->v, .has_fp = fp != NULL, .p = p, .n = n, .dpdu = dpdu,
+                          .dpdv = dpdv};
+    if (fp)
+        memcpy(g->fp, fp, sizeof g->fp);
+    g->po = tb_transform_point(&inv, p);
+    g->po_du = tb_transform_vector(&inv, dpdu);
+    g->po_dv = tb_transform_vector(&inv, dpdv);
+    if (fp) {
+        g->po_dx = tb_transform_vector(&inv, dpdxy[0]);
+        g->po_dy = tb_transform_vector(&inv, dpdxy[1]);
+    }
+}
+
+bool tb__rt_hit_surface(const tb_raytracer *rt, const tb_hit *hit, tb_vec3 p, tb_vec3 ng, tb_vec3 n,
+                        const tb_vec3 *rd, tb__rt_surface *g)
+{
+    tb_vec3 dpdu, dpdv, dpdxy[2] = {{0, 0, 0}, {0, 0, 0}};
+    const tb_object *leaf = NULL;
+    if (!tb__hit_tangents(rt->scene, hit, &dpdu, &dpdv, &leaf))
+        return false;
+    float fpv[4];
+    const float *fp = NULL;
+    if (rd && tb__rt_footprint(p, ng, dpdu, dpdv, rd, rt->diff_scale, fpv, dpdxy))
+        fp = fpv;
+    tb__surface_fill(leaf, hit, p, n, dpdu, dpdv, fp, dpdxy, g);
+    return true;
+}
+
 /* The colour of material m's `slot` pattern (0 diffuse, 1 specular) at g, or
  * `base` without one: a + f (b - a) per channel. */
 static tb_channels tb__patterned(const tb_raytracer *rt, const tb_material *m, int slot, tb_channels base,
@@ -285,18 +319,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
         fp = fpv;
     tb__rt_surface surf, *g = NULL;
     if (patterned && tangents) {
-        const tb_transform inv = tb_transform_inverse(&leaf->to_world);
-        surf = (tb__rt_surface){.u = hit.u, .v = hit.v, .has_fp = fp != NULL, .p = p, .n = n, .dpdu = dpdu,
-                                .dpdv = dpdv};
-        if (fp)
-            memcpy(surf.fp, fp, sizeof surf.fp);
-        surf.po = tb_transform_point(&inv, p);
-        surf.po_du = tb_transform_vector(&inv, dpdu);
-        surf.po_dv = tb_transform_vector(&inv, dpdv);
-        if (fp) {
-            surf.po_dx = tb_transform_vector(&inv, dpdxy[0]);
-            surf.po_dy = tb_transform_vector(&inv, dpdxy[1]);
-        }
+        tb__surface_fill(leaf, &hit, p, n, dpdu, dpdv, fp, dpdxy, &surf);
         g = &surf;
         tb_vec3 nb;
         if (m->bump.kind && tb__rt_bump(rt->patterns, m, (int)(m - s->materials), g, &nb))

@@ -135,6 +135,12 @@ typedef struct tb__rt_surface {
     tb_vec3 po_du, po_dv; /* its change per unit u and v */
     tb_vec3 po_dx, po_dy; /* its change per pixel (zero: unknown) */
 } tb__rt_surface;
+/* Private: the surface record of a hit at point p (the tracer's hit point),
+ * geometric normal ng, viewer-side normal n, with the footprint of the
+ * camera ray's offset rays rd (NULL: none), as the tracer builds it; false
+ * if the hit has no tangents (the tracer then ignores patterns and bumps). */
+bool tb__rt_hit_surface(const tb_raytracer *rt, const tb_hit *hit, tb_vec3 p, tb_vec3 ng, tb_vec3 n,
+                        const tb_vec3 *rd, tb__rt_surface *g);
 /* Private: builds the pattern textures of every material of s (bump images
  * through `filter`); *out stays NULL when no material has one. */
 tb_status tb__rt_patterns_init(const tb_scene *s, int filter, tb__rt_patterns **out);

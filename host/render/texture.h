@@ -142,6 +142,10 @@ bool tb_tex_footprint_from_rays(tb_vec3 p, tb_vec3 n, tb_vec3 dpdu, tb_vec3 dpdv
  * about 1; docs/textures.md has the measured range). Period 256. */
 double tb_noise3(double x, double y, double z);
 
+/* The permutation of 0..255 tb_noise3 uses (Perlin's): 256 entries, for
+ * the GPU's twin of the noise (shaders/lib/pattern.glsl). */
+const unsigned char *tb_noise_permutation(void);
+
 /* Fractional Brownian motion: sum over octaves i of omega^i noise(l^i p) with
  * lacunarity l = 1.99 (not 2, so octaves do not share lattice zeros). The
  * octave count is limited by the footprint (dpdx, dpdy: the change of p per

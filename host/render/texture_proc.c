@@ -31,6 +31,8 @@ static const unsigned char tb__perm[256] = {
 
 static int tb__p(int i) { return tb__perm[i & 255]; }
 
+const unsigned char *tb_noise_permutation(void) { return tb__perm; }
+
 /* Quintic fade 6t^5 - 15t^4 + 10t^3: C2 across cells. */
 static double tb__fade(double t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
 

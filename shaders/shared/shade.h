@@ -28,6 +28,18 @@
 #define TB_GPU_SHADE_AREA 1u
 /* tb_gpu_shade_item.flags: spawn mirror / refracted rays (depth < max depth). */
 #define TB_GPU_SHADE_SPAWN 2u
+/* tb_gpu_shade_item.flags: the item has a surface record (tb_gpu_surface at
+ * the item's index in the chunk) for its patterns and bump map. */
+#define TB_GPU_SHADE_SURFACE 4u
+
+/* tb_gpu_pattern.kind (host/scene/mid.h's tb_mid_pattern_kind; image bumps are routed). */
+#define TB_GPU_PATTERN_NONE 0u
+#define TB_GPU_PATTERN_CHECKER 1u
+#define TB_GPU_PATTERN_NOISE 2u
+/* Pattern slots of tb_gpu_shade_material.pattern. */
+#define TB_GPU_PATTERN_DIFFUSE 0
+#define TB_GPU_PATTERN_SPECULAR 1
+#define TB_GPU_PATTERN_BUMP 2
 
 /* tb_gpu_shade_material.flags bits: which colours are not black. */
 #define TB_GPU_MAT_DIFFUSE 1u
@@ -57,6 +69,8 @@ typedef struct tb_gpu_light_u tb_gpu_light_u;
 typedef struct tb_gpu_emitter tb_gpu_emitter;
 typedef struct tb_gpu_delta_light tb_gpu_delta_light;
 typedef struct tb_gpu_shade_material tb_gpu_shade_material;
+typedef struct tb_gpu_pattern tb_gpu_pattern;
+typedef struct tb_gpu_surface tb_gpu_surface;
 #endif
 
 /* One shading point; std430 size 64. */
@@ -114,7 +128,41 @@ struct tb_gpu_delta_light {
     TB_GPU_UINT pad0, pad1;
 };
 
-/* The scalar part of a material (its colours are in the colour table); size 32. */
+/* A procedural pattern or bump map of a material (raytrace_pattern.c's
+ * textures: checker box-filtered over the footprint, fBm noise of
+ * `octaves` octaves, omega 1/2, lacunarity 1.99); size 32. */
+struct tb_gpu_pattern {
+    TB_GPU_UINT kind;    /* TB_GPU_PATTERN_* */
+    float su;            /* scale of u (object space: of the point) (offset 4) */
+    float sv;            /* scale of v (offset 8) */
+    TB_GPU_UINT solid;   /* 1: object space (offset 12) */
+    TB_GPU_INT octaves;  /* noise (offset 16) */
+    float height;        /* bump: height of the unit value (offset 20) */
+    TB_GPU_UINT col;     /* colour patterns: float offset of colour a in the colour table, b follows (offset 24) */
+    TB_GPU_UINT pad0;
+};
+
+/* The geometry of a hit that patterns and bump maps need, computed on the
+ * host as the CPU tracer computes it (raytrace.h's tb__rt_surface: the
+ * primitive's tangents, the camera ray's footprint); size 112. */
+struct tb_gpu_surface {
+    TB_GPU_VEC3 po;      /* the point in the primitive's object space (offset 0) */
+    float u;             /* offset 12 */
+    TB_GPU_VEC3 po_du;   /* its change per unit u (offset 16) */
+    float v;             /* offset 28 */
+    TB_GPU_VEC3 po_dv;   /* per unit v (offset 32) */
+    TB_GPU_UINT has_fp;  /* fp0..3 hold the footprint (du/dx, dv/dx, du/dy, dv/dy) (offset 44) */
+    TB_GPU_VEC3 po_dx;   /* the point's change per pixel (zero: unknown) (offset 48) */
+    float fp0;           /* offset 60 */
+    TB_GPU_VEC3 po_dy;   /* offset 64 */
+    float fp1;           /* offset 76 */
+    TB_GPU_VEC3 dpdu;    /* world tangents (offset 80) */
+    float fp2;           /* offset 92 */
+    TB_GPU_VEC3 dpdv;    /* offset 96 */
+    float fp3;           /* offset 108 */
+};
+
+/* The scalar part of a material (its colours are in the colour table); size 128. */
 struct tb_gpu_shade_material {
     float exponent; /* Phong exponent */
     float ior;      /* index of refraction of the inside (offset 4) */
@@ -122,24 +170,28 @@ struct tb_gpu_shade_material {
     TB_GPU_UINT flags; /* TB_GPU_MAT_* (offset 12) */
     float alpha;    /* GGX width, clamped below to TB_GGX_ALPHA_MIN as shading.c does (offset 16) */
     float pad0, pad1, pad2;
+    tb_gpu_pattern pattern[3]; /* diffuse, specular, bump (TB_GPU_PATTERN_DIFFUSE ..) (offset 32) */
 };
 
 /* Push constants of the shade kernel; size 16. */
 #ifndef TB_GPU_GLSL
 typedef struct tb_gpu_shade_push {
     uint32_t items;       /* shading points */
-    uint32_t pad0, pad1, pad2;
+    uint32_t perm;        /* float offset of the noise permutation (256 values) in the colour table */
+    uint32_t pad1, pad2;
 } tb_gpu_shade_push;
 #endif
 
 /* Output slots per item for S shadow rays and G glossy rays: S, a mirror and
  * a refracted ray, G glossy rays. */
 #define TB_GPU_SHADE_RAYS(S, G) ((S) + 2u + (G))
-/* Output floats per item for S shadow rays of SW words, `ch` channels and G
- * glossy rays: SW per shadow ray (flag, a, b[, c]), then 3 + G colour slots
- * (emission, mirror, refracted, glossy) of a flag and the channels, then G
- * glossy densities. */
-#define TB_GPU_SHADE_VALUES(S, ch, SW, G) ((SW) * (S) + (3u + (G)) * ((ch) + 1u) + (G))
+/* Output floats per item for S shadow rays of SW words, `ch` channels, G
+ * glossy rays and PW pattern words: SW per shadow ray (flag, a, b[, c]),
+ * then 3 + G colour slots (emission, mirror, refracted, glossy) of a flag
+ * and the channels, then G glossy densities, then PW (0, or 2 when the
+ * scene has colour patterns: the blend factors of the diffuse and specular
+ * patterns, -1 without one). */
+#define TB_GPU_SHADE_VALUES(S, ch, SW, G, PW) ((SW) * (S) + (3u + (G)) * ((ch) + 1u) + (G) + (PW))
 
 #ifndef TB_GPU_GLSL
 _Static_assert(sizeof(tb_gpu_shade_item) == 64, "tb_gpu_shade_item is 64 bytes");
@@ -161,9 +213,22 @@ _Static_assert(sizeof(tb_gpu_delta_light) == 64 && offsetof(tb_gpu_delta_light, 
                    offsetof(tb_gpu_delta_light, xaxis) == 32 && offsetof(tb_gpu_delta_light, cos_falloff) == 44 &&
                    offsetof(tb_gpu_delta_light, black) == 48 && offsetof(tb_gpu_delta_light, ies) == 52,
                "tb_gpu_delta_light follows the std430 offsets of its GLSL twin");
-_Static_assert(sizeof(tb_gpu_shade_material) == 32 && offsetof(tb_gpu_shade_material, ior) == 4 &&
+_Static_assert(sizeof(tb_gpu_pattern) == 32 && offsetof(tb_gpu_pattern, su) == 4 &&
+                   offsetof(tb_gpu_pattern, sv) == 8 && offsetof(tb_gpu_pattern, solid) == 12 &&
+                   offsetof(tb_gpu_pattern, octaves) == 16 && offsetof(tb_gpu_pattern, height) == 20 &&
+                   offsetof(tb_gpu_pattern, col) == 24,
+               "tb_gpu_pattern follows the std430 offsets of its GLSL twin");
+_Static_assert(sizeof(tb_gpu_surface) == 112 && offsetof(tb_gpu_surface, u) == 12 &&
+                   offsetof(tb_gpu_surface, po_du) == 16 && offsetof(tb_gpu_surface, v) == 28 &&
+                   offsetof(tb_gpu_surface, po_dv) == 32 && offsetof(tb_gpu_surface, has_fp) == 44 &&
+                   offsetof(tb_gpu_surface, po_dx) == 48 && offsetof(tb_gpu_surface, fp0) == 60 &&
+                   offsetof(tb_gpu_surface, po_dy) == 64 && offsetof(tb_gpu_surface, fp1) == 76 &&
+                   offsetof(tb_gpu_surface, dpdu) == 80 && offsetof(tb_gpu_surface, fp2) == 92 &&
+                   offsetof(tb_gpu_surface, dpdv) == 96 && offsetof(tb_gpu_surface, fp3) == 108,
+               "tb_gpu_surface follows the std430 offsets of its GLSL twin");
+_Static_assert(sizeof(tb_gpu_shade_material) == 128 && offsetof(tb_gpu_shade_material, ior) == 4 &&
                    offsetof(tb_gpu_shade_material, knorm) == 8 && offsetof(tb_gpu_shade_material, flags) == 12 &&
-                   offsetof(tb_gpu_shade_material, alpha) == 16,
+                   offsetof(tb_gpu_shade_material, alpha) == 16 && offsetof(tb_gpu_shade_material, pattern) == 32,
                "tb_gpu_shade_material follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_shade_push) == 16, "tb_gpu_shade_push is 16 bytes");
 #endif
