@@ -80,26 +80,25 @@ float tb_fbm3(vec3 p, vec3 dpdx, vec3 dpdy, float omega, int octaves)
     return sum;
 }
 
-// The integral from 0 to x of the square wave odd on [2k+1, 2k+2).
-float tb__square_integral(float x)
-{
-    float h = floor(x * 0.5);
-    float r = x - 2.0 * h;
-    return h + (r > 1.0 ? r - 1.0 : 0.0);
-}
-
-// The fraction of [x0, x1] where floor(x) is odd (tb__odd_fraction). The
-// interval is first moved by an even integer next to 0 (exact in float), so
-// that the two integrals do not cancel in float.
+// The fraction of [x0, x1] where floor(x) is odd (tb__odd_fraction). C
+// differences two integrals of the square wave in double; in float that
+// cancels (a box of 3e-3 cells at |x| ~ 1 lost 4e-5), so this adds up the
+// odd parts instead: the partial first and last cells (k0 + 1 - x0 and
+// x1 - k1 are exact or nearly) and the whole odd cells between.
+bool tb__odd(float k) { return mod(abs(k), 2.0) == 1.0; }
 float tb__odd_fraction(float x0, float x1)
 {
     float w = x1 - x0;
     if (!(w > 1e-9 * (1.0 + abs(x0)))) {
         float m = 0.5 * (x0 + x1);
-        return mod(abs(floor(m)), 2.0) == 1.0 ? 1.0 : 0.0;
+        return tb__odd(floor(m)) ? 1.0 : 0.0;
     }
-    float base = 2.0 * floor(x0 * 0.5);
-    return (tb__square_integral(x1 - base) - tb__square_integral(x0 - base)) / w;
+    float k0 = floor(x0), k1 = floor(x1);
+    if (k0 == k1)
+        return tb__odd(k0) ? 1.0 : 0.0;
+    float len = (tb__odd(k0) ? (k0 + 1.0) - x0 : 0.0) + (tb__odd(k1) ? x1 - k1 : 0.0);
+    float whole = floor(k1 * 0.5) - floor((k0 + 1.0) * 0.5); // odd k in k0 + 1 .. k1 - 1
+    return (len + whole) / w;
 }
 
 // tb_checker_box_average: the odd squares' share of [s0, s1] x [t0, t1].

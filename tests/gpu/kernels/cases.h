@@ -10,6 +10,7 @@ typedef struct tb_case_box tb_case_box;
 typedef struct tb_case_box_out tb_case_box_out;
 typedef struct tb_case_sphere tb_case_sphere;
 typedef struct tb_case_f4 tb_case_f4;
+typedef struct tb_case_f8 tb_case_f8;
 #endif
 
 /* A ray and a box (k_aabb). */
@@ -42,7 +43,13 @@ struct tb_case_f4 {
     float x, y, z, w;
 };
 
+/* Eight floats: the arguments of a shading routine (k_shading). */
+struct tb_case_f8 {
+    float a, b, c, d, e, f, g, h;
+};
+
 #ifndef TB_GPU_GLSL
+_Static_assert(sizeof(tb_case_f8) == 32, "tb_case_f8 layout");
 _Static_assert(sizeof(tb_case_box) == 64 && offsetof(tb_case_box, lo) == 32 && offsetof(tb_case_box, hi) == 48,
                "tb_case_box layout");
 _Static_assert(sizeof(tb_case_box_out) == 16, "tb_case_box_out layout");
