@@ -1,9 +1,11 @@
 #!/bin/sh
 # `testbed render --backend vulkan` (the wavefront renderer with the shade
 # kernel, docs/gpu.md "Shade kernel and wavefront renderer") against
-# `--backend cpu` on the Cornell box (spectral) and its RGB twin at 48 x 48,
-# 4 spp, under the validation layer: image NMSE within docs/accuracy.md's
-# tolerance (1e-4), the kernel shading every hit; a textured scene whose hits
+# `--backend cpu` on the Cornell box (spectral), its RGB twin and the MID 1.1
+# materials scene (GGX lobes and glossy rays, checker and noise patterns,
+# noise bumps) at 48 x 48, 4 spp, under the validation layer: image NMSE
+# within docs/accuracy.md's tolerance (1e-4), the kernel shading every hit
+# (none routed to the CPU path); a textured scene whose hits
 # are routed to the CPU path (reported, same image); the same image for any
 # thread count. (A tile split over batches, backend choice, fallbacks and
 # usage errors: shade_backend.sh.)
@@ -16,7 +18,7 @@ fail() { echo "FAIL: $*"; [ -f "$t/shade.err" ] && cat "$t/shade.err"; [ -f "$t/
 
 small() { sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [48 48]/' "$1" >"$2"; }
 
-for name in cornell-box cornell-box-rgb; do
+for name in cornell-box cornell-box-rgb materials; do
     small "$TB_SOURCE_DIR/scenes/$name.mid" "$t/$name.mid"
     "$TESTBED" render "$t/$name.mid" -o "$t/$name-cpu.pfm" --spp 4 --backend cpu >/dev/null 2>"$t/shade.err" ||
         fail "cpu render of $name"
@@ -63,8 +65,9 @@ echo "textured (routed) 48x32: NMSE $e"
 python3 -c "import sys; sys.exit(0 if $e <= 1e-4 else 1)" || fail "textured: NMSE $e > 1e-4"
 
 # The host's loops run on OpenMP threads over distinct paths: the image does
-# not depend on the thread count (the textured scene: kernel and routed hits).
-for f in shade_tex; do
+# not depend on the thread count (the textured scene: kernel and routed hits;
+# the materials scene: surface records of patterned hits built in parallel).
+for f in shade_tex materials; do
     "$TESTBED" render "$t/$f.mid" -o "$t/thr1.pfm" --spp 1 --backend vulkan --threads 1 >/dev/null 2>&1 || fail "threads 1"
     "$TESTBED" render "$t/$f.mid" -o "$t/thr2.pfm" --spp 1 --backend vulkan --threads 2 >/dev/null 2>&1 || fail "threads 2"
     cmp -s "$t/thr1.pfm" "$t/thr2.pfm" || fail "$f: --threads 1 and 2 give different images"
