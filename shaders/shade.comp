@@ -53,11 +53,14 @@ layout(constant_id = 12) const int NGLOSSY = 0;         // most glossy rays per 
 layout(constant_id = 13) const bool HAS_COLOR_PATTERN = false; // some material has a diffuse or specular pattern
 layout(constant_id = 14) const bool HAS_BUMP = false;   // some material has a (noise) bump map
 layout(constant_id = 15) const uint PATTERN_KINDS = 0u; // bit k: a pattern or bump of kind k (TB_GPU_PATTERN_*) exists
+layout(constant_id = 16) const bool HAS_TEXTURE = false; // some material has an image texture
+layout(constant_id = 17) const int TEX_FILTER = 3;      // their filter (TB_TEX_*: the tracer's, EWA by default)
 
 const int S = NLIGHTS + NSAMPLES;  // shadow rays per item
 const int SW = HAS_GGX ? 4 : 3;    // words per shadow ray: flag, a, b (and c with GGX)
 const int SLOT = NCH + 1;          // floats per colour slot (flag and channels)
-const int PW = HAS_COLOR_PATTERN ? 2 : 0; // pattern words per item: the diffuse and specular blend factors
+const int PW0 = HAS_COLOR_PATTERN ? 2 : 0; // pattern words per item: the diffuse and specular blend factors
+const int PW = PW0 + (HAS_TEXTURE ? 6 : 0); // and the diffuse and specular texture RGB
 const float PI = 3.14159265358979323846;
 const float INV_PI = 0.318309886183790671537767526745028724;
 const float TWO_PI = 6.28318530717958647692528676655900576;
@@ -74,6 +77,8 @@ layout(std430, binding = 5) readonly buffer Colours { float colours[]; };
 layout(std430, binding = 6) writeonly buffer OutRays { tb_gpu_ray out_rays[]; };
 layout(std430, binding = 7) writeonly buffer OutValues { float out_values[]; };
 layout(std430, binding = 8) readonly buffer Surfaces { tb_gpu_surface surfaces[]; };
+layout(std430, binding = 9) readonly buffer TexInfo { uint texinfo[]; };
+layout(std430, binding = 10) readonly buffer Texels { float texels[]; };
 
 layout(push_constant) uniform Push {
     uint items;
@@ -81,8 +86,11 @@ layout(push_constant) uniform Push {
     uint pad1, pad2;
 } pc;
 
-int tb__perm(int i) { return int(colours[pc.perm + uint(i & 255)]); }
+int tb_perm(int i) { return int(colours[pc.perm + uint(i & 255)]); }
 #include "lib/pattern.glsl"
+uint tb_texinfo(uint i) { return texinfo[i]; }
+float tb_texel(uint i) { return texels[i]; }
+#include "lib/texture.glsl"
 
 // The next float above / below x (x finite).
 float next_up(float x)
@@ -312,13 +320,15 @@ vec3 bump_normal(tb_gpu_pattern pt, tb_gpu_surface g, vec3 n)
 uint g_mc;       // the material's colours in the colour table
 float g_fs;      // the specular pattern's blend factor (-1: none)
 uint g_spec_col; // the pattern's colours
+vec3 g_tex[4];   // the textures' RGB at the hit (1 without a texture)
 float spec_colour(int c)
 {
+    float k = colours[g_mc + uint(NCH + c)];
     if (HAS_COLOR_PATTERN && g_fs >= 0.0) {
         float a = colours[g_spec_col + uint(c)], b = colours[g_spec_col + uint(NCH + c)];
-        return a + g_fs * (b - a);
+        k = a + g_fs * (b - a);
     }
-    return colours[g_mc + uint(NCH + c)];
+    return HAS_TEXTURE ? k * g_tex[TB_GPU_TEX_SPECULAR][c % 3] : k;
 }
 
 // A point on emitter e seen from p (tb__sample_emitter in host/render/lights.c):
@@ -411,8 +421,26 @@ void main()
     vec3 n = front ? ng : -ng;
     g_mc = mc;
     g_fs = -1.0;
-    if ((HAS_COLOR_PATTERN || HAS_BUMP) && (it.flags & TB_GPU_SHADE_SURFACE) != 0u) {
+    for (int k = 0; k < 4; k++)
+        g_tex[k] = vec3(1.0);
+    if ((HAS_COLOR_PATTERN || HAS_BUMP || HAS_TEXTURE) && (it.flags & TB_GPU_SHADE_SURFACE) != 0u) {
         tb_gpu_surface g = surfaces[i];
+        if (HAS_TEXTURE) {
+            // image textures at the hit's (u, v) over the camera ray's footprint
+            // (raytrace.c's tb__textured; a grey image gives one value for all three)
+            vec4 fp = vec4(g.fp0, g.fp1, g.fp2, g.fp3);
+            for (int k = 0; k < 4; k++) {
+                if (m.tex[k] == TB_GPU_NO_TEXTURE)
+                    continue;
+                vec4 t = tb_tex_lookup(m.tex[k], TEX_FILTER, g.u, g.v, fp);
+                g_tex[k] = tb_tex_channels(m.tex[k]) >= 3 ? t.rgb : vec3(t.x);
+            }
+            for (int k = 0; k < 2; k++) {
+                bool has = m.tex[k] != TB_GPU_NO_TEXTURE;
+                for (int c = 0; c < 3; c++)
+                    fput(PW0 + 3 * k + c, has ? g_tex[k][c] : -1.0);
+            }
+        }
         if (HAS_BUMP && m.pattern[TB_GPU_PATTERN_BUMP].kind != TB_GPU_PATTERN_NONE)
             n = bump_normal(m.pattern[TB_GPU_PATTERN_BUMP], g, n); // rays still leave by ng
         if (HAS_COLOR_PATTERN) {
@@ -451,7 +479,8 @@ void main()
     if (HAS_EMISSION && (m.flags & TB_GPU_MAT_EMITS) != 0u && front) {
         put(0, 0, 1.0);
         for (int c = 0; c < NCH; c++)
-            put(0, 1 + c, colours[mc + uint(3 * NCH + c)] * INV_PI);
+            put(0, 1 + c, (HAS_TEXTURE ? colours[mc + uint(3 * NCH + c)] * g_tex[TB_GPU_TEX_EMISSION][c % 3]
+                                        : colours[mc + uint(3 * NCH + c)]) * INV_PI);
     }
 
     // Point, spot and directional lights.
@@ -588,7 +617,8 @@ void main()
             write_ray(S + 1, spawn_origin(p, perr, ng, w), w, 1.0 / 0.0);
             put(vt, 0, 1.0);
             for (int k = 0; k < NCH; k++)
-                put(vt, 1 + k, colours[mc + uint(2 * NCH + k)] * T);
+                put(vt, 1 + k, (HAS_TEXTURE ? colours[mc + uint(2 * NCH + k)] * g_tex[TB_GPU_TEX_TRANSMISSION][k % 3]
+                                            : colours[mc + uint(2 * NCH + k)]) * T);
         }
     } else if (HAS_GGX && ggx) {
         // Glossy rays from the host's numbers (tb_bsdf_sample of the lobe,

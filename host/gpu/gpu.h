@@ -233,7 +233,7 @@ tb_status tb_gpu_buffer_download(tb_gpu_buffer *buf, size_t offset, void *dst, s
 /* Most storage buffers per kernel (set 0, bindings 0 .. buffers-1). */
 #define TB_GPU_MAX_BUFFERS 12
 /* Most specialization constants per kernel besides the workgroup size. */
-#define TB_GPU_MAX_SPEC 16
+#define TB_GPU_MAX_SPEC 24
 /* Workgroup width when the kernel description leaves it 0. */
 #define TB_GPU_DEFAULT_WORKGROUP 64
 

@@ -43,14 +43,17 @@ struct tb_gpu_renderer {
     int nglossy;          /* most glossy rays per item (0: no GGX material) */
     int lu_per;           /* light-sample buffer entries per item: nsamples + nglossy */
     int cap_stack;        /* stack entries per path */
-    int pw;               /* pattern words per item (2 with colour patterns, else 0) */
+    int pw0;              /* pattern words per item (2 with colour patterns, else 0) */
+    int pw;               /* pattern and texture words per item (pw0, and 6 with textures) */
     bool any_surface;     /* some material has a pattern or a bump map: items carry surface records */
-    uint8_t *mpat;        /* per material: it has a pattern or bump map (its hits need a surface record) */
+    uint8_t *mpat;        /* per material: its hits need a surface record: 1 for a pattern or bump map
+                             (routed without tangents), 2 for image textures only */
     uint32_t *pat_col;    /* per material: colour-table offsets of its diffuse and specular pattern colours
                              (a, then b; 0: no pattern) */
     char **route;         /* per material: why it is routed, or NULL */
     uint8_t *mflags;      /* per material: TB_GPU_MAT_* */
-    tb_gpu_spec_constant spec[15];
+    tb_gpu_spec_constant spec[17];
+    tb_gpu_buffer *b_texinfo, *b_texels; /* image textures: records and MIP pyramids */
     tb_gpu_buffer *b_surf;  /* surface records of one chunk (item j's at j) */
     tb_gpu_buffer *b_items, *b_lightu, *b_emitters, *b_lights, *b_materials, *b_colours, *b_rays, *b_values;
     size_t chunk;         /* items per shade dispatch */
@@ -86,6 +89,8 @@ void tb_gpu_renderer_destroy(tb_gpu_renderer *r)
     tb_gpu_buffer_destroy(r->b_rays);
     tb_gpu_buffer_destroy(r->b_values);
     tb_gpu_buffer_destroy(r->b_surf);
+    tb_gpu_buffer_destroy(r->b_texinfo);
+    tb_gpu_buffer_destroy(r->b_texels);
     tb_gpu_scene_destroy(r->gscene);
     tb_rt_release(&r->rt);
     if (r->route)
@@ -124,18 +129,48 @@ static char *tb__strdup(const char *s)
     return d;
 }
 
-/* Whether a colour pattern's blend a + f (b - a), f in [0, 1], is black:
- * 0 everywhere (a and b black), 1 nowhere (a and b both positive in some
- * channel), -1 in some places only (it could be black at some f). */
-static int tb__pattern_class(const tb_material_pattern *p)
+/* Bit c (c < 3) set if channel c of the image (its only channel if grey)
+ * is positive in every texel of every level: then so is every filtered
+ * value (nearest, bilinear, trilinear and EWA weights are convex). */
+static unsigned tb__texture_positive(const tb_mipmap *t)
 {
-    bool black = true;
-    for (int c = 0; c < p->a.n; c++) {
-        if (p->a.v[c] > 0.0f && p->b.v[c] > 0.0f)
-            return 1;
-        black = black && p->a.v[c] == 0.0f && p->b.v[c] == 0.0f;
+    unsigned pos = 7;
+    for (int l = 0; l < t->nlevels && pos; l++) {
+        size_t n = (size_t)t->levels[l].width * (size_t)t->levels[l].height;
+        for (size_t x = 0; x < n && pos; x++)
+            for (int c = 0; c < 3; c++)
+                if (!(t->levels[l].texels[x * (size_t)t->channels + (size_t)(t->channels >= 3 ? c : 0)] > 0.0f))
+                    pos &= ~(1u << c);
     }
-    return black ? 0 : -1;
+    return pos;
+}
+
+/* Whether colour slot k (0 diffuse, 1 specular, 2 transmission) of a
+ * material is black at a hit, after its pattern (a + f (b - a), f in
+ * [0, 1]) and its texture `tex` (NULL: none): 0 everywhere, 1 nowhere, -1
+ * in some places only. The CPU tracer draws light samples, and spawns
+ * mirror, glossy and refracted rays, only for non-black colours, so for the
+ * kernel this must not depend on the hit. */
+static int tb__colour_class(const tb_material *m, int k, const tb_mipmap *tex)
+{
+    const tb_channels *base = k == 0 ? &m->diffuse : k == 1 ? &m->specular : &m->transmission;
+    const tb_material_pattern *p = k == 0 ? &m->diffuse_pattern : k == 1 ? &m->specular_pattern : NULL;
+    bool black = true, positive = false;
+    unsigned pos = 0; /* channels < 3 positive everywhere */
+    for (int c = 0; c < base->n; c++) {
+        bool pc = p && p->kind ? p->a.v[c] > 0.0f && p->b.v[c] > 0.0f : base->v[c] > 0.0f;
+        black = black && (p && p->kind ? p->a.v[c] == 0.0f && p->b.v[c] == 0.0f : base->v[c] == 0.0f);
+        positive = positive || pc;
+        if (pc && c < 3)
+            pos |= 1u << c;
+    }
+    if (black)
+        return 0;
+    if (tex)
+        return pos & tb__texture_positive(tex) ? 1 : -1;
+    if (p && p->kind)
+        return positive ? 1 : -1;
+    return 1; /* a constant, not black */
 }
 
 /* A colour pattern the kernel evaluates: none, checker or noise. */
@@ -191,18 +226,36 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
             kinds |= 1u << e->kind;
     }
     bool any_phong = false, any_mirror = false, any_dielectric = false, any_emission = false, any_ggx = false;
-    bool any_colour_pattern = false, any_bump = false;
+    bool any_colour_pattern = false, any_bump = false, any_texture = false;
     uint32_t pattern_kinds = 0;
+    /* image textures: the MIP pyramids of all distinct images in one texel
+     * buffer, which must fit the device's storage-buffer limit */
+    size_t tex_floats = 0;
+    if (r->rt.textures && !s->spectral) {
+        for (int q = 0; q < 4 * nm; q++) {
+            const tb_mipmap *t = tb__rt_texture_mip(r->rt.textures, q);
+            bool seen = false;
+            for (int q2 = 0; q2 < q && t && !seen; q2++)
+                seen = tb__rt_texture_mip(r->rt.textures, q2) == t;
+            for (int l = 0; t && !seen && l < t->nlevels; l++)
+                tex_floats += (size_t)t->levels[l].width * (size_t)t->levels[l].height * (size_t)t->channels;
+        }
+    }
+    const bool tex_too_big = tex_floats * sizeof(float) > tb_gpu_device_info_of(dev)->max_storage_buffer_range;
     for (int i = 0; i < nm; i++) {
         const tb_material *m = &s->materials[i];
         uint8_t f = 0;
         /* a colour pattern replaces the colour; whether it is black decides
          * which numbers the point draws, so it must not depend on the hit */
         const bool lambert = m->model == TB_MID_MODEL_LAMBERT;
-        int dcls = m->diffuse_pattern.kind ? tb__pattern_class(&m->diffuse_pattern) : !tb_channels_is_black(m->diffuse);
-        int scls = lambert ? 0
-                   : m->specular_pattern.kind ? tb__pattern_class(&m->specular_pattern)
-                                              : !tb_channels_is_black(m->specular);
+        const tb_mipmap *tex[4];
+        bool any_tex_here = false;
+        for (int k = 0; k < 4; k++) {
+            tex[k] = k == 1 && lambert ? NULL : tb__rt_texture_mip(r->rt.textures, k * nm + i);
+            any_tex_here = any_tex_here || tex[k];
+        }
+        int dcls = tb__colour_class(m, 0, tex[0]), scls = lambert ? 0 : tb__colour_class(m, 1, tex[1]);
+        int tcls = tb__colour_class(m, 2, tex[2]);
         if (dcls == 1)
             f |= TB_GPU_MAT_DIFFUSE;
         /* model lambert: the specular colour is ignored (raytrace.c) */
@@ -212,18 +265,21 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
             f |= TB_GPU_MAT_BLINN;
         if (m->model == TB_MID_MODEL_GGX && (f & TB_GPU_MAT_SPECULAR))
             f |= TB_GPU_MAT_GGX;
-        if (!tb_channels_is_black(m->transmission))
+        if (tcls == 1)
             f |= TB_GPU_MAT_TRANSMISSION;
         if (m->emits)
             f |= TB_GPU_MAT_EMITS;
         r->mflags[i] = f;
         const char *why = NULL;
-        if (m->diffuse_texture || m->specular_texture || m->transmission_texture || m->emission_texture)
-            why = "image texture";
+        if (any_tex_here && s->spectral)
+            why = "image texture in a spectral scene (the kernel has no RGB-to-spectrum upsampling)";
+        else if (any_tex_here && tex_too_big)
+            why = "image textures larger than the device's storage-buffer limit";
         else if (!tb__pattern_ok(&m->diffuse_pattern) || (!lambert && !tb__pattern_ok(&m->specular_pattern)))
             why = "procedural pattern of an unknown kind";
-        else if (dcls < 0 || scls < 0)
-            why = "colour pattern black in some places only (the numbers a point draws would depend on it)";
+        else if (dcls < 0 || scls < 0 || tcls < 0)
+            why = "colour (pattern or image texture) black in some places only (the numbers a point draws would "
+                  "depend on it)";
         else if (m->bump.kind && m->bump.kind != TB_MID_PATTERN_NOISE)
             why = m->bump.kind == TB_MID_PATTERN_IMAGE ? "bump map from an image" : "bump map of an unknown kind";
         else if (m->model != TB_MID_MODEL_PHONG && m->model != TB_MID_MODEL_BLINN &&
@@ -256,6 +312,11 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
                 else
                     any_bump = true;
             }
+        if (any_tex_here) {
+            any_texture = true;
+            if (!r->mpat[i])
+                r->mpat[i] = 2; /* textures only: without tangents, a lookup without footprint */
+        }
         any_dielectric = any_dielectric || (f & TB_GPU_MAT_TRANSMISSION);
         any_emission = any_emission || (f & TB_GPU_MAT_EMITS);
     }
@@ -269,13 +330,15 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
     /* a hit pushes at most 2 rays (dielectric) and nets +1 per level, the
      * camera ray's GGX hit nglossy */
     r->cap_stack = r->rt.max_depth + 2 + (r->nglossy > 1 ? r->nglossy - 1 : 0);
-    r->pw = any_colour_pattern ? 2 : 0;
-    r->any_surface = any_colour_pattern || any_bump;
-    tb_gpu_spec_constant spec[15] = {{1, (uint32_t)nch},  {2, (uint32_t)r->nlights}, {3, (uint32_t)r->nsamples},
+    r->pw0 = any_colour_pattern ? 2 : 0;
+    r->pw = r->pw0 + (any_texture ? 6 : 0);
+    r->any_surface = any_colour_pattern || any_bump || any_texture;
+    tb_gpu_spec_constant spec[17] = {{1, (uint32_t)nch},  {2, (uint32_t)r->nlights}, {3, (uint32_t)r->nsamples},
                                      {4, spot},           {5, any_phong},            {6, any_mirror},
                                      {7, any_dielectric}, {8, any_emission},         {9, kinds},
                                      {10, ies},           {11, any_ggx},             {12, (uint32_t)r->nglossy},
-                                     {13, any_colour_pattern}, {14, any_bump},       {15, pattern_kinds}};
+                                     {13, any_colour_pattern}, {14, any_bump},       {15, pattern_kinds},
+                                     {16, any_texture},   {17, (uint32_t)r->rt.texture_filter}};
     memcpy(r->spec, spec, sizeof spec);
 
     /* Tables: materials (scalars), colours (materials' 4 x nch, lights' and
@@ -312,7 +375,7 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         tb_bsdf_kind lobe = m->model == TB_MID_MODEL_BLINN ? TB_BSDF_BLINN_NORMALIZED_EXACT : TB_BSDF_PHONG_NORMALIZED;
         mats[i] = (tb_gpu_shade_material){m->exponent, m->ior, (float)tb_bsdf_lobe_norm(lobe, m->exponent),
                                            r->mflags[i], (float)fmax((double)m->roughness, TB_GGX_ALPHA_MIN),
-                                           0.0f, 0.0f, 0.0f, {{0}}};
+                                           0.0f, 0.0f, 0.0f, {{0}}, {0, 0, 0, 0}};
         if (!r->route[i] && r->mpat[i]) {
             const tb_material_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
             for (int k = 0; k < 3; k++) {
@@ -395,6 +458,59 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
         ems[i] = g;
         for (int c = 0; c < nch; c++)
             col[r->emitter_col + (size_t)i * (size_t)nch + (size_t)c] = e->radiance.v[c];
+    }
+    /* Image textures: a record per distinct image (shared/shade.h), its
+     * levels' texels one after the other. */
+    uint32_t *tinfo = NULL;
+    float *texels = NULL;
+    size_t ninfo = 0, ntexels = 0;
+    if (any_texture) {
+        size_t cap_info = 0;
+        for (int q = 0; q < 4 * nm; q++) {
+            const tb_mipmap *t = tb__rt_texture_mip(r->rt.textures, q);
+            cap_info += t ? TB_GPU_TEX_HEADER + TB_GPU_TEX_PER_LEVEL * (size_t)t->nlevels : 0;
+        }
+        tinfo = malloc(cap_info * sizeof *tinfo);
+        texels = malloc((tex_floats ? tex_floats : 1) * sizeof *texels);
+        if (!tinfo || !texels) {
+            free(tinfo), free(texels), free(col), free(mats), free(lts), free(ems);
+            goto nomem;
+        }
+    }
+    for (int i = 0; i < nm; i++)
+        for (int k = 0; k < 4; k++) {
+            mats[i].tex[k] = TB_GPU_NO_TEXTURE;
+            const tb_mipmap *t = r->route[i] || (k == 1 && s->materials[i].model == TB_MID_MODEL_LAMBERT)
+                                     ? NULL
+                                     : tb__rt_texture_mip(r->rt.textures, k * nm + i);
+            if (!t || !any_texture)
+                continue;
+            /* an image already copied for another slot: its record */
+            for (int q = 0; q < k * nm + i && mats[i].tex[k] == TB_GPU_NO_TEXTURE; q++)
+                if (tb__rt_texture_mip(r->rt.textures, q) == t && !r->route[q % nm] && mats[q % nm].tex[q / nm] != TB_GPU_NO_TEXTURE)
+                    mats[i].tex[k] = mats[q % nm].tex[q / nm];
+            if (mats[i].tex[k] != TB_GPU_NO_TEXTURE)
+                continue;
+            mats[i].tex[k] = (uint32_t)ninfo;
+            uint32_t *rec = tinfo + ninfo;
+            rec[0] = (uint32_t)t->channels, rec[1] = (uint32_t)t->nlevels;
+            rec[2] = (uint32_t)t->width, rec[3] = (uint32_t)t->height;
+            for (int l = 0; l < t->nlevels; l++) {
+                size_t n = (size_t)t->levels[l].width * (size_t)t->levels[l].height * (size_t)t->channels;
+                rec[TB_GPU_TEX_HEADER + TB_GPU_TEX_PER_LEVEL * (size_t)l] = (uint32_t)t->levels[l].width;
+                rec[TB_GPU_TEX_HEADER + TB_GPU_TEX_PER_LEVEL * (size_t)l + 1] = (uint32_t)t->levels[l].height;
+                rec[TB_GPU_TEX_HEADER + TB_GPU_TEX_PER_LEVEL * (size_t)l + 2] = (uint32_t)ntexels;
+                memcpy(texels + ntexels, t->levels[l].texels, n * sizeof *texels);
+                ntexels += n;
+            }
+            ninfo += TB_GPU_TEX_HEADER + TB_GPU_TEX_PER_LEVEL * (size_t)t->nlevels;
+        }
+    r->b_texinfo = tb__upload(dev, tinfo, ninfo * sizeof *tinfo);
+    r->b_texels = r->b_texinfo ? tb__upload(dev, texels, ntexels * sizeof *texels) : NULL;
+    free(tinfo), free(texels);
+    if (!r->b_texels) {
+        free(col), free(mats), free(lts), free(ems);
+        goto fail;
     }
     r->b_materials = tb__upload(dev, mats, (size_t)nm * sizeof *mats);
     r->b_colours = r->b_materials ? tb__upload(dev, col, ncol * sizeof *col) : NULL;
@@ -522,16 +638,16 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
     if (st)
         return st;
     tb_gpu_kernel *k = tb_gpu_kernel_get(r->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("shade"),
-                                                                        .buffers = 9,
+                                                                        .buffers = 11,
                                                                         .push_size = sizeof(tb_gpu_shade_push),
                                                                         .spec = r->spec,
-                                                                        .spec_count = 15});
+                                                                        .spec_count = 17});
     if (!k)
         return TB_ERR_DEVICE;
     tb_gpu_shade_push push = {(uint32_t)ni, r->perm_col, 0, 0};
     tb_gpu_dispatch d = {k,
                          {r->b_items, r->b_lightu, r->b_emitters, r->b_lights, r->b_materials, r->b_colours,
-                          r->b_rays, r->b_values, r->b_surf},
+                          r->b_rays, r->b_values, r->b_surf, r->b_texinfo, r->b_texels},
                          &push,
                          ni,
                          0.0};
@@ -625,7 +741,7 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
             /* colour patterns: the blend a + f (b - a) of the kernel's
              * factors, in double as the CPU tracer blends */
             float pdif[TB_CHANNELS_MAX], pspec[TB_CHANNELS_MAX];
-            for (int k = 0; k < r->pw; k++) {
+            for (int k = 0; k < r->pw0; k++) {
                 float f = TB__PAT(j, k);
                 if (f < 0.0f)
                     continue;
@@ -633,6 +749,19 @@ static tb_status tb__shade_chunk(tb_gpu_renderer *r, tb__paths *P, tb__wave *w, 
                 float *out = k == 0 ? pdif : pspec;
                 for (int c = 0; c < nch; c++)
                     out[c] = (float)((double)pa[c] + (double)f * ((double)pb[c] - (double)pa[c]));
+                if (k == 0)
+                    dif = pdif;
+                else
+                    spec = pspec;
+            }
+            /* image textures: times the texture's RGB (RGB scenes only) */
+            for (int k = 0; r->pw > r->pw0 && k < 2; k++) {
+                if (TB__PAT(j, (size_t)r->pw0 + 3 * (size_t)k) < 0.0f)
+                    continue;
+                const float *src = k == 0 ? dif : spec;
+                float *out = k == 0 ? pdif : pspec;
+                for (int c = 0; c < nch; c++)
+                    out[c] = src[c] * TB__PAT(j, (size_t)r->pw0 + 3 * (size_t)k + (size_t)c);
                 if (k == 0)
                     dif = pdif;
                 else
@@ -692,8 +821,13 @@ static uint8_t tb__surface(const tb_gpu_renderer *r, const tb__paths *P, tb__wav
         rdp = rd;
     }
     tb__rt_surface g;
-    if (!tb__rt_hit_surface(&r->rt, h, p, h->ng, n, rdp, &g))
-        return 2;
+    if (!tb__rt_hit_surface(&r->rt, h, p, h->ng, n, rdp, &g)) {
+        if (r->mpat[w->mat[a]] != 2)
+            return 2;
+        /* textures only: the CPU looks them up at (u, v) without a footprint */
+        w->surf[a] = (tb_gpu_surface){.u = h->u, .v = h->v};
+        return 1;
+    }
     w->surf[a] = (tb_gpu_surface){.po = g.po, .u = g.u, .po_du = g.po_du, .v = g.v, .po_dv = g.po_dv,
                                   .has_fp = g.has_fp, .po_dx = g.po_dx, .po_dy = g.po_dy, .dpdu = g.dpdu,
                                   .dpdv = g.dpdv};

@@ -118,6 +118,8 @@ void tb__rt_textures_free(tb__rt_textures *t);
  * tb_tex_filter); false if there is no texture i. */
 bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, int filter, float u, float v, const float fp[4],
                         double rgb[3]);
+/* Private: the MIP pyramid of texture i (NULL: none), for the Vulkan renderer's copy. */
+const struct tb_mipmap *tb__rt_texture_mip(const tb__rt_textures *t, int i);
 /* Private: the footprint (as above) at hit point p, normal n, tangents
  * dpdu, dpdv, of the offset rays rd = {rx_o, rx_d, ry_o, ry_d}, scaled by
  * `scale`; false (fp zeroed) if it cannot be computed. */

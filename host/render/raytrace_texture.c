@@ -16,6 +16,7 @@ bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, int filter, float u, fl
                         double rgb[3]);
 bool tb__rt_footprint(tb_vec3 p, tb_vec3 n, tb_vec3 dpdu, tb_vec3 dpdv, const tb_vec3 rd[4], float scale,
                       float fp[4], tb_vec3 dpdxy[2]);
+const tb_mipmap *tb__rt_texture_mip(const tb__rt_textures *t, int i);
 
 struct tb__rt_textures {
     tb_texture_cache *cache;
@@ -56,6 +57,11 @@ void tb__rt_textures_free(tb__rt_textures *t)
     tb_texture_cache_free(t->cache);
     free(t->mip);
     free(t);
+}
+
+const tb_mipmap *tb__rt_texture_mip(const tb__rt_textures *t, int i)
+{
+    return t && i >= 0 && i < t->n ? t->mip[i] : NULL;
 }
 
 bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, int filter, float u, float v, const float fp[4],

@@ -29,13 +29,27 @@
 /* tb_gpu_shade_item.flags: spawn mirror / refracted rays (depth < max depth). */
 #define TB_GPU_SHADE_SPAWN 2u
 /* tb_gpu_shade_item.flags: the item has a surface record (tb_gpu_surface at
- * the item's index in the chunk) for its patterns and bump map. */
+ * the item's index in the chunk) for its patterns, bump map and textures. */
 #define TB_GPU_SHADE_SURFACE 4u
 
 /* tb_gpu_pattern.kind (host/scene/mid.h's tb_mid_pattern_kind; image bumps are routed). */
 #define TB_GPU_PATTERN_NONE 0u
 #define TB_GPU_PATTERN_CHECKER 1u
 #define TB_GPU_PATTERN_NOISE 2u
+/* tb_gpu_shade_material.tex of a colour without an image texture. */
+#define TB_GPU_NO_TEXTURE 0xffffffffu
+/* Texture slots of tb_gpu_shade_material.tex (raytrace.c's order). */
+#define TB_GPU_TEX_DIFFUSE 0
+#define TB_GPU_TEX_SPECULAR 1
+#define TB_GPU_TEX_TRANSMISSION 2
+#define TB_GPU_TEX_EMISSION 3
+/* An image texture is a record of uints in the texture-info buffer:
+ * channels, levels, width and height of level 0, then per level its width,
+ * height and the offset of its texels (row-major from the top row,
+ * `channels` floats each) in the texel buffer (shaders/lib/texture.glsl). */
+#define TB_GPU_TEX_HEADER 4u
+#define TB_GPU_TEX_PER_LEVEL 3u
+
 /* Pattern slots of tb_gpu_shade_material.pattern. */
 #define TB_GPU_PATTERN_DIFFUSE 0
 #define TB_GPU_PATTERN_SPECULAR 1
@@ -162,7 +176,7 @@ struct tb_gpu_surface {
     float fp3;           /* offset 108 */
 };
 
-/* The scalar part of a material (its colours are in the colour table); size 128. */
+/* The scalar part of a material (its colours are in the colour table); size 144. */
 struct tb_gpu_shade_material {
     float exponent; /* Phong exponent */
     float ior;      /* index of refraction of the inside (offset 4) */
@@ -171,6 +185,8 @@ struct tb_gpu_shade_material {
     float alpha;    /* GGX width, clamped below to TB_GGX_ALPHA_MIN as shading.c does (offset 16) */
     float pad0, pad1, pad2;
     tb_gpu_pattern pattern[3]; /* diffuse, specular, bump (TB_GPU_PATTERN_DIFFUSE ..) (offset 32) */
+    TB_GPU_UINT tex[4];        /* image textures of diffuse, specular, transmission, emission: their
+                                  records in the texture-info buffer, or TB_GPU_NO_TEXTURE (offset 128) */
 };
 
 /* Push constants of the shade kernel; size 16. */
@@ -186,11 +202,12 @@ typedef struct tb_gpu_shade_push {
  * a refracted ray, G glossy rays. */
 #define TB_GPU_SHADE_RAYS(S, G) ((S) + 2u + (G))
 /* Output floats per item for S shadow rays of SW words, `ch` channels, G
- * glossy rays and PW pattern words: SW per shadow ray (flag, a, b[, c]),
- * then 3 + G colour slots (emission, mirror, refracted, glossy) of a flag
- * and the channels, then G glossy densities, then PW (0, or 2 when the
- * scene has colour patterns: the blend factors of the diffuse and specular
- * patterns, -1 without one). */
+ * glossy rays and PW pattern and texture words: SW per shadow ray (flag, a,
+ * b[, c]), then 3 + G colour slots (emission, mirror, refracted, glossy) of
+ * a flag and the channels, then G glossy densities, then PW: 2 when the
+ * scene has colour patterns (the blend factors of the diffuse and specular
+ * patterns, -1 without one), then 6 when it has image textures (the RGB
+ * of the diffuse and the specular texture, first word -1 without one). */
 #define TB_GPU_SHADE_VALUES(S, ch, SW, G, PW) ((SW) * (S) + (3u + (G)) * ((ch) + 1u) + (G) + (PW))
 
 #ifndef TB_GPU_GLSL
@@ -226,9 +243,10 @@ _Static_assert(sizeof(tb_gpu_surface) == 112 && offsetof(tb_gpu_surface, u) == 1
                    offsetof(tb_gpu_surface, dpdu) == 80 && offsetof(tb_gpu_surface, fp2) == 92 &&
                    offsetof(tb_gpu_surface, dpdv) == 96 && offsetof(tb_gpu_surface, fp3) == 108,
                "tb_gpu_surface follows the std430 offsets of its GLSL twin");
-_Static_assert(sizeof(tb_gpu_shade_material) == 128 && offsetof(tb_gpu_shade_material, ior) == 4 &&
+_Static_assert(sizeof(tb_gpu_shade_material) == 144 && offsetof(tb_gpu_shade_material, ior) == 4 &&
                    offsetof(tb_gpu_shade_material, knorm) == 8 && offsetof(tb_gpu_shade_material, flags) == 12 &&
-                   offsetof(tb_gpu_shade_material, alpha) == 16 && offsetof(tb_gpu_shade_material, pattern) == 32,
+                   offsetof(tb_gpu_shade_material, alpha) == 16 && offsetof(tb_gpu_shade_material, pattern) == 32 &&
+                   offsetof(tb_gpu_shade_material, tex) == 128,
                "tb_gpu_shade_material follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_shade_push) == 16, "tb_gpu_shade_push is 16 bytes");
 #endif

@@ -5,9 +5,9 @@
 # materials scene (GGX lobes and glossy rays, checker and noise patterns,
 # noise bumps) at 48 x 48, 4 spp, under the validation layer: image NMSE
 # within docs/accuracy.md's tolerance (1e-4), the kernel shading every hit
-# (none routed to the CPU path); a textured scene whose hits
-# are routed to the CPU path (reported, same image); the same image for any
-# thread count. (A tile split over batches, backend choice, fallbacks and
+# (none routed to the CPU path); a textured scene shaded by the kernel with
+# each texture filter, and one whose texture has a black texel, routed to the
+# CPU path (reported, same image); the same image for any thread count. (A tile split over batches, backend choice, fallbacks and
 # usage errors: shade_backend.sh.)
 set -eu
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
@@ -39,11 +39,21 @@ for name in cornell-box cornell-box-rgb materials; do
         fail "$name: another seed should differ far more (NMSE $e2 vs $e)"
 done
 
-# Routed: a textured floor (the kernel has no image textures) is shaded by
-# the CPU path, reported, and the image is the CPU's.
-printf 'PF\n2 2\n-1.0\n' >"$t/shade_tex.pfm"
-python3 -c "import struct,sys; sys.stdout.buffer.write(struct.pack('<12f', .9,.2,.2, .2,.9,.2, .2,.2,.9, .8,.8,.8))" \
-    >>"$t/shade_tex.pfm"
+# Image textures: a textured floor (a 64 x 64 texture, so the footprints of
+# the 48 x 32 pixels span from under a texel to several: every MIP level
+# and the EWA ellipse) shaded by the kernel with each filter, the image the
+# CPU's within the tolerance; then a texture with a black texel, routed to the
+# CPU path with the reason (the image is the CPU's).
+python3 - "$t/shade_tex.pfm" "$t/shade_black.pfm" <<'PY'
+import struct, sys
+def pfm(path, w, h, px):
+    with open(path, "wb") as f:
+        f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+        f.write(struct.pack("<%df" % len(px), *px))
+px = [0.1 + 0.8 * ((i * 37) % 101) / 101.0 for i in range(3 * 64 * 64)]
+pfm(sys.argv[1], 64, 64, px)
+pfm(sys.argv[2], 2, 2, [.9, .2, .2, 0, 0, 0, .2, .2, .9, .8, .8, .8])
+PY
 cat >"$t/shade_tex.mid" <<'EOF'
 mid 1
 camera "c" { eye = [0 -6 3] look_at = [0 0 0] up = [0 0 1] fov = 50 resolution = [48 32] }
@@ -54,15 +64,27 @@ polygons "lamp" { geometry = { vertices = [[-0.5 -0.5 3] [-0.5 0.5 3] [0.5 0.5 3
   rendering = { diffuse = 0 emission = [10 8 6] } }
 point_light { position = [1 1 2] intensity = [5 4 3] }
 EOF
-"$TESTBED" render "$t/shade_tex.mid" -o "$t/tex-cpu.pfm" --spp 2 --backend cpu >/dev/null 2>&1 || fail "cpu textured"
-TB_VK_VALIDATION=1 "$TESTBED" render "$t/shade_tex.mid" -o "$t/tex-vk.pfm" --spp 2 --backend vulkan \
-    >"$t/shade.out" 2>"$t/shade.err" || fail "vulkan textured"
-if grep -q "vulkan validation \|VUID" "$t/shade.err"; then fail "validation messages (textured)"; fi
-grep -q "[1-9][0-9]* routed to the CPU path (material [0-9]*: image texture)" "$t/shade.out" ||
-    fail "textured hits should be reported as routed"
-e=$(nmse "$t/tex-vk.pfm" "$t/tex-cpu.pfm")
-echo "textured (routed) 48x32: NMSE $e"
-python3 -c "import sys; sys.exit(0 if $e <= 1e-4 else 1)" || fail "textured: NMSE $e > 1e-4"
+for filter in ewa trilinear bilinear; do
+    "$TESTBED" render "$t/shade_tex.mid" -o "$t/tex-cpu.pfm" --spp 1 --texture-filter $filter --backend cpu \
+        >/dev/null 2>&1 || fail "cpu textured ($filter)"
+    TB_VK_VALIDATION=1 "$TESTBED" render "$t/shade_tex.mid" -o "$t/tex-vk.pfm" --spp 1 --texture-filter $filter \
+        --backend vulkan >"$t/shade.out" 2>"$t/shade.err" || fail "vulkan textured ($filter)"
+    if grep -q "vulkan validation \|VUID" "$t/shade.err"; then fail "validation messages (textured, $filter)"; fi
+    grep -q "vulkan: [1-9][0-9]* hits shaded by the kernel, 0 routed to the CPU path" "$t/shade.out" ||
+        fail "textured hits should be shaded by the kernel ($filter)"
+    e=$(nmse "$t/tex-vk.pfm" "$t/tex-cpu.pfm")
+    echo "textured 48x32, $filter: NMSE $e"
+    python3 -c "import sys; sys.exit(0 if $e <= 1e-4 else 1)" || fail "textured ($filter): NMSE $e > 1e-4"
+done
+sed 's/shade_tex.pfm/shade_black.pfm/' "$t/shade_tex.mid" >"$t/shade_black.mid"
+"$TESTBED" render "$t/shade_black.mid" -o "$t/black-cpu.pfm" --spp 2 --backend cpu >/dev/null 2>&1 || fail "cpu black"
+TB_VK_VALIDATION=1 "$TESTBED" render "$t/shade_black.mid" -o "$t/black-vk.pfm" --spp 2 --backend vulkan \
+    >"$t/shade.out" 2>"$t/shade.err" || fail "vulkan black texel"
+grep -q "[1-9][0-9]* routed to the CPU path (material [0-9]*: colour (pattern or image texture) black" "$t/shade.out" ||
+    fail "hits on a texture with a black texel should be reported as routed"
+e=$(nmse "$t/black-vk.pfm" "$t/black-cpu.pfm")
+echo "texture with a black texel (routed) 48x32: NMSE $e"
+python3 -c "import sys; sys.exit(0 if $e <= 1e-4 else 1)" || fail "black texel: NMSE $e > 1e-4"
 
 # The host's loops run on OpenMP threads over distinct paths: the image does
 # not depend on the thread count (the textured scene: kernel and routed hits;

@@ -2,13 +2,14 @@
  * tracer (tb_rt_radiance), ray by ray: a floor lit by a point light and a
  * quad emitter with a sphere casting shadows, seen by 1024 rays, once per
  * material or light feature (Lambert, Phong highlight + mirror, spot,
- * directional, smooth glass, spectral bands, a sphere emitter), and a
- * textured floor, whose hits the kernel does not shade (routed to the CPU
- * path: counted, and equal to the CPU's values bit for bit). Each ray's
- * stream is seeded alike on both paths: the radiance must agree within
- * float tolerance and the stream must end in the same state (the wavefront
- * drew exactly the CPU path's numbers). Validation layer on; any message
- * fails. */
+ * directional, smooth glass, spectral bands, a sphere emitter, IES tables,
+ * GGX lobes with glossy rays, checker and noise patterns, noise bumps,
+ * image textures), and the cases the kernel routes to the CPU path
+ * (counted, with the reason, and equal to the CPU's values bit for bit).
+ * Each ray's stream is seeded alike on both paths: the radiance must agree
+ * within float tolerance and the stream must end in the same state (the
+ * wavefront drew exactly the CPU path's numbers). Validation layer on; any
+ * message fails. */
 #include "gpu_test.h"
 
 #include <math.h>
@@ -329,22 +330,59 @@ static void test_sphere_emitter(void **state)
                 "sphere lamp", (tb__want){.channels = 3});
 }
 
-static void test_routed_texture(void **state)
+/* Writes a w x h PFM texture (bottom-to-top rows) of RGB pixels px into
+ * TB_TEST_TMPDIR; returns the directory. */
+static const char *tb__texture(const char *name, int w, int h, const float *px)
 {
-    /* A 2 x 2 PFM texture (bottom-to-top rows, little-endian). */
     const char *dir = getenv("TB_TEST_TMPDIR");
     if (!dir)
         dir = "/tmp";
     char path[1024];
-    snprintf(path, sizeof path, "%s/shade_kernel_tex.pfm", dir);
+    snprintf(path, sizeof path, "%s/%s", dir, name);
     FILE *fp = fopen(path, "wb");
     assert_non_null(fp);
-    fprintf(fp, "PF\n2 2\n-1.0\n");
-    float px[12] = {0.9f, 0.2f, 0.2f, 0.2f, 0.9f, 0.2f, 0.2f, 0.2f, 0.9f, 0.8f, 0.8f, 0.8f};
-    assert_int_equal(fwrite(px, sizeof px, 1, fp), 1);
+    fprintf(fp, "PF\n%d %d\n-1.0\n", w, h);
+    assert_int_equal(fwrite(px, sizeof(float) * 3 * (size_t)w * (size_t)h, 1, fp), 1);
     fclose(fp);
+    return dir;
+}
+
+/* Image textures on the diffuse, specular and emission colours (point
+ * sampled: these rays have no footprint, so every filter is the bilinear
+ * lookup of level 0; the renderer's footprints and filters are checked by
+ * gpu_shade_cli). A texture with a black texel where the colour is not
+ * black elsewhere, and a texture in a spectral scene, are routed. */
+static void test_textures(void **state)
+{
+    float px[12] = {0.9f, 0.2f, 0.2f, 0.2f, 0.9f, 0.2f, 0.2f, 0.2f, 0.9f, 0.8f, 0.8f, 0.8f};
+    const char *dir = tb__texture("shade_kernel_tex.pfm", 2, 2, px);
+    float big[3 * 16 * 8];
+    for (int i = 0; i < 3 * 16 * 8; i++)
+        big[i] = 0.1f + 0.8f * (float)((i * 37) % 101) / 101.0f;
+    tb__texture("shade_kernel_tex16.pfm", 16, 8, big);
     tb__compare(*state, tb__load("diffuse = 1 diffuse_texture = file(\"shade_kernel_tex.pfm\")", tb__point, true, dir),
-                "texture", (tb__want){.channels = 3, .routed = "image texture"});
+                "texture", (tb__want){.channels = 3});
+    tb__compare(*state,
+                tb__load("diffuse = 0.5 specular = 0.4 exponent = 30 diffuse_texture = file(\"shade_kernel_tex16.pfm\") "
+                         "specular_texture = file(\"shade_kernel_tex.pfm\")",
+                         tb__point, true, dir),
+                "tex spec", (tb__want){.channels = 3, .secondary = true});
+    tb__compare(*state,
+                tb__load("diffuse = [0.6 0.5 0.4]",
+                         "point_light { position = [1 1 2] intensity = [5 4 3] }\n"
+                         "polygons \"panel\" { geometry = { vertices = [[-3 1 0] [-1 1 0] [-1 1 2] [-3 1 2]] "
+                         "faces = [[0 1 2 3]] uvs = [[0 0] [1 0] [1 1] [0 1]] } rendering = { diffuse = 0 "
+                         "emission = [2 2 2] emission_texture = file(\"shade_kernel_tex16.pfm\") } }\n",
+                         true, dir),
+                "tex emitter", (tb__want){.channels = 3});
+    px[3] = px[4] = px[5] = 0.0f; /* a black texel */
+    tb__texture("shade_kernel_black.pfm", 2, 2, px);
+    tb__compare(*state, tb__load("diffuse = 1 diffuse_texture = file(\"shade_kernel_black.pfm\")", tb__point, true, dir),
+                "black texel", (tb__want){.channels = 3, .routed = "black in some places"});
+    tb_scene *sp = tb__load("diffuse = spectrum([400 700], [0.5 0.7]) diffuse_texture = file(\"shade_kernel_tex.pfm\")",
+                            tb__point, true, dir);
+    assert_true(sp->spectral);
+    tb__compare(*state, sp, "tex spectral", (tb__want){.channels = sp->nchannels, .routed = "spectral"});
 }
 
 int main(void)
@@ -352,7 +390,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lambert),     cmocka_unit_test(test_phong_mirror),   cmocka_unit_test(test_spot),
         cmocka_unit_test(test_directional), cmocka_unit_test(test_glass),          cmocka_unit_test(test_spectral),
-        cmocka_unit_test(test_sphere_emitter), cmocka_unit_test(test_routed_texture), cmocka_unit_test(test_blinn),
+        cmocka_unit_test(test_sphere_emitter), cmocka_unit_test(test_textures), cmocka_unit_test(test_blinn),
         cmocka_unit_test(test_lambert_model),  cmocka_unit_test(test_routed_models), cmocka_unit_test(test_ggx), cmocka_unit_test(test_patterns),  cmocka_unit_test(test_ies),
     };
     return cmocka_run_group_tests(tests, tb__setup, tb__teardown);

@@ -21,7 +21,7 @@ layout(std430, binding = 1) writeonly buffer Out { tb_case_f4 results[]; };
 layout(std430, binding = 2) readonly buffer Perm { float perm[]; };
 layout(push_constant) uniform Push { uint n; } pc;
 
-int tb__perm(int i) { return int(perm[i & 255]); }
+int tb_perm(int i) { return int(perm[i & 255]); }
 #include "lib/pattern.glsl"
 
 void main()
