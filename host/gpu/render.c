@@ -487,7 +487,8 @@ tb_status tb_gpu_renderer_create(tb_gpu_device *dev, const tb_scene *s, const tb
                 continue;
             /* an image already copied for another slot: its record */
             for (int q = 0; q < k * nm + i && mats[i].tex[k] == TB_GPU_NO_TEXTURE; q++)
-                if (tb__rt_texture_mip(r->rt.textures, q) == t && !r->route[q % nm] && mats[q % nm].tex[q / nm] != TB_GPU_NO_TEXTURE)
+                if (tb__rt_texture_mip(r->rt.textures, q) == t && !r->route[q % nm] &&
+                    mats[q % nm].tex[q / nm] != TB_GPU_NO_TEXTURE)
                     mats[i].tex[k] = mats[q % nm].tex[q / nm];
             if (mats[i].tex[k] != TB_GPU_NO_TEXTURE)
                 continue;
@@ -863,8 +864,8 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
     w.shadow_src = malloc(r->chunk * (S ? S : 1) * sizeof *w.shadow_src);
     w.occl = malloc(r->chunk * (S ? S : 1));
     tb_status st = TB_OK;
-    if (!w.path || !w.ray || !w.depth || !w.thr || !w.mis || (r->any_surface && (!w.surf || !w.sok)) || !w.hit || !w.item_of || !w.routed || !w.mat || !w.sstart ||
-        !w.shadow || !w.shadow_src || !w.occl)
+    if (!w.path || !w.ray || !w.depth || !w.thr || !w.mis || (r->any_surface && (!w.surf || !w.sok)) || !w.hit ||
+        !w.item_of || !w.routed || !w.mat || !w.sstart || !w.shadow || !w.shadow_src || !w.occl)
         st = tb_error(TB_ERR_NOMEM, "GPU render: out of memory for %zu paths", n);
     const int nthreads = r->threads > 0 ? r->threads : omp_get_max_threads();
     double wave0 = tb__now();
@@ -992,7 +993,8 @@ static tb_status tb__wavefront(tb_gpu_renderer *r, tb__paths *P)
     }
     r->st.wave_seconds += tb__now() - wave0;
     free(w.path), free(w.ray), free(w.depth), free(w.thr), free(w.hit), free(w.item_of), free(w.shadow),
-        free(w.shadow_src), free(w.occl), free(w.routed), free(w.mat), free(w.sstart), free(w.mis), free(w.surf), free(w.sok);
+        free(w.shadow_src), free(w.occl), free(w.routed), free(w.mat), free(w.sstart), free(w.mis), free(w.surf),
+        free(w.sok);
     return st;
 }
 
@@ -1082,9 +1084,10 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
     const int cap_stack = r->cap_stack;
     /* bytes per path: stack entries (ray, depth, throughput), streams, film
      * position, radiance, and the wave's copies */
-    size_t per_path = (size_t)cap_stack * (sizeof(tb_ray) + sizeof(int) + sizeof(tb_rt_mis) + (size_t)nch * sizeof(float)) +
-                      2 * sizeof(tb_rng) + 2 * sizeof(double) + 2 * (size_t)nch * sizeof(float) + sizeof(tb_ray) +
-                      sizeof(tb_hit) + sizeof(tb_rt_mis) + 4 * sizeof(size_t) + 2 * sizeof(int);
+    size_t per_path =
+        (size_t)cap_stack * (sizeof(tb_ray) + sizeof(int) + sizeof(tb_rt_mis) + (size_t)nch * sizeof(float)) +
+        2 * sizeof(tb_rng) + 2 * sizeof(double) + 2 * (size_t)nch * sizeof(float) + sizeof(tb_ray) + sizeof(tb_hit) +
+        sizeof(tb_rt_mis) + 4 * sizeof(size_t) + 2 * sizeof(int);
     size_t budget = TB__GR_BATCH_BYTES / per_path;
     if (budget > TB__GR_BATCH_MAX)
         budget = TB__GR_BATCH_MAX;

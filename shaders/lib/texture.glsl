@@ -31,7 +31,11 @@ int tb_tex_index(float s)
 
 int tb_tex_channels(uint rec) { return int(tb_texinfo(rec)); }
 int tb_tex_levels(uint rec) { return int(tb_texinfo(rec + 1u)); }
-ivec2 tb_tex_size(uint rec, int l) { uint at = rec + 4u + 3u * uint(l); return ivec2(tb_texinfo(at), tb_texinfo(at + 1u)); }
+ivec2 tb_tex_size(uint rec, int l)
+{
+    uint at = rec + 4u + 3u * uint(l);
+    return ivec2(tb_texinfo(at), tb_texinfo(at + 1u));
+}
 
 // Texel (x, y) of level l, wrapped.
 vec4 tb_tex_fetch(uint rec, int l, int x, int y)

@@ -130,8 +130,8 @@ static void tb__compare(gpu_test_env *e, tb_scene *s, const char *name, tb__want
     tb_gpu_renderer_stats(r, &gs);
     print_message("%-12s %4d rays: %d beyond %.0e relative (worst %.2g), %d streams equal; %llu kernel hits, "
                   "%llu routed, %llu rays, %llu shadow rays, mean %.4g\n",
-                  name, TB__N, bad, want.tol > 0.0 ? want.tol : 1e-4, worst, same_rng, (unsigned long long)gs.gpu_shaded,
-                  (unsigned long long)gs.cpu_shaded, (unsigned long long)gs.rays,
+                  name, TB__N, bad, want.tol > 0.0 ? want.tol : 1e-4, worst, same_rng,
+                  (unsigned long long)gs.gpu_shaded, (unsigned long long)gs.cpu_shaded, (unsigned long long)gs.rays,
                   (unsigned long long)gs.shadow_rays, sum / TB__N / s->nchannels);
     /* Float against double: a ray may meet an edge or a shadow boundary on
      * one path only; at most 1 % of rays, every stream the same otherwise.
@@ -236,23 +236,27 @@ static void test_patterns(void **state)
         {"checker obj", "sphere", "diffuse = 1 diffuse_pattern = checker(1.7, [0.1 0.2 0.5], 0.8, object)", 0},
         {"noise uv", NULL, "diffuse = 1 diffuse_pattern = noise(6, 5, [0.35 0.3 0.28], [0.95 0.93 0.9])", 0},
         {"noise obj", NULL, "diffuse = 1 diffuse_pattern = noise(2.5, 6, 0.1, [0.9 0.8 0.7], object)", 0},
-        {"spec checker", NULL, "diffuse = 0.3 specular = 1 exponent = 40 specular_pattern = checker(4, 0.1, [0.5 0.4 0.3])",
+        {"spec checker", NULL,
+         "diffuse = 0.3 specular = 1 exponent = 40 specular_pattern = checker(4, 0.1, [0.5 0.4 0.3])", 0},
+        {"ggx noise", NULL,
+         "diffuse = 0.1 specular = 1 model = ggx roughness = 0.25 "
+         "specular_pattern = noise(3, 4, [0.9 0.6 0.3], 0.2) diffuse_pattern = checker(2, 0.1, 0.6)",
          0},
-        {"ggx noise", NULL, "diffuse = 0.1 specular = 1 model = ggx roughness = 0.25 "
-                      "specular_pattern = noise(3, 4, [0.9 0.6 0.3], 0.2) diffuse_pattern = checker(2, 0.1, 0.6)",
-         0},
-        {"bump uv", NULL, "diffuse = 0.7 bump = noise(3, 2, 0.05)", 1e-3},
-        {"bump obj", NULL, "diffuse = 0.6 specular = 0.3 exponent = 20 bump = noise(1.5, 4, 0.08, object)", 1e-3},
-        {"bump ggx", NULL, "diffuse = 0 specular = [0.95 0.64 0.54] model = ggx roughness = 0.1 bump = noise(4, 3, 0.02)",
-         1e-3},
+        {"bump uv", NULL, "diffuse = 0.7 bump = noise(3, 2, 0.05)", 0},
+        {"bump obj", NULL, "diffuse = 0.6 specular = 0.3 exponent = 20 bump = noise(1.5, 4, 0.08, object)", 0},
+        {"bump ggx", NULL,
+         "diffuse = 0 specular = [0.95 0.64 0.54] model = ggx roughness = 0.1 bump = noise(4, 3, 0.02)", 0},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         char extra[1024];
         snprintf(extra, sizeof extra,
                  "%smaterial \"p\" { %s }\n"
-                 "sphere \"ball\" { transform = [scale(1.2) translate([-0.6 -1.2 1.2])] rendering = { material = \"p\" } }\n",
+                 "sphere \"ball\" { transform = [scale(1.2) translate([-0.6 -1.2 1.2])] rendering = { material = \"p\" "
+                 "} }\n",
                  tb__point, cases[i].mat);
-        tb__compare(*state, cases[i].on ? tb__load("diffuse = 0.5", extra, true, NULL) : tb__load(cases[i].mat, tb__point, true, NULL),
+        tb__compare(*state,
+                    cases[i].on ? tb__load("diffuse = 0.5", extra, true, NULL)
+                                : tb__load(cases[i].mat, tb__point, true, NULL),
                     cases[i].name, (tb__want){.channels = 3, .tol = cases[i].tol});
     }
 }
@@ -362,11 +366,12 @@ static void test_textures(void **state)
     tb__texture("shade_kernel_tex16.pfm", 16, 8, big);
     tb__compare(*state, tb__load("diffuse = 1 diffuse_texture = file(\"shade_kernel_tex.pfm\")", tb__point, true, dir),
                 "texture", (tb__want){.channels = 3});
-    tb__compare(*state,
-                tb__load("diffuse = 0.5 specular = 0.4 exponent = 30 diffuse_texture = file(\"shade_kernel_tex16.pfm\") "
-                         "specular_texture = file(\"shade_kernel_tex.pfm\")",
-                         tb__point, true, dir),
-                "tex spec", (tb__want){.channels = 3, .secondary = true});
+    tb__compare(
+        *state,
+        tb__load("diffuse = 0.5 specular = 0.4 exponent = 30 diffuse_texture = file(\"shade_kernel_tex16.pfm\") "
+                 "specular_texture = file(\"shade_kernel_tex.pfm\")",
+                 tb__point, true, dir),
+        "tex spec", (tb__want){.channels = 3, .secondary = true});
     tb__compare(*state,
                 tb__load("diffuse = [0.6 0.5 0.4]",
                          "point_light { position = [1 1 2] intensity = [5 4 3] }\n"
@@ -377,7 +382,8 @@ static void test_textures(void **state)
                 "tex emitter", (tb__want){.channels = 3});
     px[3] = px[4] = px[5] = 0.0f; /* a black texel */
     tb__texture("shade_kernel_black.pfm", 2, 2, px);
-    tb__compare(*state, tb__load("diffuse = 1 diffuse_texture = file(\"shade_kernel_black.pfm\")", tb__point, true, dir),
+    tb__compare(*state,
+                tb__load("diffuse = 1 diffuse_texture = file(\"shade_kernel_black.pfm\")", tb__point, true, dir),
                 "black texel", (tb__want){.channels = 3, .routed = "black in some places"});
     tb_scene *sp = tb__load("diffuse = spectrum([400 700], [0.5 0.7]) diffuse_texture = file(\"shade_kernel_tex.pfm\")",
                             tb__point, true, dir);
@@ -388,10 +394,11 @@ static void test_textures(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_lambert),     cmocka_unit_test(test_phong_mirror),   cmocka_unit_test(test_spot),
-        cmocka_unit_test(test_directional), cmocka_unit_test(test_glass),          cmocka_unit_test(test_spectral),
-        cmocka_unit_test(test_sphere_emitter), cmocka_unit_test(test_textures), cmocka_unit_test(test_blinn),
-        cmocka_unit_test(test_lambert_model),  cmocka_unit_test(test_routed_models), cmocka_unit_test(test_ggx), cmocka_unit_test(test_patterns),  cmocka_unit_test(test_ies),
+        cmocka_unit_test(test_lambert),        cmocka_unit_test(test_phong_mirror),  cmocka_unit_test(test_spot),
+        cmocka_unit_test(test_directional),    cmocka_unit_test(test_glass),         cmocka_unit_test(test_spectral),
+        cmocka_unit_test(test_sphere_emitter), cmocka_unit_test(test_textures),      cmocka_unit_test(test_blinn),
+        cmocka_unit_test(test_lambert_model),  cmocka_unit_test(test_routed_models), cmocka_unit_test(test_ggx),
+        cmocka_unit_test(test_patterns),       cmocka_unit_test(test_ies),
     };
     return cmocka_run_group_tests(tests, tb__setup, tb__teardown);
 }

@@ -163,7 +163,8 @@ static void test_ggx(void **state)
     for (int i = 0; i < N; i++) {
         tb_vec3 wo = {in[i].b, in[i].c, in[i].d}, wi = {in[i].e, in[i].f, in[i].g};
         /* Schlick with F0 = 1 is 1 (the scalar alone), with F0 = 0 it is m^5 */
-        tb_bsdf b1 = tb_bsdf_ggx(one, in[i].a, TB_FRESNEL_SCHLICK, 1.0), b0 = tb_bsdf_ggx(zero, in[i].a, TB_FRESNEL_SCHLICK, 1.0);
+        tb_bsdf b1 = tb_bsdf_ggx(one, in[i].a, TB_FRESNEL_SCHLICK, 1.0),
+                b0 = tb_bsdf_ggx(zero, in[i].a, TB_FRESNEL_SCHLICK, 1.0);
         double f1 = tb_bsdf_eval(&b1, wo, wi).v[0], f0 = tb_bsdf_eval(&b0, wo, wi).v[0], pdf = tb_bsdf_pdf(&b1, wo, wi);
         double g = out[i].x, gm = out[i].y, gp = out[i].z;
         double rel = fabs(g - f1) / fmax(f1, 1e-30), drel = fabs(gp - pdf) / fmax(pdf, 1e-30);
@@ -240,7 +241,8 @@ static void test_checker(void **state)
     for (int i = 0; i < N; i++) {
         float s = rnd(&rng, -100, 100), t = rnd(&rng, -100, 100), z = rnd(&rng, -100, 100);
         /* a quarter point-sampled, the rest boxes from 1e-3 to 4 cells */
-        float hs = i % 4 == 0 ? 0.0f : (float)exp2(rnd(&rng, -10, 2)), ht = i % 4 == 0 ? 0.0f : (float)exp2(rnd(&rng, -10, 2));
+        float hs = i % 4 == 0 ? 0.0f : (float)exp2(rnd(&rng, -10, 2)),
+              ht = i % 4 == 0 ? 0.0f : (float)exp2(rnd(&rng, -10, 2));
         float hz = i % 4 == 0 ? 0.0f : (float)exp2(rnd(&rng, -10, 2));
         if (i < 16) /* whole cells: exact halves and quarters */
             s = (float)(i % 4) - 1.5f, t = (float)(i / 4) + 0.5f, hs = 1.0f, ht = 0.5f, z = 0.25f, hz = 0.0f;
@@ -331,7 +333,8 @@ static void test_texture(void **state)
     for (int i = 0; i < N; i++) {
         float c[4];
         tb_tex_footprint fp = {in[i].c, in[i].d, in[i].e, in[i].f};
-        tb_mipmap_lookup(m, (tb_tex_filter)(int)in[i].h, in[i].a, in[i].b, &fp, TB_TEX_REPEAT, TB_TEX_MAX_ANISO_DEFAULT, c);
+        tb_mipmap_lookup(m, (tb_tex_filter)(int)in[i].h, in[i].a, in[i].b, &fp, TB_TEX_REPEAT, TB_TEX_MAX_ANISO_DEFAULT,
+                         c);
         const float *g = &out[i].x;
         double d = 0;
         for (int k = 0; k < 3; k++)
