@@ -1082,12 +1082,13 @@ tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb
     tb_tile_rect t0r = film ? tb_film_tile_rect(film, 0) : (tb_tile_rect){0};
     const size_t tw = (size_t)(t0r.x1 - t0r.x0), th = (size_t)(t0r.y1 - t0r.y0);
     const int cap_stack = r->cap_stack;
-    /* bytes per path: stack entries (ray, depth, throughput), streams, film
-     * position, radiance, and the wave's copies */
+    /* bytes per path: stack entries (ray, depth, MIS context, throughput),
+     * streams, film position, radiance, and the wave's copies and surface
+     * records */
     size_t per_path =
         (size_t)cap_stack * (sizeof(tb_ray) + sizeof(int) + sizeof(tb_rt_mis) + (size_t)nch * sizeof(float)) +
         2 * sizeof(tb_rng) + 2 * sizeof(double) + 2 * (size_t)nch * sizeof(float) + sizeof(tb_ray) + sizeof(tb_hit) +
-        sizeof(tb_rt_mis) + 4 * sizeof(size_t) + 2 * sizeof(int);
+        sizeof(tb_rt_mis) + 4 * sizeof(size_t) + 2 * sizeof(int) + (r->any_surface ? sizeof(tb_gpu_surface) + 1 : 0);
     size_t budget = TB__GR_BATCH_BYTES / per_path;
     if (budget > TB__GR_BATCH_MAX)
         budget = TB__GR_BATCH_MAX;
