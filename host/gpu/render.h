@@ -86,8 +86,10 @@ void tb_gpu_renderer_stats(const tb_gpu_renderer *r, tb_gpu_render_stats *out);
 
 /* tb_render_raytrace on the device: the same tiles, sample positions,
  * per-sample streams, filter and merge order as the CPU path, radiance from
- * the wavefront. Adaptive antialiasing is TB_ERR_UNSUPPORTED. `stats` and
- * `gstats` may be NULL. */
+ * the wavefront. Adaptive antialiasing makes the CPU path's decisions in
+ * rounds (the criterion on the host from the kernel's values; a value at the
+ * threshold can decide otherwise: docs/accuracy.md). `stats` and `gstats`
+ * may be NULL. */
 tb_status tb_gpu_render_raytrace(tb_gpu_device *dev, const tb_scene *s, const tb_render_options *o,
                                  tb_image **out, tb_render_stats *stats, tb_gpu_render_stats *gstats);
 

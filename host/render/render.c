@@ -52,6 +52,14 @@ tb_image *tb_render_resolve(const tb_scene *s, const tb_film *film)
     return img;
 }
 
+void tb_render_sample_counts(const tb_film *film, uint32_t *counts)
+{
+    int w = tb_film_width(film), h = tb_film_height(film);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++)
+            counts[(size_t)y * (size_t)w + (size_t)x] = tb_film_sample_count(film, x, y);
+}
+
 /* The per-sample context: the tracer plus the time budget. */
 typedef struct tb__render_ctx {
     const tb_raytracer *rt;
@@ -132,6 +140,8 @@ tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_i
         if (!*out)
             err = TB_ERR_NOMEM;
     }
+    if (!err && o->sample_counts)
+        tb_render_sample_counts(film, o->sample_counts);
     tb_film_free(film);
     tb_rt_release(&rt);
     if (stats)

@@ -15,6 +15,7 @@
 
 #include <stdatomic.h>
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "host/render/antialias.h"
 #include "host/render/film.h"
@@ -39,6 +40,7 @@ typedef struct tb_render_options {
     bool progress;          /* draw a progress bar on a terminal (util/base/progress.h) */
     tb_render_pass_fn on_pass; /* NULL: none */
     void *on_pass_ctx;
+    uint32_t *sample_counts; /* NULL, or width x height (row by row): set to each pixel's camera samples, all passes */
 } tb_render_options;
 
 /* What a render did. */
@@ -57,6 +59,9 @@ tb_render_options tb_render_defaults(void);
  * scale: a band value of 1 W/(m^2 sr nm) over the visible gives Y of about
  * 107). NULL on failure. */
 tb_image *tb_render_resolve(const tb_scene *s, const tb_film *film);
+
+/* Copies the film's per-pixel camera sample counts into counts[y * width + x]. */
+void tb_render_sample_counts(const tb_film *film, uint32_t *counts);
 
 /* Renders `s` with the Whitted ray tracer (raytrace.h) into *out (linear
  * sRGB, see tb_render_resolve). An interrupted render still returns TB_OK

@@ -57,6 +57,7 @@ static void tb__render_usage(FILE *out)
             "  --time-budget S      stop starting new tiles after S seconds\n"
             "  --exposure STOPS     PNG/RLE only: scale by 2^STOPS (default: mean luminance to 0.18)\n"
             "  --stats FILE.json    counters, times and provenance\n"
+            "  --sample-map F.pfm   each pixel's camera sample count (grey PFM; adaptive: where samples went)\n"
             "  --report FILE.csv    a row per pass: seconds, spp, relMSE against --reference IMG\n"
             "Ctrl-C writes the image rendered so far and exits with status 130.\n",
             TB_RT_DEFAULT_MAX_DEPTH, TB_RT_DEFAULT_LIGHT_SAMPLES, TB_RT_DEFAULT_GLOSSY_SAMPLES);
@@ -117,6 +118,7 @@ int tb_cmd_render(int argc, char **argv)
         return TB_EXIT_OK;
     }
     const char *scene_path = NULL, *out_path = NULL, *stats_path = NULL, *report_path = NULL, *ref_path = NULL;
+    const char *map_path = NULL;
     tb_render_options ro = tb_render_defaults();
     tb_accel_kind accel = TB_ACCEL_BVH;
     double exposure = NAN;
@@ -180,6 +182,8 @@ int tb_cmd_render(int argc, char **argv)
                 return tb__render_fail("bad --exposure '%s'", argv[i]), TB_EXIT_USAGE;
         } else if (!strcmp(a, "--stats") && has)
             stats_path = argv[++i];
+        else if (!strcmp(a, "--sample-map") && has)
+            map_path = argv[++i];
         else if (!strcmp(a, "--backend") && has)
             backend = argv[++i];
         else if (!strcmp(a, "--device") && has && tb__parse_long(argv[i + 1], 0, 1024, &v))
@@ -204,6 +208,8 @@ int tb_cmd_render(int argc, char **argv)
     tb_image_format fmt = tb_image_format_from_path(out_path);
     if (fmt == TB_IMAGE_UNKNOWN)
         return tb__render_fail("unknown image format of '%s' (.png, .exr, .pfm, .rle)", out_path), TB_EXIT_USAGE;
+    if (map_path && tb_image_format_from_path(map_path) != TB_IMAGE_PFM)
+        return tb__render_fail("--sample-map writes a .pfm file, not '%s'", map_path), TB_EXIT_USAGE;
     if (!report_path != !ref_path)
         return tb__render_fail("%s", "--report and --reference go together"), TB_EXIT_USAGE;
     tb_gpu_mode gmode;
@@ -212,7 +218,7 @@ int tb_cmd_render(int argc, char **argv)
 
     int rc = TB_EXIT_FAIL;
     tb_scene *scene = NULL;
-    tb_image *img = NULL, *ref = NULL;
+    tb_image *img = NULL, *ref = NULL, *map = NULL;
     tb__report rep = {0};
     tb_scene_options so = {.accel = accel, .threads = ro.threads};
     if (tb_scene_load(scene_path, &so, &scene)) {
@@ -245,6 +251,15 @@ int tb_cmd_render(int argc, char **argv)
     /* Tells a script that Ctrl-C now writes the partial image. */
     fprintf(stderr, "testbed render: rendering %s (Ctrl-C writes the image so far)\n", scene_path);
     tb_render_stats rs;
+    if (map_path) {
+        map = tb_image_create(scene->camera.width, scene->camera.height, 1, NULL);
+        ro.sample_counts = map ? calloc((size_t)map->width * (size_t)map->height, sizeof *ro.sample_counts) : NULL;
+        if (!ro.sample_counts) {
+            fprintf(stderr, "testbed render: out of memory for --sample-map\n");
+            sigaction(SIGINT, &old_sa, NULL);
+            goto done;
+        }
+    }
     ro.rt.spp = ro.aa.spp; /* scales the texture footprints (docs/raytrace.md) */
     /* The Vulkan wavefront tracer (docs/gpu.md, "Shade kernel and wavefront
      * renderer"); auto falls back to the CPU path on any Vulkan failure. */
@@ -317,6 +332,12 @@ int tb_cmd_render(int argc, char **argv)
         st = tb_stats_set_value("seconds", rs.seconds);
         if (!st)
             st = tb_stats_set_value("samples", (double)rs.aa.samples);
+        if (!st && ro.aa.adaptive)
+            st = tb_stats_set_value("pixels_refined", (double)rs.aa.pixels_refined);
+        if (!st && ro.aa.adaptive)
+            st = tb_stats_set_value("ring_samples", (double)rs.aa.ring_samples);
+        if (!st && ro.aa.adaptive)
+            st = tb_stats_set_value("max_spp_used", (double)rs.aa.max_spp_used);
         if (!st)
             st = tb_stats_set_value("passes", (double)rs.passes_done);
         if (!st)
@@ -368,6 +389,15 @@ int tb_cmd_render(int argc, char **argv)
         fprintf(stderr, "testbed render: %s\n", tb_last_error());
         goto done;
     }
+    if (map) {
+        for (size_t k = 0; k < (size_t)map->width * (size_t)map->height; k++)
+            map->pixels[k] = (float)ro.sample_counts[k];
+        if (tb_image_write(map_path, map, NULL)) {
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
+            remove(out_path);
+            goto done;
+        }
+    }
     printf("testbed render: %s: %dx%d, %llu samples, %.3f s (%d threads, %s)%s; wrote %s\n", scene_path, img->width,
            img->height, (unsigned long long)rs.aa.samples, rs.seconds, nthreads, scene->spectral ? "spectral" : "rgb",
            rs.interrupted ? ", INTERRUPTED (partial image)" : "", out_path);
@@ -386,6 +416,8 @@ done:
         fclose(rep.fp);
     tb_image_free(ref);
     tb_image_free(img);
+    tb_image_free(map);
+    free(ro.sample_counts);
     tb_scene_free(scene);
     return rc;
 }
