@@ -123,6 +123,38 @@ bool tb_ff_occluders_visible(void *ctx, tb_vec3 a, tb_vec3 b);
 /* Frees the occluders; NULL is allowed. */
 void tb_ff_occluders_free(tb_ff_occluders *occ);
 
+/* Most triangles a tb_ff_shaft lists. */
+#define TB_FF_SHAFT_MAX 24
+
+/* The occluder triangles that may block the segments between two boxes
+ * (from tb_ff_occluders_shaft). */
+typedef struct tb_ff_shaft {
+    const tb_ff_occluders *occ;
+    size_t n;                       /* triangles listed */
+    double margin;                  /* rounding allowance of the rejection tests */
+    uint32_t tris[TB_FF_SHAFT_MAX]; /* occluder triangle indices */
+} tb_ff_shaft;
+
+/* Lists in *sh every occluder triangle that a segment from a point of box a
+ * to a point of box b (lo xyz, hi xyz; tb_ff_occluders_visible's a and b)
+ * could cross: those whose bounds meet the two boxes' convex hull (shaft
+ * culling, Haines and Wallace 1991, down the occluders' tree), whose plane
+ * such a segment can cross within [TB_FF_SEGMENT_EPS, 1 - TB_FF_SEGMENT_EPS]
+ * of its length, and that reach the part of the shaft where it can (margins
+ * for rounding). apts[0..na) and bpts[0..nb), when not NULL, are the only
+ * a and b ends (inside their boxes), which tightens the plane test. False if there are more than
+ * TB_FF_SHAFT_MAX (test those segments with tb_ff_occluders_visible). */
+bool tb_ff_occluders_shaft(const tb_ff_occluders *occ, const float a[6], const tb_vec3 *apts, size_t na,
+                           const float b[6], const tb_vec3 *bpts, size_t nb, tb_ff_shaft *sh);
+
+/* A tb_ff_visible_fn whose ctx is a tb_ff_shaft: for a segment with one end
+ * in each of its boxes, tb_ff_occluders_visible's answer from the listed
+ * triangles only (box and plane rejection, then the same triangle test).
+ * A blocker found moves to the front of the list (a shadow cache), so one
+ * shaft is used by one thread at a time. */
+bool tb_ff_shaft_visible(void *ctx, tb_vec3 a, tb_vec3 b);
+
+
 /* Ray-cast form factors from one shooter to many receivers: ff[i] is
  * tb_ff_raycast(pts, npts, ns, area, p[i], n[i], ...) with visibility
  * through the occluders behind `ctx`. The solver calls whichever backend it

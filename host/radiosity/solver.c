@@ -41,6 +41,7 @@ struct tb_rad_solver {
     size_t *near_list;      /* ray cast: the elements gnear holds this shot */
     size_t nnear;
     double *dB;             /* nelems * nc: unshot radiosity */
+    double *racc;           /* ray cast: 2 nelems, one shot's power received and absorbed by each element */
     double *up;             /* nelems: tb__unshot_power of each element, kept up to date with dB (the
                                unshot fraction after every shot sums these, not nelems * nc values) */
     double *ff;             /* nrecv: form factors of one shot */
@@ -50,6 +51,10 @@ struct tb_rad_solver {
     tb_ff_occluders *occ;   /* the CPU backend's, when the solver built it */
     float (*boxes)[6];      /* with occ: bounds of clusters of touching occluders (lo xyz, hi xyz, padded) */
     size_t nboxes;
+    uint32_t *corder;       /* with occ: the vertices in clusters of TB__RAD_CLUSTER, near ones together */
+    float (*clbox)[6];      /* bounds of each cluster's receivers */
+    tb_vec3 *crp;           /* the receiver positions in corder's order */
+    size_t ncl;
     tb_hemicube *hc;
     tb_pqueue q;            /* elements by unshot power */
     float *vff, *eff;       /* one shooter's form factors: F(v -> i) per vertex (ray cast), F_ji per element */
@@ -83,13 +88,35 @@ static uint64_t tb__shot_seed(uint64_t seed, uint64_t k)
     return z ^ (z >> 31);
 }
 
+/* x[0] + ... + x[n-1] in four interleaved partial sums (a fixed order:
+ * the same answer everywhere, without one long chain of dependent adds). */
+static inline double tb__sum(const double *restrict x, size_t n)
+{
+    double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
+    size_t c = 0;
+    for (; c + 4 <= n; c += 4)
+        a0 += x[c], a1 += x[c + 1], a2 += x[c + 2], a3 += x[c + 3];
+    for (; c < n; c++)
+        a0 += x[c];
+    return (a0 + a1) + (a2 + a3);
+}
+
+/* sum of rho[c] x[c] over n channels, summed as tb__sum does. */
+static inline double tb__dot(const float *restrict rho, const double *restrict x, size_t n)
+{
+    double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
+    size_t c = 0;
+    for (; c + 4 <= n; c += 4)
+        a0 += rho[c] * x[c], a1 += rho[c + 1] * x[c + 1], a2 += rho[c + 2] * x[c + 2], a3 += rho[c + 3] * x[c + 3];
+    for (; c < n; c++)
+        a0 += rho[c] * x[c];
+    return (a0 + a1) + (a2 + a3);
+}
+
 /* Unshot power of element i, summed over channels. */
 static double tb__unshot_power(const tb_rad_solver *s, size_t i)
 {
-    double p = 0.0;
-    for (int c = 0; c < s->nc; c++)
-        p += s->dB[i * (size_t)s->nc + (size_t)c];
-    return p * s->m.elems[i].area;
+    return tb__sum(s->dB + i * (size_t)s->nc, (size_t)s->nc) * s->m.elems[i].area;
 }
 
 void tb_rad_solver_free(tb_rad_solver *s)
@@ -109,6 +136,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->vert_area);
     free(s->dB);
     free(s->up);
+    free(s->racc);
     free(s->ff);
     free(s->vff);
     free(s->eff);
@@ -120,6 +148,9 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->rho_mean);
     tb_ff_occluders_free(s->occ);
     free(s->boxes);
+    free(s->corder);
+    free(s->clbox);
+    free(s->crp);
     tb_hemicube_free(s->hc);
     tb_pqueue_free(&s->q);
     tb_rad_lights_free(s->lights);
@@ -222,16 +253,101 @@ static bool tb__visible(void *ctx, tb_vec3 a, tb_vec3 b)
     return true;
 }
 
-/* The CPU form factors of shooter i to every vertex: tb_ff_raycast_batch
- * over the solver's occluders, through tb__visible. */
+/* Receivers per cluster: one shaft per cluster and shot. */
+#define TB__RAD_CLUSTER 8
+
+static int tb__cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Spreads the low 10 bits of x to every third bit. */
+static uint64_t tb__morton_bits(uint64_t x)
+{
+    x &= 0x3ff;
+    x = (x | x << 16) & 0x30000ffull;
+    x = (x | x << 8) & 0x300f00full;
+    x = (x | x << 4) & 0x30c30c3ull;
+    x = (x | x << 2) & 0x9249249ull;
+    return x;
+}
+
+/* Receiver clusters for tb__batch: the vertices in Morton order of their
+ * positions, cut into runs of TB__RAD_CLUSTER, each with its bounds. */
+static tb_status tb__receiver_clusters(tb_rad_solver *s)
+{
+    size_t nv = s->m.nverts;
+    tb_vec3 lo = s->rp[0], hi = lo;
+    for (size_t v = 1; v < nv; v++)
+        lo = tb_vec3_min(lo, s->rp[v]), hi = tb_vec3_max(hi, s->rp[v]);
+    uint64_t *key = malloc(nv * sizeof *key);
+    s->ncl = (nv + TB__RAD_CLUSTER - 1) / TB__RAD_CLUSTER;
+    s->corder = malloc(nv * sizeof *s->corder);
+    s->clbox = malloc(s->ncl * sizeof *s->clbox);
+    s->crp = malloc(nv * sizeof *s->crp);
+    if (!key || !s->corder || !s->clbox || !s->crp) {
+        free(key);
+        return tb_error(TB_ERR_NOMEM, "radiosity: out of memory");
+    }
+    float ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}, org[3] = {lo.x, lo.y, lo.z};
+    for (size_t v = 0; v < nv; v++) {
+        float p[3] = {s->rp[v].x, s->rp[v].y, s->rp[v].z};
+        uint64_t k = 0;
+        for (int x = 0; x < 3; x++) {
+            double f = ext[x] > 0.0f ? (p[x] - org[x]) / ext[x] : 0.0;
+            uint64_t q = (uint64_t)(f * 1023.0 + 0.5);
+            k |= tb__morton_bits(q > 1023 ? 1023 : q) << x;
+        }
+        key[v] = k << 32 | (uint64_t)v; /* ties in vertex order */
+    }
+    qsort(key, nv, sizeof *key, tb__cmp_u64);
+    for (size_t v = 0; v < nv; v++)
+        s->corder[v] = (uint32_t)key[v], s->crp[v] = s->rp[s->corder[v]];
+    free(key);
+    for (size_t c = 0; c < s->ncl; c++) {
+        size_t end = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
+        tb_vec3 l = s->rp[s->corder[c * TB__RAD_CLUSTER]], h = l;
+        for (size_t q = c * TB__RAD_CLUSTER + 1; q < end; q++)
+            l = tb_vec3_min(l, s->rp[s->corder[q]]), h = tb_vec3_max(h, s->rp[s->corder[q]]);
+        float *b = s->clbox[c];
+        b[0] = l.x, b[1] = l.y, b[2] = l.z, b[3] = h.x, b[4] = h.y, b[5] = h.z;
+    }
+    return TB_OK;
+}
+
+/* The CPU form factors of shooter i to every vertex: tb_ff_raycast over the
+ * solver's occluders. Each cluster of receivers first lists the occluders
+ * in the shaft between it and the sample points (most lists are empty: no
+ * visibility test at all); a cluster with too many goes through tb__visible.
+ * Either way a segment gets the BVH's answer, so each receiver's value
+ * depends only on its own inputs: any schedule gives the same results. */
 static tb_status tb__batch(tb_rad_solver *s, size_t i)
 {
     const tb_rad_element *e = &s->m.elems[i];
-    ptrdiff_t cnt = (ptrdiff_t)s->m.nverts;
-    /* each receiver's value depends only on its own inputs: any schedule gives the same results */
-#pragma omp parallel for schedule(dynamic, 64)
-    for (ptrdiff_t v = 0; v < cnt; v++)
-        s->ff[v] = tb_ff_raycast(s->pts, s->opt.samples, e->normal, e->area, s->rp[v], s->rn[v], tb__visible, s);
+    float a[6] = {s->pts[0].x, s->pts[0].y, s->pts[0].z, s->pts[0].x, s->pts[0].y, s->pts[0].z};
+    for (int k = 1; k < s->opt.samples; k++) {
+        float p[3] = {s->pts[k].x, s->pts[k].y, s->pts[k].z};
+        for (int x = 0; x < 3; x++)
+            a[x] = fminf(a[x], p[x]), a[x + 3] = fmaxf(a[x + 3], p[x]);
+    }
+    ptrdiff_t ncl = (ptrdiff_t)s->ncl;
+    size_t nv = s->m.nverts;
+#pragma omp parallel for schedule(dynamic, 4)
+    for (ptrdiff_t c = 0; c < ncl; c++) {
+        tb_ff_shaft sh;
+        tb_ff_visible_fn fn = tb_ff_shaft_visible;
+        void *ctx = &sh;
+        size_t q0 = (size_t)c * TB__RAD_CLUSTER, q1 = q0 + TB__RAD_CLUSTER < nv ? q0 + TB__RAD_CLUSTER : nv;
+        if (!tb_ff_occluders_shaft(s->occ, s->clbox[c], s->crp + q0, q1 - q0, a, s->pts, (size_t)s->opt.samples, &sh))
+            fn = tb__visible, ctx = s;
+        else if (sh.n == 0)
+            fn = NULL, ctx = NULL; /* nothing in the way: the same sum without tests */
+        for (size_t q = q0; q < q1; q++) {
+            uint32_t v = s->corder[q];
+            s->ff[v] = tb_ff_raycast(s->pts, s->opt.samples, e->normal, e->area, s->rp[v], s->rn[v], fn, ctx);
+        }
+    }
     return TB_OK;
 }
 
@@ -311,6 +427,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
         s->gnear = tb__calloc(ne, sizeof *s->gnear, &ok);
         s->vvis = tb__calloc(nv, sizeof *s->vvis, &ok);
         s->near_list = tb__calloc(ne, sizeof *s->near_list, &ok);
+        s->racc = tb__calloc(2 * ne, sizeof *s->racc, &ok);
     }
     if (!ok || tb_pqueue_reserve(&s->q, ne)) {
         tb_rad_solver_free(s);
@@ -442,6 +559,8 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
                 tb_status st = tb_ff_occluders_build(occ, nocc, &s->occ);
                 if (!st)
                     st = tb__occluder_boxes(s, occ, nocc);
+                if (!st)
+                    st = tb__receiver_clusters(s);
                 free(occ);
                 if (st) {
                     tb_rad_solver_free(s);
@@ -458,6 +577,10 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
 
 static void tb__near_field(tb_rad_solver *s, size_t i);
 static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i);
+
+/* Channels x (vertices + elements) from which a shot's update is spread
+ * over the threads (below, waking them costs more than it saves). */
+#define TB__RAD_PARALLEL_UPDATE 16384
 
 /* Most bytes of form factors kept for shooters shot again. */
 #define TB__RAD_CACHE_BYTES ((size_t)512 << 20)
@@ -660,33 +783,48 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
         }
     } else {
         /* restrict: the arrays never overlap, which lets the channel loops
-         * vectorise (the same operations in the same order) */
-        double *restrict Hv = s->Hv, *restrict He = s->He, *restrict dB = s->dB;
-        const float *restrict rhos = s->m.rho;
-        for (size_t v = 0; v < s->m.nverts; v++) {
-            double f = s->vff[v];
-            if (f != 0.0)
-                for (int c = 0; c < nc; c++)
-                    Hv[v * (size_t)nc + (size_t)c] += dBi[c] * f;
+         * vectorise (the same operations in the same order). Every vertex
+         * and element is updated from its own values only, so the threads
+         * split them statically; the energy sums and the queue then go
+         * serially in element order, as one thread would. */
+        double *restrict Hv = s->Hv, *restrict He = s->He, *restrict dB = s->dB, *restrict up = s->up;
+        double *restrict racc = s->racc;
+        const float *restrict rhos = s->m.rho, *restrict vff = s->vff, *restrict eff = s->eff;
+        const tb_rad_element *elems = s->m.elems;
+        double sum_dbi = tb__sum(dBi, (size_t)nc);
+        ptrdiff_t nv = (ptrdiff_t)s->m.nverts, ne = (ptrdiff_t)s->m.nelems;
+        size_t ncs = (size_t)nc;
+#pragma omp parallel if ((size_t)(nv + ne) * ncs >= TB__RAD_PARALLEL_UPDATE)
+        {
+#pragma omp for schedule(static) nowait
+            for (ptrdiff_t v = 0; v < nv; v++) {
+                double f = vff[v];
+                if (f != 0.0)
+                    for (size_t c = 0; c < ncs; c++)
+                        Hv[(size_t)v * ncs + c] += dBi[c] * f;
+            }
+#pragma omp for schedule(static)
+            for (ptrdiff_t j = 0; j < ne; j++) {
+                double g = eff[j];
+                if ((size_t)j == i || !(g > 0.0))
+                    continue;
+                double aj = elems[j].area;
+                for (size_t c = 0; c < ncs; c++) {
+                    double dh = dBi[c] * g, rho = rhos[(size_t)j * ncs + c];
+                    He[(size_t)j * ncs + c] += dh;
+                    dB[(size_t)j * ncs + c] += rho * dh;
+                }
+                /* received sum_c dBi g aj, of it reflected sum_c rho dBi g aj */
+                double rec = sum_dbi * g * aj, refl = tb__dot(rhos + (size_t)j * ncs, dBi, ncs) * g * aj;
+                up[j] = tb__sum(dB + (size_t)j * ncs, ncs) * aj; /* tb__unshot_power */
+                racc[2 * j] = rec, racc[2 * j + 1] = rec - refl;
+            }
         }
         for (size_t j = 0; j < s->m.nelems; j++) {
-            if (j == i)
+            if (j == i || !(s->eff[j] > 0.0))
                 continue;
-            const tb_rad_element *ej = &s->m.elems[j];
-            double g = s->eff[j];
-            if (!(g > 0.0))
-                continue;
-            double rec = 0.0, abs_ = 0.0, aj = ej->area;
-            for (int c = 0; c < nc; c++) {
-                double dh = dBi[c] * g, rho = rhos[j * (size_t)nc + (size_t)c];
-                He[j * (size_t)nc + (size_t)c] += dh;
-                dB[j * (size_t)nc + (size_t)c] += rho * dh;
-                rec += dh * aj;
-                abs_ += (1.0 - rho) * dh * aj;
-            }
-            received_all += rec;
-            s->absorbed += abs_;
-            s->up[j] = tb__unshot_power(s, j);
+            received_all += racc[2 * j];
+            s->absorbed += racc[2 * j + 1];
             tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
         }
     }

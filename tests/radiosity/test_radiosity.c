@@ -563,6 +563,96 @@ static void test_occluders(void **state)
     tb_scene_free(sc);
 }
 
+/* Box (lo xyz, hi xyz) of n points. */
+static void tb__box(const tb_vec3 *p, size_t n, float b[6])
+{
+    b[0] = b[3] = p[0].x, b[1] = b[4] = p[0].y, b[2] = b[5] = p[0].z;
+    for (size_t k = 1; k < n; k++) {
+        b[0] = fminf(b[0], p[k].x), b[1] = fminf(b[1], p[k].y), b[2] = fminf(b[2], p[k].z);
+        b[3] = fmaxf(b[3], p[k].x), b[4] = fmaxf(b[4], p[k].y), b[5] = fmaxf(b[5], p[k].z);
+    }
+}
+
+/* Shaft culling (tb_ff_occluders_shaft + tb_ff_shaft_visible) gives exactly
+ * the BVH's answer for every segment between its boxes, on the spectral
+ * Cornell box's occluders: rotated blocks, the twisted red wall (whose
+ * elements are occluders, hit by grazing segments between its own points)
+ * and the light 0.1 mm below the ceiling (it hides the ceiling above it).
+ * Receivers are element corners moved 1e-3 of the way into the element and
+ * the ends are the shooters' sample points, as in the solver. */
+static void test_shaft(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb__load("scenes/cornell-box-rgb.mid");
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 60};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    tb_ff_polygon *p = malloc(m.nelems * sizeof *p);
+    size_t n = tb_rad_mesh_occluders(&m, p);
+    tb_ff_occluders *occ = NULL;
+    assert_int_equal(tb_ff_occluders_build(p, n, &occ), TB_OK);
+    /* receivers: clusters of 8 corners of consecutive elements */
+    size_t nr = 0;
+    tb_vec3 *rp = malloc(4 * m.nelems * sizeof *rp);
+    for (size_t i = 0; i < m.nelems; i++) {
+        tb_ff_polygon e;
+        tb_rad_mesh_polygon(&m, i, &e);
+        for (int k = 0; k < e.n; k++)
+            rp[nr++] = tb_vec3_add(e.v[k], tb_vec3_scale(tb_vec3_sub(m.elems[i].centroid, e.v[k]), 1e-3f));
+    }
+    long segs = 0, blocked = 0, listed = 0, full = 0, shafts = 0;
+    for (size_t i = 0; i < m.nelems; i += 5) {
+        tb_ff_polygon e;
+        tb_rad_mesh_polygon(&m, i, &e);
+        tb_vec3 pts[4];
+        assert_int_equal(tb_ff_sample_polygon(&e, 4, i, pts), TB_OK);
+        float sb[6];
+        tb__box(pts, 4, sb);
+        for (size_t c = 0; c < nr; c += 8) {
+            size_t nc = c + 8 <= nr ? 8 : nr - c;
+            float rb[6];
+            tb__box(rp + c, nc, rb);
+            tb_ff_shaft sh;
+            shafts++;
+            /* with and without the points: both must be conservative */
+            bool ok = tb_ff_occluders_shaft(occ, rb, (c / 8) % 2 ? rp + c : NULL, nc, sb, (c / 8) % 3 ? pts : NULL, 4, &sh);
+            if (!ok) {
+                full++;
+                continue;
+            }
+            listed += (long)sh.n;
+            for (size_t q = c; q < c + nc; q++)
+                for (int k = 0; k < 4; k++) {
+                    bool bvh = tb_ff_occluders_visible(occ, rp[q], pts[k]);
+                    bool shaft = tb_ff_shaft_visible(&sh, rp[q], pts[k]);
+                    if (bvh != shaft)
+                        fail_msg("element %zu sample %d, receiver %zu: BVH %d, shaft %d (%zu listed)", i, k, q, bvh,
+                                 shaft, sh.n);
+                    segs++;
+                    blocked += !bvh;
+                }
+        }
+    }
+    print_message("shafts: %ld (%ld with too many occluders), %.2f occluder triangles listed on average; "
+                  "%ld segments (%ld blocked) agree with the BVH\n",
+                  shafts, full, (double)listed / (double)(shafts - full), segs, blocked);
+    assert_true(blocked > 1000 && segs > 100000);
+    assert_true(full < shafts / 4);
+    /* the empty cases: no occluders, and a shaft in empty space */
+    tb_ff_occluders *none = NULL;
+    assert_int_equal(tb_ff_occluders_build(NULL, 0, &none), TB_OK);
+    tb_ff_shaft sh;
+    float b0[6] = {0, 0, 0, 1, 1, 1}, b1[6] = {5, 5, 5, 6, 6, 6};
+    assert_true(tb_ff_occluders_shaft(none, b0, NULL, 0, b1, NULL, 0, &sh) && sh.n == 0);
+    assert_true(tb_ff_shaft_visible(&sh, tb_vec3_make(0, 0, 0), tb_vec3_make(6, 6, 6)));
+    tb_ff_occluders_free(none);
+    free(rp);
+    tb_ff_occluders_free(occ);
+    free(p);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1)
@@ -573,7 +663,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_reciprocity),     cmocka_unit_test(test_threads),
         cmocka_unit_test(test_patches_csv),     cmocka_unit_test(test_continue),
         cmocka_unit_test(test_errors),          cmocka_unit_test(test_cornell_image),
-        cmocka_unit_test(test_occluders),
+        cmocka_unit_test(test_occluders), cmocka_unit_test(test_shaft),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
