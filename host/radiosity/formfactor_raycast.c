@@ -326,8 +326,8 @@ static inline double tb__fmin(double a, double b) { return a < b ? a : b; }
 
 /* One side plane of a shaft, parallel to axis 3 - i - j: n0 x_i + n1 x_j <= c inside. */
 typedef struct tb__shaft_plane {
-    double n0, n1, c, tol;
-    int i, j;
+    double n0, n1, c; /* c includes the rounding allowance */
+    int i, j;         /* the box bounds (0..5) nearest the inside along the normal */
 } tb__shaft_plane;
 
 typedef struct tb__shaft_geom {
@@ -354,8 +354,7 @@ static bool tb__shaft_meets(const tb__shaft_geom *g, const float *bx)
             return false;
     for (int k = 0; k < g->np; k++) {
         const tb__shaft_plane *p = &g->pl[k];
-        double v = p->n0 * (p->n0 > 0.0 ? bx[p->i] : bx[p->i + 3]) + p->n1 * (p->n1 > 0.0 ? bx[p->j] : bx[p->j + 3]);
-        if (v > p->c + p->tol)
+        if (p->n0 * bx[p->i] + p->n1 * bx[p->j] > p->c)
             return false;
     }
     return true;
@@ -488,9 +487,9 @@ bool tb_ff_occluders_shaft(const tb_ff_occluders *occ, const float a[6], const t
                 if (n0 * (si ? 1.0 : -1.0) + n1 * (sj ? 1.0 : -1.0) < 0.0)
                     n0 = -n0, n1 = -n1; /* outward: toward the (si, sj) corner */
                 tb__shaft_plane *p = &g.pl[g.np++];
-                p->n0 = n0, p->n1 = n1, p->i = i, p->j = j;
-                p->c = n0 * pa0 + n1 * pa1;
-                p->tol = g.m * (fabs(n0) + fabs(n1));
+                p->n0 = n0, p->n1 = n1;
+                p->i = n0 > 0.0 ? i : i + 3, p->j = n1 > 0.0 ? j : j + 3;
+                p->c = n0 * pa0 + n1 * pa1 + g.m * (fabs(n0) + fabs(n1));
             }
     }
     uint32_t stack[64];

@@ -41,7 +41,6 @@ struct tb_rad_solver {
     size_t *near_list;      /* ray cast: the elements gnear holds this shot */
     size_t nnear;
     double *dB;             /* nelems * nc: unshot radiosity */
-    double *racc;           /* ray cast: 2 nelems, one shot's power received and absorbed by each element */
     double *up;             /* nelems: tb__unshot_power of each element, kept up to date with dB (the
                                unshot fraction after every shot sums these, not nelems * nc values) */
     double *ff;             /* nrecv: form factors of one shot */
@@ -136,7 +135,6 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->vert_area);
     free(s->dB);
     free(s->up);
-    free(s->racc);
     free(s->ff);
     free(s->vff);
     free(s->eff);
@@ -316,6 +314,24 @@ static tb_status tb__receiver_clusters(tb_rad_solver *s)
     return TB_OK;
 }
 
+/* Does a receiver of cluster [q0, q1) face a sample point that faces it
+ * (tb_ff_raycast's test, in the same double arithmetic)? If none does, the
+ * cluster needs no shaft: tb_ff_raycast tests no visibility there. */
+static bool tb__cluster_faces(const tb_rad_solver *s, tb_vec3 ns, size_t q0, size_t q1)
+{
+    tb_dvec3 nsd = {ns.x, ns.y, ns.z};
+    for (size_t q = q0; q < q1; q++) {
+        uint32_t v = s->corder[q];
+        tb_dvec3 pd = {s->rp[v].x, s->rp[v].y, s->rp[v].z}, nd = {s->rn[v].x, s->rn[v].y, s->rn[v].z};
+        for (int k = 0; k < s->opt.samples; k++) {
+            tb_dvec3 d = tb_dvec3_sub((tb_dvec3){s->pts[k].x, s->pts[k].y, s->pts[k].z}, pd);
+            if (tb_dvec3_length2(d) > 0.0 && tb_dvec3_dot(nd, d) > 0.0 && -tb_dvec3_dot(nsd, d) > 0.0)
+                return true;
+        }
+    }
+    return false;
+}
+
 /* The CPU form factors of shooter i to every vertex: tb_ff_raycast over the
  * solver's occluders. Each cluster of receivers first lists the occluders
  * in the shaft between it and the sample points (most lists are empty: no
@@ -339,7 +355,9 @@ static tb_status tb__batch(tb_rad_solver *s, size_t i)
         tb_ff_visible_fn fn = tb_ff_shaft_visible;
         void *ctx = &sh;
         size_t q0 = (size_t)c * TB__RAD_CLUSTER, q1 = q0 + TB__RAD_CLUSTER < nv ? q0 + TB__RAD_CLUSTER : nv;
-        if (!tb_ff_occluders_shaft(s->occ, s->clbox[c], s->crp + q0, q1 - q0, a, s->pts, (size_t)s->opt.samples, &sh))
+        if (!tb__cluster_faces(s, e->normal, q0, q1))
+            fn = NULL, ctx = NULL; /* no exchange: tb_ff_raycast casts no ray */
+        else if (!tb_ff_occluders_shaft(s->occ, s->clbox[c], s->crp + q0, q1 - q0, a, s->pts, (size_t)s->opt.samples, &sh))
             fn = tb__visible, ctx = s;
         else if (sh.n == 0)
             fn = NULL, ctx = NULL; /* nothing in the way: the same sum without tests */
@@ -427,7 +445,6 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
         s->gnear = tb__calloc(ne, sizeof *s->gnear, &ok);
         s->vvis = tb__calloc(nv, sizeof *s->vvis, &ok);
         s->near_list = tb__calloc(ne, sizeof *s->near_list, &ok);
-        s->racc = tb__calloc(2 * ne, sizeof *s->racc, &ok);
     }
     if (!ok || tb_pqueue_reserve(&s->q, ne)) {
         tb_rad_solver_free(s);
@@ -577,10 +594,6 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
 
 static void tb__near_field(tb_rad_solver *s, size_t i);
 static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i);
-
-/* Channels x (vertices + elements) from which a shot's update is spread
- * over the threads (below, waking them costs more than it saves). */
-#define TB__RAD_PARALLEL_UPDATE 16384
 
 /* Most bytes of form factors kept for shooters shot again. */
 #define TB__RAD_CACHE_BYTES ((size_t)512 << 20)
@@ -783,48 +796,36 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
         }
     } else {
         /* restrict: the arrays never overlap, which lets the channel loops
-         * vectorise (the same operations in the same order). Every vertex
-         * and element is updated from its own values only, so the threads
-         * split them statically; the energy sums and the queue then go
-         * serially in element order, as one thread would. */
-        double *restrict Hv = s->Hv, *restrict He = s->He, *restrict dB = s->dB, *restrict up = s->up;
-        double *restrict racc = s->racc;
-        const float *restrict rhos = s->m.rho, *restrict vff = s->vff, *restrict eff = s->eff;
-        const tb_rad_element *elems = s->m.elems;
-        double sum_dbi = tb__sum(dBi, (size_t)nc);
-        ptrdiff_t nv = (ptrdiff_t)s->m.nverts, ne = (ptrdiff_t)s->m.nelems;
+         * vectorise (the same operations in the same order). Serial: one
+         * shot's update is a few tens of microseconds, about what waking
+         * the other threads costs with passive waits, and under load a
+         * parallel update was slower. */
+        double *restrict Hv = s->Hv, *restrict He = s->He, *restrict dB = s->dB;
+        const float *restrict rhos = s->m.rho;
         size_t ncs = (size_t)nc;
-#pragma omp parallel if ((size_t)(nv + ne) * ncs >= TB__RAD_PARALLEL_UPDATE)
-        {
-#pragma omp for schedule(static) nowait
-            for (ptrdiff_t v = 0; v < nv; v++) {
-                double f = vff[v];
-                if (f != 0.0)
-                    for (size_t c = 0; c < ncs; c++)
-                        Hv[(size_t)v * ncs + c] += dBi[c] * f;
-            }
-#pragma omp for schedule(static)
-            for (ptrdiff_t j = 0; j < ne; j++) {
-                double g = eff[j];
-                if ((size_t)j == i || !(g > 0.0))
-                    continue;
-                double aj = elems[j].area;
-                for (size_t c = 0; c < ncs; c++) {
-                    double dh = dBi[c] * g, rho = rhos[(size_t)j * ncs + c];
-                    He[(size_t)j * ncs + c] += dh;
-                    dB[(size_t)j * ncs + c] += rho * dh;
-                }
-                /* received sum_c dBi g aj, of it reflected sum_c rho dBi g aj */
-                double rec = sum_dbi * g * aj, refl = tb__dot(rhos + (size_t)j * ncs, dBi, ncs) * g * aj;
-                up[j] = tb__sum(dB + (size_t)j * ncs, ncs) * aj; /* tb__unshot_power */
-                racc[2 * j] = rec, racc[2 * j + 1] = rec - refl;
-            }
+        double sum_dbi = tb__sum(dBi, ncs);
+        for (size_t v = 0; v < s->m.nverts; v++) {
+            double f = s->vff[v];
+            if (f != 0.0)
+                for (size_t c = 0; c < ncs; c++)
+                    Hv[v * ncs + c] += dBi[c] * f;
         }
         for (size_t j = 0; j < s->m.nelems; j++) {
-            if (j == i || !(s->eff[j] > 0.0))
+            double g = s->eff[j];
+            if (j == i || !(g > 0.0))
                 continue;
-            received_all += racc[2 * j];
-            s->absorbed += racc[2 * j + 1];
+            double aj = s->m.elems[j].area;
+            for (size_t c = 0; c < ncs; c++) {
+                double dh = dBi[c] * g, rho = rhos[j * ncs + c];
+                He[j * ncs + c] += dh;
+                dB[j * ncs + c] += rho * dh;
+            }
+            /* received: sum_c dBi g aj; reflected: sum_c rho dBi g aj (no
+             * long chains of dependent adds over the channels) */
+            double rec = sum_dbi * g * aj;
+            received_all += rec;
+            s->absorbed += rec - tb__dot(rhos + j * ncs, dBi, ncs) * g * aj;
+            s->up[j] = tb__unshot_power(s, j);
             tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
         }
     }
