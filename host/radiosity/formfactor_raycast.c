@@ -16,6 +16,7 @@
 TB_STAT_COUNTER(tb__ff_shafts, "Form factors/shafts");
 TB_STAT_COUNTER(tb__ff_shafts_full, "Form factors/shafts with too many occluders");
 TB_STAT_COUNTER(tb__ff_shaft_tris, "Form factors/occluders listed in shafts");
+TB_STAT_COUNTER(tb__ff_shafts_empty, "Form factors/shafts with no occluder");
 
 #define TB__PI 3.14159265358979323846
 
@@ -519,6 +520,8 @@ bool tb_ff_occluders_shaft(const tb_ff_occluders *occ, const float a[6], const t
     }
     TB_STAT_INC(tb__ff_shafts);
     tb_stat_add(&tb__ff_shaft_tris, (int64_t)sh->n);
+    if (sh->n == 0)
+        TB_STAT_INC(tb__ff_shafts_empty);
     return true;
 }
 

@@ -24,6 +24,7 @@ TB_STAT_COUNTER(tb__rad_shots, "Radiosity/shots");
 TB_STAT_COUNTER(tb__rad_ffs, "Radiosity/form factors");
 TB_STAT_COUNTER(tb__rad_rays, "Radiosity/rays (receivers x samples)");
 TB_STAT_COUNTER(tb__rad_cached, "Radiosity/shots from cached form factors");
+TB_STAT_COUNTER(tb__rad_facing_none, "Radiosity/receiver clusters facing no sample");
 TB_STAT_TIMER(tb__rad_ff_time, "Radiosity/form factor time");
 TB_STAT_TIMER(tb__rad_update_time, "Radiosity/update time");
 
@@ -113,7 +114,7 @@ static inline double tb__dot(const float *restrict rho, const double *restrict x
 }
 
 /* Unshot power of element i, summed over channels. */
-static double tb__unshot_power(const tb_rad_solver *s, size_t i)
+static inline double tb__unshot_power(const tb_rad_solver *s, size_t i)
 {
     return tb__sum(s->dB + i * (size_t)s->nc, (size_t)s->nc) * s->m.elems[i].area;
 }
@@ -355,8 +356,10 @@ static tb_status tb__batch(tb_rad_solver *s, size_t i)
         tb_ff_visible_fn fn = tb_ff_shaft_visible;
         void *ctx = &sh;
         size_t q0 = (size_t)c * TB__RAD_CLUSTER, q1 = q0 + TB__RAD_CLUSTER < nv ? q0 + TB__RAD_CLUSTER : nv;
-        if (!tb__cluster_faces(s, e->normal, q0, q1))
+        if (!tb__cluster_faces(s, e->normal, q0, q1)) {
             fn = NULL, ctx = NULL; /* no exchange: tb_ff_raycast casts no ray */
+            TB_STAT_INC(tb__rad_facing_none);
+        }
         else if (!tb_ff_occluders_shaft(s->occ, s->clbox[c], s->crp + q0, q1 - q0, a, s->pts, (size_t)s->opt.samples, &sh))
             fn = tb__visible, ctx = s;
         else if (sh.n == 0)
