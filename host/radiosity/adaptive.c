@@ -153,7 +153,10 @@ static tb_status tb__from_refiner(const tb_mesh_refiner *r, const tb_rad_mesh *p
         memcpy(out->emission + i * (size_t)nc, prev->emission + map[i] * (size_t)nc,
                sizeof *out->emission * (size_t)nc);
     }
-    tb_status st = tb_rad_mesh_update_geometry(out);
+    /* a refined element stays in the patch of the element it came from */
+    tb_status st = tb_rad_mesh_copy_patches(out, prev, map);
+    if (!st)
+        st = tb_rad_mesh_update_geometry(out);
     if (st)
         tb_rad_mesh_free(out);
     return st;
@@ -377,6 +380,7 @@ static tb_status tb__copy_mesh(const tb_rad_mesh *m, tb_rad_mesh *out)
     tb_rad_mesh_init(out);
     size_t nc = (size_t)m->nchannels, ne = m->nelems ? m->nelems : 1;
     *out = *m;
+    out->patch = NULL, out->patch_poly = NULL, out->npatches = 0;
     out->verts = malloc(sizeof *out->verts * (m->nverts ? m->nverts : 1));
     out->elems = malloc(sizeof *out->elems * ne);
     out->rho = malloc(sizeof *out->rho * ne * nc);
@@ -389,7 +393,10 @@ static tb_status tb__copy_mesh(const tb_rad_mesh *m, tb_rad_mesh *out)
     memcpy(out->elems, m->elems, sizeof *out->elems * m->nelems);
     memcpy(out->rho, m->rho, sizeof *out->rho * m->nelems * nc);
     memcpy(out->emission, m->emission, sizeof *out->emission * m->nelems * nc);
-    return TB_OK;
+    tb_status st = tb_rad_mesh_copy_patches(out, m, NULL);
+    if (st)
+        tb_rad_mesh_free(out);
+    return st;
 }
 
 tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const tb_rad_stop *stop,

@@ -6,6 +6,7 @@
 
 #include "host/object/object.h"
 #include "host/object/polygonize.h"
+#include "host/radiosity/patches_internal.h"
 #include "host/radiosity/radiosity.h"
 #include "util/mesh/mesh.h"
 
@@ -28,6 +29,8 @@ void tb_rad_mesh_free(tb_rad_mesh *m)
     free(m->elems);
     free(m->rho);
     free(m->emission);
+    free(m->patch);
+    free(m->patch_poly);
     int nc = m->nchannels;
     bool sp = m->spectral;
     tb_bands b = m->bands;
@@ -98,6 +101,8 @@ void tb_rad_mesh_polygon(const tb_rad_mesh *m, size_t i, tb_ff_polygon *out)
 typedef struct tb__mb {
     tb_rad_mesh *m;
     size_t vcap, ecap;
+    bool patches;       /* two levels: m->patch grows with the elements */
+    size_t pcap;        /* of m->patch_poly */
 } tb__mb;
 
 static tb_status tb__push_vert(tb__mb *b, tb_rad_vertex v)
@@ -128,7 +133,10 @@ static tb_status tb__push_elem(tb__mb *b, const tb_rad_element *e, const tb_chan
         float *pm = realloc(m->emission, cap * (size_t)nc * sizeof *pm);
         if (pm)
             m->emission = pm;
-        if (!pe || !pr || !pm)
+        uint32_t *pp = b->patches ? realloc(m->patch, cap * sizeof *pp) : NULL;
+        if (pp)
+            m->patch = pp;
+        if (!pe || !pr || !pm || (b->patches && !pp))
             return tb_error(TB_ERR_NOMEM, "radiosity mesh: out of memory");
         b->ecap = cap;
     }
@@ -138,6 +146,30 @@ static tb_status tb__push_elem(tb__mb *b, const tb_rad_element *e, const tb_chan
         m->rho[i * (size_t)nc + (size_t)c] = rho->v[c];
         m->emission[i * (size_t)nc + (size_t)c] = em->v[c];
     }
+    return TB_OK;
+}
+
+/* Two levels: the last element pushed lies in patch k of `pm`; the patch
+ * gets the mesh's next index (and its outline) at its first element. */
+static tb_status tb__push_patch(tb__mb *b, const tb_mesh *pm, uint32_t k, uint32_t *pglob)
+{
+    tb_rad_mesh *m = b->m;
+    if (pglob[k] == TB_RAD_NONE) {
+        if (m->npatches == b->pcap) {
+            size_t cap = b->pcap ? 2 * b->pcap : 256;
+            tb_ff_polygon *p = realloc(m->patch_poly, cap * sizeof *p);
+            if (!p)
+                return tb_error(TB_ERR_NOMEM, "radiosity mesh: out of memory");
+            m->patch_poly = p, b->pcap = cap;
+        }
+        const tb_mesh_elem *pe = tb_mesh_elem_at(pm, k);
+        tb_ff_polygon *poly = &m->patch_poly[m->npatches];
+        poly->n = tb_mesh_elem_size(pe);
+        for (int q = 0; q < poly->n; q++)
+            poly->v[q] = TB_ARRAY_AT(&pm->positions, tb_vec3, pe->v[q]);
+        pglob[k] = (uint32_t)m->npatches++;
+    }
+    m->patch[m->nelems - 1] = pglob[k];
     return TB_OK;
 }
 
@@ -165,8 +197,25 @@ static tb_status tb__add_object(tb__mb *b, const tb_scene *s, const tb_object *o
      * deviation over the number of cells (docs/radiosity.md, "Meshing"). */
     tb_mesh_opts mo = {.max_edge = opt->max_edge, .max_area = opt->max_area, .quads = true,
                        .planar_tol = TB__RAD_PLANAR_TOL};
-    tb_status st = tb_mesh_from_fed(fed, &mo, &mesh);
+    tb_mesh pmesh; /* two levels: the patches (each element's face is its patch there) */
+    uint32_t *pglob = NULL; /* two levels: the mesh's index of each patch, TB_RAD_NONE until it has an element */
+    tb_status st;
+    if (b->patches) {
+        tb_mesh_opts po = mo;
+        po.max_edge = opt->patch_edge, po.max_area = opt->patch_area;
+        st = tb__rad_mesh_two_level(fed, &po, &mo, &pmesh, &mesh);
+        size_t np = tb_mesh_nelems(&pmesh);
+        if (!st && !(pglob = malloc(sizeof *pglob * (np ? np : 1))))
+            st = tb_error(TB_ERR_NOMEM, "radiosity mesh: out of memory");
+        for (size_t k = 0; k < np && pglob; k++)
+            pglob[k] = TB_RAD_NONE;
+    } else {
+        tb_mesh_init(&pmesh);
+        st = tb_mesh_from_fed(fed, &mo, &mesh);
+    }
     if (st) {
+        free(pglob);
+        tb_mesh_free(&pmesh);
         tb_mesh_free(&mesh);
         return st;
     }
@@ -233,8 +282,9 @@ static tb_status tb__add_object(tb__mb *b, const tb_scene *s, const tb_object *o
         }
         if (st)
             break;
+        uint32_t face = b->patches ? tb_mesh_elem_at(&pmesh, me->face)->face : me->face;
         const tb_material *mat = NULL;
-        int mi = tb__face_material(o, fed, me->face);
+        int mi = tb__face_material(o, fed, face);
         if (mi >= 0 && mi < s->nmaterials)
             mat = &s->materials[mi];
         tb_channels rho = tb_channels_splat(s->nchannels, 0.0f), em = rho;
@@ -257,6 +307,8 @@ static tb_status tb__add_object(tb__mb *b, const tb_scene *s, const tb_object *o
         }
         if (!st)
             st = tb__push_elem(b, &e, &rho, &em);
+        if (!st && b->patches)
+            st = tb__push_patch(b, &pmesh, me->face, pglob);
     }
     /* vertices without a surface normal take their elements' mean normal */
     for (size_t q = 0; q < chain.len && !st; q++) {
@@ -267,6 +319,8 @@ static tb_status tb__add_object(tb__mb *b, const tb_scene *s, const tb_object *o
             rv->n = tb_vec3_make((float)(ns[0] / l), (float)(ns[1] / l), (float)(ns[2] / l));
     }
 done:
+    free(pglob);
+    tb_mesh_free(&pmesh);
     free(head);
     tb_array_free(&chain);
     tb_array_free(&rep);
@@ -399,11 +453,27 @@ tb_status tb_rad_mesh_from_scene(const tb_scene *scene, const tb_rad_mesh_option
     if (!(o.max_edge >= 0.0) || !(o.max_area >= 0.0) || !(o.max_angle >= 0.0) || !isfinite(o.max_edge) ||
         !isfinite(o.max_area) || !isfinite(o.max_angle))
         return tb_error(TB_ERR_ARG, "radiosity mesh: max edge, area and angle must be finite and >= 0");
+    if (!(o.patch_edge >= 0.0) || !(o.patch_area >= 0.0) || !isfinite(o.patch_edge) || !isfinite(o.patch_area))
+        return tb_error(TB_ERR_ARG, "radiosity mesh: patch edge and area must be finite and >= 0");
+    bool patches = o.patch_edge > 0.0 || o.patch_area > 0.0;
+    if (patches) {
+        /* the edge bounds the mesher applies: min(edge, sqrt(area)) */
+        double le = o.max_edge > 0.0 ? o.max_edge : INFINITY, lp = o.patch_edge > 0.0 ? o.patch_edge : INFINITY;
+        if (o.max_area > 0.0)
+            le = fmin(le, sqrt(o.max_area));
+        if (o.patch_area > 0.0)
+            lp = fmin(lp, sqrt(o.patch_area));
+        if (!isfinite(le))
+            return tb_error(TB_ERR_ARG, "radiosity mesh: patches need an element size (max edge or area)");
+        if (lp < le)
+            return tb_error(TB_ERR_ARG, "radiosity mesh: patches (edge %g) must not be smaller than elements (edge %g)",
+                            lp, le);
+    }
     tb_rad_mesh_init(out);
     out->nchannels = scene->nchannels;
     out->spectral = scene->spectral;
     out->bands = scene->bands;
-    tb__mb b = {.m = out};
+    tb__mb b = {.m = out, .patches = patches};
     /* CSG boundary resolution: the element size, but never coarser than
      * 1/50 of the scene (elements of 1/24 of it, the command's default, lost
      * the showcase's small CSG pieces that faces-whole meshing kept) */

@@ -38,6 +38,8 @@ tb_status tb_rad_write_patches(const tb_rad_solver *s, const char *path)
         tb__channel_name(m, c, name, sizeof name), fprintf(fp, ",b_%s", name);
     for (int c = 0; c < nc; c++)
         tb__channel_name(m, c, name, sizeof name), fprintf(fp, ",u_%s", name);
+    if (m->npatches > 0) /* two levels: appended, so the one-level columns keep their places */
+        fputs(",patch", fp);
     fputc('\n', fp);
     double b[TB_CHANNELS_MAX], u[TB_CHANNELS_MAX];
     for (size_t i = 0; i < m->nelems; i++) {
@@ -51,6 +53,8 @@ tb_status tb_rad_write_patches(const tb_rad_solver *s, const char *path)
             fprintf(fp, ",%.9g", b[c]);
         for (int c = 0; c < nc; c++)
             fprintf(fp, ",%.9g", u[c]);
+        if (m->npatches > 0)
+            fprintf(fp, ",%u", m->patch[i]);
         fputc('\n', fp);
     }
     if (ferror(fp)) {

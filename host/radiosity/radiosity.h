@@ -93,6 +93,11 @@ typedef struct tb_rad_mesh {
     tb_rad_element *elems;
     float *rho;             /* nelems * nchannels: diffuse reflectance, in [0, 1) */
     float *emission;        /* nelems * nchannels: emitted radiosity (W/m^2 per channel) */
+    /* Patches (Cohen et al. 1986): coarse shooters, each the union of its
+     * elements. npatches == 0: one level, every element its own patch. */
+    size_t npatches;
+    uint32_t *patch;        /* nelems: the patch of each element (npatches > 0), else NULL */
+    tb_ff_polygon *patch_poly; /* npatches: each patch's outline (its shots' sample points lie on it) */
 } tb_rad_mesh;
 
 /* How to mesh a scene; zeroed means faces whole (the command's default
@@ -101,6 +106,9 @@ typedef struct tb_rad_mesh_options {
     double max_edge;  /* > 0: longest element edge (world units); 0: none */
     double max_area;  /* > 0: largest element area (world units^2); 0: none */
     double max_angle; /* curved surfaces: polygonization angle (radians); 0: the object level's default */
+    double patch_edge; /* > 0: faces are first cut into patches with no edge longer than this, each then
+                          meshed into elements (needs an element size no larger); 0: none */
+    double patch_area; /* > 0: largest patch area (an edge bound of its square root); 0: none */
 } tb_rad_mesh_options;
 
 /* The element size `testbed render --method radiosity` uses when neither
@@ -132,6 +140,12 @@ tb_status tb_rad_mesh_from_scene(const tb_scene *scene, const tb_rad_mesh_option
 /* Recomputes area, centroid and normal of every element from its vertices;
  * TB_ERR_ARG for an out-of-range vertex index or a degenerate element. */
 tb_status tb_rad_mesh_update_geometry(tb_rad_mesh *m);
+
+/* Copies src's patches into dst (whose own are freed first): the outlines,
+ * and for every element i of dst the patch of src's element map[i] (map
+ * NULL: the same index; dst->nelems must then equal src->nelems). A src
+ * without patches leaves dst without. TB_ERR_NOMEM. */
+tb_status tb_rad_mesh_copy_patches(tb_rad_mesh *dst, const tb_rad_mesh *src, const uint32_t *map);
 
 /* Element i as a form-factor polygon. */
 void tb_rad_mesh_polygon(const tb_rad_mesh *m, size_t i, tb_ff_polygon *out);
@@ -193,7 +207,7 @@ void tb_rad_solver_free(tb_rad_solver *s);
 /* The solver's copy of the mesh. */
 const tb_rad_mesh *tb_rad_solver_mesh(const tb_rad_solver *s);
 
-/* Shoots the element with the most unshot power once, or a light not yet
+/* Shoots the patch (the element, on one level) with the most unshot power once, or a light not yet
  * shot whose power is at least that (each light shoots once, directly:
  * host/radiosity/lights.h). *shot (may be NULL) is false if nothing was
  * left to shoot. */
@@ -245,6 +259,18 @@ void tb_rad_ambient(const tb_rad_solver *s, double *out);
  * the ambient term. */
 void tb_rad_element_radiosity(const tb_rad_solver *s, size_t i, bool ambient, double *out);
 
+/* Shooters of the solver: the mesh's patches, or its elements when it has
+ * none (patch p is then element p). */
+size_t tb_rad_solver_npatches(const tb_rad_solver *s);
+
+/* Radiosity of patch p: the area-weighted mean of its elements'
+ * (tb_rad_element_radiosity), out[0..nchannels). */
+void tb_rad_patch_radiosity(const tb_rad_solver *s, size_t p, bool ambient, double *out);
+
+/* Unshot power of patch p (summed over channels) as the shooter queue holds
+ * it: the sum of its elements' unshot powers, 0 once shot. */
+double tb_rad_patch_unshot_power(const tb_rad_solver *s, size_t p);
+
 /* Unshot radiosity of element i, out[0..nchannels). */
 void tb_rad_element_unshot(const tb_rad_solver *s, size_t i, double *out);
 
@@ -255,8 +281,8 @@ void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambie
  * or free): what tb_rad_solver_create takes to continue elsewhere. */
 tb_rad_state tb_rad_solver_state(const tb_rad_solver *s);
 
-/* The element-to-element form factor F_ij (fraction of the power leaving i
- * that reaches j) exactly as a shot from i moves energy: ray cast, A_j / A_i times F_ji, F_ji the mean over j's
+/* The form factor F_ij from shooter i (a patch; an element on one level) to
+ * element j (fraction of the power leaving i that reaches j; 0 for j in i) exactly as a shot from i moves energy: ray cast, A_j / A_i times F_ji, F_ji the mean over j's
  * corners of F(v -> i) or, next to i, the near-field estimate
  * (docs/radiosity.md); hemicube, the hemicube at i's centroid. For
  * reciprocity checks; costs a shot unless i's form factors are cached. */
@@ -264,7 +290,8 @@ tb_status tb_rad_formfactor(tb_rad_solver *s, size_t i, size_t j, double *f);
 
 /* --patches CSV: header `element,object,area,cx,cy,cz,nx,ny,nz,` then
  * b_r,b_g,b_b (RGB) or b_<nm> per band (its wavelength, e.g. b_400), then
- * the unshot columns likewise (u_r.. or u_<nm>); one row per element, no
+ * the unshot columns likewise (u_r.. or u_<nm>), then, when the mesh has
+ * patches, `patch` (the element's patch index); one row per element, no
  * ambient term, radiosity in W/m^2 per channel. Written all-or-nothing. */
 tb_status tb_rad_write_patches(const tb_rad_solver *s, const char *path);
 

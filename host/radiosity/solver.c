@@ -56,7 +56,16 @@ struct tb_rad_solver {
     tb_vec3 *crp;           /* the receiver positions in corder's order */
     size_t ncl;
     tb_hemicube *hc;
-    tb_pqueue q;            /* elements by unshot power */
+    tb_pqueue q;            /* shooters (patches) by unshot power */
+    /* Shooters (docs/radiosity.md, "Patches and elements"): the mesh's
+     * patches, or its elements on one level (shooter k = element k). */
+    size_t nsh;
+    uint32_t *pof;          /* nelems: the shooter of each element */
+    uint32_t *pstart, *pel; /* shooter k's elements: pel[pstart[k] .. pstart[k + 1]), ascending */
+    tb_ff_polygon *spoly;   /* nsh: outlines (the elements' own polygons on one level) */
+    double *sarea;          /* nsh: area, the sum of its elements' */
+    tb_vec3 *scen, *snrm;   /* nsh: area centroid and unit normal */
+    unsigned char *sdirty;  /* nsh: two levels: an element's unshot power changed this shot */
     float *vff, *eff;       /* one shooter's form factors: F(v -> i) per vertex (ray cast), F_ji per element */
     float **cache;          /* per shooter: its vff (nverts, ray cast) then eff (nelems), or NULL */
     size_t cache_bytes;     /* held by `cache` */
@@ -119,12 +128,91 @@ static inline double tb__unshot_power(const tb_rad_solver *s, size_t i)
     return tb__sum(s->dB + i * (size_t)s->nc, (size_t)s->nc) * s->m.elems[i].area;
 }
 
+/* Shooter k's unshot power: the sum of its elements' (in element order). */
+static double tb__shooter_power(const tb_rad_solver *s, size_t k)
+{
+    double p = 0.0;
+    for (uint32_t q = s->pstart[k]; q < s->pstart[k + 1]; q++)
+        p += s->up[s->pel[q]];
+    return p;
+}
+
+/* Element j's unshot power changed: its shooter's priority follows (on two
+ * levels at tb__queue_flush, once per shot). */
+static inline void tb__queue_elem(tb_rad_solver *s, size_t j)
+{
+    if (s->m.npatches == 0)
+        tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
+    else
+        s->sdirty[s->pof[j]] = 1;
+}
+
+/* Two levels: the patches whose elements changed get their new sums. */
+static void tb__queue_flush(tb_rad_solver *s)
+{
+    if (s->m.npatches == 0)
+        return;
+    for (size_t k = 0; k < s->nsh; k++)
+        if (s->sdirty[k]) {
+            s->sdirty[k] = 0;
+            tb_pqueue_set(&s->q, (uint32_t)k, tb__shooter_power(s, k));
+        }
+}
+
+/* The shooters: each element's patch, the patches' element lists, outlines,
+ * areas (sums of their elements'), centroids and normals (area-weighted).
+ * On one level shooter k is element k with its own geometry, bit for bit. */
+static tb_status tb__shooters_init(tb_rad_solver *s)
+{
+    size_t ne = s->m.nelems, ns = s->nsh;
+    for (size_t i = 0; i < ne; i++)
+        s->pof[i] = s->m.npatches ? s->m.patch[i] : (uint32_t)i;
+    for (size_t i = 0; i < ne; i++)
+        s->pstart[s->pof[i] + 1]++;
+    for (size_t k = 0; k < ns; k++)
+        s->pstart[k + 1] += s->pstart[k];
+    for (size_t k = 0; k < ns; k++)
+        if (s->pstart[k + 1] == s->pstart[k])
+            return tb_error(TB_ERR_ARG, "radiosity: patch %zu has no element", k);
+    uint32_t *fill = malloc(sizeof *fill * (ns ? ns : 1));
+    if (!fill)
+        return tb_error(TB_ERR_NOMEM, "radiosity: out of memory");
+    memcpy(fill, s->pstart, sizeof *fill * ns);
+    for (size_t i = 0; i < ne; i++)
+        s->pel[fill[s->pof[i]]++] = (uint32_t)i;
+    free(fill);
+    for (size_t k = 0; k < ns; k++) {
+        uint32_t a = s->pstart[k], b = s->pstart[k + 1];
+        if (b - a == 1) {
+            const tb_rad_element *e = &s->m.elems[s->pel[a]];
+            s->spoly[k] = s->polys[s->pel[a]];
+            s->sarea[k] = e->area, s->scen[k] = e->centroid, s->snrm[k] = e->normal;
+            continue;
+        }
+        double A = 0.0, c[3] = {0, 0, 0}, n[3] = {0, 0, 0};
+        for (uint32_t q = a; q < b; q++) {
+            const tb_rad_element *e = &s->m.elems[s->pel[q]];
+            A += e->area;
+            c[0] += e->area * e->centroid.x, c[1] += e->area * e->centroid.y, c[2] += e->area * e->centroid.z;
+            n[0] += e->area * e->normal.x, n[1] += e->area * e->normal.y, n[2] += e->area * e->normal.z;
+        }
+        double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(l > 0.0))
+            return tb_error(TB_ERR_ARG, "radiosity: patch %zu has no normal (its elements face opposite ways)", k);
+        s->spoly[k] = s->m.patch_poly[k];
+        s->sarea[k] = A;
+        s->scen[k] = tb_vec3_make((float)(c[0] / A), (float)(c[1] / A), (float)(c[2] / A));
+        s->snrm[k] = tb_vec3_make((float)(n[0] / l), (float)(n[1] / l), (float)(n[2] / l));
+    }
+    return TB_OK;
+}
+
 void tb_rad_solver_free(tb_rad_solver *s)
 {
     if (!s)
         return;
-    if (s->cache) /* before the mesh, which holds the count */
-        for (size_t i = 0; i < s->m.nelems; i++)
+    if (s->cache)
+        for (size_t i = 0; i < s->nsh; i++)
             free(s->cache[i]);
     free(s->cache);
     tb_rad_mesh_free(&s->m);
@@ -145,6 +233,8 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->pts);
     free(s->polys);
     free(s->rho_mean);
+    free(s->pof), free(s->pstart), free(s->pel), free(s->spoly), free(s->sarea), free(s->scen), free(s->snrm);
+    free(s->sdirty);
     tb_ff_occluders_free(s->occ);
     free(s->boxes);
     free(s->corder);
@@ -339,9 +429,10 @@ static bool tb__cluster_faces(const tb_rad_solver *s, tb_vec3 ns, size_t q0, siz
  * visibility test at all); a cluster with too many goes through tb__visible.
  * Either way a segment gets the BVH's answer, so each receiver's value
  * depends only on its own inputs: any schedule gives the same results. */
-static tb_status tb__batch(tb_rad_solver *s, size_t i)
+static tb_status tb__batch(tb_rad_solver *s, size_t k)
 {
-    const tb_rad_element *e = &s->m.elems[i];
+    const tb_vec3 nrm = s->snrm[k]; /* the shooter's (a patch's, or an element's) */
+    const double area = s->sarea[k];
     float a[6] = {s->pts[0].x, s->pts[0].y, s->pts[0].z, s->pts[0].x, s->pts[0].y, s->pts[0].z};
     for (int k = 1; k < s->opt.samples; k++) {
         float p[3] = {s->pts[k].x, s->pts[k].y, s->pts[k].z};
@@ -356,7 +447,7 @@ static tb_status tb__batch(tb_rad_solver *s, size_t i)
         tb_ff_visible_fn fn = tb_ff_shaft_visible;
         void *ctx = &sh;
         size_t q0 = (size_t)c * TB__RAD_CLUSTER, q1 = q0 + TB__RAD_CLUSTER < nv ? q0 + TB__RAD_CLUSTER : nv;
-        if (!tb__cluster_faces(s, e->normal, q0, q1)) {
+        if (!tb__cluster_faces(s, nrm, q0, q1)) {
             fn = NULL, ctx = NULL; /* no exchange: tb_ff_raycast casts no ray */
             TB_STAT_INC(tb__rad_facing_none);
         }
@@ -366,7 +457,7 @@ static tb_status tb__batch(tb_rad_solver *s, size_t i)
             fn = NULL, ctx = NULL; /* nothing in the way: the same sum without tests */
         for (size_t q = q0; q < q1; q++) {
             uint32_t v = s->corder[q];
-            s->ff[v] = tb_ff_raycast(s->pts, s->opt.samples, e->normal, e->area, s->rp[v], s->rn[v], fn, ctx);
+            s->ff[v] = tb_ff_raycast(s->pts, s->opt.samples, nrm, area, s->rp[v], s->rn[v], fn, ctx);
         }
     }
     return TB_OK;
@@ -393,6 +484,17 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
         return tb_error(TB_ERR_ARG, "radiosity: empty mesh");
     if (mesh->nelems > TB_PQUEUE_MAX_KEY)
         return tb_error(TB_ERR_ARG, "radiosity: too many elements (%zu)", mesh->nelems);
+    if (mesh->npatches > 0) {
+        if (!mesh->patch || !mesh->patch_poly || mesh->npatches > mesh->nelems)
+            return tb_error(TB_ERR_ARG, "radiosity: %zu patches over %zu elements without their arrays",
+                            mesh->npatches, mesh->nelems);
+        for (size_t i = 0; i < mesh->nelems; i++)
+            if (mesh->patch[i] >= mesh->npatches)
+                return tb_error(TB_ERR_ARG, "radiosity: element %zu: patch %u out of range", i, mesh->patch[i]);
+        for (size_t k = 0; k < mesh->npatches; k++)
+            if (mesh->patch_poly[k].n < 3 || mesh->patch_poly[k].n > TB_FF_MAX_VERTS)
+                return tb_error(TB_ERR_ARG, "radiosity: patch %zu has %d corners", k, mesh->patch_poly[k].n);
+    }
     if (mesh->nchannels < 1 || mesh->nchannels > TB_CHANNELS_MAX)
         return tb_error(TB_ERR_ARG, "radiosity: %d channels not in 1..%d", mesh->nchannels, TB_CHANNELS_MAX);
     int nc = mesh->nchannels;
@@ -422,6 +524,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     s->nc = nc;
     bool ok = true;
     s->m = *mesh;
+    s->m.patch = NULL, s->m.patch_poly = NULL, s->m.npatches = 0; /* copied below */
     s->m.verts = tb__calloc(nv, sizeof *s->m.verts, &ok);
     s->m.elems = tb__calloc(ne, sizeof *s->m.elems, &ok);
     s->m.rho = tb__calloc(ne * (size_t)nc, sizeof *s->m.rho, &ok);
@@ -435,8 +538,17 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     s->ff = tb__calloc(s->nrecv, sizeof *s->ff, &ok);
     s->vff = tb__calloc(nv, sizeof *s->vff, &ok);
     s->eff = tb__calloc(ne, sizeof *s->eff, &ok);
+    s->nsh = mesh->npatches > 0 ? mesh->npatches : ne;
     if (!o.no_cache)
-        s->cache = tb__calloc(ne, sizeof *s->cache, &ok);
+        s->cache = tb__calloc(s->nsh, sizeof *s->cache, &ok);
+    s->pof = tb__calloc(ne, sizeof *s->pof, &ok);
+    s->pstart = tb__calloc(s->nsh + 1, sizeof *s->pstart, &ok);
+    s->pel = tb__calloc(ne, sizeof *s->pel, &ok);
+    s->spoly = tb__calloc(s->nsh, sizeof *s->spoly, &ok);
+    s->sarea = tb__calloc(s->nsh, sizeof *s->sarea, &ok);
+    s->scen = tb__calloc(s->nsh, sizeof *s->scen, &ok);
+    s->snrm = tb__calloc(s->nsh, sizeof *s->snrm, &ok);
+    s->sdirty = tb__calloc(s->nsh, sizeof *s->sdirty, &ok);
     s->polys = tb__calloc(ne, sizeof *s->polys, &ok);
     s->rho_mean = tb__calloc((size_t)nc, sizeof *s->rho_mean, &ok);
     if (hemi) {
@@ -459,6 +571,15 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     memcpy(s->m.emission, mesh->emission, ne * (size_t)nc * sizeof *s->m.emission);
     for (size_t i = 0; i < ne; i++)
         tb_rad_mesh_polygon(&s->m, i, &s->polys[i]);
+    {
+        tb_status st = tb_rad_mesh_copy_patches(&s->m, mesh, NULL);
+        if (!st)
+            st = tb__shooters_init(s);
+        if (st) {
+            tb_rad_solver_free(s);
+            return st;
+        }
+    }
 
     /* state */
     if (state && state->gathered)
@@ -496,8 +617,11 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
         double p = tb__unshot_power(s, i);
         s->up[i] = p;
         unshot += p;
+    }
+    for (size_t k = 0; k < s->nsh; k++) {
+        double p = tb__shooter_power(s, k);
         if (p > 0.0)
-            tb_pqueue_set(&s->q, (uint32_t)i, p);
+            tb_pqueue_set(&s->q, (uint32_t)k, p);
     }
     for (int c = 0; c < nc; c++)
         s->rho_mean[c] /= s->total_area;
@@ -603,25 +727,25 @@ static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i);
 
 /* The form factors of shooter i, rounded to float (whether cached or not, so
  * that caching never changes an answer): s->vff[v] = F(v -> i) for every
- * vertex (ray cast) and s->eff[j] = F_ji for every element (0 for i). */
-static tb_status tb__shooter_ff(tb_rad_solver *s, size_t i)
+ * vertex (ray cast) and s->eff[j] = F_ji for every element (0 for the
+ * shooter's own elements). */
+static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k)
 {
     size_t nv = s->m.nverts, ne = s->m.nelems;
     bool hemi = s->opt.ff == TB_RAD_FF_HEMICUBE;
     size_t nvf = hemi ? 0 : nv;
-    if (s->cache && s->cache[i]) {
-        memcpy(s->vff, s->cache[i], nvf * sizeof(float));
-        memcpy(s->eff, s->cache[i] + nvf, ne * sizeof(float));
+    if (s->cache && s->cache[k]) {
+        memcpy(s->vff, s->cache[k], nvf * sizeof(float));
+        memcpy(s->eff, s->cache[k] + nvf, ne * sizeof(float));
         tb_stat_add(&tb__rad_cached, 1);
         return TB_OK;
     }
-    tb_status st = tb__shot_formfactors(s, i);
+    tb_status st = tb__shot_formfactors(s, k);
     if (st)
         return st;
-    const tb_rad_element *ei = &s->m.elems[i];
     if (hemi) {
         for (size_t j = 0; j < ne; j++)
-            s->eff[j] = j == i ? 0.0f : (float)(s->ff[j] * ei->area / s->m.elems[j].area);
+            s->eff[j] = s->pof[j] == k ? 0.0f : (float)(s->ff[j] * s->sarea[k] / s->m.elems[j].area);
     } else {
         for (size_t v = 0; v < nv; v++)
             s->vff[v] = (float)s->ff[v];
@@ -636,7 +760,7 @@ static tb_status tb__shooter_ff(tb_rad_solver *s, size_t i)
                     g += s->vff[ej->v[k]];
                 g /= n;
             }
-            s->eff[j] = j == i ? 0.0f : (float)g;
+            s->eff[j] = s->pof[j] == k ? 0.0f : (float)g;
         }
         for (size_t k = 0; k < s->nnear; k++)
             s->gnear[s->near_list[k]] = NAN;
@@ -648,34 +772,80 @@ static tb_status tb__shooter_ff(tb_rad_solver *s, size_t i)
         if (c) {
             memcpy(c, s->vff, nvf * sizeof(float));
             memcpy(c + nvf, s->eff, ne * sizeof(float));
-            s->cache[i] = c;
+            s->cache[k] = c;
             s->cache_bytes += bytes;
         }
     }
     return TB_OK;
 }
 
-/* Form factors of one shot from element i: s->ff[r] for every receiver. */
-static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i)
+/* Form factors of one shot from shooter k: s->ff[r] for every receiver. */
+static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t k)
 {
-    const tb_rad_element *e = &s->m.elems[i];
     tb_timer_token tt = tb_timer_start(&tb__rad_ff_time);
     tb_status st;
     if (s->opt.ff == TB_RAD_FF_HEMICUBE) {
-        st = tb_hemicube_formfactors(s->hc, e->centroid, e->normal, s->polys, s->m.nelems, (uint32_t)i, s->ff);
+        /* a one-element shooter is left out of its hemicube; a patch's own
+         * elements lie in its plane (and get F = 0 in tb__shooter_ff) */
+        uint32_t skip = s->pstart[k + 1] - s->pstart[k] == 1 ? s->pel[s->pstart[k]] : UINT32_MAX;
+        st = tb_hemicube_formfactors(s->hc, s->scen[k], s->snrm[k], s->polys, s->m.nelems, skip, s->ff);
     } else {
-        st = tb_ff_sample_polygon(&s->polys[i], s->opt.samples, tb__shot_seed(s->opt.seed, i), s->pts);
+        st = tb_ff_sample_polygon(&s->spoly[k], s->opt.samples, tb__shot_seed(s->opt.seed, k), s->pts);
         if (!st)
-            st = s->boxes ? tb__batch(s, i)
-                          : s->opt.batch(s->opt.batch_ctx, s->pts, s->opt.samples, e->normal, e->area, s->rp,
+            st = s->boxes ? tb__batch(s, k)
+                          : s->opt.batch(s->opt.batch_ctx, s->pts, s->opt.samples, s->snrm[k], s->sarea[k], s->rp,
                                          s->rn, s->m.nverts, s->ff);
         tb_stat_add(&tb__rad_rays, (int64_t)s->m.nverts * s->opt.samples);
         if (!st)
-            tb__near_field(s, i);
+            tb__near_field(s, k);
     }
     tb_stat_add(&tb__rad_ffs, (int64_t)s->nrecv);
     (void)tb_timer_stop(tt);
     return st;
+}
+
+/* Cells per side of the midpoint grid of tb__element_mean_ff. */
+#define TB__RAD_NEAR_GRID 4
+
+/* Bilinear point (u, v) of the quad q (a triangle as v0 v1 v2 v2). */
+static tb_vec3 tb__bilerp(const tb_vec3 *q, double u, double v)
+{
+    double w[4] = {(1 - u) * (1 - v), u * (1 - v), u * v, (1 - u) * v};
+    double x = 0, y = 0, z = 0;
+    for (int k = 0; k < 4; k++)
+        x += w[k] * q[k].x, y += w[k] * q[k].y, z += w[k] * q[k].z;
+    return tb_vec3_make((float)x, (float)y, (float)z);
+}
+
+/* Two levels, near a patch: F_jp, the mean over element j of the exact
+ * point-to-polygon form factor to the patch outline, by the midpoint rule on
+ * a TB__RAD_NEAR_GRID^2 grid of j weighted by cell area. A patch is larger
+ * than its receivers, so averaging over the small side (j) is the accurate
+ * one; the shooter's few sample points over the whole patch left elements
+ * along the edges of the furnace 6% off. */
+static double tb__element_mean_ff(const tb_ff_polygon *pj, tb_vec3 nj, const tb_ff_polygon *shooter)
+{
+    tb_vec3 q[4] = {pj->v[0], pj->v[1], pj->v[2], pj->n == 4 ? pj->v[3] : pj->v[2]};
+    const int n = TB__RAD_NEAR_GRID;
+    double sum = 0.0, wsum = 0.0;
+    for (int a = 0; a < n; a++)
+        for (int b = 0; b < n; b++) {
+            double u0 = (double)a / n, u1 = (double)(a + 1) / n, v0 = (double)b / n, v1 = (double)(b + 1) / n;
+            tb_vec3 c[4] = {tb__bilerp(q, u0, v0), tb__bilerp(q, u1, v0), tb__bilerp(q, u1, v1), tb__bilerp(q, u0, v1)};
+            double nn[3] = {0, 0, 0};
+            for (int k = 0; k < 4; k++) {
+                tb_vec3 p0 = c[k], p1 = c[(k + 1) % 4];
+                nn[0] += ((double)p0.y - p1.y) * ((double)p0.z + p1.z);
+                nn[1] += ((double)p0.z - p1.z) * ((double)p0.x + p1.x);
+                nn[2] += ((double)p0.x - p1.x) * ((double)p0.y + p1.y);
+            }
+            double w = 0.5 * sqrt(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+            double f = tb_ff_point_polygon(tb__bilerp(q, 0.5 * (u0 + u1), 0.5 * (v0 + v1)), nj, shooter);
+            if (f > 0.0 && isfinite(f))
+                sum += w * f;
+            wsum += w;
+        }
+    return wsum > 0.0 ? sum / wsum : 0.0;
 }
 
 /* Near the shooter the sampled estimate (a disk per sample point) is poor:
@@ -690,24 +860,27 @@ static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i)
  *    of the power of a shooter in a corner) but, by reciprocity,
  *    A_i / A_j times F_ij, F_ij the mean over the shooter's sample points of
  *    the exact point-to-polygon form factor to j, times the mean visible
- *    fraction of j's corners. */
-static void tb__near_field(tb_rad_solver *s, size_t i)
+ *    fraction of j's corners; from a patch (two levels), F_jp directly as
+ *    the mean over j of the exact form factor to the patch
+ *    (tb__element_mean_ff), times the same visible fraction. */
+static void tb__near_field(tb_rad_solver *s, size_t sk)
 {
-    const tb_rad_element *e = &s->m.elems[i];
-    const tb_ff_polygon *poly = &s->polys[i];
+    const tb_ff_polygon *poly = &s->spoly[sk];
+    const tb_vec3 cen = s->scen[sk], nrm = s->snrm[sk];
+    const double area = s->sarea[sk];
     double rad2 = 0.0;
     for (int k = 0; k < poly->n; k++)
-        rad2 = fmax(rad2, (double)tb_vec3_length2(tb_vec3_sub(poly->v[k], e->centroid)));
+        rad2 = fmax(rad2, (double)tb_vec3_length2(tb_vec3_sub(poly->v[k], cen)));
     double rad = sqrt(rad2), near2 = TB__RAD_NEAR * TB__RAD_NEAR * rad2;
     for (size_t v = 0; v < s->m.nverts; v++) {
         s->vvis[v] = NAN;
-        tb_vec3 d = tb_vec3_sub(s->rp[v], e->centroid);
+        tb_vec3 d = tb_vec3_sub(s->rp[v], cen);
         if ((double)tb_vec3_length2(d) >= near2)
             continue;
         double exact = tb_ff_point_polygon(s->rp[v], s->rn[v], poly);
         if (!(exact >= 0.0) || !isfinite(exact))
             continue;
-        double open = tb_ff_raycast(s->pts, s->opt.samples, e->normal, e->area, s->rp[v], s->rn[v], NULL, NULL);
+        double open = tb_ff_raycast(s->pts, s->opt.samples, nrm, area, s->rp[v], s->rn[v], NULL, NULL);
         double vis = open > 0.0 ? s->ff[v] / open : 1.0;
         vis = vis > 1.0 ? 1.0 : vis;
         s->vvis[v] = vis;
@@ -715,7 +888,7 @@ static void tb__near_field(tb_rad_solver *s, size_t i)
     }
     s->nnear = 0;
     for (size_t j = 0; j < s->m.nelems; j++) {
-        if (j == i)
+        if (s->pof[j] == sk)
             continue;
         const tb_rad_element *ej = &s->m.elems[j];
         const tb_ff_polygon *pj = &s->polys[j];
@@ -723,22 +896,27 @@ static void tb__near_field(tb_rad_solver *s, size_t i)
         for (int k = 0; k < pj->n; k++)
             rj2 = fmax(rj2, (double)tb_vec3_length2(tb_vec3_sub(pj->v[k], ej->centroid)));
         double lim = TB__RAD_NEAR * rad + sqrt(rj2);
-        if ((double)tb_vec3_length2(tb_vec3_sub(ej->centroid, e->centroid)) >= lim * lim)
+        if ((double)tb_vec3_length2(tb_vec3_sub(ej->centroid, cen)) >= lim * lim)
             continue;
+        bool patch = s->pstart[sk + 1] - s->pstart[sk] > 1;
         double f = 0.0;
-        for (int k = 0; k < s->opt.samples; k++) {
-            double x = tb_ff_point_polygon(s->pts[k], e->normal, pj);
-            if (x > 0.0 && isfinite(x))
-                f += x;
+        if (patch)
+            f = tb__element_mean_ff(pj, ej->normal, poly); /* F_jp itself */
+        else {
+            for (int k = 0; k < s->opt.samples; k++) {
+                double x = tb_ff_point_polygon(s->pts[k], nrm, pj);
+                if (x > 0.0 && isfinite(x))
+                    f += x;
+            }
+            f /= s->opt.samples;
         }
-        f /= s->opt.samples;
         double vis = 0.0;
         for (int k = 0; k < pj->n; k++) {
             double x = s->vvis[ej->v[k]];
             vis += isnan(x) ? 1.0 : x;
         }
         vis /= pj->n;
-        s->gnear[j] = f * e->area / ej->area * vis;
+        s->gnear[j] = (patch ? f : f * area / ej->area) * vis;
         s->near_list[s->nnear++] = j;
     }
 }
@@ -756,7 +934,7 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
             return st;
         }
     }
-    uint32_t i;
+    uint32_t i; /* the shooter: a patch, or an element on one level */
     double pri;
     if (!tb_pqueue_peek(&s->q, &i, &pri) || !(pri > 0.0))
         return TB_OK;
@@ -766,15 +944,21 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
     if (st)
         return st;
     tb_timer_token tt = tb_timer_start(&tb__rad_update_time);
-    const tb_rad_element *ei = &s->m.elems[i];
+    /* the patch shoots its elements' unshot power as one density over its area */
     double dBi[TB_CHANNELS_MAX];
+    uint32_t pa = s->pstart[i], pb = s->pstart[i + 1];
     for (int c = 0; c < nc; c++) {
-        dBi[c] = s->dB[i * (size_t)nc + (size_t)c];
-        s->dB[i * (size_t)nc + (size_t)c] = 0.0;
+        double p = 0.0;
+        for (uint32_t q = pa; q < pb; q++) {
+            size_t x = s->pel[q] * (size_t)nc + (size_t)c;
+            p += pb - pa == 1 ? s->dB[x] : s->dB[x] * s->m.elems[s->pel[q]].area;
+            s->dB[x] = 0.0;
+        }
+        dBi[c] = pb - pa == 1 ? p : p / s->sarea[i];
     }
     double shot_power = 0.0, received_all = 0.0;
     for (int c = 0; c < nc; c++)
-        shot_power += dBi[c] * ei->area;
+        shot_power += dBi[c] * s->sarea[i];
     /* receivers gather */
     if (s->opt.ff == TB_RAD_FF_HEMICUBE) {
         for (size_t j = 0; j < s->m.nelems; j++) {
@@ -795,7 +979,7 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
             received_all += rec;
             s->absorbed += abs_;
             s->up[j] = tb__unshot_power(s, j);
-            tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
+            tb__queue_elem(s, j);
         }
     } else {
         /* restrict: the arrays never overlap, which lets the channel loops
@@ -815,7 +999,7 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
         }
         for (size_t j = 0; j < s->m.nelems; j++) {
             double g = s->eff[j];
-            if (j == i || !(g > 0.0))
+            if (s->pof[j] == i || !(g > 0.0)) /* the shooting patch's own elements get nothing */
                 continue;
             double aj = s->m.elems[j].area;
             for (size_t c = 0; c < ncs; c++) {
@@ -829,11 +1013,13 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
             received_all += rec;
             s->absorbed += rec - tb__dot(rhos + j * ncs, dBi, ncs) * g * aj;
             s->up[j] = tb__unshot_power(s, j);
-            tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
+            tb__queue_elem(s, j);
         }
     }
+    tb__queue_flush(s);
     tb_pqueue_remove(&s->q, i);
-    s->up[i] = 0.0; /* = tb__unshot_power(s, i): its dB is 0 */
+    for (uint32_t q = pa; q < pb; q++)
+        s->up[s->pel[q]] = 0.0; /* = tb__unshot_power: its dB is 0 */
     s->escaped += shot_power - received_all;
     (void)tb_timer_stop(tt);
     s->shots++;
@@ -945,6 +1131,28 @@ void tb_rad_element_radiosity(const tb_rad_solver *s, size_t i, bool ambient, do
     }
 }
 
+size_t tb_rad_solver_npatches(const tb_rad_solver *s) { return s->nsh; }
+
+void tb_rad_patch_radiosity(const tb_rad_solver *s, size_t p, bool ambient, double *out)
+{
+    int nc = s->nc;
+    double acc[TB_CHANNELS_MAX] = {0}, b[TB_CHANNELS_MAX];
+    for (uint32_t q = s->pstart[p]; q < s->pstart[p + 1]; q++) {
+        double a = s->m.elems[s->pel[q]].area;
+        tb_rad_element_radiosity(s, s->pel[q], ambient, b);
+        for (int c = 0; c < nc; c++)
+            acc[c] += a * b[c];
+    }
+    for (int c = 0; c < nc; c++)
+        out[c] = acc[c] / s->sarea[p];
+}
+
+double tb_rad_patch_unshot_power(const tb_rad_solver *s, size_t p)
+{
+    double pri;
+    return tb_pqueue_get(&s->q, (uint32_t)p, &pri) ? pri : 0.0;
+}
+
 void tb_rad_element_unshot(const tb_rad_solver *s, size_t i, double *out)
 {
     for (int c = 0; c < s->nc; c++)
@@ -975,16 +1183,15 @@ tb_rad_state tb_rad_solver_state(const tb_rad_solver *s)
 tb_status tb_rad_formfactor(tb_rad_solver *s, size_t i, size_t j, double *f)
 {
     *f = 0.0;
-    if (i >= s->m.nelems || j >= s->m.nelems)
-        return tb_error(TB_ERR_ARG, "radiosity: element index out of range");
-    if (i == j)
+    if (i >= s->nsh || j >= s->m.nelems)
+        return tb_error(TB_ERR_ARG, "radiosity: shooter or element index out of range");
+    if (s->pof[j] == i)
         return TB_OK;
-    const tb_rad_element *ei = &s->m.elems[i], *ej = &s->m.elems[j];
     /* exactly what a shot from i uses */
     tb_status st = tb__shooter_ff(s, i);
     if (st)
         return st;
-    *f = (double)s->eff[j] * ej->area / ei->area;
+    *f = (double)s->eff[j] * s->m.elems[j].area / s->sarea[i];
     return TB_OK;
 }
 
@@ -1070,8 +1277,9 @@ static tb_status tb__lights_step(tb_rad_solver *s, bool *shot)
         received += rec;
         s->absorbed += abs_;
         s->up[j] = tb__unshot_power(s, j);
-        tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
+        tb__queue_elem(s, j);
     }
+    tb__queue_flush(s);
     if (!hemi)
         for (size_t x = 0; x < nv * (size_t)nc; x++)
             s->Hv[x] += ev[x];

@@ -33,7 +33,8 @@ static void tb__rad_usage(FILE *out)
             "scene's point, spot and directional lights (IES included), each shot once, directly, with shadows.\n"
             "  -o IMAGE              the solution from the scene camera (.png, .exr, .pfm, .rle), Gouraud-shaded\n"
             "  --patches FILE.csv    one row per element: element,object,area,cx,cy,cz,nx,ny,nz, the radiosity\n"
-            "                        per channel (b_r,b_g,b_b or b_<nm>), then the unshot radiosity (u_...); W/m^2\n"
+            "                        per channel (b_r,b_g,b_b or b_<nm>), then the unshot radiosity (u_...); W/m^2;\n"
+            "                        with --patch-edge/--patch-area a last column `patch` (the element's patch)\n"
             "  --mesh-out FILE       the solved mesh with vertex colours, by extension: .ply (binary PLY), .gltf\n"
             "                        (glTF 2.0, buffer embedded as base64) or .glb (binary glTF); colours are\n"
             "                        radiance B/pi scaled so the mean non-emitting luminance is 0.18, clamped\n"
@@ -49,6 +50,12 @@ static void tb__rad_usage(FILE *out)
             "  --max-edge L          longest element edge, scene units (default, when neither --max-edge nor\n"
             "                        --max-area is given: the scene's bounding-box diagonal / %d; 0: faces whole)\n"
             "  --max-area A          largest element area, scene units^2 (alone: no edge limit besides sqrt(A))\n"
+            "  --patch-edge L        two levels (Cohen et al. 1986): cut faces into patches with edges up to L,\n"
+            "                        then each patch into elements (--max-edge/--max-area, which L must not be\n"
+            "                        below); patches shoot (sample points over the whole patch, or the hemicube at\n"
+            "                        its centroid), elements receive and are displayed and written (default: one\n"
+            "                        level, every element shoots)\n"
+            "  --patch-area A        two levels: largest patch area, scene units^2 (like --patch-edge sqrt(A))\n"
             "  --adapt X             adaptive subdivision (Cohen et al. 1986): after solving, split elements whose\n"
             "                        corners' reflected luminance differs by more than X times the brightest\n"
             "                        element's, keep the mesh conforming, gather for the new vertices, continue\n"
@@ -175,6 +182,7 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     const char *backend = "cpu";
     double exposure = NAN;
     bool size_given = false; /* --max-edge or --max-area: else the default element size */
+    double patch_edge = 0.0, patch_area = 0.0;
     long v;
     double d;
     for (int i = 1; i < argc; i++) {
@@ -226,6 +234,14 @@ int tb_cmd_render_radiosity(int argc, char **argv)
             if (!tb__rad_double(nx, 1e-300, 1e30, &d))
                 return tb__rad_fail("bad --max-area '%s' (> 0)", nx), TB_EXIT_USAGE;
             mo.max_area = d, size_given = true, i++;
+        } else if (!strcmp(a, "--patch-edge") && has) {
+            if (!tb__rad_double(nx, 1e-300, 1e30, &d))
+                return tb__rad_fail("bad --patch-edge '%s' (> 0)", nx), TB_EXIT_USAGE;
+            patch_edge = d, i++;
+        } else if (!strcmp(a, "--patch-area") && has) {
+            if (!tb__rad_double(nx, 1e-300, 1e30, &d))
+                return tb__rad_fail("bad --patch-area '%s' (> 0)", nx), TB_EXIT_USAGE;
+            patch_area = d, i++;
         } else if (!strcmp(a, "--threads") && has) {
             if (!tb__rad_long(nx, 0, 4096, &v))
                 return tb__rad_fail("bad --threads '%s' (0..4096)", nx), TB_EXIT_USAGE;
@@ -333,6 +349,7 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     }
     if (!size_given)
         mo = tb_rad_default_mesh_options(scene);
+    mo.patch_edge = patch_edge, mo.patch_area = patch_area;
     double t_mesh = 1e-9 * (double)tb_stats_now_ns();
     if ((st = tb_rad_mesh_from_scene(scene, &mo, &mesh)))
         goto fail;
@@ -390,6 +407,9 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     fprintf(stderr, "testbed render: radiosity on %s: %zu elements (%s), %zu vertices, %d channels (%s), %s\n",
             scene_path, mesh.nelems, size, mesh.nverts, mesh.nchannels, mesh.spectral ? "spectral" : "rgb",
             ro.ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "ray cast");
+    if (mesh.npatches > 0)
+        fprintf(stderr, "testbed render: %zu patches (patch edge %g, area %g) shoot; the elements receive\n",
+                mesh.npatches, mo.patch_edge, mo.patch_area);
     bool emits = false;
     for (size_t k = 0; k < mesh.nelems * (size_t)mesh.nchannels && !emits; k++)
         emits = mesh.emission[k] > 0.0f;
@@ -436,10 +456,11 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     char opts[512];
     snprintf(opts, sizeof opts,
              "method=radiosity formfactor=%s samples=%d hemicube_res=%d threshold=%g time_budget=%g max_edge=%g "
-             "max_area=%g max_angle=%g spp=%d threads=%d colour=%s backend=%s adapt=%g adapt_levels=%d min_area=%g",
+             "max_area=%g max_angle=%g patch_edge=%g patch_area=%g spp=%d threads=%d colour=%s backend=%s adapt=%g "
+             "adapt_levels=%d min_area=%g",
              ro.ff == TB_RAD_FF_HEMICUBE ? "hemicube" : "raycast", ro.samples ? ro.samples : TB_RAD_DEFAULT_SAMPLES,
              ro.hemicube_res ? ro.hemicube_res : TB_RAD_DEFAULT_HEMICUBE_RES, stop.threshold, stop.time_budget,
-             mo.max_edge, mo.max_area, mo.max_angle, spp, nthreads, mesh.spectral ? "spectral" : "rgb",
+             mo.max_edge, mo.max_area, mo.max_angle, mo.patch_edge, mo.patch_area, spp, nthreads, mesh.spectral ? "spectral" : "rgb",
              ro.batch ? "vulkan" : "cpu", ao.threshold,
              ao.threshold > 0 ? (ao.max_levels ? ao.max_levels : TB_RAD_ADAPT_DEFAULT_LEVELS) : 0, ao.min_area);
     tb_provenance_set_seed(&prov, ro.seed);
@@ -460,6 +481,7 @@ int tb_cmd_render_radiosity(int argc, char **argv)
                   {"mesh_seconds", t_mesh},
                   {"elements", (double)mesh.nelems},
                   {"vertices", (double)mesh.nverts},
+                  {"patches", (double)tb_rad_solver_npatches(solver)},
                   {"shots", (double)tb_rad_solver_shots(solver)},
                   {"shots_per_element", (double)tb_rad_solver_shots(solver) / (double)mesh.nelems},
                   {"unshot_fraction", frac},
