@@ -74,6 +74,11 @@ struct tb_rad_solver {
     double emitted, absorbed, escaped;
     double total_area;
     double *rho_mean;       /* nc: area-weighted mean reflectance */
+    uint32_t *rrow;         /* nelems: which of the distinct reflectance rows the element has, or NULL when
+                               there are more than TB__RAD_MAX_ROWS */
+    uint32_t *row_elem;     /* an element with each distinct row */
+    double *row_dot;        /* per distinct row: sum_c rho[c] dBi[c] of the current shot */
+    size_t nrows;
     /* point, spot and directional lights (the block at the end of this file) */
     tb_rad_lights *lights;  /* NULL: none */
     unsigned char *lshot;   /* nlights: shot yet */
@@ -235,6 +240,9 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->rho_mean);
     free(s->pof), free(s->pstart), free(s->pel), free(s->spoly), free(s->sarea), free(s->scen), free(s->snrm);
     free(s->sdirty);
+    free(s->rrow);
+    free(s->row_elem);
+    free(s->row_dot);
     tb_ff_occluders_free(s->occ);
     free(s->boxes);
     free(s->corder);
@@ -463,6 +471,40 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k)
     return TB_OK;
 }
 
+/* Most distinct reflectance rows the update shares dot products over. */
+#define TB__RAD_MAX_ROWS 64
+
+/* The distinct reflectance rows (one per material on most meshes), so that
+ * a shot computes sum_c rho[c] dBi[c] once per row, not per element. Leaves
+ * rrow NULL (per-element sums) if there are many or memory is short. */
+static void tb__reflectance_rows(tb_rad_solver *s)
+{
+    size_t ne = s->m.nelems, nc = (size_t)s->nc;
+    s->rrow = malloc(ne * sizeof *s->rrow);
+    s->row_elem = malloc(TB__RAD_MAX_ROWS * sizeof *s->row_elem);
+    s->row_dot = malloc(TB__RAD_MAX_ROWS * sizeof *s->row_dot);
+    bool ok = s->rrow && s->row_elem && s->row_dot;
+    s->nrows = 0;
+    for (size_t j = 0; j < ne && ok; j++) {
+        const float *r = s->m.rho + j * nc;
+        size_t k = 0;
+        while (k < s->nrows && memcmp(r, s->m.rho + (size_t)s->row_elem[k] * nc, nc * sizeof *r) != 0)
+            k++;
+        if (k == s->nrows) {
+            if (k == TB__RAD_MAX_ROWS) {
+                ok = false;
+                break;
+            }
+            s->row_elem[s->nrows++] = (uint32_t)j;
+        }
+        s->rrow[j] = (uint32_t)k;
+    }
+    if (!ok) {
+        free(s->rrow);
+        s->rrow = NULL;
+    }
+}
+
 tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *state, const tb_rad_options *opt,
                                tb_rad_solver **out)
 {
@@ -625,6 +667,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     }
     for (int c = 0; c < nc; c++)
         s->rho_mean[c] /= s->total_area;
+    tb__reflectance_rows(s);
     if (o.nlights > 0) {
         tb_status st = tb__lights_init(s, state);
         if (st) {
@@ -1026,6 +1069,9 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
         const float *restrict rhos = s->m.rho;
         size_t ncs = (size_t)nc;
         double sum_dbi = tb__sum(dBi, ncs);
+        if (s->rrow)
+            for (size_t k = 0; k < s->nrows; k++)
+                s->row_dot[k] = tb__dot(rhos + (size_t)s->row_elem[k] * ncs, dBi, ncs);
         for (size_t v = 0; v < s->m.nverts; v++) {
             double f = s->vff[v];
             if (f != 0.0)
@@ -1042,12 +1088,13 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
                 He[j * ncs + c] += dh;
                 dB[j * ncs + c] += rho * dh;
             }
-            /* received: sum_c dBi g aj; reflected: sum_c rho dBi g aj (no
-             * long chains of dependent adds over the channels) */
+            /* received: sum_c dBi g aj; reflected (what joins the unshot
+             * power): sum_c rho dBi g aj, per distinct reflectance row */
             double rec = sum_dbi * g * aj;
+            double refl = (s->rrow ? s->row_dot[s->rrow[j]] : tb__dot(rhos + j * ncs, dBi, ncs)) * g * aj;
             received_all += rec;
-            s->absorbed += rec - tb__dot(rhos + j * ncs, dBi, ncs) * g * aj;
-            s->up[j] = tb__unshot_power(s, j);
+            s->absorbed += rec - refl;
+            s->up[j] += refl; /* = tb__unshot_power(s, j) up to rounding */
             tb__queue_elem(s, j);
         }
     }
