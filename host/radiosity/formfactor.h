@@ -124,7 +124,7 @@ bool tb_ff_occluders_visible(void *ctx, tb_vec3 a, tb_vec3 b);
 void tb_ff_occluders_free(tb_ff_occluders *occ);
 
 /* Most triangles a tb_ff_shaft lists. */
-#define TB_FF_SHAFT_MAX 48
+#define TB_FF_SHAFT_MAX 8
 
 /* The occluder triangles that may block the segments between two boxes
  * (from tb_ff_occluders_shaft). */
