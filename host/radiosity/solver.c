@@ -393,6 +393,7 @@ static tb_status tb__receiver_clusters(tb_rad_solver *s)
         uint64_t k = 0;
         for (int x = 0; x < 3; x++) {
             double f = ext[x] > 0.0f ? (p[x] - org[x]) / ext[x] : 0.0;
+            f = f >= 0.0 ? (f <= 1.0 ? f : 1.0) : 0.0; /* NaN too: the order only affects speed */
             uint64_t q = (uint64_t)(f * 1023.0 + 0.5);
             k |= tb__morton_bits(q > 1023 ? 1023 : q) << x;
         }
