@@ -14,6 +14,7 @@
 
 #include "host/radiosity/radiosity.h"
 #include "host/render/scene.h"
+#include "rad_measure.h"
 
 static tb_rad_solver *tb__solve(const tb_rad_mesh *m, int samples, double thr)
 {
@@ -25,27 +26,6 @@ static tb_rad_solver *tb__solve(const tb_rad_mesh *m, int samples, double thr)
         exit(1);
     }
     return s;
-}
-
-static double *tb__b(const tb_rad_solver *s)
-{
-    const tb_rad_mesh *m = tb_rad_solver_mesh(s);
-    double *b = malloc(sizeof *b * m->nelems * (size_t)m->nchannels);
-    if (!b)
-        exit(1);
-    for (size_t i = 0; i < m->nelems; i++)
-        tb_rad_element_radiosity(s, i, false, b + i * (size_t)m->nchannels);
-    return b;
-}
-
-static double tb__nrmse(const tb_rad_mesh *m, const double *b, const double *ref)
-{
-    double num = 0.0, den = 0.0;
-    for (size_t x = 0; x < m->nelems * (size_t)m->nchannels; x++) {
-        num += (b[x] - ref[x]) * (b[x] - ref[x]);
-        den += (ref[x] - m->emission[x]) * (ref[x] - m->emission[x]);
-    }
-    return sqrt(num / den);
 }
 
 int main(int argc, char **argv)
@@ -76,20 +56,20 @@ int main(int argc, char **argv)
         size_t np = m.npatches;
         m.npatches = 0;
         tb_rad_solver *s = tb__solve(&m, 64, 1e-3);
-        double *ref = tb__b(s);
+        double *ref = tb_rad_test_radiosities(s);
         tb_rad_solver_free(s);
         s = tb__solve(&m, samples, thr);
-        double *b1 = tb__b(s), t1 = tb_rad_solver_seconds(s);
+        double *b1 = tb_rad_test_radiosities(s), t1 = tb_rad_solver_seconds(s);
         unsigned long long n1 = (unsigned long long)tb_rad_solver_shots(s);
         tb_rad_solver_free(s);
         m.npatches = np;
         s = tb__solve(&m, samples, thr);
-        double *b2 = tb__b(s), t2 = tb_rad_solver_seconds(s);
+        double *b2 = tb_rad_test_radiosities(s), t2 = tb_rad_solver_seconds(s);
         unsigned long long n2 = (unsigned long long)tb_rad_solver_shots(s);
         tb_rad_solver_free(s);
         printf("%10g | %8zu | %7zu | %5llu, %6.3f, %.4f | %5llu (%.2f N), %6.3f, %.4f | %.2f\n", pe, m.nelems,
-               np ? np : m.nelems, n1, t1, tb__nrmse(&m, b1, ref), n2, (double)n2 / (double)m.nelems, t2,
-               tb__nrmse(&m, b2, ref), t2 / t1);
+               np ? np : m.nelems, n1, t1, tb_rad_test_nrmse(&m, b1, ref), n2, (double)n2 / (double)m.nelems, t2,
+               tb_rad_test_nrmse(&m, b2, ref), t2 / t1);
         fflush(stdout);
         free(ref), free(b1), free(b2);
         tb_rad_mesh_free(&m);

@@ -17,29 +17,9 @@
 
 #include "host/radiosity/radiosity.h"
 #include "host/render/scene.h"
+#include "rad_measure.h"
+#include "rad_test.h"
 #include "tb_test.h"
-
-static tb_scene *tb__load(const char *rel)
-{
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s", TB_SOURCE_DIR, rel);
-    tb_scene_options so = {.no_accel = true};
-    tb_scene *s = NULL;
-    if (tb_scene_load(path, &so, &s))
-        fail_msg("%s", tb_last_error());
-    return s;
-}
-
-static tb_rad_solver *tb__solve(const tb_rad_mesh *m, const tb_rad_options *o, double threshold)
-{
-    tb_rad_solver *s = NULL;
-    if (tb_rad_solver_create(m, NULL, o, &s))
-        fail_msg("%s", tb_last_error());
-    tb_rad_stop stop = {.threshold = threshold};
-    if (tb_rad_solver_run(s, &stop, NULL, NULL, 0))
-        fail_msg("%s", tb_last_error());
-    return s;
-}
 
 static int tb__nv(const tb_rad_element *e) { return e->v[3] == TB_RAD_NONE ? 3 : 4; }
 
@@ -71,7 +51,7 @@ static int tb__cmp_edge(const void *x, const void *y) { return memcmp(x, y, size
 static void test_mesh(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 0.25, .patch_edge = 0.5};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -135,7 +115,7 @@ static void test_mesh(void **state)
  * both form-factor methods; 3 x 3 patches of 2 x 2 elements per face. */
 static void tb__furnace(tb_rad_ff_method ff, double tol)
 {
-    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 0.2, .patch_edge = 0.4};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -143,7 +123,7 @@ static void tb__furnace(tb_rad_ff_method ff, double tol)
     assert_int_equal(m.npatches, 6 * 9);
     tb_rad_options o = {.ff = ff, .samples = 16, .hemicube_res = 128};
     double thr = 1e-3;
-    tb_rad_solver *s = tb__solve(&m, &o, thr);
+    tb_rad_solver *s = tb_rad_test_solve(&m, &o, thr);
     assert_int_equal(tb_rad_solver_npatches(s), 54);
     double b[TB_CHANNELS_MAX], worst = 0.0, worst_c = 0.0, worst_p = 0.0;
     for (size_t i = 0; i < m.nelems; i++) {
@@ -197,7 +177,7 @@ static void test_furnace_hemicube(void **state)
 static void test_energy(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 0.125, .patch_edge = 0.5};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -275,27 +255,6 @@ static void test_energy(void **state)
     tb_scene_free(sc);
 }
 
-/* NRMSE of b against ref over the reflected part (ref - E), all channels. */
-static double tb__nrmse(const tb_rad_mesh *m, const double *b, const double *ref)
-{
-    double num = 0.0, den = 0.0;
-    for (size_t x = 0; x < m->nelems * (size_t)m->nchannels; x++) {
-        num += (b[x] - ref[x]) * (b[x] - ref[x]);
-        den += (ref[x] - m->emission[x]) * (ref[x] - m->emission[x]);
-    }
-    return sqrt(num / den);
-}
-
-static double *tb__radiosities(const tb_rad_solver *s)
-{
-    const tb_rad_mesh *m = tb_rad_solver_mesh(s);
-    double *b = malloc(sizeof *b * m->nelems * (size_t)m->nchannels);
-    assert_non_null(b);
-    for (size_t i = 0; i < m->nelems; i++)
-        tb_rad_element_radiosity(s, i, false, b + i * (size_t)m->nchannels);
-    return b;
-}
-
 /* The Cornell box on the same elements (max edge 60, patches of 120): the
  * two-level solution against a one-level reference (64 samples, to 1e-3),
  * next to the one-level solution with the same samples and threshold. The
@@ -303,7 +262,7 @@ static double *tb__radiosities(const tb_rad_solver *s)
 static void test_cornell(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("scenes/cornell-box-rgb.mid");
+    tb_scene *sc = tb_rad_test_load("scenes/cornell-box-rgb.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 60, .patch_edge = 120};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -311,20 +270,20 @@ static void test_cornell(void **state)
     assert_true(np > 0 && np < m.nelems / 2);
     m.npatches = 0; /* the same elements, one level */
     tb_rad_options ro = {.samples = 64};
-    tb_rad_solver *s = tb__solve(&m, &ro, 1e-3);
-    double *ref = tb__radiosities(s);
+    tb_rad_solver *s = tb_rad_test_solve(&m, &ro, 1e-3);
+    double *ref = tb_rad_test_radiosities(s);
     tb_rad_solver_free(s);
     tb_rad_options o = {.samples = 4};
-    s = tb__solve(&m, &o, 1e-2);
-    double *one = tb__radiosities(s);
+    s = tb_rad_test_solve(&m, &o, 1e-2);
+    double *one = tb_rad_test_radiosities(s);
     uint64_t shots1 = tb_rad_solver_shots(s);
     tb_rad_solver_free(s);
     m.npatches = np;
-    s = tb__solve(&m, &o, 1e-2);
-    double *two = tb__radiosities(s);
+    s = tb_rad_test_solve(&m, &o, 1e-2);
+    double *two = tb_rad_test_radiosities(s);
     uint64_t shots2 = tb_rad_solver_shots(s);
     tb_rad_solver_free(s);
-    double e1 = tb__nrmse(&m, one, ref), e2 = tb__nrmse(&m, two, ref), e12 = tb__nrmse(&m, two, one);
+    double e1 = tb_rad_test_nrmse(&m, one, ref), e2 = tb_rad_test_nrmse(&m, two, ref), e12 = tb_rad_test_nrmse(&m, two, one);
     print_message("Cornell box, %zu elements, %zu patches: NRMSE one level %.4f (%llu shots), two levels %.4f "
                   "(%llu shots), two against one %.4f\n",
                   m.nelems, np, e1, (unsigned long long)shots1, e2, (unsigned long long)shots2, e12);
@@ -336,28 +295,12 @@ static void test_cornell(void **state)
     tb_scene_free(sc);
 }
 
-static char *tb__slurp(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *buf = malloc((size_t)n + 1);
-    assert_non_null(buf);
-    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
-    buf[n] = 0;
-    fclose(f);
-    *len = (size_t)n;
-    return buf;
-}
-
 /* With patches, the same CSV bytes with 1 and 2 threads, for both methods;
  * the CSV ends with the patch column. */
 static void test_threads(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("scenes/cornell-box-rgb.mid");
+    tb_scene *sc = tb_rad_test_load("scenes/cornell-box-rgb.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 60, .patch_edge = 150};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -369,12 +312,12 @@ static void test_threads(void **state)
             omp_set_num_threads(t);
             tb_rad_options o = {.ff = method ? TB_RAD_FF_HEMICUBE : TB_RAD_FF_RAYCAST, .samples = 4, .seed = 7,
                                 .hemicube_res = 64};
-            tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+            tb_rad_solver *s = tb_rad_test_solve(&m, &o, 1e-2);
             assert_int_equal(tb_rad_write_patches(s, t == 1 ? p1 : p2), TB_OK);
             tb_rad_solver_free(s);
         }
         size_t n1, n2;
-        char *a = tb__slurp(p1, &n1), *b = tb__slurp(p2, &n2);
+        char *a = tb_rad_test_slurp(p1, &n1), *b = tb_rad_test_slurp(p2, &n2);
         assert_int_equal(n1, n2);
         assert_memory_equal(a, b, n1);
         const char *nl = strchr(a, '\n');
@@ -390,7 +333,7 @@ static void test_threads(void **state)
 static void test_errors(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options bad[] = {
         {.max_edge = 0.25, .patch_edge = 0.2}, /* patches smaller than elements */

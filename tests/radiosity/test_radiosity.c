@@ -15,46 +15,25 @@
 
 #include "host/radiosity/radiosity.h"
 #include "host/render/scene.h"
+#include "rad_test.h"
 #include "tb_test.h"
 #include "util/image/image.h"
 
 #define TB__PI 3.14159265358979323846
-
-static tb_scene *tb__load(const char *rel)
-{
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s", TB_SOURCE_DIR, rel);
-    tb_scene_options so = {.no_accel = true};
-    tb_scene *s = NULL;
-    if (tb_scene_load(path, &so, &s))
-        fail_msg("%s", tb_last_error());
-    return s;
-}
-
-static tb_rad_solver *tb__solve(const tb_rad_mesh *m, const tb_rad_options *o, double threshold)
-{
-    tb_rad_solver *s = NULL;
-    if (tb_rad_solver_create(m, NULL, o, &s))
-        fail_msg("%s", tb_last_error());
-    tb_rad_stop stop = {.threshold = threshold};
-    if (tb_rad_solver_run(s, &stop, NULL, NULL, 0))
-        fail_msg("%s", tb_last_error());
-    return s;
-}
 
 /* Furnace: B = E / (1 - rho) = 2 on every element; the ambient term accounts
  * for what is left unshot, so with it every element is within the
  * form-factor error, and without it within that plus the threshold. */
 static void tb__furnace(tb_rad_ff_method ff, double tol)
 {
-    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 0.2};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
     assert_int_equal(m.nelems, 6 * 25);
     tb_rad_options o = {.ff = ff, .samples = 16, .hemicube_res = 128};
     double thr = 1e-3;
-    tb_rad_solver *s = tb__solve(&m, &o, thr);
+    tb_rad_solver *s = tb_rad_test_solve(&m, &o, thr);
     assert_true(tb_rad_unshot_fraction(s) < thr);
     double b[TB_CHANNELS_MAX], worst = 0.0, worst_na = 0.0;
     for (size_t i = 0; i < m.nelems; i++) {
@@ -170,7 +149,7 @@ static void test_sphere_cap(void **state)
     for (int method = 0; method < 2; method++) {
         /* the inside of a sphere is convex: nothing to occlude */
         tb_rad_options o = {.ff = method ? TB_RAD_FF_HEMICUBE : TB_RAD_FF_RAYCAST, .samples = 16, .no_occlusion = true};
-        tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+        tb_rad_solver *s = tb_rad_test_solve(&m, &o, 1e-2);
         double worst = 0.0, b[3];
         for (size_t i = 0; i < m.nelems; i++) {
             tb_rad_element_radiosity(s, i, true, b);
@@ -195,7 +174,7 @@ static void test_energy(void **state)
     /* variant 1: every element its own reflectance (more distinct rows than
      * the update shares its reflected sums over: the per-element path) */
     for (int variant = 0; variant < 2; variant++) {
-        tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+        tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
         tb_rad_mesh m;
         tb_rad_mesh_options mo = {.max_edge = 0.25};
         assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -209,7 +188,7 @@ static void test_energy(void **state)
                     m.rho[i * (size_t)m.nchannels + (size_t)c] *= 1.0f - 0.002f * (float)(i % 200);
         }
         tb_rad_options o = {.samples = 16};
-        tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+        tb_rad_solver *s = tb_rad_test_solve(&m, &o, 1e-2);
         tb_rad_energy en = tb_rad_solver_energy(s);
         print_message("energy (variant %d, %zu elements): emitted %g absorbed %g unshot %g escaped %g\n", variant,
                       m.nelems, en.emitted, en.absorbed, en.unshot, en.escaped);
@@ -241,7 +220,7 @@ static void test_energy(void **state)
 static void test_reciprocity(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 0.2};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -283,27 +262,11 @@ static void test_reciprocity(void **state)
     tb_scene_free(sc);
 }
 
-static char *tb__slurp(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *buf = malloc((size_t)n + 1);
-    assert_non_null(buf);
-    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
-    buf[n] = 0;
-    fclose(f);
-    *len = (size_t)n;
-    return buf;
-}
-
 /* The same CSV bytes with 1 and 2 threads. */
 static void test_threads(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("scenes/cornell-box-rgb.mid");
+    tb_scene *sc = tb_rad_test_load("scenes/cornell-box-rgb.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 120};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -313,21 +276,21 @@ static void test_threads(void **state)
     for (int t = 1; t <= 2; t++) {
         omp_set_num_threads(t);
         tb_rad_options o = {.samples = 4, .seed = 7};
-        tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+        tb_rad_solver *s = tb_rad_test_solve(&m, &o, 1e-2);
         assert_int_equal(tb_rad_write_patches(s, t == 1 ? p1 : p2), TB_OK);
         tb_rad_solver_free(s);
     }
     size_t n1, n2;
-    char *a = tb__slurp(p1, &n1), *b = tb__slurp(p2, &n2);
+    char *a = tb_rad_test_slurp(p1, &n1), *b = tb_rad_test_slurp(p2, &n2);
     assert_int_equal(n1, n2);
     assert_memory_equal(a, b, n1);
     /* and a different seed changes the answer (the comparison can fail) */
     tb_rad_options o = {.samples = 4, .seed = 8};
-    tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+    tb_rad_solver *s = tb_rad_test_solve(&m, &o, 1e-2);
     assert_int_equal(tb_rad_write_patches(s, p2), TB_OK);
     tb_rad_solver_free(s);
     free(b);
-    b = tb__slurp(p2, &n2);
+    b = tb_rad_test_slurp(p2, &n2);
     assert_true(n1 != n2 || memcmp(a, b, n1) != 0);
     free(a), free(b);
     tb_rad_mesh_free(&m);
@@ -339,17 +302,17 @@ static void test_threads(void **state)
 static void test_patches_csv(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 0.5};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
     tb_rad_options o = {.samples = 4};
-    tb_rad_solver *s = tb__solve(&m, &o, 0.1);
+    tb_rad_solver *s = tb_rad_test_solve(&m, &o, 0.1);
     char path[1024];
     snprintf(path, sizeof path, "%s/rad_patches.csv", tb_test_tmpdir());
     assert_int_equal(tb_rad_write_patches(s, path), TB_OK);
     size_t len;
-    char *text = tb__slurp(path, &len);
+    char *text = tb_rad_test_slurp(path, &len);
     const char *hdr = "element,object,area,cx,cy,cz,nx,ny,nz,b_r,b_g,b_b,u_r,u_g,u_b\n";
     assert_memory_equal(text, hdr, strlen(hdr));
     char *line = strchr(text, '\n') + 1;
@@ -394,7 +357,7 @@ static void test_patches_csv(void **state)
 static void test_continue(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 0.25};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -456,13 +419,13 @@ static void test_errors(void **state)
 static void test_cornell_image(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("scenes/cornell-box.mid");
+    tb_scene *sc = tb_rad_test_load("scenes/cornell-box.mid");
     assert_true(sc->spectral);
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 100};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
     tb_rad_options o = {.samples = 4};
-    tb_rad_solver *s = tb__solve(&m, &o, 1e-2);
+    tb_rad_solver *s = tb_rad_test_solve(&m, &o, 1e-2);
     tb_image *img = NULL;
     assert_int_equal(tb_rad_render_image(s, sc, 1, &img), TB_OK);
     assert_int_equal(img->channels, 3);
@@ -496,7 +459,7 @@ static void test_cornell_image(void **state)
 static void test_occluders(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("tests/radiosity/furnace.mid");
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 0.25};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
@@ -506,7 +469,7 @@ static void test_occluders(void **state)
     tb_rad_mesh_free(&m);
     tb_scene_free(sc);
 
-    sc = tb__load("scenes/cornell-box-rgb.mid");
+    sc = tb_rad_test_load("scenes/cornell-box-rgb.mid");
     mo.max_edge = 80;
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
     p = malloc(m.nelems * sizeof *p);
@@ -592,7 +555,7 @@ static void tb__box(const tb_vec3 *p, size_t n, float b[6])
 static void test_shaft(void **state)
 {
     (void)state;
-    tb_scene *sc = tb__load("scenes/cornell-box-rgb.mid");
+    tb_scene *sc = tb_rad_test_load("scenes/cornell-box-rgb.mid");
     tb_rad_mesh m;
     tb_rad_mesh_options mo = {.max_edge = 60};
     assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
