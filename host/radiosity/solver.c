@@ -895,6 +895,24 @@ static double tb__element_mean_ff(const tb_ff_polygon *pj, tb_vec3 nj, const tb_
     return wsum > 0.0 ? sum / wsum : 0.0;
 }
 
+/* Squared distance from c to the farthest corner of p (p's radius about c). */
+static double tb__radius2(const tb_ff_polygon *p, tb_vec3 c)
+{
+    double r2 = 0.0;
+    for (int k = 0; k < p->n; k++)
+        r2 = fmax(r2, (double)tb_vec3_length2(tb_vec3_sub(p->v[k], c)));
+    return r2;
+}
+
+/* Whether element j can come within TB__RAD_NEAR shooter radii `rad` of the
+ * shooter's centroid cen: its centroid lies within that plus its own radius. */
+static bool tb__near_element(const tb_rad_solver *s, size_t j, tb_vec3 cen, double rad)
+{
+    const tb_rad_element *ej = &s->m.elems[j];
+    double lim = TB__RAD_NEAR * rad + sqrt(tb__radius2(&s->polys[j], ej->centroid));
+    return !((double)tb_vec3_length2(tb_vec3_sub(ej->centroid, cen)) >= lim * lim); /* !(>=): a NaN counts as near */
+}
+
 /* Two levels, hemicube: one hemicube at the patch's centroid stands for
  * the whole patch, which is poor for the elements next to it (the furnace's
  * edges were 7.5% off). Within TB__RAD_NEAR patch radii, F_jp becomes the
@@ -905,21 +923,12 @@ static void tb__hemicube_near_patch(tb_rad_solver *s, size_t k)
 {
     const tb_ff_polygon *poly = &s->spoly[k];
     const tb_vec3 cen = s->scen[k], nrm = s->snrm[k];
-    double rad2 = 0.0;
-    for (int q = 0; q < poly->n; q++)
-        rad2 = fmax(rad2, (double)tb_vec3_length2(tb_vec3_sub(poly->v[q], cen)));
-    double rad = sqrt(rad2);
+    double rad = sqrt(tb__radius2(poly, cen));
     for (size_t j = 0; j < s->m.nelems; j++) {
-        if (s->pof[j] == k)
+        if (s->pof[j] == k || !tb__near_element(s, j, cen, rad))
             continue;
         const tb_rad_element *ej = &s->m.elems[j];
         const tb_ff_polygon *pj = &s->polys[j];
-        double rj2 = 0.0;
-        for (int q = 0; q < pj->n; q++)
-            rj2 = fmax(rj2, (double)tb_vec3_length2(tb_vec3_sub(pj->v[q], ej->centroid)));
-        double lim = TB__RAD_NEAR * rad + sqrt(rj2);
-        if ((double)tb_vec3_length2(tb_vec3_sub(ej->centroid, cen)) >= lim * lim)
-            continue;
         double open = tb_ff_point_polygon(cen, nrm, pj), vis = 1.0;
         if (open > 0.0 && isfinite(open))
             vis = fmin(1.0, s->ff[j] / open);
@@ -947,9 +956,7 @@ static void tb__near_field(tb_rad_solver *s, size_t sk)
     const tb_ff_polygon *poly = &s->spoly[sk];
     const tb_vec3 cen = s->scen[sk], nrm = s->snrm[sk];
     const double area = s->sarea[sk];
-    double rad2 = 0.0;
-    for (int k = 0; k < poly->n; k++)
-        rad2 = fmax(rad2, (double)tb_vec3_length2(tb_vec3_sub(poly->v[k], cen)));
+    double rad2 = tb__radius2(poly, cen);
     double rad = sqrt(rad2), near2 = TB__RAD_NEAR * TB__RAD_NEAR * rad2;
     for (size_t v = 0; v < s->m.nverts; v++) {
         s->vvis[v] = NAN;
@@ -967,16 +974,10 @@ static void tb__near_field(tb_rad_solver *s, size_t sk)
     }
     s->nnear = 0;
     for (size_t j = 0; j < s->m.nelems; j++) {
-        if (s->pof[j] == sk)
+        if (s->pof[j] == sk || !tb__near_element(s, j, cen, rad))
             continue;
         const tb_rad_element *ej = &s->m.elems[j];
         const tb_ff_polygon *pj = &s->polys[j];
-        double rj2 = 0.0;
-        for (int k = 0; k < pj->n; k++)
-            rj2 = fmax(rj2, (double)tb_vec3_length2(tb_vec3_sub(pj->v[k], ej->centroid)));
-        double lim = TB__RAD_NEAR * rad + sqrt(rj2);
-        if ((double)tb_vec3_length2(tb_vec3_sub(ej->centroid, cen)) >= lim * lim)
-            continue;
         bool patch = s->pstart[sk + 1] - s->pstart[sk] > 1;
         double f = 0.0;
         if (patch)
