@@ -17,30 +17,8 @@ tb_status tb__rad_mesh_two_level(const tb_fed *fed, const tb_mesh_opts *patch_mo
     /* The patches as a FED (face k = patch k), with the surface's normals
      * and uvs: meshing it cuts each patch edge once for both patches that
      * share it, so the elements stay conforming across patch boundaries. */
-    size_t np = tb_mesh_nelems(patches), nv = patches->positions.len;
-    uint32_t *sizes = malloc(sizeof *sizes * (np ? np : 1)), *corners = malloc(sizeof *corners * (4 * np + 1));
-    if (!sizes || !corners) {
-        free(sizes), free(corners);
-        return tb_error(TB_ERR_NOMEM, "radiosity patches: out of memory");
-    }
-    uint32_t nc = 0;
-    for (size_t k = 0; k < np; k++) {
-        const tb_mesh_elem *e = tb_mesh_elem_at(patches, k);
-        sizes[k] = (uint32_t)tb_mesh_elem_size(e);
-        for (uint32_t q = 0; q < sizes[k]; q++)
-            corners[nc++] = e->v[q];
-    }
-    tb_fed_desc d = {.nverts = (uint32_t)nv,
-                     .positions = patches->positions.data,
-                     .normals = patches->normals.len == nv ? patches->normals.data : NULL,
-                     .uvs = patches->uvs.len == nv ? patches->uvs.data : NULL,
-                     .nfaces = (uint32_t)np,
-                     .nloops = (uint32_t)np,
-                     .loop_sizes = sizes,
-                     .corners = corners};
     tb_fed *pf = NULL;
-    st = tb_fed_build(&d, &pf, NULL);
-    free(sizes), free(corners);
+    st = tb_mesh_to_fed(patches, true, &pf);
     if (!st)
         st = tb_mesh_from_fed(pf, elem_mo, elems);
     tb_fed_free(pf);

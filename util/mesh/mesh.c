@@ -42,16 +42,16 @@ double tb_mesh_elem_area(const tb_mesh *m, size_t i)
     return 0.5 * sqrt(nv.x * nv.x + nv.y * nv.y + nv.z * nv.z);
 }
 
-tb_status tb_mesh_adjacency(const tb_mesh *m, tb_fed **out)
+tb_status tb_mesh_to_fed(const tb_mesh *m, bool attributes, tb_fed **out)
 {
     *out = NULL;
-    size_t ne = m->elems.len;
-    if (ne > TB_FED_MAX_COUNT || m->positions.len > TB_FED_MAX_COUNT)
-        return tb_error(TB_ERR_ARG, "mesh adjacency: too many elements or vertices");
+    size_t ne = m->elems.len, nv = m->positions.len;
+    if (ne > TB_FED_MAX_COUNT || nv > TB_FED_MAX_COUNT)
+        return tb_error(TB_ERR_ARG, "mesh to FED: too many elements or vertices");
     uint32_t *sizes = malloc(sizeof(uint32_t) * (ne + 1)), *corners = malloc(sizeof(uint32_t) * (4 * ne + 1));
     if (!sizes || !corners) {
         free(sizes), free(corners);
-        return tb_error(TB_ERR_NOMEM, "mesh adjacency: out of memory");
+        return tb_error(TB_ERR_NOMEM, "mesh to FED: out of memory");
     }
     uint32_t nc = 0;
     for (size_t i = 0; i < ne; i++) {
@@ -60,12 +60,20 @@ tb_status tb_mesh_adjacency(const tb_mesh *m, tb_fed **out)
         for (uint32_t k = 0; k < sizes[i]; k++)
             corners[nc++] = e->v[k];
     }
-    tb_fed_desc d = {.nverts = (uint32_t)m->positions.len, .positions = m->positions.data,
-                     .nfaces = (uint32_t)ne, .nloops = (uint32_t)ne, .loop_sizes = sizes, .corners = corners};
+    tb_fed_desc d = {.nverts = (uint32_t)nv,
+                     .positions = m->positions.data,
+                     .normals = attributes && m->normals.len == nv ? m->normals.data : NULL,
+                     .uvs = attributes && m->uvs.len == nv ? m->uvs.data : NULL,
+                     .nfaces = (uint32_t)ne,
+                     .nloops = (uint32_t)ne,
+                     .loop_sizes = sizes,
+                     .corners = corners};
     tb_status st = tb_fed_build(&d, out, NULL);
     free(sizes), free(corners);
     return st;
 }
+
+tb_status tb_mesh_adjacency(const tb_mesh *m, tb_fed **out) { return tb_mesh_to_fed(m, false, out); }
 
 bool tb_mesh_quad_check(const tb_vec3 q[4], double rel_tol, double *score)
 {

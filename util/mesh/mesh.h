@@ -90,11 +90,15 @@ double tb_mesh_elem_area(const tb_mesh *m, size_t i);
  * float resolution of the mesh; TB_ERR_NOMEM. */
 tb_status tb_mesh_from_fed(const tb_fed *fed, const tb_mesh_opts *opts, tb_mesh *out);
 
-/* The elements as a FED mesh (face i = element i, same vertex indices and
- * positions): its edges, edge uses and vertex-face lists are the element
- * adjacency (the neighbour across an edge, the elements around a vertex)
- * that adaptive refinement needs (docs/meshing.md, "Adaptive refinement").
- * TB_ERR_FORMAT if an element is degenerate. */
+/* The elements as a FED mesh: face i = element i, with the same vertex
+ * indices and positions, and with `attributes` the per-vertex normals and uvs
+ * the mesh has. TB_ERR_FORMAT if an element is degenerate. */
+tb_status tb_mesh_to_fed(const tb_mesh *m, bool attributes, tb_fed **out);
+
+/* tb_mesh_to_fed without the attributes: its edges, edge uses and
+ * vertex-face lists are the element adjacency (the neighbour across an edge,
+ * the elements around a vertex) that adaptive refinement needs
+ * (docs/meshing.md, "Adaptive refinement"). */
 tb_status tb_mesh_adjacency(const tb_mesh *m, tb_fed **out);
 
 /* The quad criterion (docs/meshing.md, "Quads"): the quad q[0..3] is
