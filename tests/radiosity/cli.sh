@@ -6,11 +6,7 @@
 # --reference, --mesh-out PLY, the default element size, and bad options: a clear message, a non-zero
 # exit and no file left behind.
 set -u
-T="${TB_TEST_TMPDIR:-/tmp}/radiosity_cli.$$"
-rm -rf "$T" && mkdir -p "$T"
-FURNACE="$TB_SOURCE_DIR/tests/radiosity/furnace.mid"
-fail() { echo "FAIL: $*"; exit 1; }
-rad() { "$TESTBED" render --method radiosity "$@"; }
+NAME=radiosity_cli; . "$TB_SOURCE_DIR/tests/radiosity/rad_cli.sh"
 
 # --- the furnace, 1 and 2 threads
 rad "$FURNACE" --max-edge 0.25 --samples 16 --threshold 1e-3 --threads 1 --patches "$T/a.csv" \

@@ -10,10 +10,8 @@
 # cone, pi R^2 E through the mesh's bounding sphere) and its bookkeeping, the
 # same CSV bytes for 1 and 2 threads, and --help.
 set -u
-T="${TB_TEST_TMPDIR:-/tmp}/radiosity_lights.$$"
-rm -rf "$T" && mkdir -p "$T"
+NAME=radiosity_lights; . "$TB_SOURCE_DIR/tests/radiosity/rad_cli.sh"
 SCENE="$TB_SOURCE_DIR/tests/radiosity/lights.mid"
-fail() { echo "FAIL: $*"; exit 1; }
 
 "$TESTBED" render "$SCENE" -o "$T/rt.pfm" --spp 16 > "$T/o1" 2>&1 || { cat "$T/o1"; fail "ray tracer"; }
 "$TESTBED" render "$SCENE" --method radiosity --max-edge 0.15 --spp 16 --threshold 1e-4 --threads 1 -o "$T/rad.pfm" \

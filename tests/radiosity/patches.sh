@@ -6,11 +6,7 @@
 # --stats, adaptive subdivision keeping the patches, 1 and 2 threads alike,
 # and bad options: a clear message, a non-zero exit, no file left behind.
 set -u
-T="${TB_TEST_TMPDIR:-/tmp}/radiosity_patches_cli.$$"
-rm -rf "$T" && mkdir -p "$T"
-FURNACE="$TB_SOURCE_DIR/tests/radiosity/furnace.mid"
-fail() { echo "FAIL: $*"; exit 1; }
-rad() { "$TESTBED" render --method radiosity "$@"; }
+NAME=radiosity_patches_cli; . "$TB_SOURCE_DIR/tests/radiosity/rad_cli.sh"
 
 rad "$FURNACE" --max-edge 0.25 --patch-edge 0.5 --samples 16 --threshold 1e-3 --threads 1 --patches "$T/a.csv" \
     --stats "$T/a.json" > "$T/out1" 2>&1 || { cat "$T/out1"; fail "furnace run"; }

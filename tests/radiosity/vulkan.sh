@@ -3,9 +3,7 @@
 # host/gpu/formfactor.h) against the CPU backend on the furnace: the same
 # shots, radiosities equal to float rounding. Skipped (77) without a device.
 set -u
-T="${TB_TEST_TMPDIR:-/tmp}/radiosity_vulkan.$$"
-rm -rf "$T" && mkdir -p "$T"
-FURNACE="$TB_SOURCE_DIR/tests/radiosity/furnace.mid"
+NAME=radiosity_vulkan; . "$TB_SOURCE_DIR/tests/radiosity/rad_cli.sh"
 run() { "$TESTBED" render --method radiosity "$FURNACE" --max-edge 0.25 --samples 8 --threshold 1e-2 "$@"; }
 if ! run --backend vulkan --patches "$T/v.csv" > "$T/v.log" 2>&1; then
     if grep -qi "no vulkan\|vulkan loader\|no device\|cannot load" "$T/v.log"; then
