@@ -1,23 +1,10 @@
 # Shell helpers shared by the GPU script tests (sourced: `. "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"`).
 
 # Image NMSE = sum (a - b)^2 / sum b^2 of two PFM files (b the reference).
-nmse() {
-    python3 - "$1" "$2" <<'EOF_PY'
-import struct, sys
-def rd(p):
-    with open(p, 'rb') as f:
-        assert f.readline().strip() == b'PF'
-        w, h = map(int, f.readline().split())
-        s = float(f.readline())
-        n = w * h * 3
-        return struct.unpack(('<' if s < 0 else '>') + '%df' % n, f.read(4 * n))
-a, b = rd(sys.argv[1]), rd(sys.argv[2])
-assert len(a) == len(b)
-num = sum((x - y) ** 2 for x, y in zip(a, b))
-den = sum(y * y for y in b)
-print('%.6g' % (num / den if den > 0 else float('inf')))
-EOF_PY
-}
+nmse() { python3 "$TB_SOURCE_DIR/tests/gpu/pfm_compare.py" nmse "$1" "$2"; }
+
+# mapcmp A.pfm B.pfm (sample maps): "differing-pixels total-A total-B min-A max-A pixels"
+mapcmp() { python3 "$TB_SOURCE_DIR/tests/gpu/pfm_compare.py" mapcmp "$1" "$2"; }
 
 # validate_scene OUT SCENE ARGS...: `testbed validate SCENE ARGS...` under the
 # validation layer, its output in OUT; exits the test (printing OUT) if it

@@ -17,22 +17,6 @@ fail() { echo "FAIL: $*"; [ -f "$t/ad.err" ] && cat "$t/ad.err"; [ -f "$t/ad.out
 
 . "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
 
-# mapcmp A.pfm B.pfm: "differing-pixels total-A total-B min-A max-A pixels"
-mapcmp() {
-    python3 - "$1" "$2" <<'EOF_PY'
-import struct, sys
-def rd(p):
-    with open(p, 'rb') as f:
-        assert f.readline().strip() == b'Pf'
-        w, h = map(int, f.readline().split())
-        s = float(f.readline())
-        return struct.unpack(('<' if s < 0 else '>') + '%df' % (w * h), f.read(4 * w * h))
-a, b = rd(sys.argv[1]), rd(sys.argv[2])
-assert len(a) == len(b)
-print(sum(x != y for x, y in zip(a, b)), int(sum(a)), int(sum(b)), int(min(a)), int(max(a)), len(a))
-EOF_PY
-}
-
 sized() { sed "s/resolution = \[[0-9]* [0-9]*\]/resolution = [$3 $4]/" "$1" >"$2"; }
 
 # name, size, options: the counts may differ in at most MAXDIFF pixels
