@@ -48,4 +48,25 @@ static inline char *tb_rad_test_slurp(const char *path, size_t *len)
     return buf;
 }
 
+/* The solver's energy bookkeeping on a solved mesh: absorbed + unshot +
+ * escaped = emitted, under 2% escaped, and the absorbed power equal to the
+ * one computed independently from the element radiosities,
+ * sum over elements and channels of (1 - rho) (B - E) / rho A. */
+static inline void tb_rad_test_check_energy(const tb_rad_solver *s, const tb_rad_mesh *m)
+{
+    tb_rad_energy en = tb_rad_solver_energy(s);
+    tb_assert_near(en.absorbed + en.unshot + en.escaped, en.emitted, 1e-9 * en.emitted);
+    assert_true(fabs(en.escaped) < 0.02 * en.emitted);
+    double absorbed = 0.0, b[TB_CHANNELS_MAX];
+    int nc = m->nchannels;
+    for (size_t i = 0; i < m->nelems; i++) {
+        tb_rad_element_radiosity(s, i, false, b);
+        for (int c = 0; c < nc; c++) {
+            double rho = m->rho[i * (size_t)nc + (size_t)c], e = m->emission[i * (size_t)nc + (size_t)c];
+            absorbed += (1.0 - rho) * (b[c] - e) / rho * m->elems[i].area;
+        }
+    }
+    tb_assert_near(absorbed, en.absorbed, 1e-6 * en.emitted);
+}
+
 #endif
