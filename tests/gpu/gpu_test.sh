@@ -6,6 +6,9 @@ nmse() { python3 "$TB_SOURCE_DIR/tests/gpu/pfm_compare.py" nmse "$1" "$2"; }
 # mapcmp A.pfm B.pfm (sample maps): "differing-pixels total-A total-B min-A max-A pixels"
 mapcmp() { python3 "$TB_SOURCE_DIR/tests/gpu/pfm_compare.py" mapcmp "$1" "$2"; }
 
+# sized IN.mid OUT.mid W H: the scene IN with its camera resolution set to W x H.
+sized() { sed "s/resolution = \[[0-9]* [0-9]*\]/resolution = [$3 $4]/" "$1" >"$2"; }
+
 # validate_scene OUT SCENE ARGS...: `testbed validate SCENE ARGS...` under the
 # validation layer, its output in OUT; exits the test (printing OUT) if it
 # fails or the layer reported anything.

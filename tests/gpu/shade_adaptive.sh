@@ -17,8 +17,6 @@ fail() { echo "FAIL: $*"; [ -f "$t/ad.err" ] && cat "$t/ad.err"; [ -f "$t/ad.out
 
 . "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
 
-sized() { sed "s/resolution = \[[0-9]* [0-9]*\]/resolution = [$3 $4]/" "$1" >"$2"; }
-
 # name, size, options: the counts may differ in at most MAXDIFF pixels
 check() {
     name=$1 w=$2 h=$3

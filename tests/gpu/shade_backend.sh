@@ -11,13 +11,13 @@ set -eu
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
 t="$TB_TEST_TMPDIR"
 fail() { echo "FAIL: $*"; [ -f "$t/backend.err" ] && cat "$t/backend.err"; [ -f "$t/backend.out" ] && cat "$t/backend.out"; exit 1; }
-sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [32 32]/' "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" >"$t/backend.mid"
 
 . "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
+sized "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" "$t/backend.mid" 32 32
 
 # More samples than a wavefront batch holds (65 536) in one tile: the tile is
 # rendered in runs of rows over several batches; same image as the CPU.
-sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [20 8]/' "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" >"$t/split.mid"
+sized "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" "$t/split.mid" 20 8
 "$TESTBED" render "$t/split.mid" -o "$t/split-cpu.pfm" --spp 600 --backend cpu >/dev/null 2>&1 || fail "cpu split"
 "$TESTBED" render "$t/split.mid" -o "$t/split-vk.pfm" --spp 600 --backend vulkan >"$t/backend.out" 2>&1 ||
     fail "vulkan split"

@@ -16,10 +16,8 @@ fail() { echo "FAIL: $*"; [ -f "$t/shade.err" ] && cat "$t/shade.err"; [ -f "$t/
 
 . "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
 
-small() { sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [48 48]/' "$1" >"$2"; }
-
 for name in cornell-box cornell-box-rgb materials; do
-    small "$TB_SOURCE_DIR/scenes/$name.mid" "$t/$name.mid"
+    sized "$TB_SOURCE_DIR/scenes/$name.mid" "$t/$name.mid" 48 48
     "$TESTBED" render "$t/$name.mid" -o "$t/$name-cpu.pfm" --spp 4 --backend cpu >/dev/null 2>"$t/shade.err" ||
         fail "cpu render of $name"
     TB_VK_VALIDATION=1 "$TESTBED" render "$t/$name.mid" -o "$t/$name-vk.pfm" --spp 4 --backend vulkan \
