@@ -9,7 +9,11 @@
 # shade_cli.sh.)
 set -eu
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
-t="$TB_TEST_TMPDIR"
+# A scratch folder of this script's own: the GPU scripts run in parallel and
+# write files of the same names (resized scenes, split-cpu.pfm).
+t="$TB_TEST_TMPDIR/shade_backend.$$"
+mkdir -p "$t"
+trap 'rm -rf "$t"' EXIT
 fail() { echo "FAIL: $*"; [ -f "$t/backend.err" ] && cat "$t/backend.err"; [ -f "$t/backend.out" ] && cat "$t/backend.out"; exit 1; }
 
 . "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
