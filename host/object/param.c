@@ -802,22 +802,30 @@ static void tb__poly_st(const tb__poly_frame *f, tb_dvec3 p, double *s, double *
  * even-odd rule) nearest to (s, t). */
 static void tb__poly_closest(const tb__poly_frame *f, const tb_vec3 *v, const int *idx, int nv, double *s, double *t)
 {
+    /* Inside first (most points are): the nearest edge point only when outside. */
     bool in = false;
-    double bd = INFINITY, bs = *s, bt = *t;
     double ps, pt;
+    tb__poly_st(f, tb__cv(v, idx, nv - 1), &ps, &pt);
+    for (int i = 0; i < nv; i++) {
+        double qs, qt;
+        tb__poly_st(f, tb__cv(v, idx, i), &qs, &qt);
+        if ((qt > *t) != (pt > *t) && *s < ps + (*t - pt) * (qs - ps) / (qt - pt))
+            in = !in;
+        ps = qs, pt = qt;
+    }
+    if (in)
+        return;
+    double bd = INFINITY, bs = *s, bt = *t;
     tb__poly_st(f, tb__cv(v, idx, nv - 1), &ps, &pt);
     for (int i = 0; i < nv; i++) {
         double qs, qt, cs, ct;
         tb__poly_st(f, tb__cv(v, idx, i), &qs, &qt);
-        if ((qt > *t) != (pt > *t) && *s < ps + (*t - pt) * (qs - ps) / (qt - pt))
-            in = !in;
         double d = tb__seg_closest(*s, *t, ps, pt, qs, qt, &cs, &ct);
         if (d < bd)
             bd = d, bs = cs, bt = ct;
         ps = qs, pt = qt;
     }
-    if (!in)
-        *s = bs, *t = bt;
+    *s = bs, *t = bt;
 }
 
 void tb_poly_frame_uv(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, int nv, tb_dvec3 p, double *u,
@@ -833,6 +841,72 @@ void tb_poly_frame_uv(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, 
 /* A polygon's triangles as corner numbers (0 .. nv-1) into its loop: the fan
  * from corner 0 when the loop is convex in its plane, else util/mesh's
  * ear-clipping triangulation of the loop's plane coordinates. */
+bool tb_poly_frame_convex(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, int nv)
+{
+    double ps, pt, qs, qt;
+    tb__poly_st(f, tb__cv(v, idx, nv - 2), &ps, &pt);
+    tb__poly_st(f, tb__cv(v, idx, nv - 1), &qs, &qt);
+    for (int i = 0; i < nv; i++) {
+        double rs, rt;
+        tb__poly_st(f, tb__cv(v, idx, i), &rs, &rt);
+        if ((qs - ps) * (rt - pt) - (qt - pt) * (rs - ps) < 0.0)
+            return false;
+        ps = qs, pt = qt, qs = rs, qt = rt;
+    }
+    return true;
+}
+
+/* Barycentric coordinates of (x, y) in the 2D triangle a b c; false if degenerate. */
+static bool tb__bary2(double x, double y, const double a[2], const double b[2], const double c[2], double w[3]);
+/* How far outside the triangle barycentric weights are (0 inside). */
+static double tb__bary_out(const double w[3]);
+
+/* (s, t) of p (nearest point of the loop when outside it) to (u, v) by the
+ * uvs of the triangle holding it (or coming closest); tri(j, c) gives the
+ * corner numbers (0 .. nv-1) of triangle j of n. False when every triangle
+ * is degenerate in the plane. */
+static bool tb__poly_tex_uv(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, const tb_vec2 *uvs, int nv,
+                            const uint32_t (*tc)[3], int n, tb_dvec3 p, double *u, double *w)
+{
+    double s, t;
+    tb__poly_st(f, p, &s, &t);
+    tb__poly_closest(f, v, idx, nv, &s, &t);
+    int best = -1;
+    double bw[3] = {0, 0, 0}, bo = INFINITY;
+    int bc[3] = {0, 0, 0};
+    for (int j = 0; j < n; j++) {
+        int c[3];
+        if (!tc)
+            c[0] = 0, c[1] = j + 1, c[2] = j + 2;
+        else
+            c[0] = (int)tc[j][0], c[1] = (int)tc[j][1], c[2] = (int)tc[j][2];
+        double P[3][2];
+        for (int i = 0; i < 3; i++)
+            tb__poly_st(f, tb__cv(v, idx, c[i]), &P[i][0], &P[i][1]);
+        double wt[3];
+        if (!tb__bary2(s, t, P[0], P[1], P[2], wt))
+            continue;
+        double o = tb__bary_out(wt);
+        if (o < bo)
+            bo = o, best = j, bw[0] = wt[0], bw[1] = wt[1], bw[2] = wt[2], bc[0] = c[0], bc[1] = c[1], bc[2] = c[2];
+        if (o == 0.0)
+            break;
+    }
+    if (best < 0)
+        return false;
+    tb_vec2 a = uvs[idx ? idx[bc[0]] : bc[0]], b = uvs[idx ? idx[bc[1]] : bc[1]], c = uvs[idx ? idx[bc[2]] : bc[2]];
+    *u = tb__clamp01(bw[0] * a.x + bw[1] * b.x + bw[2] * c.x);
+    *w = tb__clamp01(bw[0] * a.y + bw[1] * b.y + bw[2] * c.y);
+    return true;
+}
+
+void tb_poly_fan_uv(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, const tb_vec2 *uvs, int nv, tb_dvec3 p,
+                    double *u, double *w)
+{
+    if (!tb__poly_tex_uv(f, v, idx, uvs, nv, NULL, nv - 2, p, u, w))
+        *u = *w = 0.0;
+}
+
 typedef struct tb__poly_tris {
     int n;           /* triangles */
     uint32_t (*c)[3]; /* corners, or NULL for the fan */
@@ -848,18 +922,7 @@ static tb_status tb__poly_tris_of(const tb_geom_polygons *g, int face, const tb_
     t->n = nv - 2, t->c = NULL;
     if (nv == 3)
         return TB_OK;
-    double ps, pt, qs, qt;
-    tb__poly_st(f, tb__pv(g, face, nv - 2), &ps, &pt);
-    tb__poly_st(f, tb__pv(g, face, nv - 1), &qs, &qt);
-    bool convex = true;
-    for (int i = 0; i < nv && convex; i++) {
-        double rs, rt;
-        tb__poly_st(f, tb__pv(g, face, i), &rs, &rt);
-        if ((qs - ps) * (rt - pt) - (qt - pt) * (rs - ps) < 0.0)
-            convex = false;
-        ps = qs, pt = qt, qs = rs, qt = rt;
-    }
-    if (convex)
+    if (tb_poly_frame_convex(f, g->vertices, g->indices + g->face_start[face], nv))
         return TB_OK;
     double *xy = malloc(sizeof(double) * 2 * (size_t)nv);
     if (!xy)
@@ -976,39 +1039,12 @@ static tb_status tb__poly_project(const tb_geom_polygons *g, int face, tb_dvec3 
         tb_poly_frame_uv(&f, g->vertices, idx, nv, p, u, v);
         return TB_OK;
     }
-    double s, t;
-    tb__poly_st(&f, p, &s, &t);
-    tb__poly_closest(&f, g->vertices, idx, nv, &s, &t);
     tb__poly_tris tr;
     if ((st = tb__poly_tris_of(g, face, &f, &tr)))
         return st;
-    int best = -1;
-    double bw[3] = {0, 0, 0}, bo = INFINITY;
-    for (int j = 0; j < tr.n; j++) {
-        int c[3];
-        tb__poly_tri(g, face, &tr, j, c);
-        double P[3][2];
-        for (int i = 0; i < 3; i++)
-            tb__poly_st(&f, tb_vec3_to_d(g->vertices[c[i]]), &P[i][0], &P[i][1]);
-        double w[3];
-        if (!tb__bary2(s, t, P[0], P[1], P[2], w))
-            continue;
-        double o = tb__bary_out(w);
-        if (o < bo)
-            bo = o, best = j, bw[0] = w[0], bw[1] = w[1], bw[2] = w[2];
-        if (o == 0.0)
-            break;
-    }
-    int c[3];
-    if (best >= 0)
-        tb__poly_tri(g, face, &tr, best, c);
-    tb__poly_tris_free(&tr);
-    if (best < 0) {
+    if (!tb__poly_tex_uv(&f, g->vertices, idx, g->uvs, nv, (const uint32_t(*)[3])tr.c, tr.n, p, u, v))
         *u = *v = 0.0;
-        return TB_OK;
-    }
-    *u = tb__clamp01(bw[0] * g->uvs[c[0]].x + bw[1] * g->uvs[c[1]].x + bw[2] * g->uvs[c[2]].x);
-    *v = tb__clamp01(bw[0] * g->uvs[c[0]].y + bw[1] * g->uvs[c[1]].y + bw[2] * g->uvs[c[2]].y);
+    tb__poly_tris_free(&tr);
     return TB_OK;
 }
 

@@ -203,4 +203,16 @@ bool tb_poly_frame_make(const tb_vec3 *v, const int *idx, int nv, tb_poly_frame 
 void tb_poly_frame_uv(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, int nv, tb_dvec3 p, double *u,
                       double *w);
 
+/* Whether the loop (v, idx, nv as for tb_poly_frame_make) turns the same way
+ * at every corner in the frame's plane, as tb_param_from_point decides it
+ * (a convex loop is split as the fan from corner 0, else ear-clipped). */
+bool tb_poly_frame_convex(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, int nv);
+
+/* (u, v) of p for a convex polygon with per-vertex uvs (uvs indexed like v),
+ * as tb_param_from_point gives it: the nearest point of the loop, then the
+ * uvs of the fan triangle holding it (or coming closest), clamped to [0, 1].
+ * Exposed for the same memo as tb_poly_frame_uv. */
+void tb_poly_fan_uv(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, const tb_vec2 *uvs, int nv,
+                    tb_dvec3 p, double *u, double *w);
+
 #endif

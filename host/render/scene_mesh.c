@@ -66,7 +66,7 @@ static bool tb__better(float t, uint32_t object, uint32_t face, uint32_t index)
     return index < b->index;
 }
 
-/* ------------------------------------------------ (u, v) of a face without uvs
+/* ------------------------------------------------------ (u, v) of a face
  *
  * tb_param_from_point recomputes the polygon's frame (Newell normal, in-plane
  * axes, the face's extent in them) on every call, which is most of the cost
@@ -75,8 +75,10 @@ static bool tb__better(float t, uint32_t object, uint32_t face, uint32_t index)
  * tb_poly_frame_make / tb_poly_frame_uv, the functions tb_param_from_point
  * itself uses, so (u, v) are the object level's bit for bit
  * (tests/render/test_scene_accel.c compares every hit with
- * tb_object_intersect's byte for byte). Faces with uvs or more than
- * TB__UV_MAX_NV corners use tb_param_from_point. */
+ * tb_object_intersect's byte for byte). Convex faces with uvs likewise
+ * (tb_poly_fan_uv, with the uvs in the key); non-convex faces with uvs
+ * (ear-clipped by param) or more than TB__UV_MAX_NV corners use
+ * tb_param_from_point. */
 #define TB__UV_MAX_NV 8
 #define TB__UV_SLOTS 256u
 
@@ -84,8 +86,10 @@ typedef struct tb__uv_frame {
     const tb_geom_polygons *g; /* key: geometry, face, and the corners themselves */
     int face, nv;
     tb_vec3 corner[TB__UV_MAX_NV];
+    tb_vec2 uv[TB__UV_MAX_NV]; /* the corners' uvs, when the geometry has them */
     tb_poly_frame frame;
     bool ok;                   /* the frame exists (else param's error path: u = v = 0) */
+    bool fan;                  /* with uvs: the loop is convex (param splits it as the fan) */
 } tb__uv_frame;
 
 static _Thread_local tb__uv_frame tb__uv_cache[TB__UV_SLOTS];
@@ -103,7 +107,8 @@ static const tb__uv_frame *tb__uv_frame_of(const tb_geom_polygons *g, int face)
         int idx = g->indices[b + i];
         if (idx < 0 || idx >= g->nvertices)
             return NULL;
-        same = memcmp(&f->corner[i], &g->vertices[idx], sizeof(tb_vec3)) == 0;
+        same = memcmp(&f->corner[i], &g->vertices[idx], sizeof(tb_vec3)) == 0 &&
+               (!g->uvs || memcmp(&f->uv[i], &g->uvs[idx], sizeof(tb_vec2)) == 0);
     }
     if (same)
         return f;
@@ -114,9 +119,12 @@ static const tb__uv_frame *tb__uv_frame_of(const tb_geom_polygons *g, int face)
             return NULL;
         }
         f->corner[i] = g->vertices[idx];
+        if (g->uvs)
+            f->uv[i] = g->uvs[idx];
     }
     f->g = g, f->face = face, f->nv = nv;
     f->ok = tb_poly_frame_make(f->corner, NULL, nv, &f->frame);
+    f->fan = f->ok && (nv == 3 || tb_poly_frame_convex(&f->frame, f->corner, NULL, nv));
     return f;
 }
 
@@ -133,9 +141,14 @@ void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
     int pf = (int)face;
     double u = 0.0, v = 0.0;
     const tb_geom_polygons *g = &o->geom.polygons;
-    const tb__uv_frame *f = !g->uvs && tb_dvec3_isfinite(p) ? tb__uv_frame_of(g, (int)face) : NULL;
+    const tb__uv_frame *f = tb_dvec3_isfinite(p) ? tb__uv_frame_of(g, (int)face) : NULL;
+    if (f && g->uvs && !f->fan)
+        f = NULL; /* ear-clipped or no area: param's own path */
     if (f) {
-        if (f->ok)
+        /* !f->ok: no area, param's error path (u = v = 0) */
+        if (f->ok && g->uvs)
+            tb_poly_fan_uv(&f->frame, f->corner, NULL, f->uv, f->nv, p, &u, &v);
+        else if (f->ok)
             tb_poly_frame_uv(&f->frame, f->corner, NULL, f->nv, p, &u, &v);
     } else if (tb_param_from_point(o->kind, &o->geom, p, (int)face, &pf, &u, &v) != TB_OK) {
         u = v = 0.0;

@@ -352,6 +352,40 @@ static void test_fed_file(void **state)
     remove(path);
 }
 
+/* Polygons with per-vertex uvs: convex faces (triangle, quad, pentagon; the
+ * scene's memo with tb_poly_fan_uv), a non-convex L (param's ear-clipped
+ * path; its uvs are not affine, so the fan would give other (u, v)), two
+ * objects with the same corners but other uvs, under a mirroring transform
+ * too. (u, v) must be tb_object_intersect's bit for bit. */
+static void test_uv_polygons(void **state)
+{
+    (void)state;
+    static const char text[] =
+        "mid 1\ncamera { eye = [0 -6 3] look_at = [0 0 0] up = [0 0 1] resolution = [64 64] }\n"
+        "polygons { transform = [rotate([1 0 0], 20) translate([0 0 0.5])]\n"
+        "  geometry = { vertices = [[-1 -1 0] [1 -1 0] [1 1 0] [-1 1 0] [0 1.6 0.1] [2 -1 0] [2.5 1 0]]\n"
+        "    faces = [[0 1 2 3] [3 2 4] [1 5 6 2]]\n"
+        "    uvs = [[0 0] [1 0] [1 1] [0 1] [0.5 0.9] [0.2 0.3] [0.9 0.1]] } }\n"
+        "polygons { transform = [rotate([1 0 0], 20) translate([0 0 0.5])]\n"
+        "  geometry = { vertices = [[-1 -1 0] [1 -1 0] [1 1 0] [-1 1 0] [0 1.6 0.1] [2 -1 0] [2.5 1 0]]\n"
+        "    faces = [[0 1 2 3] [3 2 4] [1 5 6 2]]\n"
+        "    uvs = [[1 1] [0.3 0] [0 0.7] [0.5 0.5] [0 0] [1 0] [0.4 0.6]] } }\n"
+        "polygons { transform = [scale([-1.5 1 1]) rotate([0 1 1], 50) translate([0.2 0 -0.8])]\n"
+        "  geometry = { vertices = [[0 0 0] [2 0 0] [2 1 0] [1 1 0] [1 2 0] [0 2 0] [-1 0.5 0] [-0.5 -0.5 0]]\n"
+        "    faces = [[0 1 2 3 4 5] [0 5 6 7]]\n"
+        "    uvs = [[0 0] [1 0] [1 0.5] [0.8 0.3] [0.5 1] [0 1] [0.2 0.2] [0.7 0.1]] } }\n"
+        "sphere { transform = [scale(0.3) translate([0 0 -1.5])] }\n";
+    FILE *fp = fmemopen((void *)text, strlen(text), "r");
+    assert_non_null(fp);
+    tb_scene *s;
+    if (tb_scene_load_stream(fp, "uv.mid", NULL, NULL, &s))
+        fail_msg("%s", tb_last_error());
+    fclose(fp);
+    assert_int_equal(s->nobjects, 4);
+    check_scene("uv polygons", s, 6000, tb_test_seed("uv polygons", 7));
+    tb_scene_free(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -359,6 +393,7 @@ int main(void)
         cmocka_unit_test(test_showcase),
         cmocka_unit_test(test_meshes),
         cmocka_unit_test(test_fed_file),
+        cmocka_unit_test(test_uv_polygons),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
