@@ -128,6 +128,18 @@ static tb_vec3 tb__world_normal(const tb__xing *x)
     return (tb_vec3){(float)(n.x * s), (float)(n.y * s), (float)(n.z * s)};
 }
 
+/* The crossing of this thread's last successful tb_object_intersect, with
+ * its object and ray (o, d, tmin), so that tb_object_hit_point on the
+ * winner of a scene query need not sweep (CSG trees) again. */
+typedef struct tb__last_xing {
+    const tb_object *obj;
+    tb_vec3 o, d;
+    float tmin;
+    tb__xing x;
+} tb__last_xing;
+
+static _Thread_local tb__last_xing tb__last;
+
 bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
 {
     if (!obj || !ray || !tb__ray_ok(ray))
@@ -135,6 +147,7 @@ bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
     tb__xing x;
     if (!tb__closest(obj, ray, ray->tmin, ray->tmax, &x))
         return false;
+    tb__last = (tb__last_xing){obj, ray->o, ray->d, ray->tmin, x};
     const tb_object *leaf = x.leaf;
     tb__oray r = tb__object_ray(leaf, ray);
     tb_dvec3 p = {r.o.x + x.t * r.d.x, r.o.y + x.t * r.d.y, r.o.z + x.t * r.d.z};
@@ -278,9 +291,20 @@ bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *
     float tmax = ray->tmax;
     if (!(tmax > hit->t))
         tmax = tb_next_float_up(hit->t); /* the query's tmax may have been shortened to t */
+    /* tb__closest returns the first crossing of a list sorted by t whose
+     * float t is in [tmin, tmax]; the crossings before the memo's failed
+     * that test with t below the memo's, so by tmin alone, and the memo's is
+     * in this range too: with the same object and ray (o, d, tmin) it is
+     * this query's answer whatever tmax the earlier query had. */
     tb__xing x;
-    if (!tb__closest(obj, ray, ray->tmin, tmax, &x) || (float)x.t != hit->t ||
-        x.leaf->face_base + x.face != hit->face)
+    const tb__last_xing *c = &tb__last;
+    if (c->obj == obj && (float)c->x.t == hit->t && (float)c->x.t <= tmax &&
+        memcmp(&c->o, &ray->o, sizeof c->o) == 0 && memcmp(&c->d, &ray->d, sizeof c->d) == 0 &&
+        memcmp(&c->tmin, &ray->tmin, sizeof c->tmin) == 0)
+        x = c->x;
+    else if (!tb__closest(obj, ray, ray->tmin, tmax, &x))
+        return false;
+    if ((float)x.t != hit->t || x.leaf->face_base + x.face != hit->face)
         return false;
     const tb_object *leaf = x.leaf;
     tb__oray r = tb__object_ray(leaf, ray);

@@ -386,6 +386,48 @@ static void test_uv_polygons(void **state)
     tb_scene_free(s);
 }
 
+/* tb_object_hit_point after a scene query reuses the crossing the winner's
+ * tb_object_intersect found (a per-thread memo, intersect.c); it must give
+ * bit for bit what a fresh sweep gives. Fresh: the memo is first pointed at
+ * another object by intersecting the previous ray's winner again. */
+static void test_hit_point_memo(void **state)
+{
+    (void)state;
+    tb_scene *s;
+    if (tb_scene_load(TB_SOURCE_DIR "/scenes/showcase.mid", NULL, &s))
+        fail_msg("%s", tb_last_error());
+    tb_rng r;
+    tb_rng_seed(&r, tb_test_seed("hit point memo", 8), 0);
+    size_t n;
+    tb_ray *rays = make_rays(s, &r, (size_t)scaled(6000), &n);
+    long checked = 0, differ = 0;
+    const tb_object *prev = NULL;
+    tb_ray prev_ray = {0};
+    for (size_t i = 0; i < n; i++) {
+        tb_hit h;
+        if (!tb_scene_intersect(s, &rays[i], &h))
+            continue;
+        const tb_object *o = s->objects[h.object];
+        tb_vec3 p1 = {0}, e1 = {0}, p2 = {0}, e2 = {0};
+        bool ok1 = tb_object_hit_point(o, &rays[i], &h, &p1, &e1);
+        if (prev && prev != o && o->kind != TB_PRIM_POLYGONS) {
+            tb_hit other;
+            assert_true(tb_object_intersect(prev, &prev_ray, &other));
+            bool ok2 = tb_object_hit_point(o, &rays[i], &h, &p2, &e2);
+            checked++;
+            if (ok1 != ok2 || memcmp(&p1, &p2, sizeof p1) != 0 || memcmp(&e1, &e2, sizeof e1) != 0)
+                differ++;
+        }
+        if (o->kind != TB_PRIM_POLYGONS && tb_object_intersect(o, &rays[i], &(tb_hit){0}))
+            prev = o, prev_ray = rays[i];
+    }
+    print_message("hit point memo: %ld hits checked, %ld differ\n", checked, differ);
+    assert_true(checked > (long)n / 10);
+    assert_int_equal(differ, 0);
+    free(rays);
+    tb_scene_free(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -394,6 +436,7 @@ int main(void)
         cmocka_unit_test(test_meshes),
         cmocka_unit_test(test_fed_file),
         cmocka_unit_test(test_uv_polygons),
+        cmocka_unit_test(test_hit_point_memo),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
