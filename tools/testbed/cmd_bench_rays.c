@@ -347,7 +347,9 @@ static void tb__rays_usage(FILE *out)
             "  --rays N     N random camera rays (default: one per pixel at the file's resolution)\n"
             "  --threads T  comma-separated thread counts (default 1,2)\n"
             "  --seed S     random seed (default 1)\n"
-            "  --repeat R   timed runs per measurement, best kept (default 3)\n"
+            "  --repeat R   timed rounds, best kept per measurement (default 3); each round runs\n"
+            "               every thread count, ours then Embree, so a short disturbance spoils one\n"
+            "               round of each, not every repeat of one\n"
             "  --no-stats   turn the statistics counters (util/stats) off while tracing\n"
             "\n"
             "Exit status: 0 done, 1 the scene could not be loaded or Embree failed, 2 usage error.\n");
@@ -498,32 +500,39 @@ int tb_cmd_bench_rays(int argc, char **argv)
         double rate_ours[8] = {0}, rate_em[8] = {0}, cpu_ours[8] = {0}, cpu_em[8] = {0};
         size_t hits = 0, differ = 0;
         double nodes = 0.0, tests = 0.0; /* our BVH per ray (0 with --no-stats) */
-        for (int ti = 0; ti < nthreads; ti++) {
-            double best = INFINITY, bestc = INFINITY, c;
-            int64_t nodes0 = tb__counter("BVH/nodes visited"), tests0 = tb__counter("BVH/primitives tested");
-            for (uint64_t r = 0; r < repeat; r++) {
+        /* Repeats interleaved: each round runs every thread count, ours then
+         * Embree, so a disturbance of a few milliseconds (a short set takes
+         * ~10 ms) costs one round of each measurement, not all the repeats of
+         * one of them; the best of the rounds is kept per measurement. */
+        double best_ours[8], bestc_ours[8], best_em[8], bestc_em[8];
+        for (int ti = 0; ti < nthreads; ti++)
+            best_ours[ti] = bestc_ours[ti] = best_em[ti] = bestc_em[ti] = INFINITY;
+        for (uint64_t r = 0; r < repeat; r++)
+            for (int ti = 0; ti < nthreads; ti++) {
+                double c;
+                int64_t nodes0 = tb__counter("BVH/nodes visited"), tests0 = tb__counter("BVH/primitives tested");
                 double t = tb__trace_ours(s, rs, k, threads[ti], ti == 0 && r == 0 ? ours : NULL, &c);
                 if (r == 0 && ti == 0) {
                     nodes = (double)(tb__counter("BVH/nodes visited") - nodes0) / (double)rs->n;
                     tests = (double)(tb__counter("BVH/primitives tested") - tests0) / (double)rs->n;
                 }
-                best = t < best ? t : best;
-                bestc = c < bestc ? c : bestc;
-            }
-            rate_ours[ti] = (double)rs->n / best * 1e-6;
-            cpu_ours[ti] = (double)rs->n / bestc * 1e-6;
+                best_ours[ti] = t < best_ours[ti] ? t : best_ours[ti];
+                bestc_ours[ti] = c < bestc_ours[ti] ? c : bestc_ours[ti];
 #ifdef TB_HAVE_EMBREE
-            if (embree) {
-                best = INFINITY, bestc = INFINITY;
-                for (uint64_t r = 0; r < repeat; r++) {
-                    double t = tb__trace_embree(&e, rs, k, threads[ti], ti == 0 && r == 0 ? theirs : NULL, &c);
-                    best = t < best ? t : best;
-                    bestc = c < bestc ? c : bestc;
+                if (embree) {
+                    t = tb__trace_embree(&e, rs, k, threads[ti], ti == 0 && r == 0 ? theirs : NULL, &c);
+                    best_em[ti] = t < best_em[ti] ? t : best_em[ti];
+                    bestc_em[ti] = c < bestc_em[ti] ? c : bestc_em[ti];
                 }
-                rate_em[ti] = (double)rs->n / best * 1e-6;
-                cpu_em[ti] = (double)rs->n / bestc * 1e-6;
-            }
 #endif
+            }
+        for (int ti = 0; ti < nthreads; ti++) {
+            rate_ours[ti] = (double)rs->n / best_ours[ti] * 1e-6;
+            cpu_ours[ti] = (double)rs->n / bestc_ours[ti] * 1e-6;
+            if (embree) {
+                rate_em[ti] = (double)rs->n / best_em[ti] * 1e-6;
+                cpu_em[ti] = (double)rs->n / bestc_em[ti] * 1e-6;
+            }
             if (ti == 0)
                 for (size_t i = 0; i < rs->n; i++) {
                     hits += ours[i].object != UINT32_MAX;
