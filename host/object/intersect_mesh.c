@@ -579,15 +579,27 @@ static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, dou
                 continue;
             if (!((float)t >= tmin && (float)t <= *tmax)) /* on the float t, as intersect.c */
                 continue;
+            bool had = found;
             found = true;
             tb__xing x = {t, {0, 0, 0}, o, m->tri_face[i], i, dir};
             if (mode == 1)
                 return true;
-            x.n = tb__tri_normal(m, i);
             if (mode == 0) {
-                *tmax = t;
+                /* The closest hit is the least in the scene's tie rule
+                 * (docs/accel.md): float t, then face, then triangle, so the
+                 * order the BVH meets triangles hit at one float t (a ray
+                 * through a fold of a non-planar polygon crosses both of its
+                 * triangles there) does not decide, and the record is the
+                 * scene's per-triangle one. tmax keeps the best float t, so
+                 * later triangles tying with it are still tested. */
+                if (had && (float)t == (float)hit->t &&
+                    (x.face > hit->face || (x.face == hit->face && i > hit->tri)))
+                    continue;
+                x.n = tb__tri_normal(m, i);
+                *tmax = (float)t;
                 *hit = x;
             } else {
+                x.n = tb__tri_normal(m, i);
                 tb__xbuf_push(out, &x);
             }
         }
