@@ -1,5 +1,14 @@
 # Shell helpers shared by the GPU script tests (sourced: `. "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"`).
 
+# scratch_dir NAME: sets t to a folder of the calling script's own under
+# $TB_TEST_TMPDIR, removed on exit. The GPU scripts run in parallel and write
+# files of the same names (resized scenes, split-cpu.pfm).
+scratch_dir() {
+    t="$TB_TEST_TMPDIR/$1.$$"
+    mkdir -p "$t"
+    trap 'rm -rf "$t"' EXIT
+}
+
 # Image NMSE = sum (a - b)^2 / sum b^2 of two PFM files (b the reference).
 nmse() { python3 "$TB_SOURCE_DIR/tests/gpu/pfm_compare.py" nmse "$1" "$2"; }
 

@@ -12,14 +12,9 @@
 # --threads 1 and 2.
 set -eu
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
-# A scratch folder of this script's own: the GPU scripts run in parallel and
-# write files of the same names (resized scenes, split-cpu.pfm).
-t="$TB_TEST_TMPDIR/shade_adaptive.$$"
-mkdir -p "$t"
-trap 'rm -rf "$t"' EXIT
-fail() { echo "FAIL: $*"; [ -f "$t/ad.err" ] && cat "$t/ad.err"; [ -f "$t/ad.out" ] && cat "$t/ad.out"; exit 1; }
-
 . "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
+scratch_dir shade_adaptive
+fail() { echo "FAIL: $*"; [ -f "$t/ad.err" ] && cat "$t/ad.err"; [ -f "$t/ad.out" ] && cat "$t/ad.out"; exit 1; }
 
 # name, size, options: the counts may differ in at most MAXDIFF pixels
 check() {

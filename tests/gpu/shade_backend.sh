@@ -9,14 +9,10 @@
 # shade_cli.sh.)
 set -eu
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
-# A scratch folder of this script's own: the GPU scripts run in parallel and
-# write files of the same names (resized scenes, split-cpu.pfm).
-t="$TB_TEST_TMPDIR/shade_backend.$$"
-mkdir -p "$t"
-trap 'rm -rf "$t"' EXIT
+. "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
+scratch_dir shade_backend
 fail() { echo "FAIL: $*"; [ -f "$t/backend.err" ] && cat "$t/backend.err"; [ -f "$t/backend.out" ] && cat "$t/backend.out"; exit 1; }
 
-. "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
 sized "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" "$t/backend.mid" 32 32
 
 # More samples than a wavefront batch holds (65 536) in one tile: the tile is

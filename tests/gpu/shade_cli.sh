@@ -11,14 +11,9 @@
 # usage errors: shade_backend.sh.)
 set -eu
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
-# A scratch folder of this script's own: the GPU scripts run in parallel and
-# write files of the same names (resized scenes, split-cpu.pfm).
-t="$TB_TEST_TMPDIR/shade_cli.$$"
-mkdir -p "$t"
-trap 'rm -rf "$t"' EXIT
-fail() { echo "FAIL: $*"; [ -f "$t/shade.err" ] && cat "$t/shade.err"; [ -f "$t/shade.out" ] && cat "$t/shade.out"; exit 1; }
-
 . "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
+scratch_dir shade_cli
+fail() { echo "FAIL: $*"; [ -f "$t/shade.err" ] && cat "$t/shade.err"; [ -f "$t/shade.out" ] && cat "$t/shade.out"; exit 1; }
 
 for name in cornell-box cornell-box-rgb materials; do
     sized "$TB_SOURCE_DIR/scenes/$name.mid" "$t/$name.mid" 48 48
