@@ -133,6 +133,7 @@ static tb_vec3 tb__world_normal(const tb__xing *x)
  * winner of a scene query need not sweep (CSG trees) again. */
 typedef struct tb__last_xing {
     const tb_object *obj;
+    unsigned long gen; /* tb__object_generation when stored: x.leaf points into obj's tree */
     tb_vec3 o, d;
     float tmin;
     tb__xing x;
@@ -147,7 +148,7 @@ bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
     tb__xing x;
     if (!tb__closest(obj, ray, ray->tmin, ray->tmax, &x))
         return false;
-    tb__last = (tb__last_xing){obj, ray->o, ray->d, ray->tmin, x};
+    tb__last = (tb__last_xing){obj, tb__object_generation, ray->o, ray->d, ray->tmin, x};
     const tb_object *leaf = x.leaf;
     tb__oray r = tb__object_ray(leaf, ray);
     tb_dvec3 p = {r.o.x + x.t * r.d.x, r.o.y + x.t * r.d.y, r.o.z + x.t * r.d.z};
@@ -298,7 +299,7 @@ bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *
      * this query's answer whatever tmax the earlier query had. */
     tb__xing x;
     const tb__last_xing *c = &tb__last;
-    if (c->obj == obj && (float)c->x.t == hit->t && (float)c->x.t <= tmax &&
+    if (c->obj == obj && c->gen == tb__object_generation && (float)c->x.t == hit->t && (float)c->x.t <= tmax &&
         memcmp(&c->o, &ray->o, sizeof c->o) == 0 && memcmp(&c->d, &ray->d, sizeof c->d) == 0 &&
         memcmp(&c->tmin, &ray->tmin, sizeof c->tmin) == 0)
         x = c->x;

@@ -152,4 +152,9 @@ static inline tb__oray tb__object_ray(const tb_object *o, const tb_ray *r)
     return q;
 }
 
+/* Counts object teardowns (tb__object_clear): per-thread memos that keep
+ * pointers into an object tree (tb_object_hit_point's crossing) are valid
+ * only while it is unchanged, since a later object may reuse the address. */
+extern _Atomic unsigned long tb__object_generation;
+
 #endif

@@ -425,8 +425,11 @@ tb_status tb_object_from_mid(const tb_mid_object *m, uint32_t index, tb_object_m
     return TB_OK;
 }
 
+_Atomic unsigned long tb__object_generation;
+
 static void tb__object_clear(tb_object *o)
 {
+    tb__object_generation++; /* invalidates memos that point into objects */
     for (int i = 0; i < o->nchildren; i++)
         tb__object_clear(&o->children[i]);
     free(o->children);
