@@ -163,8 +163,15 @@ bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
     hit->face = leaf->face_base + x.face;
     hit->u = (float)u;
     hit->v = (float)v;
-    hit->ng = tb__world_normal(&x);
+    /* A triangle's normal is kept by its mesh (the same formula). */
+    hit->ng = leaf->kind == TB_PRIM_POLYGONS ? leaf->mesh->wnormal[x.tri] : tb__world_normal(&x);
     return true;
+}
+
+tb_dvec3 tb_object_ray_point(const tb_object *obj, const tb_ray *ray, double t)
+{
+    tb__oray r = tb__object_ray(obj, ray);
+    return (tb_dvec3){r.o.x + t * r.d.x, r.o.y + t * r.d.y, r.o.z + t * r.d.z};
 }
 
 bool tb_object_occluded(const tb_object *obj, const tb_ray *ray)

@@ -52,7 +52,11 @@ bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *
 bool tb_object_triangle_crossing(const tb_object *obj, uint32_t tri, const tb_ray *ray, double *t);
 
 /* Unit world-space geometric normal of triangle `tri`, as tb_object_intersect
- * reports it for a hit on that triangle. */
+ * reports it for a hit on that triangle (kept per triangle: a load). */
 tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t tri);
+
+/* The point at line parameter t of the world ray, in obj's object space and
+ * in double, exactly as tb_object_intersect computes a hit point for (u, v). */
+tb_dvec3 tb_object_ray_point(const tb_object *obj, const tb_ray *ray, double t);
 
 #endif

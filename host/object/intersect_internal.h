@@ -19,6 +19,7 @@
  * normalised, so t means the same as in world space). */
 typedef struct tb__oray {
     tb_dvec3 o, d;
+    const tb_ray *world; /* the world ray it came from (polygons test in world space) */
 } tb__oray;
 
 /* One crossing of the line o + t d with a primitive's surface. */
@@ -147,6 +148,7 @@ static inline tb__oray tb__object_ray(const tb_object *o, const tb_ray *r)
     } else {
         q.o = tb_mat4_mul_point(&o->to_world.inv, (tb_dvec3){ox, oy, oz});
     }
+    q.world = r;
     q.d = (tb_dvec3){m[0][0] * dx + m[0][1] * dy + m[0][2] * dz, m[1][0] * dx + m[1][1] * dy + m[1][2] * dz,
                      m[2][0] * dx + m[2][1] * dy + m[2][2] * dz};
     return q;

@@ -1,6 +1,12 @@
 /* Polygons: triangulation once at build time, a BVH over the triangles, and
  * the watertight ray/triangle test of Woop, Benthin and Wald ("Watertight
- * Ray/Triangle Intersection", JCGT 2(1), 2013), evaluated in double.
+ * Ray/Triangle Intersection", JCGT 2(1), 2013), evaluated in double in world
+ * space: the vertices are mapped to world space once at build time (in
+ * double), so the test takes the world ray as it is, and a query that tests
+ * triangles of several meshes prepares the ray once (the scene level tests
+ * each triangle on its own, tb_object_triangle_crossing). The line parameter
+ * t is the same in both spaces (the object ray's direction is not
+ * normalised), so hit points and normals are still computed in object space.
  *
  * Watertightness: the ray is made the z axis of a sheared space; a vertex's
  * sheared coordinates are computed once per vertex, and the edge function of
@@ -42,8 +48,10 @@ void tb__mesh_free(tb_object_mesh *m)
     if (!m)
         return;
     free(m->vertices);
+    free(m->wvertices);
     free(m->tris);
     free(m->tri_face);
+    free(m->wnormal);
     free(m->nodes);
     free(m);
 }
@@ -59,6 +67,18 @@ typedef struct tb__bctx {
     tb_object_bvh_node *nodes;
     uint32_t nnodes;
 } tb__bctx;
+
+/* The largest float <= x and the least float >= x (x finite). */
+static float tb__float_down(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+static float tb__float_up(double x)
+{
+    float f = (float)x;
+    return (double)f < x ? nextafterf(f, INFINITY) : f;
+}
 
 static float tb__area(const float lo[3], const float hi[3])
 {
@@ -256,6 +276,8 @@ static bool tb__polygons_closed(const tb_geom_polygons *g)
     return closed;
 }
 
+static tb_vec3 tb__tri_world_normal(const tb_object *o, uint32_t tri);
+
 tb_status tb__mesh_build(tb_object *o)
 {
     const tb_geom_polygons *g = &o->geom.polygons;
@@ -268,6 +290,14 @@ tb_status tb__mesh_build(tb_object *o)
     if (!m->vertices)
         return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
     memcpy(m->vertices, g->vertices, sizeof(tb_vec3) * (size_t)g->nvertices);
+    m->wvertices = malloc(sizeof(tb_dvec3) * (g->nvertices ? (size_t)g->nvertices : 1));
+    if (!m->wvertices)
+        return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
+    for (int i = 0; i < g->nvertices; i++)
+        m->wvertices[i] = tb_transform_dpoint(&o->to_world, tb_vec3_to_d(g->vertices[i]));
+    /* A mirroring transform turns counter-clockwise into clockwise: the
+     * world-space determinant's sign then means the opposite side. */
+    m->wsign = tb_transform_swaps_handedness(&o->to_world) ? -1 : 1;
 
     /* Triangulate: triangles as they are, larger polygons (and FED faces
      * with holes) by ear clipping. */
@@ -363,9 +393,11 @@ tb_status tb__mesh_build(tb_object *o)
             p->hi[a] = -INFINITY;
         }
         for (int k = 0; k < 3; k++) {
-            tb_vec3 v = m->vertices[tv[3 * i + k]];
-            float vv[3] = {v.x, v.y, v.z};
-            tb__grow(p->lo, p->hi, vv, vv);
+            /* World positions rounded outward to float, so the box holds them. */
+            tb_dvec3 v = m->wvertices[tv[3 * i + k]];
+            float lo[3] = {tb__float_down(v.x), tb__float_down(v.y), tb__float_down(v.z)};
+            float hi[3] = {tb__float_up(v.x), tb__float_up(v.y), tb__float_up(v.z)};
+            tb__grow(p->lo, p->hi, lo, hi);
         }
         for (int a = 0; a < 3; a++)
             p->c[a] = 0.5f * p->lo[a] + 0.5f * p->hi[a];
@@ -385,6 +417,12 @@ tb_status tb__mesh_build(tb_object *o)
     tb_array_free(&tris);
     tb_array_free(&faces);
     o->closed = m->closed;
+    /* Hits report the normal of the triangle they land on: computed once. */
+    m->wnormal = malloc(sizeof *m->wnormal * (nt ? nt : 1));
+    if (!m->wnormal)
+        return tb_error(TB_ERR_NOMEM, "polygons: out of memory for %zu triangles", nt);
+    for (size_t i = 0; i < nt; i++)
+        m->wnormal[i] = tb__tri_world_normal(o, (uint32_t)i);
     return TB_OK;
 }
 
@@ -398,7 +436,7 @@ typedef struct tb__wray {
     double sx, sy, sz;
 } tb__wray;
 
-static void tb__wray_init(tb__wray *w, const tb__oray *r)
+static void tb__wray_init(tb__wray *w, const tb_ray *r)
 {
     w->o[0] = r->o.x;
     w->o[1] = r->o.y;
@@ -480,9 +518,10 @@ static bool tb__claims(int s, double px, double py, double qx, double qy)
     return ey > 0.0 || (ey == 0.0 && ex < 0.0);
 }
 
-/* Watertight ray/triangle test; on a hit writes t and dir (+1 front: the ray
- * enters the solid behind the counter-clockwise side). */
-static bool tb__tri(const tb__wray *w, tb_vec3 v0, tb_vec3 v1, tb_vec3 v2, double *t, int *dir)
+/* Watertight ray/triangle test on world-space corners; on a hit writes t and
+ * dir (+1: the ray meets the side from which the corners run
+ * counter-clockwise in world space; callers multiply by the mesh's wsign). */
+static bool tb__tri(const tb__wray *w, tb_dvec3 v0, tb_dvec3 v1, tb_dvec3 v2, double *t, int *dir)
 {
     double A[3] = {v0.x - w->o[0], v0.y - w->o[1], v0.z - w->o[2]};
     double B[3] = {v1.x - w->o[0], v1.y - w->o[1], v1.z - w->o[2]};
@@ -542,7 +581,7 @@ static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, dou
     if (!m || m->nnodes == 0)
         return false;
     tb__wray w;
-    tb__wray_init(&w, r);
+    tb__wray_init(&w, r->world);
     uint32_t stack[TB__BVH_STACK];
     int sp = 0;
     stack[sp++] = 0;
@@ -575,8 +614,9 @@ static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, dou
             const uint32_t *tv = &m->tris[3 * i];
             double t;
             int dir;
-            if (!tb__tri(&w, m->vertices[tv[0]], m->vertices[tv[1]], m->vertices[tv[2]], &t, &dir))
+            if (!tb__tri(&w, m->wvertices[tv[0]], m->wvertices[tv[1]], m->wvertices[tv[2]], &t, &dir))
                 continue;
+            dir *= m->wsign;
             if (!((float)t >= tmin && (float)t <= *tmax)) /* on the float t, as intersect.c */
                 continue;
             bool had = found;
@@ -666,33 +706,28 @@ void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out)
 
 /* ------------------------------------------------------------ one triangle */
 
-/* The last prepared ray of this thread. A scene query tests several
- * triangles of one mesh with the same ray, and preparing it (the inverse
- * transform in double, the shear constants) costs as much as the test
- * itself. The key is everything the prepared ray depends on, compared bit
- * for bit: the world ray's origin and direction and the object's inverse
- * transform (not only the object's address, which a later object may
- * reuse). So a memo hit gives exactly what recomputing gives. */
+/* The last prepared ray of this thread. A scene query tests triangles of
+ * one or more meshes with the same ray, and preparing it (the shear
+ * constants, the reciprocal direction) costs about as much as the test
+ * itself. It depends on the world ray only (the test is in world space), so
+ * the key is the ray's origin and direction compared bit for bit, and a memo
+ * hit gives exactly what recomputing gives, whichever mesh asks. */
 typedef struct tb__wray_memo {
     bool valid;
     tb_vec3 o, d;
-    tb_mat4 inv;
     tb__wray w;
 } tb__wray_memo;
 
 static _Thread_local tb__wray_memo tb__memo;
 
-static const tb__wray *tb__memo_ray(const tb_object *o, const tb_ray *ray)
+static const tb__wray *tb__memo_ray(const tb_ray *ray)
 {
     tb__wray_memo *c = &tb__memo;
-    if (c->valid && memcmp(&c->o, &ray->o, sizeof c->o) == 0 && memcmp(&c->d, &ray->d, sizeof c->d) == 0 &&
-        memcmp(&c->inv, &o->to_world.inv, sizeof c->inv) == 0)
+    if (c->valid && memcmp(&c->o, &ray->o, sizeof c->o) == 0 && memcmp(&c->d, &ray->d, sizeof c->d) == 0)
         return &c->w;
-    tb__oray r = tb__object_ray(o, ray);
-    tb__wray_init(&c->w, &r);
+    tb__wray_init(&c->w, ray);
     c->o = ray->o;
     c->d = ray->d;
-    c->inv = o->to_world.inv;
     c->valid = true;
     return &c->w;
 }
@@ -702,13 +737,15 @@ bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray 
     const tb_object_mesh *m = o->mesh;
     if (!m || tri >= m->ntris)
         return false;
-    const tb__wray *w = tb__memo_ray(o, ray);
+    const tb__wray *w = tb__memo_ray(ray);
     const uint32_t *tv = &m->tris[3 * (size_t)tri];
     int dir;
-    return tb__tri(w, m->vertices[tv[0]], m->vertices[tv[1]], m->vertices[tv[2]], t, &dir);
+    return tb__tri(w, m->wvertices[tv[0]], m->wvertices[tv[1]], m->wvertices[tv[2]], t, &dir);
 }
 
-tb_vec3 tb_object_triangle_normal(const tb_object *o, uint32_t tri)
+/* The unit world normal of triangle tri: its object-space normal by the
+ * inverse transpose, normalised in double, negated for a flipped leaf. */
+static tb_vec3 tb__tri_world_normal(const tb_object *o, uint32_t tri)
 {
     tb_dvec3 nw = tb_transform_dnormal(&o->to_world, tb__tri_normal(o->mesh, tri));
     double len = tb_dvec3_length(nw);
@@ -716,4 +753,9 @@ tb_vec3 tb_object_triangle_normal(const tb_object *o, uint32_t tri)
         return (tb_vec3){0.0f, 0.0f, 1.0f};
     double s = (o->flip ? -1.0 : 1.0) / len;
     return (tb_vec3){(float)(nw.x * s), (float)(nw.y * s), (float)(nw.z * s)};
+}
+
+tb_vec3 tb_object_triangle_normal(const tb_object *o, uint32_t tri)
+{
+    return o->mesh->wnormal[tri];
 }

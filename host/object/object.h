@@ -42,15 +42,20 @@ _Static_assert(sizeof(tb_object_bvh_node) == 32, "BVH nodes are 32 bytes");
 
 /* The triangulated form of a polygons primitive, built once for intersection:
  * every polygon is split into triangles (util/mesh/triangulate.h) that
- * remember the polygon (face ID) they came from. Object space. */
+ * remember the polygon (face ID) they came from. The ray/triangle test runs
+ * in world space (docs/primitives.md, "Watertight triangles"): the vertices
+ * are transformed once here, so a ray needs no transform per mesh. */
 typedef struct tb_object_mesh {
     uint32_t nvertices;
     tb_vec3 *vertices;          /* object-space positions */
+    tb_dvec3 *wvertices;        /* the same mapped to world space by to_world in double (what the test uses) */
+    int wsign;                  /* +1, or -1 if to_world mirrors (swaps which side is counter-clockwise) */
     uint32_t ntris;
     uint32_t *tris;             /* 3 vertex indices per triangle, counter-clockwise seen from the front; BVH leaf order */
     uint32_t *tri_face;         /* polygon index (face ID) of each triangle */
+    tb_vec3 *wnormal;           /* unit world normal of each triangle, as hits report it (flip included) */
     uint32_t nnodes;
-    tb_object_bvh_node *nodes;  /* BVH over the triangles; node 0 is the root (nnodes == 0 when ntris == 0) */
+    tb_object_bvh_node *nodes;  /* BVH over the triangles' world boxes; node 0 is the root (nnodes == 0 when ntris == 0) */
     bool closed;                /* every polygon edge is matched by exactly one edge running the other way: a solid */
 } tb_object_mesh;
 

@@ -743,6 +743,7 @@ static int tb__poly_nv(const tb_geom_polygons *g, int face) { return g->face_sta
 
 bool tb_poly_frame_make(const tb_vec3 *v, const int *idx, int nv, tb_poly_frame *f)
 {
+    f->ncst = 0;
     /* Newell normal, relative to the first vertex. */
     tb_dvec3 o = tb__cv(v, idx, 0), nn = {0, 0, 0};
     for (int i = 0; i < nv; i++) {
@@ -767,10 +768,16 @@ bool tb_poly_frame_make(const tb_vec3 *v, const int *idx, int nv, tb_poly_frame 
     f->e1 = tb_dvec3_normalize(e);
     f->e2 = tb_dvec3_cross(f->n, f->e1);
     double s0 = INFINITY, s1 = -INFINITY, t0 = INFINITY, t1 = -INFINITY;
+    /* The corners' (s, t) are kept for small loops: every (u, v) of a point
+     * needs them (inside test, nearest edge), and they are tb__poly_st's
+     * values (the same operations), so using them changes no bit. */
+    f->ncst = nv <= TB_POLY_FRAME_CORNERS ? nv : 0;
     for (int i = 0; i < nv; i++) {
         tb_dvec3 d = tb_dvec3_sub(tb__cv(v, idx, i), o);
         double s = tb_dvec3_dot(d, f->e1), t = tb_dvec3_dot(d, f->e2);
         s0 = fmin(s0, s), s1 = fmax(s1, s), t0 = fmin(t0, t), t1 = fmax(t1, t);
+        if (i < f->ncst)
+            f->cst[i][0] = s, f->cst[i][1] = t;
     }
     f->s0 = s0, f->ds = s1 - s0, f->t0 = t0, f->dt = t1 - t0;
     return true;
@@ -798,6 +805,16 @@ static void tb__poly_st(const tb__poly_frame *f, tb_dvec3 p, double *s, double *
     *s = tb_dvec3_dot(d, f->e1), *t = tb_dvec3_dot(d, f->e2);
 }
 
+/* Plane coordinates of corner i of the loop the frame was made from. */
+static inline void tb__corner_st(const tb__poly_frame *f, const tb_vec3 *v, const int *idx, int i, double *s,
+                                 double *t)
+{
+    if (i < f->ncst)
+        *s = f->cst[i][0], *t = f->cst[i][1];
+    else
+        tb__poly_st(f, tb__cv(v, idx, i), s, t);
+}
+
 /* The point of the loop (its projection on the frame's plane, filled by the
  * even-odd rule) nearest to (s, t). */
 static void tb__poly_closest(const tb__poly_frame *f, const tb_vec3 *v, const int *idx, int nv, double *s, double *t)
@@ -805,10 +822,10 @@ static void tb__poly_closest(const tb__poly_frame *f, const tb_vec3 *v, const in
     /* Inside first (most points are): the nearest edge point only when outside. */
     bool in = false;
     double ps, pt;
-    tb__poly_st(f, tb__cv(v, idx, nv - 1), &ps, &pt);
+    tb__corner_st(f, v, idx, nv - 1, &ps, &pt);
     for (int i = 0; i < nv; i++) {
         double qs, qt;
-        tb__poly_st(f, tb__cv(v, idx, i), &qs, &qt);
+        tb__corner_st(f, v, idx, i, &qs, &qt);
         if ((qt > *t) != (pt > *t) && *s < ps + (*t - pt) * (qs - ps) / (qt - pt))
             in = !in;
         ps = qs, pt = qt;
@@ -816,10 +833,10 @@ static void tb__poly_closest(const tb__poly_frame *f, const tb_vec3 *v, const in
     if (in)
         return;
     double bd = INFINITY, bs = *s, bt = *t;
-    tb__poly_st(f, tb__cv(v, idx, nv - 1), &ps, &pt);
+    tb__corner_st(f, v, idx, nv - 1, &ps, &pt);
     for (int i = 0; i < nv; i++) {
         double qs, qt, cs, ct;
-        tb__poly_st(f, tb__cv(v, idx, i), &qs, &qt);
+        tb__corner_st(f, v, idx, i, &qs, &qt);
         double d = tb__seg_closest(*s, *t, ps, pt, qs, qt, &cs, &ct);
         if (d < bd)
             bd = d, bs = cs, bt = ct;
@@ -844,11 +861,11 @@ void tb_poly_frame_uv(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, 
 bool tb_poly_frame_convex(const tb_poly_frame *f, const tb_vec3 *v, const int *idx, int nv)
 {
     double ps, pt, qs, qt;
-    tb__poly_st(f, tb__cv(v, idx, nv - 2), &ps, &pt);
-    tb__poly_st(f, tb__cv(v, idx, nv - 1), &qs, &qt);
+    tb__corner_st(f, v, idx, nv - 2, &ps, &pt);
+    tb__corner_st(f, v, idx, nv - 1, &qs, &qt);
     for (int i = 0; i < nv; i++) {
         double rs, rt;
-        tb__poly_st(f, tb__cv(v, idx, i), &rs, &rt);
+        tb__corner_st(f, v, idx, i, &rs, &rt);
         if ((qs - ps) * (rt - pt) - (qt - pt) * (rs - ps) < 0.0)
             return false;
         ps = qs, pt = qt, qs = rs, qt = rt;
@@ -882,7 +899,7 @@ static bool tb__poly_tex_uv(const tb_poly_frame *f, const tb_vec3 *v, const int 
             c[0] = (int)tc[j][0], c[1] = (int)tc[j][1], c[2] = (int)tc[j][2];
         double P[3][2];
         for (int i = 0; i < 3; i++)
-            tb__poly_st(f, tb__cv(v, idx, c[i]), &P[i][0], &P[i][1]);
+            tb__corner_st(f, v, idx, c[i], &P[i][0], &P[i][1]);
         double wt[3];
         if (!tb__bary2(s, t, P[0], P[1], P[2], wt))
             continue;

@@ -188,13 +188,18 @@ tb_status tb_param_eval_world(tb_prim_kind kind, const tb_mid_geometry *geom,
  * of its corners in (e1, e2) coordinates. Exposed so a caller may memoise
  * it (host/render/scene_mesh.c) and still get tb_param_from_point's (u, v)
  * bit for bit. */
+#define TB_POLY_FRAME_CORNERS 8
+
 typedef struct tb_poly_frame {
     tb_dvec3 o, e1, e2, n;
     double s0, ds, t0, dt;
+    int ncst;                               /* corners whose (s, t) are kept below: nv if nv <= 8, else 0 */
+    double cst[TB_POLY_FRAME_CORNERS][2];   /* corner i's (s, t), as the (u, v) functions would recompute them */
 } tb_poly_frame;
 
 /* The frame of the loop of nv >= 3 corners v[idx[i]] (v[i] when idx is NULL);
- * false when the loop has no area (its Newell normal is zero or not finite). */
+ * false when the loop has no area (its Newell normal is zero or not finite).
+ * The functions below take the frame with the same loop it was made from. */
 bool tb_poly_frame_make(const tb_vec3 *v, const int *idx, int nv, tb_poly_frame *f);
 
 /* (u, v) of p for a polygon without uvs, as tb_param_from_point gives it:

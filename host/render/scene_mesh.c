@@ -134,9 +134,7 @@ void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
     if (!b->valid || hit->t != b->tf || hit->object != b->obj->index || hit->face != b->face)
         return; /* the winner is not a triangle reference */
     const tb_object *o = b->obj;
-    tb_dvec3 ro = tb_mat4_mul_point(&o->to_world.inv, (tb_dvec3){ray->o.x, ray->o.y, ray->o.z});
-    tb_dvec3 rd = tb_mat4_mul_vec(&o->to_world.inv, (tb_dvec3){ray->d.x, ray->d.y, ray->d.z});
-    tb_dvec3 p = {ro.x + b->t * rd.x, ro.y + b->t * rd.y, ro.z + b->t * rd.z};
+    tb_dvec3 p = tb_object_ray_point(o, ray, b->t);
     uint32_t face = o->mesh->tri_face[b->tri];
     int pf = (int)face;
     double u = 0.0, v = 0.0;
