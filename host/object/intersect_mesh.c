@@ -290,11 +290,13 @@ tb_status tb__mesh_build(tb_object *o)
     if (!m->vertices)
         return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
     memcpy(m->vertices, g->vertices, sizeof(tb_vec3) * (size_t)g->nvertices);
-    m->wvertices = malloc(sizeof(tb_dvec3) * (g->nvertices ? (size_t)g->nvertices : 1));
+    m->wvertices = malloc(sizeof(double) * 3 * (g->nvertices ? (size_t)g->nvertices : 1));
     if (!m->wvertices)
         return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
-    for (int i = 0; i < g->nvertices; i++)
-        m->wvertices[i] = tb_transform_dpoint(&o->to_world, tb_vec3_to_d(g->vertices[i]));
+    for (int i = 0; i < g->nvertices; i++) {
+        tb_dvec3 w = tb_transform_dpoint(&o->to_world, tb_vec3_to_d(g->vertices[i]));
+        m->wvertices[3 * (size_t)i] = w.x, m->wvertices[3 * (size_t)i + 1] = w.y, m->wvertices[3 * (size_t)i + 2] = w.z;
+    }
     /* A mirroring transform turns counter-clockwise into clockwise: the
      * world-space determinant's sign then means the opposite side. */
     m->wsign = tb_transform_swaps_handedness(&o->to_world) ? -1 : 1;
@@ -394,9 +396,9 @@ tb_status tb__mesh_build(tb_object *o)
         }
         for (int k = 0; k < 3; k++) {
             /* World positions rounded outward to float, so the box holds them. */
-            tb_dvec3 v = m->wvertices[tv[3 * i + k]];
-            float lo[3] = {tb__float_down(v.x), tb__float_down(v.y), tb__float_down(v.z)};
-            float hi[3] = {tb__float_up(v.x), tb__float_up(v.y), tb__float_up(v.z)};
+            const double *v = &m->wvertices[3 * (size_t)tv[3 * i + k]];
+            float lo[3] = {tb__float_down(v[0]), tb__float_down(v[1]), tb__float_down(v[2])};
+            float hi[3] = {tb__float_up(v[0]), tb__float_up(v[1]), tb__float_up(v[2])};
             tb__grow(p->lo, p->hi, lo, hi);
         }
         for (int a = 0; a < 3; a++)
@@ -436,7 +438,9 @@ typedef struct tb__wray {
     double sx, sy, sz;
 } tb__wray;
 
-static void tb__wray_init(tb__wray *w, const tb_ray *r)
+/* Prepares w for the triangle test and, with `boxes`, for the box test
+ * (a single triangle needs no box). */
+static void tb__wray_init(tb__wray *w, const tb_ray *r, bool boxes)
 {
     w->o[0] = r->o.x;
     w->o[1] = r->o.y;
@@ -444,7 +448,7 @@ static void tb__wray_init(tb__wray *w, const tb_ray *r)
     w->d[0] = r->d.x;
     w->d[1] = r->d.y;
     w->d[2] = r->d.z;
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; boxes && i < 3; i++) {
         w->inv[i] = 1.0 / w->d[i];
         bool neg = signbit(w->inv[i]);
         w->nearp[i] = i + (neg ? 3 : 0);
@@ -521,15 +525,15 @@ static bool tb__claims(int s, double px, double py, double qx, double qy)
 /* Watertight ray/triangle test on world-space corners; on a hit writes t and
  * dir (+1: the ray meets the side from which the corners run
  * counter-clockwise in world space; callers multiply by the mesh's wsign). */
-static bool tb__tri(const tb__wray *w, tb_dvec3 v0, tb_dvec3 v1, tb_dvec3 v2, double *t, int *dir)
+static inline bool tb__tri(const tb__wray *w, const double *v0, const double *v1, const double *v2, double *t,
+                           int *dir)
 {
-    double A[3] = {v0.x - w->o[0], v0.y - w->o[1], v0.z - w->o[2]};
-    double B[3] = {v1.x - w->o[0], v1.y - w->o[1], v1.z - w->o[2]};
-    double C[3] = {v2.x - w->o[0], v2.y - w->o[1], v2.z - w->o[2]};
+    /* Corners relative to the origin, permuted so the ray runs along z. */
     int kx = w->kx, ky = w->ky, kz = w->kz;
-    double ax = A[kx] - w->sx * A[kz], ay = A[ky] - w->sy * A[kz];
-    double bx = B[kx] - w->sx * B[kz], by = B[ky] - w->sy * B[kz];
-    double cx = C[kx] - w->sx * C[kz], cy = C[ky] - w->sy * C[kz];
+    double Az = v0[kz] - w->o[kz], Bz = v1[kz] - w->o[kz], Cz = v2[kz] - w->o[kz];
+    double ax = (v0[kx] - w->o[kx]) - w->sx * Az, ay = (v0[ky] - w->o[ky]) - w->sy * Az;
+    double bx = (v1[kx] - w->o[kx]) - w->sx * Bz, by = (v1[ky] - w->o[ky]) - w->sy * Bz;
+    double cx = (v2[kx] - w->o[kx]) - w->sx * Cz, cy = (v2[ky] - w->o[ky]) - w->sy * Cz;
     double U = cx * by - cy * bx;
     double V = ax * cy - ay * cx;
     double W = bx * ay - by * ax;
@@ -552,7 +556,7 @@ static bool tb__tri(const tb__wray *w, tb_dvec3 v0, tb_dvec3 v1, tb_dvec3 v2, do
     double det = U + V + W;
     if (det == 0.0)
         return false;
-    double az = w->sz * A[kz], bz = w->sz * B[kz], cz = w->sz * C[kz];
+    double az = w->sz * Az, bz = w->sz * Bz, cz = w->sz * Cz;
     double T = U * az + V * bz + W * cz;
     *t = T / det;
     *dir = det > 0.0 ? 1 : -1;
@@ -581,7 +585,7 @@ static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, dou
     if (!m || m->nnodes == 0)
         return false;
     tb__wray w;
-    tb__wray_init(&w, r->world);
+    tb__wray_init(&w, r->world, true);
     uint32_t stack[TB__BVH_STACK];
     int sp = 0;
     stack[sp++] = 0;
@@ -614,7 +618,8 @@ static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, dou
             const uint32_t *tv = &m->tris[3 * i];
             double t;
             int dir;
-            if (!tb__tri(&w, m->wvertices[tv[0]], m->wvertices[tv[1]], m->wvertices[tv[2]], &t, &dir))
+            if (!tb__tri(&w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
+                         &m->wvertices[3 * (size_t)tv[2]], &t, &dir))
                 continue;
             dir *= m->wsign;
             if (!((float)t >= tmin && (float)t <= *tmax)) /* on the float t, as intersect.c */
@@ -725,7 +730,7 @@ static const tb__wray *tb__memo_ray(const tb_ray *ray)
     tb__wray_memo *c = &tb__memo;
     if (c->valid && memcmp(&c->o, &ray->o, sizeof c->o) == 0 && memcmp(&c->d, &ray->d, sizeof c->d) == 0)
         return &c->w;
-    tb__wray_init(&c->w, ray);
+    tb__wray_init(&c->w, ray, false);
     c->o = ray->o;
     c->d = ray->d;
     c->valid = true;
@@ -740,7 +745,8 @@ bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray 
     const tb__wray *w = tb__memo_ray(ray);
     const uint32_t *tv = &m->tris[3 * (size_t)tri];
     int dir;
-    return tb__tri(w, m->wvertices[tv[0]], m->wvertices[tv[1]], m->wvertices[tv[2]], t, &dir);
+    return tb__tri(w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
+                   &m->wvertices[3 * (size_t)tv[2]], t, &dir);
 }
 
 /* The unit world normal of triangle tri: its object-space normal by the

@@ -427,6 +427,8 @@ tb_status tb_object_from_mid(const tb_mid_object *m, uint32_t index, tb_object_m
 
 _Atomic unsigned long tb__object_generation;
 
+unsigned long tb_object_generation(void) { return tb__object_generation; }
+
 static void tb__object_clear(tb_object *o)
 {
     tb__object_generation++; /* invalidates memos that point into objects */

@@ -48,7 +48,7 @@ _Static_assert(sizeof(tb_object_bvh_node) == 32, "BVH nodes are 32 bytes");
 typedef struct tb_object_mesh {
     uint32_t nvertices;
     tb_vec3 *vertices;          /* object-space positions */
-    tb_dvec3 *wvertices;        /* the same mapped to world space by to_world in double (what the test uses) */
+    double *wvertices;          /* the same mapped to world space by to_world in double, x y z per vertex (what the test uses) */
     int wsign;                  /* +1, or -1 if to_world mirrors (swaps which side is counter-clockwise) */
     uint32_t ntris;
     uint32_t *tris;             /* 3 vertex indices per triangle, counter-clockwise seen from the front; BVH leaf order */
@@ -112,6 +112,11 @@ tb_status tb_object_from_mid(const tb_mid_object *m, uint32_t index, tb_object_m
 
 /* Frees an object and its children; NULL is allowed. */
 void tb_object_free(tb_object *obj);
+
+/* How many objects (and CSG children) have been torn down so far: a memo that
+ * keys on an object's address compares it, since a later object may reuse
+ * the address. */
+unsigned long tb_object_generation(void);
 
 /* The CSG leaf (a primitive of the tree, or obj itself when it is a
  * primitive) owning face ID `face` of top-level object `obj`, and that face's

@@ -76,14 +76,15 @@ static bool tb__better(float t, uint32_t object, uint32_t face, uint32_t index)
  * itself uses, so (u, v) are the object level's bit for bit
  * (tests/render/test_scene_accel.c compares every hit with
  * tb_object_intersect's byte for byte). Convex faces with uvs likewise
- * (tb_poly_fan_uv, with the uvs in the key); non-convex faces with uvs
+ * (tb_poly_fan_uv); non-convex faces with uvs
  * (ear-clipped by param) or more than TB__UV_MAX_NV corners use
  * tb_param_from_point. */
 #define TB__UV_MAX_NV 8
 #define TB__UV_SLOTS 256u
 
 typedef struct tb__uv_frame {
-    const tb_geom_polygons *g; /* key: geometry, face, and the corners themselves */
+    const tb_geom_polygons *g; /* key: geometry and face, valid while gen is the current object generation */
+    unsigned long gen;         /* tb_object_generation() when filled (a later object may reuse g's address) */
     int face, nv;
     tb_vec3 corner[TB__UV_MAX_NV];
     tb_vec2 uv[TB__UV_MAX_NV]; /* the corners' uvs, when the geometry has them */
@@ -94,7 +95,9 @@ typedef struct tb__uv_frame {
 
 static _Thread_local tb__uv_frame tb__uv_cache[TB__UV_SLOTS];
 
-/* The frame of face `face` of g, from this thread's memo when its corners match. */
+/* The frame of face `face` of g, from this thread's memo when it holds that
+ * face of that geometry and no object was torn down since (objects are
+ * read-only while they live, so the corners cannot have changed). */
 static const tb__uv_frame *tb__uv_frame_of(const tb_geom_polygons *g, int face)
 {
     int b = g->face_start[face], nv = g->face_start[face + 1] - b;
@@ -102,15 +105,8 @@ static const tb__uv_frame *tb__uv_frame_of(const tb_geom_polygons *g, int face)
         return NULL;
     uintptr_t h = ((uintptr_t)g >> 4) * 0x9E3779B97F4A7C15u + (uintptr_t)face * 0xC2B2AE3D27D4EB4Fu;
     tb__uv_frame *f = &tb__uv_cache[(h >> 32) % TB__UV_SLOTS];
-    bool same = f->g == g && f->face == face && f->nv == nv;
-    for (int i = 0; i < nv && same; i++) {
-        int idx = g->indices[b + i];
-        if (idx < 0 || idx >= g->nvertices)
-            return NULL;
-        same = memcmp(&f->corner[i], &g->vertices[idx], sizeof(tb_vec3)) == 0 &&
-               (!g->uvs || memcmp(&f->uv[i], &g->uvs[idx], sizeof(tb_vec2)) == 0);
-    }
-    if (same)
+    unsigned long gen = tb_object_generation();
+    if (f->g == g && f->face == face && f->gen == gen)
         return f;
     for (int i = 0; i < nv; i++) {
         int idx = g->indices[b + i];
@@ -122,7 +118,7 @@ static const tb__uv_frame *tb__uv_frame_of(const tb_geom_polygons *g, int face)
         if (g->uvs)
             f->uv[i] = g->uvs[idx];
     }
-    f->g = g, f->face = face, f->nv = nv;
+    f->g = g, f->face = face, f->nv = nv, f->gen = gen;
     f->ok = tb_poly_frame_make(f->corner, NULL, nv, &f->frame);
     f->fan = f->ok && (nv == 3 || tb_poly_frame_convex(&f->frame, f->corner, NULL, nv));
     return f;
