@@ -90,9 +90,9 @@ static float tb__area(const float lo[3], const float hi[3])
 
 static void tb__grow(float lo[3], float hi[3], const float plo[3], const float phi[3])
 {
-    for (int i = 0; i < 3; i++) {
-        lo[i] = fminf(lo[i], plo[i]);
-        hi[i] = fmaxf(hi[i], phi[i]);
+    for (int i = 0; i < 3; i++) { /* comparisons, not fminf/fmaxf (library calls); boxes hold no NaN */
+        lo[i] = plo[i] < lo[i] ? plo[i] : lo[i];
+        hi[i] = phi[i] > hi[i] ? phi[i] : hi[i];
     }
 }
 

@@ -775,7 +775,9 @@ bool tb_poly_frame_make(const tb_vec3 *v, const int *idx, int nv, tb_poly_frame 
     for (int i = 0; i < nv; i++) {
         tb_dvec3 d = tb_dvec3_sub(tb__cv(v, idx, i), o);
         double s = tb_dvec3_dot(d, f->e1), t = tb_dvec3_dot(d, f->e2);
-        s0 = fmin(s0, s), s1 = fmax(s1, s), t0 = fmin(t0, t), t1 = fmax(t1, t);
+        /* Comparisons, not fmin/fmax (library calls here): the same for
+         * finite values, and zeros keep the first seen. */
+        s0 = s < s0 ? s : s0, s1 = s > s1 ? s : s1, t0 = t < t0 ? t : t0, t1 = t > t1 ? t : t1;
         if (i < f->ncst)
             f->cst[i][0] = s, f->cst[i][1] = t;
     }
