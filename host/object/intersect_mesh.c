@@ -737,6 +737,12 @@ static const tb__wray *tb__memo_ray(const tb_ray *ray)
     return &c->w;
 }
 
+bool tb_triangle_crossing_world(const double *v0, const double *v1, const double *v2, const tb_ray *ray, double *t)
+{
+    int dir;
+    return tb__tri(tb__memo_ray(ray), v0, v1, v2, t, &dir);
+}
+
 bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray *ray, double *t)
 {
     const tb_object_mesh *m = o->mesh;

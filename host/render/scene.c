@@ -625,7 +625,8 @@ static tb_status tb__make_prims(tb_scene *s)
         n += o->kind == TB_PRIM_POLYGONS && o->mesh ? o->mesh->ntris : 1;
     }
     s->prims = n ? malloc(sizeof *s->prims * n) : NULL;
-    if (n && !s->prims)
+    s->tris = n ? malloc(sizeof *s->tris * n) : NULL;
+    if (n && (!s->prims || !s->tris))
         return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", n);
     s->bounds = tb_aabb_empty();
     size_t k = 0;
@@ -637,6 +638,7 @@ static tb_status tb__make_prims(tb_scene *s)
                 tb_accel_prim *r = &s->prims[k++];
                 r->object = i;
                 r->sub = t;
+                tb__scene_tri_make(o, t, &s->tris[k - 1]);
                 if ((st = tb__scene_tri_bounds(o, t, &r->bounds)))
                     return st;
                 s->bounds = tb_aabb_union(s->bounds, r->bounds);
@@ -664,17 +666,15 @@ static bool tb__cb_intersect(void *ctx, const tb_accel_prim *prim, uint32_t inde
     const tb_object *o = s->objects[prim->object];
     if (prim->sub == TB_SCENE_WHOLE_OBJECT)
         return tb_object_intersect(o, ray, hit);
-    return tb__scene_tri_intersect(o, prim->sub, index, ray, hit);
+    return tb__scene_tri_intersect(&s->tris[index], index, ray, hit);
 }
 
 static bool tb__cb_occluded(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray)
 {
-    (void)index;
     const tb_scene *s = ctx;
-    const tb_object *o = s->objects[prim->object];
     if (prim->sub == TB_SCENE_WHOLE_OBJECT)
-        return tb_object_occluded(o, ray);
-    return tb__scene_tri_occluded(o, prim->sub, ray);
+        return tb_object_occluded(s->objects[prim->object], ray);
+    return tb__scene_tri_occluded(&s->tris[index], ray);
 }
 
 tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel_options *opt)
@@ -812,6 +812,7 @@ void tb_scene_free(tb_scene *s)
     free(s->emissive);
     free(s->emitters);
     free(s->prims);
+    free(s->tris);
     tb__scene_priv *p = s->priv;
     if (p) {
         for (int i = 0; i < p->nmats; i++)

@@ -147,6 +147,8 @@ typedef struct tb_scene {
                                    callbacks); tb_accel_occluded may be called directly */
     size_t nprims;
     tb_accel_prim *prims;       /* the acceleration references in build order */
+    struct tb__scene_tri *tris; /* per reference (same numbering): a triangle's test data (scene_internal.h);
+                                   unused entries for whole objects */
     tb_scene_stats stats;
     tb__scene_priv *priv;       /* owned storage (strings, IES tables) */
 } tb_scene;

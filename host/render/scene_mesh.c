@@ -32,12 +32,22 @@
 #include "util/math/mat.h"
 #include "util/math/transform.h"
 
-/* Tests triangle `tri`; t in the ray's range on the float t. */
-static bool tb__hit_tri(const tb_object *o, uint32_t tri, const tb_ray *ray, double *t)
+/* Tests triangle reference r; t in the ray's range on the float t. */
+static inline bool tb__hit_tri(const tb__scene_tri *r, const tb_ray *ray, double *t)
 {
-    if (!tb_object_triangle_crossing(o, tri, ray, t))
+    if (!tb_triangle_crossing_world(&r->v[0], &r->v[3], &r->v[6], ray, t))
         return false;
     return (float)*t >= ray->tmin && (float)*t <= ray->tmax;
+}
+
+void tb__scene_tri_make(const tb_object *o, uint32_t tri, tb__scene_tri *r)
+{
+    const tb_object_mesh *m = o->mesh;
+    for (int k = 0; k < 3; k++)
+        memcpy(&r->v[3 * k], &m->wvertices[3 * (size_t)m->tris[3 * (size_t)tri + k]], sizeof(double) * 3);
+    r->o = o;
+    r->tri = tri;
+    r->face = o->face_base + m->tri_face[tri];
 }
 
 /* The best triangle candidate of this thread's current query. */
@@ -152,13 +162,13 @@ void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
     hit->ng = tb_object_triangle_normal(o, b->tri);
 }
 
-bool tb__scene_tri_intersect(const tb_object *o, uint32_t tri, uint32_t index, const tb_ray *ray, tb_hit *hit)
+bool tb__scene_tri_intersect(const tb__scene_tri *r, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {
     double t;
-    if (!tb__hit_tri(o, tri, ray, &t))
+    if (!tb__hit_tri(r, ray, &t))
         return false;
-    const tb_object_mesh *m = o->mesh;
-    uint32_t face = o->face_base + m->tri_face[tri];
+    const tb_object *o = r->o;
+    uint32_t face = r->face;
     hit->t = (float)t;
     hit->object = o->index;
     hit->face = face;
@@ -166,14 +176,14 @@ bool tb__scene_tri_intersect(const tb_object *o, uint32_t tri, uint32_t index, c
     hit->u = hit->v = 0.0f;
     hit->ng = (tb_vec3){0.0f, 0.0f, 0.0f};
     if (tb__better(hit->t, o->index, face, index))
-        tb__best = (tb__tri_best){true, o, tri, index, face, hit->t, t};
+        tb__best = (tb__tri_best){true, o, r->tri, index, face, hit->t, t};
     return true;
 }
 
-bool tb__scene_tri_occluded(const tb_object *o, uint32_t tri, const tb_ray *ray)
+bool tb__scene_tri_occluded(const tb__scene_tri *r, const tb_ray *ray)
 {
     double t;
-    return tb__hit_tri(o, tri, ray, &t);
+    return tb__hit_tri(r, ray, &t);
 }
 
 tb_status tb__scene_tri_bounds(const tb_object *o, uint32_t tri, tb_aabb *out)
