@@ -26,8 +26,13 @@ static int tb__ev_cmp(const void *pa, const void *pb)
 /* |o|max / |d|max of the world ray: the t scale of rounding in its solutions. */
 static double tb__t_scale(const tb_ray *r)
 {
-    double o = fmax(fabs(r->o.x), fmax(fabs(r->o.y), fabs(r->o.z)));
-    double d = fmax(fabs(r->d.x), fmax(fabs(r->d.y), fabs(r->d.z)));
+    /* The max by comparison, as fmax would give for these (no NaN in a
+     * valid ray; fabs has no -0), without its libm calls. */
+    double ox = fabs(r->o.x), oy = fabs(r->o.y), oz = fabs(r->o.z);
+    double dx = fabs(r->d.x), dy = fabs(r->d.y), dz = fabs(r->d.z);
+    double o = oy > oz ? oy : oz, d = dy > dz ? dy : dz;
+    o = ox > o ? ox : o;
+    d = dx > d ? dx : d;
     return o / d;
 }
 
@@ -48,7 +53,7 @@ static bool tb__member(tb_prim_kind k, int nin, int nchildren, bool first_in)
 static void tb__ev_sort(tb__ev *ev, size_t m)
 {
     if (m > 32) {
-        tb__ev_sort(ev, m);
+        qsort(ev, m, sizeof *ev, tb__ev_cmp);
         return;
     }
     for (size_t i = 1; i < m; i++) {

@@ -365,11 +365,45 @@ static void test_csg_coincident(void **state)
     tb_object_free(o2);
 }
 
+/* More than 32 ends in one node: the sweep sorts them with qsort instead of
+ * insertion sort (csg.c; it once called itself there, without end). A union
+ * of 20 unit spheres 3 apart along x, children in scrambled order, crossed
+ * along x: 40 ends, 20 intervals [3i - 1, 3i + 1] + 5 from o.x = -5. */
+static void test_csg_many_ends(void **state)
+{
+    (void)state;
+    enum { N = 20 };
+    tb_transform id = tb_transform_identity();
+    tb_mid_geometry gs = tb_mid_geometry_default(TB_PRIM_SPHERE);
+    tb_mid_object kids[N];
+    for (int i = 0; i < N; i++) {
+        int at = (7 * i) % N; /* a permutation: the lists arrive out of order */
+        kids[i] = ti_prim(TB_PRIM_SPHERE, gs, tb_transform_translate((tb_dvec3){3.0 * at, 0, 0}));
+    }
+    tb_mid_object m = ti_csg(TB_PRIM_UNION, kids, N, id);
+    tb_object *o = ti_build(&m, 0);
+    tb_ray r = ti_ray(-5, 0, 0, 1, 0, 0);
+    float a[N + 2], b[N + 2];
+    assert_int_equal(tb_object_intervals(o, &r, a, b, N + 2), N);
+    for (int i = 0; i < N; i++) {
+        tb_assert_near(a[i], 3.0 * i - 1.0 + 5.0, 1e-5);
+        tb_assert_near(b[i], 3.0 * i + 1.0 + 5.0, 1e-5);
+    }
+    tb_hit h;
+    tb_ray far = ti_ray(30.5, 0, 0, 1, 0, 0); /* from inside the sphere at x = 30 */
+    assert_true(tb_object_intersect(o, &far, &h));
+    tb_assert_near(h.t, 0.5, 1e-6);
+    far.tmax = 0.25f;
+    assert_false(tb_object_occluded(o, &far));
+    tb_object_free(o);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_csg_property),
         cmocka_unit_test(test_csg_coincident),
+        cmocka_unit_test(test_csg_many_ends),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
