@@ -85,6 +85,10 @@ void tb__xings_prism(const tb_object *o, const tb__oray *r, tb__xbuf *out);
 void tb__xings_arch(const tb_object *o, const tb__oray *r, tb__xbuf *out);
 void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out);
 
+/* Sets o->zclosed of a cylinder, cone or conic (after conic and zrange;
+ * object.c), once instead of at every ray. */
+void tb__revolved_prepare(tb_object *o);
+
 /* Closest triangle hit with t in [tmin, tmax] (polygons); false if none. */
 bool tb__mesh_closest(const tb_object *o, const tb__oray *r, double tmin, double tmax, tb__xing *hit);
 /* True if any triangle is hit with t in [tmin, tmax]. */
@@ -140,8 +144,9 @@ static inline tb__oray tb__object_ray(const tb_object *o, const tb_ray *r)
     const double(*m)[4] = o->to_world.inv.m;
     double ox = r->o.x, oy = r->o.y, oz = r->o.z, dx = r->d.x, dy = r->d.y, dz = r->d.z;
     tb__oray q;
-    if (m[3][0] == 0.0 && m[3][1] == 0.0 && m[3][2] == 0.0 && m[3][3] == 1.0 && isfinite(ox) && isfinite(oy) &&
-        isfinite(oz)) {
+    /* ox + oy + oz is finite exactly when all three are: they are floats, so
+     * their double sum cannot overflow. One test instead of three. */
+    if (m[3][0] == 0.0 && m[3][1] == 0.0 && m[3][2] == 0.0 && m[3][3] == 1.0 && isfinite(ox + oy + oz)) {
         q.o = (tb_dvec3){m[0][0] * ox + m[0][1] * oy + m[0][2] * oz + m[0][3],
                          m[1][0] * ox + m[1][1] * oy + m[1][2] * oz + m[1][3],
                          m[2][0] * ox + m[2][1] * oy + m[2][2] * oz + m[2][3]};

@@ -69,6 +69,18 @@ static tb_dvec3 tb__revolved_normal(const double *c, tb_dvec3 p, double zmid)
     return n;
 }
 
+void tb__revolved_prepare(tb_object *o)
+{
+    /* An end where the radius is zero closes in a point: anything found
+     * there belongs to the side. */
+    const double *c = o->conic;
+    for (int i = 0; i < 2; i++) {
+        double z = o->zrange[i];
+        double sz = fabs(c[0]) + fabs(c[1] * z) + fabs(c[2] * z * z);
+        o->zclosed[i] = c[0] + c[1] * z + c[2] * z * z <= 1e-12 * sz;
+    }
+}
+
 void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out)
 {
     const double *c = o->conic;
@@ -134,13 +146,8 @@ void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out)
         sa = (tb__end){-INFINITY, TB_FACE_CYLINDER_BOTTOM, {0, 0, -1}};
         sb = (tb__end){INFINITY, TB_FACE_CYLINDER_TOP, {0, 0, 1}};
     } else {
-        /* An end where the radius is zero closes in a point: anything found
-         * there belongs to the side. (Only needed here, after the misses
-         * have returned.) */
-        double sz0 = fabs(c[0]) + fabs(c[1] * z0) + fabs(c[2] * z0 * z0);
-        double sz1 = fabs(c[0]) + fabs(c[1] * z1) + fabs(c[2] * z1 * z1);
-        bool closed0 = c[0] + c[1] * z0 + c[2] * z0 * z0 <= 1e-12 * sz0;
-        bool closed1 = c[0] + c[1] * z1 + c[2] * z1 * z1 <= 1e-12 * sz1;
+        /* An end closed in a point (tb__revolved_prepare) belongs to the side. */
+        bool closed0 = o->zclosed[0], closed1 = o->zclosed[1];
         tb__end bot = {(z0 - p0.z) / d.z, closed0 ? TB_FACE_CYLINDER_SIDE : TB_FACE_CYLINDER_BOTTOM, {0, 0, -1}};
         tb__end top = {(z1 - p0.z) / d.z, closed1 ? TB_FACE_CYLINDER_SIDE : TB_FACE_CYLINDER_TOP, {0, 0, 1}};
         sa = d.z > 0.0 ? bot : top;

@@ -371,6 +371,8 @@ static tb_status tb__build(tb_object *o, const tb_mid_object *m, uint32_t index,
             return tb_error(TB_ERR_ARG, "%s: only CSG nodes may contain objects", tb_prim_kind_name(m->kind));
         if ((st = tb__copy_geometry(o, &m->geom)))
             return tb_error_context(st, "%s", tb_prim_kind_name(m->kind));
+        if (o->kind == TB_PRIM_CYLINDER || o->kind == TB_PRIM_CONE || o->kind == TB_PRIM_CONIC)
+            tb__revolved_prepare(o);
         o->face_base = *face_next;
         o->nfaces = tb__face_count(o->kind, &o->geom);
         if (o->nfaces > UINT32_MAX - *face_next)

@@ -85,6 +85,7 @@ struct tb_object {
     /* Derived at build time for intersection (docs/primitives.md). */
     double conic[3];         /* cylinder, cone, conic: r^2 = conic[0] + conic[1] z + conic[2] z^2 */
     double zrange[2];        /* cylinder, cone, conic: the z range */
+    bool zclosed[2];         /* cylinder, cone, conic: the radius is zero at zrange[0] / [1] (an apex: no cap) */
     int nprofile;            /* prism: profile points used by the test (0: large regular prism, tested by sectors) */
     double *profile;         /* prism: those points as x y pairs (owned) */
     double profile_orient;   /* prism: +1 if the profile turns counter-clockwise, -1 if clockwise */

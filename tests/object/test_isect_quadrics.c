@@ -358,11 +358,68 @@ static void test_textbook_float_loses(void **state)
     assert_true(worst > 1.0 || missed > 0); /* the reference can tell a poor solver from a good one */
 }
 
+/* Ends of a revolved solid where the radius is zero close in a point (the
+ * object's zclosed flags, set once at build): a line entering there meets
+ * the side, not a cap. Down the axis of a pointed cone, of the dome
+ * paraboloid r^2 = 0.5 - 0.5 z (apex z = 1) and of the double cone
+ * r^2 = z^2 (apex z = 0 inside, r = 1 at both ends: caps); and a cylinder,
+ * whose ends are caps. */
+static void test_apex_is_side(void **state)
+{
+    (void)state;
+    tb_transform id = tb_transform_identity();
+    tb_ray down = tb_ray_make((tb_vec3){0, 0, 5}, (tb_vec3){0, 0, -1}, 0.0f, INFINITY);
+    tb_hit h;
+
+    tb_mid_geometry gc = tb_mid_geometry_default(TB_PRIM_CONE);
+    gc.cone.top_radius = 0.0;
+    tb_mid_object m = ti_prim(TB_PRIM_CONE, gc, id);
+    tb_object *o = ti_build(&m, 0);
+    assert_true(o->zclosed[1] && !o->zclosed[0]);
+    assert_true(tb_object_intersect(o, &down, &h));
+    tb_assert_near(h.t, 4.0, 1e-9);
+    assert_int_equal(h.face, TB_FACE_CONE_SIDE);
+    tb_ray up = tb_ray_make((tb_vec3){0, 0, -5}, (tb_vec3){0, 0, 1}, 0.0f, INFINITY);
+    assert_true(tb_object_intersect(o, &up, &h));
+    assert_int_equal(h.face, TB_FACE_CONE_BOTTOM);
+    tb_object_free(o);
+
+    tb_mid_geometry gd = tb_mid_geometry_default(TB_PRIM_CONIC);
+    gd.conic.c[0] = 0.5;
+    gd.conic.c[1] = -0.5;
+    gd.conic.c[2] = 0.0;
+    m = ti_prim(TB_PRIM_CONIC, gd, id);
+    o = ti_build(&m, 0);
+    assert_true(o->zclosed[1] && !o->zclosed[0]);
+    assert_true(tb_object_intersect(o, &down, &h));
+    tb_assert_near(h.t, 4.0, 1e-9);
+    assert_int_equal(h.face, TB_FACE_CONIC_SIDE);
+    tb_object_free(o);
+
+    gd.conic.c[0] = 0.0;
+    gd.conic.c[1] = 0.0;
+    gd.conic.c[2] = 1.0;
+    m = ti_prim(TB_PRIM_CONIC, gd, id);
+    o = ti_build(&m, 0);
+    assert_true(!o->zclosed[0] && !o->zclosed[1]);
+    assert_true(tb_object_intersect(o, &down, &h));
+    assert_int_equal(h.face, TB_FACE_CONIC_TOP);
+    tb_object_free(o);
+
+    m = ti_prim(TB_PRIM_CYLINDER, tb_mid_geometry_default(TB_PRIM_CYLINDER), id);
+    o = ti_build(&m, 0);
+    assert_true(!o->zclosed[0] && !o->zclosed[1]);
+    assert_true(tb_object_intersect(o, &down, &h));
+    assert_int_equal(h.face, TB_FACE_CYLINDER_TOP);
+    tb_object_free(o);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stable_quadratics),
         cmocka_unit_test(test_textbook_float_loses),
+        cmocka_unit_test(test_apex_is_side),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
