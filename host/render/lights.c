@@ -445,6 +445,14 @@ tb_status tb_area_light_init(tb_area_light *a, const tb_emitter *e, int n)
     return TB_OK;
 }
 
+/* max(x, 0), NaN -> 0: what fmax(0.0, x) gives for these arguments (never
+ * -0: they are 1 - y), by a comparison instead of a libm call on the area
+ * light's per-sample path. */
+static inline double tb__pos(double x)
+{
+    return x > 0.0 ? x : 0.0;
+}
+
 /* Sphere seen from outside: sin^2 and 1 - cos of the half-angle of the cone
  * it subtends at distance dc (> r). */
 static void tb__cone(double r, double dc, double *sin2, double *one_minus_cos)
@@ -452,7 +460,7 @@ static void tb__cone(double r, double dc, double *sin2, double *one_minus_cos)
     double s2 = (r / dc) * (r / dc);
     *sin2 = s2;
     /* 1 - sqrt(1 - s2) = s2 / (1 + sqrt(1 - s2)): no cancellation for small spheres. */
-    *one_minus_cos = s2 / (1.0 + sqrt(fmax(0.0, 1.0 - s2)));
+    *one_minus_cos = s2 / (1.0 + sqrt(tb__pos(1.0 - s2)));
 }
 
 /* Samples emitter e seen from p: point q, front normal nq, solid-angle density. */
@@ -497,8 +505,8 @@ static bool tb__sample_emitter(const tb_emitter *e, double area, tb_dvec3 p, flo
             tb__cone(r, dc, &s2max, &omc_max);
             double omc = u1 * omc_max; /* 1 - cos theta, uniform */
             double ct = 1.0 - omc, s2 = omc * (2.0 - omc);
-            double cos_alpha = s2 / sqrt(s2max) + ct * sqrt(fmax(0.0, 1.0 - s2 / s2max));
-            double sin_alpha = sqrt(fmax(0.0, 1.0 - cos_alpha * cos_alpha));
+            double cos_alpha = s2 / sqrt(s2max) + ct * sqrt(tb__pos(1.0 - s2 / s2max));
+            double sin_alpha = sqrt(tb__pos(1.0 - cos_alpha * cos_alpha));
             double phi = TB_2PI * u2;
             tb_dvec3 axis = tb_dvec3_scale(pc, 1.0 / dc), b1, b2;
             tb_dvec3_basis(axis, &b1, &b2);
