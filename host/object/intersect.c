@@ -78,6 +78,25 @@ void tb__prim_xings(const tb_object *o, const tb__oray *r, tb__xbuf *out)
     }
 }
 
+bool tb__prim_any(const tb_object *o, const tb__oray *r, double tmin, double tmax)
+{
+    switch (o->kind) {
+    case TB_PRIM_SPHERE: tb__count_kind(o->kind); return tb__any_sphere(o, r, tmin, tmax);
+    case TB_PRIM_CYLINDER:
+    case TB_PRIM_CONE:
+    case TB_PRIM_CONIC: tb__count_kind(o->kind); return tb__any_revolved(o, r, tmin, tmax);
+    default: break;
+    }
+    tb__xbuf b;
+    tb__xbuf_init(&b);
+    tb__prim_xings(o, r, &b);
+    bool any = false;
+    for (int i = 0; i < b.n && !any; i++) /* tb__closest's range test */
+        any = (float)b.x[i].t >= tmin && (float)b.x[i].t <= tmax;
+    tb__xbuf_free(&b);
+    return any;
+}
+
 /* The closest crossing of obj with t in [tmin, tmax] (double). */
 static bool tb__closest(const tb_object *obj, const tb_ray *ray, double tmin, double tmax, tb__xing *hit)
 {
@@ -182,6 +201,10 @@ bool tb_object_occluded(const tb_object *obj, const tb_ray *ray)
         tb__count_kind(obj->kind);
         tb__oray r = tb__object_ray(obj, ray);
         return tb__mesh_any(obj, &r, ray->tmin, ray->tmax);
+    }
+    if (!tb_prim_is_csg(obj->kind)) { /* any-hit: no list, no normals */
+        tb__oray r = tb__object_ray(obj, ray);
+        return tb__prim_any(obj, &r, ray->tmin, ray->tmax);
     }
     tb__xing x;
     return tb__closest(obj, ray, ray->tmin, ray->tmax, &x);

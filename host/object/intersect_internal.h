@@ -85,6 +85,15 @@ void tb__xings_prism(const tb_object *o, const tb__oray *r, tb__xbuf *out);
 void tb__xings_arch(const tb_object *o, const tb__oray *r, tb__xbuf *out);
 void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out);
 
+/* True if a crossing of the line with primitive o (not CSG, not polygons)
+ * has t, rounded to float, in [tmin, tmax]: what tb__closest would find,
+ * without building the list or the normals for the kinds below (any-hit
+ * queries; intersect.c). Counted per kind as tb__prim_xings. */
+bool tb__prim_any(const tb_object *o, const tb__oray *r, double tmin, double tmax);
+/* Per family: the same for a sphere, and for cylinder, cone and conic (intersect_quadric.c, uncounted). */
+bool tb__any_sphere(const tb_object *o, const tb__oray *r, double tmin, double tmax);
+bool tb__any_revolved(const tb_object *o, const tb__oray *r, double tmin, double tmax);
+
 /* Sets o->zclosed of a cylinder, cone or conic (after conic and zrange;
  * object.c), once instead of at every ray. */
 void tb__revolved_prepare(tb_object *o);

@@ -39,22 +39,48 @@ static tb_dvec3 tb__at(tb_dvec3 o, tb_dvec3 d, double s)
 
 /* ------------------------------------------------------------------ sphere */
 
-void tb__xings_sphere(const tb_object *o, const tb__oray *r, tb__xbuf *out)
+/* The line's nearest point to the centre, o + t0 d = p0, and the roots s of
+ * |p0 + s d| = 1 (two, equal for a tangent); false if it misses. */
+static inline bool tb__sphere_roots(const tb__oray *r, double *t0, tb_dvec3 *p0, double root[2])
 {
     tb_dvec3 d = r->d;
     double dd = tb_dvec3_dot(d, d);
-    double t0 = -tb_dvec3_dot(r->o, d) / dd;
-    tb_dvec3 p0 = tb__at(r->o, d, t0); /* nearest point to the centre */
-    double root[2];
-    int n = tb_quadratic(dd, 2.0 * tb_dvec3_dot(p0, d), tb_dvec3_dot(p0, p0) - 1.0, root);
+    *t0 = -tb_dvec3_dot(r->o, d) / dd;
+    *p0 = tb__at(r->o, d, *t0);
+    int n = tb_quadratic(dd, 2.0 * tb_dvec3_dot(*p0, d), tb_dvec3_dot(*p0, *p0) - 1.0, root);
     if (n == 0)
-        return;
+        return false;
     if (n == 1)
         root[1] = root[0];
+    return true;
+}
+
+void tb__xings_sphere(const tb_object *o, const tb__oray *r, tb__xbuf *out)
+{
+    double t0, root[2];
+    tb_dvec3 p0, d = r->d;
+    if (!tb__sphere_roots(r, &t0, &p0, root))
+        return;
     tb__end a = {t0 + root[0], TB_FACE_SPHERE, tb__at(p0, d, root[0])};
     tb__end b = {t0 + root[1], TB_FACE_SPHERE, tb__at(p0, d, root[1])};
     tb__push(out, o, &a, +1);
     tb__push(out, o, &b, -1);
+}
+
+/* True if float(t) of a crossing lies in [tmin, tmax]: tb__closest's test. */
+static inline bool tb__t_in(double t, double tmin, double tmax)
+{
+    return (float)t >= tmin && (float)t <= tmax;
+}
+
+bool tb__any_sphere(const tb_object *o, const tb__oray *r, double tmin, double tmax)
+{
+    (void)o;
+    double t0, root[2];
+    tb_dvec3 p0;
+    if (!tb__sphere_roots(r, &t0, &p0, root))
+        return false;
+    return tb__t_in(t0 + root[0], tmin, tmax) || tb__t_in(t0 + root[1], tmin, tmax);
 }
 
 /* ------------------------------------------- cylinder, cone, conic (revolved) */
@@ -81,7 +107,12 @@ void tb__revolved_prepare(tb_object *o)
     }
 }
 
-void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out)
+/* The crossings of a revolved solid, for tb__xings_revolved (out, with
+ * normals) or tb__any_revolved (out NULL: true as soon as one has float t in
+ * [tmin, tmax]; no normals). One body, so both see the same t. Inlined
+ * into each with `out` known, which drops the normals of the second. */
+static inline __attribute__((always_inline)) bool tb__revolved(const tb_object *o, const tb__oray *r,
+                                                                tb__xbuf *out, double tmin, double tmax)
 {
     const double *c = o->conic;
     double z0 = o->zrange[0], z1 = o->zrange[1], zc = 0.5 * (z0 + z1);
@@ -136,13 +167,13 @@ void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out)
         nq = 1;
     }
     if (nq == 0)
-        return;
+        return false;
 
     /* The slab z0 <= z <= z1. */
     tb__end sa, sb;
     if (d.z == 0.0) {
         if (!(p0.z >= z0 && p0.z <= z1))
-            return;
+            return false;
         sa = (tb__end){-INFINITY, TB_FACE_CYLINDER_BOTTOM, {0, 0, -1}};
         sb = (tb__end){INFINITY, TB_FACE_CYLINDER_TOP, {0, 0, 1}};
     } else {
@@ -161,18 +192,20 @@ void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out)
                    "revolved primitives share face numbers");
 
     for (int i = 0; i < nq; i++) {
-        tb__end a, b;
+        tb__end a = {0}, b = {0}; /* normals only with out */
         if (qa[i] >= sa.t) {
             a.t = qa[i];
             a.face = TB_FACE_CYLINDER_SIDE;
-            a.n = tb__revolved_normal(c, tb__at(p0, d, qa[i]), zc);
+            if (out)
+                a.n = tb__revolved_normal(c, tb__at(p0, d, qa[i]), zc);
         } else {
             a = sa;
         }
         if (qb[i] <= sb.t) {
             b.t = qb[i];
             b.face = TB_FACE_CYLINDER_SIDE;
-            b.n = tb__revolved_normal(c, tb__at(p0, d, qb[i]), zc);
+            if (out)
+                b.n = tb__revolved_normal(c, tb__at(p0, d, qb[i]), zc);
         } else {
             b = sb;
         }
@@ -181,11 +214,28 @@ void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out)
         a.t += t0;
         b.t += t0;
         /* Without caps the surface is open: ends on the missing discs are not surface. */
-        if (caps || a.face == TB_FACE_CYLINDER_SIDE)
+        bool keep_a = caps || a.face == TB_FACE_CYLINDER_SIDE, keep_b = caps || b.face == TB_FACE_CYLINDER_SIDE;
+        if (!out) {
+            if ((keep_a && tb__t_in(a.t, tmin, tmax)) || (keep_b && tb__t_in(b.t, tmin, tmax)))
+                return true;
+            continue;
+        }
+        if (keep_a)
             tb__push(out, o, &a, +1);
-        if (caps || b.face == TB_FACE_CYLINDER_SIDE)
+        if (keep_b)
             tb__push(out, o, &b, -1);
     }
+    return false;
+}
+
+void tb__xings_revolved(const tb_object *o, const tb__oray *r, tb__xbuf *out)
+{
+    tb__revolved(o, r, out, 0.0, 0.0);
+}
+
+bool tb__any_revolved(const tb_object *o, const tb__oray *r, double tmin, double tmax)
+{
+    return tb__revolved(o, r, NULL, tmin, tmax);
 }
 
 /* ------------------------------------------------------------------ torus */

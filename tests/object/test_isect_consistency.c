@@ -15,6 +15,7 @@
 
 #include "host/object/intersect.h"
 #include "host/object/param.h"
+#include "util/math/float.h"
 
 typedef long double ld;
 
@@ -190,6 +191,27 @@ static void ti_consistency(const ti_variant *var, uint64_t seed, long nrays)
             h.object != 0) {
             S.misc_fail++;
             continue;
+        }
+        /* The range ends at the hit's float t, and one float past it on
+         * either side: occluded (an any-hit path of its own for the quadrics)
+         * must still agree with intersect, the hit itself being in range. */
+        float ends[4][2] = {{ray.tmin, h.t},
+                            {ray.tmin, tb_next_float_down(h.t)},
+                            {h.t, ray.tmax},
+                            {tb_next_float_up(h.t), ray.tmax}};
+        for (int e = 0; e < 4; e++) {
+            tb_ray re = ray;
+            re.tmin = ends[e][0];
+            re.tmax = ends[e][1];
+            if (!(re.tmin <= re.tmax))
+                continue;
+            tb_hit he;
+            bool ie = tb_object_intersect(o, &re, &he), oe = tb_object_occluded(o, &re);
+            if (ie != oe || (e % 2 == 0 && !oe)) {
+                if (S.misc_fail++ < 3)
+                    print_message("%s: range [%a, %a] around hit t = %a: intersect %d, occluded %d\n", var->name,
+                                  (double)re.tmin, (double)re.tmax, (double)h.t, ie, oe);
+            }
         }
         tb_vec3 p, perr;
         if (!tb_object_hit_point(o, &ray, &h, &p, &perr)) {
