@@ -26,6 +26,7 @@
 
 #include "host/object/intersect.h"
 #include "host/object/intersect_internal.h"
+#include "host/object/watertight.h"
 #include "util/container/array.h"
 #include "util/math/float.h"
 #include "util/mesh/fed.h"
@@ -432,45 +433,24 @@ tb_status tb__mesh_build(tb_object *o)
 
 /* The ray prepared for the watertight test and the box test. */
 typedef struct tb__wray {
-    double o[3], d[3], inv[3];
+    tb_wt_ray t;           /* the triangle test's part */
+    double d[3];           /* direction (near child first) */
+    double inv[3];         /* 1 / d */
     int nearp[3], farp[3]; /* per axis: index into a node's lo[]/hi[] pair of the near and far plane */
-    int kx, ky, kz;
-    double sx, sy, sz;
 } tb__wray;
 
-/* Prepares w for the triangle test and, with `boxes`, for the box test
- * (a single triangle needs no box). */
-static void tb__wray_init(tb__wray *w, const tb_ray *r, bool boxes)
+static void tb__wray_init(tb__wray *w, const tb_ray *r)
 {
-    w->o[0] = r->o.x;
-    w->o[1] = r->o.y;
-    w->o[2] = r->o.z;
+    tb_wt_ray_init(&w->t, r);
     w->d[0] = r->d.x;
     w->d[1] = r->d.y;
     w->d[2] = r->d.z;
-    for (int i = 0; boxes && i < 3; i++) {
+    for (int i = 0; i < 3; i++) {
         w->inv[i] = 1.0 / w->d[i];
         bool neg = signbit(w->inv[i]);
         w->nearp[i] = i + (neg ? 3 : 0);
         w->farp[i] = i + (neg ? 0 : 3);
     }
-    int kz = 0;
-    if (fabs(w->d[1]) > fabs(w->d[kz]))
-        kz = 1;
-    if (fabs(w->d[2]) > fabs(w->d[kz]))
-        kz = 2;
-    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
-    if (w->d[kz] < 0.0) { /* keep the winding direction */
-        int t = kx;
-        kx = ky;
-        ky = t;
-    }
-    w->kx = kx;
-    w->ky = ky;
-    w->kz = kz;
-    w->sx = w->d[kx] / w->d[kz];
-    w->sy = w->d[ky] / w->d[kz];
-    w->sz = 1.0 / w->d[kz];
 }
 
 /* Slab test of a node's box in double; the near/far plane is chosen by the
@@ -483,9 +463,10 @@ static void tb__wray_init(tb__wray *w, const tb_ray *r, bool boxes)
 static bool tb__box(const tb_object_bvh_node *nd, const tb__wray *w, double tmin, double tmax)
 {
     const float *b = nd->b; /* plane j (0 lo, 1 hi) of axis i is b[i + 3 j] */
-    double t0 = (b[w->nearp[0]] - w->o[0]) * w->inv[0], t1 = (b[w->farp[0]] - w->o[0]) * w->inv[0];
-    double a1 = (b[w->nearp[1]] - w->o[1]) * w->inv[1], b1 = (b[w->farp[1]] - w->o[1]) * w->inv[1];
-    double a2 = (b[w->nearp[2]] - w->o[2]) * w->inv[2], b2 = (b[w->farp[2]] - w->o[2]) * w->inv[2];
+    const double *o = w->t.o;
+    double t0 = (b[w->nearp[0]] - o[0]) * w->inv[0], t1 = (b[w->farp[0]] - o[0]) * w->inv[0];
+    double a1 = (b[w->nearp[1]] - o[1]) * w->inv[1], b1 = (b[w->farp[1]] - o[1]) * w->inv[1];
+    double a2 = (b[w->nearp[2]] - o[2]) * w->inv[2], b2 = (b[w->farp[2]] - o[2]) * w->inv[2];
     /* Written so that a NaN (0 * inf) never wins a comparison. */
     if (!(t0 >= -INFINITY))
         t0 = -INFINITY;
@@ -522,46 +503,18 @@ static bool tb__claims(int s, double px, double py, double qx, double qy)
     return ey > 0.0 || (ey == 0.0 && ex < 0.0);
 }
 
-/* Watertight ray/triangle test on world-space corners; on a hit writes t and
- * dir (+1: the ray meets the side from which the corners run
- * counter-clockwise in world space; callers multiply by the mesh's wsign). */
-static inline bool tb__tri(const tb__wray *w, const double *v0, const double *v1, const double *v2, double *t,
-                           int *dir)
+bool tb_wt_edge_ties(double U, double V, double W, double ax, double ay, double bx, double by, double cx, double cy)
 {
-    /* Corners relative to the origin, permuted so the ray runs along z. */
-    int kx = w->kx, ky = w->ky, kz = w->kz;
-    double Az = v0[kz] - w->o[kz], Bz = v1[kz] - w->o[kz], Cz = v2[kz] - w->o[kz];
-    double ax = (v0[kx] - w->o[kx]) - w->sx * Az, ay = (v0[ky] - w->o[ky]) - w->sy * Az;
-    double bx = (v1[kx] - w->o[kx]) - w->sx * Bz, by = (v1[ky] - w->o[ky]) - w->sy * Bz;
-    double cx = (v2[kx] - w->o[kx]) - w->sx * Cz, cy = (v2[ky] - w->o[ky]) - w->sy * Cz;
-    double U = cx * by - cy * bx;
-    double V = ax * cy - ay * cx;
-    double W = bx * ay - by * ax;
-    if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0))
+    int su = tb__edge_sign(U, bx, by, cx, cy);
+    int sv = tb__edge_sign(V, cx, cy, ax, ay);
+    int sw = tb__edge_sign(W, ax, ay, bx, by);
+    if ((su < 0 || sv < 0 || sw < 0) && (su > 0 || sv > 0 || sw > 0))
         return false;
-    int s;
-    if (U == 0.0 || V == 0.0 || W == 0.0) {
-        int su = tb__edge_sign(U, bx, by, cx, cy);
-        int sv = tb__edge_sign(V, cx, cy, ax, ay);
-        int sw = tb__edge_sign(W, ax, ay, bx, by);
-        if ((su < 0 || sv < 0 || sw < 0) && (su > 0 || sv > 0 || sw > 0))
-            return false;
-        s = su + sv + sw > 0 ? 1 : (su + sv + sw < 0 ? -1 : 0);
-        if (s == 0)
-            return false; /* the triangle is edge-on to the ray */
-        if ((su == 0 && !tb__claims(s, bx, by, cx, cy)) || (sv == 0 && !tb__claims(s, cx, cy, ax, ay)) ||
-            (sw == 0 && !tb__claims(s, ax, ay, bx, by)))
-            return false;
-    }
-    double det = U + V + W;
-    if (det == 0.0)
-        return false;
-    double az = w->sz * Az, bz = w->sz * Bz, cz = w->sz * Cz;
-    double T = U * az + V * bz + W * cz;
-    *t = T / det;
-    *dir = det > 0.0 ? 1 : -1;
-    (void)s;
-    return isfinite(*t);
+    int s = su + sv + sw > 0 ? 1 : (su + sv + sw < 0 ? -1 : 0);
+    if (s == 0)
+        return false; /* the triangle is edge-on to the ray */
+    return !((su == 0 && !tb__claims(s, bx, by, cx, cy)) || (sv == 0 && !tb__claims(s, cx, cy, ax, ay)) ||
+             (sw == 0 && !tb__claims(s, ax, ay, bx, by)));
 }
 
 static tb_dvec3 tb__tri_normal(const tb_object_mesh *m, uint32_t i)
@@ -585,7 +538,7 @@ static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, dou
     if (!m || m->nnodes == 0)
         return false;
     tb__wray w;
-    tb__wray_init(&w, r->world, true);
+    tb__wray_init(&w, r->world);
     uint32_t stack[TB__BVH_STACK];
     int sp = 0;
     stack[sp++] = 0;
@@ -618,7 +571,7 @@ static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, dou
             const uint32_t *tv = &m->tris[3 * i];
             double t;
             int dir;
-            if (!tb__tri(&w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
+            if (!tb_wt_triangle(&w.t, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
                          &m->wvertices[3 * (size_t)tv[2]], &t, &dir))
                 continue;
             dir *= m->wsign;
@@ -720,17 +673,17 @@ void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out)
 typedef struct tb__wray_memo {
     bool valid;
     tb_vec3 o, d;
-    tb__wray w;
+    tb_wt_ray w;
 } tb__wray_memo;
 
 static _Thread_local tb__wray_memo tb__memo;
 
-static const tb__wray *tb__memo_ray(const tb_ray *ray)
+static const tb_wt_ray *tb__memo_ray(const tb_ray *ray)
 {
     tb__wray_memo *c = &tb__memo;
     if (c->valid && memcmp(&c->o, &ray->o, sizeof c->o) == 0 && memcmp(&c->d, &ray->d, sizeof c->d) == 0)
         return &c->w;
-    tb__wray_init(&c->w, ray, false);
+    tb_wt_ray_init(&c->w, ray);
     c->o = ray->o;
     c->d = ray->d;
     c->valid = true;
@@ -740,7 +693,7 @@ static const tb__wray *tb__memo_ray(const tb_ray *ray)
 bool tb_triangle_crossing_world(const double *v0, const double *v1, const double *v2, const tb_ray *ray, double *t)
 {
     int dir;
-    return tb__tri(tb__memo_ray(ray), v0, v1, v2, t, &dir);
+    return tb_wt_triangle(tb__memo_ray(ray), v0, v1, v2, t, &dir);
 }
 
 bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray *ray, double *t)
@@ -748,10 +701,10 @@ bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray 
     const tb_object_mesh *m = o->mesh;
     if (!m || tri >= m->ntris)
         return false;
-    const tb__wray *w = tb__memo_ray(ray);
+    const tb_wt_ray *w = tb__memo_ray(ray);
     const uint32_t *tv = &m->tris[3 * (size_t)tri];
     int dir;
-    return tb__tri(w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
+    return tb_wt_triangle(w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
                    &m->wvertices[3 * (size_t)tv[2]], t, &dir);
 }
 
