@@ -187,6 +187,16 @@ bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
     return true;
 }
 
+void tb_object_note_triangle_hit(const tb_object *obj, const tb_ray *ray, uint32_t tri, double t, int dir)
+{
+    const tb_object_mesh *m = obj->mesh;
+    if (obj->kind != TB_PRIM_POLYGONS || !m || tri >= m->ntris)
+        return;
+    /* The record tb__mesh_closest makes for that triangle. */
+    tb__xing x = {t, tb__tri_normal(m, tri), obj, m->tri_face[tri], tri, dir * m->wsign};
+    tb__last = (tb__last_xing){obj, tb__object_generation, ray->o, ray->d, ray->tmin, x};
+}
+
 tb_dvec3 tb_object_ray_point(const tb_object *obj, const tb_ray *ray, double t)
 {
     tb__oray r = tb__object_ray(obj, ray);

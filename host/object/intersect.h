@@ -61,6 +61,16 @@ bool tb_triangle_crossing_world(const double *v0, const double *v1, const double
  * reports it for a hit on that triangle (kept per triangle: a load). */
 tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t tri);
 
+/* Tells the object level that triangle `tri` of the top-level polygons
+ * object obj, crossed at line parameter t with direction dir (both as
+ * tb_wt_triangle gave them, host/object/watertight.h), is the closest
+ * crossing of `ray` with obj from ray->tmin on: what tb_object_intersect
+ * would find. A following tb_object_hit_point for that hit then takes it
+ * from this thread's memo instead of searching the mesh again. Only for a
+ * crossing that is that answer (the scene's triangle references note the
+ * winner of a query: render_scene_accel checks the two agree). */
+void tb_object_note_triangle_hit(const tb_object *obj, const tb_ray *ray, uint32_t tri, double t, int dir);
+
 /* The point at line parameter t of the world ray, in obj's object space and
  * in double, exactly as tb_object_intersect computes a hit point for (u, v). */
 tb_dvec3 tb_object_ray_point(const tb_object *obj, const tb_ray *ray, double t);

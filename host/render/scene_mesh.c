@@ -47,7 +47,7 @@ static _Thread_local tb__wt_memo tb__wt;
 /* Tests triangle reference r with the object level's watertight test
  * (inline: it runs for every triangle a query meets); t in the ray's range
  * on the float t. */
-static inline bool tb__hit_tri(const tb__scene_tri *r, const tb_ray *ray, double *t)
+static inline bool tb__hit_tri(const tb__scene_tri *r, const tb_ray *ray, double *t, int *dir)
 {
     tb__wt_memo *c = &tb__wt;
     if (!c->valid || memcmp(&c->o, &ray->o, sizeof c->o) != 0 || memcmp(&c->d, &ray->d, sizeof c->d) != 0) {
@@ -56,8 +56,7 @@ static inline bool tb__hit_tri(const tb__scene_tri *r, const tb_ray *ray, double
         c->d = ray->d;
         c->valid = true;
     }
-    int dir;
-    if (!tb_wt_triangle(&c->w, &r->v[0], &r->v[3], &r->v[6], t, &dir))
+    if (!tb_wt_triangle(&c->w, &r->v[0], &r->v[3], &r->v[6], t, dir))
         return false;
     return (float)*t >= ray->tmin && (float)*t <= ray->tmax;
 }
@@ -77,6 +76,7 @@ typedef struct tb__tri_best {
     bool valid;
     const tb_object *obj;
     uint32_t tri, index, face;
+    int dir;    /* the test's crossing direction (for the object level's hit-point memo) */
     float tf;   /* the reported t */
     double t;   /* the line parameter in double, as the object level uses it for (u, v) */
 } tb__tri_best;
@@ -182,12 +182,16 @@ void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
     hit->u = (float)u;
     hit->v = (float)v;
     hit->ng = tb_object_triangle_normal(o, b->tri);
+    /* The shading point comes next (tb_object_hit_point): give the object
+     * level the crossing so it need not search the mesh for it again. */
+    tb_object_note_triangle_hit(o, ray, b->tri, b->t, b->dir);
 }
 
 bool tb__scene_tri_intersect(const tb__scene_tri *r, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {
     double t;
-    if (!tb__hit_tri(r, ray, &t))
+    int dir;
+    if (!tb__hit_tri(r, ray, &t, &dir))
         return false;
     const tb_object *o = r->o;
     uint32_t face = r->face;
@@ -198,14 +202,15 @@ bool tb__scene_tri_intersect(const tb__scene_tri *r, uint32_t index, const tb_ra
     hit->u = hit->v = 0.0f;
     hit->ng = (tb_vec3){0.0f, 0.0f, 0.0f};
     if (tb__better(hit->t, o->index, face, index))
-        tb__best = (tb__tri_best){true, o, r->tri, index, face, hit->t, t};
+        tb__best = (tb__tri_best){true, o, r->tri, index, face, dir, hit->t, t};
     return true;
 }
 
 bool tb__scene_tri_occluded(const tb__scene_tri *r, const tb_ray *ray)
 {
     double t;
-    return tb__hit_tri(r, ray, &t);
+    int dir;
+    return tb__hit_tri(r, ray, &t, &dir);
 }
 
 tb_status tb__scene_tri_bounds(const tb_object *o, uint32_t tri, tb_aabb *out)
