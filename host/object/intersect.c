@@ -150,6 +150,8 @@ static tb_vec3 tb__world_normal(const tb__xing *x)
 /* The crossing of this thread's last successful tb_object_intersect, with
  * its object and ray (o, d, tmin), so that tb_object_hit_point on the
  * winner of a scene query need not sweep (CSG trees) again. */
+/* (Filled by tb_object_intersect, or by tb_object_note_triangle_hit
+ * without x.n.) */
 typedef struct tb__last_xing {
     const tb_object *obj;
     unsigned long gen; /* tb__object_generation when stored: x.leaf points into obj's tree */
@@ -192,9 +194,22 @@ void tb_object_note_triangle_hit(const tb_object *obj, const tb_ray *ray, uint32
     const tb_object_mesh *m = obj->mesh;
     if (obj->kind != TB_PRIM_POLYGONS || !m || tri >= m->ntris)
         return;
-    /* The record tb__mesh_closest makes for that triangle. */
-    tb__xing x = {t, tb__tri_normal(m, tri), obj, m->tri_face[tri], tri, dir * m->wsign};
-    tb__last = (tb__last_xing){obj, tb__object_generation, ray->o, ray->d, ray->tmin, x};
+    /* The record tb__mesh_closest makes for that triangle, but for the
+     * normal n, which tb_object_hit_point (the memo's only reader) does not
+     * read: left 0 here, as it costs half of this call (every query's winner
+     * comes through here, whether or not a hit point follows). */
+    tb__last_xing *c = &tb__last;
+    c->obj = obj;
+    c->gen = tb__object_generation;
+    c->o = ray->o;
+    c->d = ray->d;
+    c->tmin = ray->tmin;
+    c->x.t = t;
+    c->x.n = (tb_dvec3){0.0, 0.0, 0.0};
+    c->x.leaf = obj;
+    c->x.face = m->tri_face[tri];
+    c->x.tri = tri;
+    c->x.dir = dir * m->wsign;
 }
 
 tb_dvec3 tb_object_ray_point(const tb_object *obj, const tb_ray *ray, double t)

@@ -103,10 +103,6 @@ bool tb__mesh_closest(const tb_object *o, const tb__oray *r, double tmin, double
 /* True if any triangle is hit with t in [tmin, tmax]. */
 bool tb__mesh_any(const tb_object *o, const tb__oray *r, double tmin, double tmax);
 
-/* Object-space normal (v1 - v0) x (v2 - v0) of triangle i (any length,
- * non-zero: +z for a degenerate triangle), as crossings carry it. */
-tb_dvec3 tb__tri_normal(const tb_object_mesh *m, uint32_t i);
-
 /* Triangulates o->geom.polygons into o->mesh and builds its BVH (object.c
  * calls it after copying the polygons). */
 tb_status tb__mesh_build(tb_object *o);

@@ -517,7 +517,7 @@ bool tb_wt_edge_ties(double U, double V, double W, double ax, double ay, double 
              (sw == 0 && !tb__claims(s, ax, ay, bx, by)));
 }
 
-tb_dvec3 tb__tri_normal(const tb_object_mesh *m, uint32_t i)
+static tb_dvec3 tb__tri_normal(const tb_object_mesh *m, uint32_t i)
 {
     const uint32_t *t = &m->tris[3 * i];
     tb_vec3 v0 = m->vertices[t[0]], v1 = m->vertices[t[1]], v2 = m->vertices[t[2]];
