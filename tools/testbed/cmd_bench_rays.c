@@ -162,7 +162,8 @@ static void tb__user_occluded(const struct RTCOccludedFunctionNArguments *args)
 }
 
 /* Builds the Embree scene of `s`; 0 on failure (message printed). *user_objects counts user geometries. */
-static int tb__embree_build(const tb_scene *s, tb__embree *e, size_t *user_objects, double *build_seconds)
+static int tb__embree_build(const tb_scene *s, tb__embree *e, bool robust, size_t *user_objects,
+                            double *build_seconds)
 {
     *user_objects = 0;
     e->s = s;
@@ -174,6 +175,10 @@ static int tb__embree_build(const tb_scene *s, tb__embree *e, size_t *user_objec
     }
     double t0 = tb__wall();
     e->scene = rtcNewScene(e->dev);
+    /* Robust mode: Embree's watertight traversal and triangle test (the
+     * guarantee ours always gives), at its own cost. */
+    if (robust)
+        rtcSetSceneFlags(e->scene, RTC_SCENE_FLAG_ROBUST);
     /* The user geometries' boxes: the scene's whole-object references. */
     for (size_t i = 0; i < s->nprims; i++) {
         const tb_accel_prim *p = &s->prims[i];
@@ -331,8 +336,8 @@ static int64_t tb__counter(const char *name)
 static void tb__rays_usage(FILE *out)
 {
     fprintf(out,
-            "usage: testbed bench rays SCENE.mid [--embree] [--rays N] [--threads T,...] [--seed S]\n"
-            "                                    [--repeat R] [--no-stats]\n"
+            "usage: testbed bench rays SCENE.mid [--embree | --embree-robust] [--rays N] [--threads T,...]\n"
+            "                                    [--seed S] [--repeat R] [--no-stats]\n"
             "\n"
             "Primary (the scene camera), shadow (primary hit to a point on a light, any hit) and\n"
             "diffuse (cosine bounce from primary hits, closest hit) rays through the scene's BVH\n"
@@ -344,6 +349,8 @@ static void tb__rays_usage(FILE *out)
             "disagree (hit/miss, object or face).\n"
             "\n"
             "  --embree     also trace with Embree (needs a build configured with Embree 3)\n"
+            "  --embree-robust  the same with Embree's robust mode (RTC_SCENE_FLAG_ROBUST: watertight\n"
+            "               traversal and triangle test, as ours always is)\n"
             "  --rays N     N random camera rays (default: one per pixel at the file's resolution)\n"
             "  --threads T  comma-separated thread counts (default 1,2)\n"
             "  --seed S     random seed (default 1)\n"
@@ -375,13 +382,15 @@ int tb_cmd_bench_rays(int argc, char **argv)
         return TB_EXIT_OK;
     }
     const char *path = NULL;
-    bool embree = false;
+    bool embree = false, robust = false;
     uint64_t nrays = 0, seed = 1, repeat = 3;
     int threads[8] = {1, 2}, nthreads = 2;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (strcmp(a, "--embree") == 0)
             embree = true;
+        else if (strcmp(a, "--embree-robust") == 0)
+            embree = robust = true;
         else if (strcmp(a, "--no-stats") == 0)
             tb_stats_set_enabled(0); /* the BVH's per-ray counters (util/stats) cost time */
         else if (strcmp(a, "--rays") == 0 && i + 1 < argc) {
@@ -471,12 +480,12 @@ int tb_cmd_bench_rays(int argc, char **argv)
     if (embree) {
         size_t nu;
         double bs;
-        if (!tb__embree_build(s, &e, &nu, &bs)) {
+        if (!tb__embree_build(s, &e, robust, &nu, &bs)) {
             status = TB_EXIT_FAIL;
             goto done;
         }
-        printf("Embree %d.%d.%d scene built in %.3f s (%zu user geometries)\n", RTC_VERSION_MAJOR,
-               RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu);
+        printf("Embree %d.%d.%d scene built in %.3f s (%zu user geometries%s)\n", RTC_VERSION_MAJOR,
+               RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu, robust ? ", RTC_SCENE_FLAG_ROBUST" : "");
     }
 #endif
     double load[1] = {0};
