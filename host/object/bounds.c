@@ -193,23 +193,12 @@ tb_status tb_bounds_support(tb_prim_kind kind, const tb_mid_geometry *g, tb_dvec
 
 /* ------------------------------------------------------------------ boxes */
 
-/* x rounded to float toward -inf (dir < 0) or +inf (dir > 0). */
-static float tb__round_dir(double x, int dir)
-{
-    float f = (float)x;
-    if (dir > 0 && (double)f < x)
-        f = nextafterf(f, INFINITY);
-    if (dir < 0 && (double)f > x)
-        f = nextafterf(f, -INFINITY);
-    return f;
-}
-
 tb_aabb tb_bounds_round_out(tb_dvec3 lo, tb_dvec3 hi)
 {
     if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z))
         return tb_aabb_empty();
-    return (tb_aabb){{tb__round_dir(lo.x, -1), tb__round_dir(lo.y, -1), tb__round_dir(lo.z, -1)},
-                     {tb__round_dir(hi.x, 1), tb__round_dir(hi.y, 1), tb__round_dir(hi.z, 1)}};
+    return (tb_aabb){{tb_float_round_down(lo.x), tb_float_round_down(lo.y), tb_float_round_down(lo.z)},
+                     {tb_float_round_up(hi.x), tb_float_round_up(hi.y), tb_float_round_up(hi.z)}};
 }
 
 /* True if the matrix is affine (last row 0 0 0 1). */

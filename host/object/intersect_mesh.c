@@ -69,18 +69,6 @@ typedef struct tb__bctx {
     uint32_t nnodes;
 } tb__bctx;
 
-/* The largest float <= x and the least float >= x (x finite). */
-static float tb__float_down(double x)
-{
-    float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
-}
-static float tb__float_up(double x)
-{
-    float f = (float)x;
-    return (double)f < x ? nextafterf(f, INFINITY) : f;
-}
-
 static float tb__area(const float lo[3], const float hi[3])
 {
     float e0 = hi[0] - lo[0], e1 = hi[1] - lo[1], e2 = hi[2] - lo[2];
@@ -398,8 +386,8 @@ tb_status tb__mesh_build(tb_object *o)
         for (int k = 0; k < 3; k++) {
             /* World positions rounded outward to float, so the box holds them. */
             const double *v = &m->wvertices[3 * (size_t)tv[3 * i + k]];
-            float lo[3] = {tb__float_down(v[0]), tb__float_down(v[1]), tb__float_down(v[2])};
-            float hi[3] = {tb__float_up(v[0]), tb__float_up(v[1]), tb__float_up(v[2])};
+            float lo[3] = {tb_float_round_down(v[0]), tb_float_round_down(v[1]), tb_float_round_down(v[2])};
+            float hi[3] = {tb_float_round_up(v[0]), tb_float_round_up(v[1]), tb_float_round_up(v[2])};
             tb__grow(p->lo, p->hi, lo, hi);
         }
         for (int a = 0; a < 3; a++)

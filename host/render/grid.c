@@ -53,18 +53,6 @@ static void tb__grid_range(const tb__grid *g, const tb_aabb *b, int i0[3], int i
     }
 }
 
-/* The largest float <= v, and the smallest float >= v. */
-static float tb__float_down(double v)
-{
-    float f = (float)v;
-    return (double)f > v ? tb_next_float_down(f) : f;
-}
-static float tb__float_up(double v)
-{
-    float f = (float)v;
-    return (double)f < v ? tb_next_float_up(f) : f;
-}
-
 /* Sets the voxel size for resolution res over [g->lo, g->hi]. */
 static void tb__grid_set_res(tb__grid *g, const int res[3])
 {
@@ -190,8 +178,8 @@ tb_status tb__grid_build(tb_accel *acc, const tb_accel_options *opt)
     acc->stats.grid_nonempty = nonempty;
     acc->stats.grid_refs = pairs;
     /* The double box rounded outward to float. */
-    acc->stats.grid_bounds = (tb_aabb){{tb__float_down(g->lo[0]), tb__float_down(g->lo[1]), tb__float_down(g->lo[2])},
-                                       {tb__float_up(g->hi[0]), tb__float_up(g->hi[1]), tb__float_up(g->hi[2])}};
+    acc->stats.grid_bounds = (tb_aabb){{tb_float_round_down(g->lo[0]), tb_float_round_down(g->lo[1]), tb_float_round_down(g->lo[2])},
+                                       {tb_float_round_up(g->hi[0]), tb_float_round_up(g->hi[1]), tb_float_round_up(g->hi[2])}};
     tb_timer_stop(timer);
     return TB_OK;
 }

@@ -50,6 +50,36 @@ static void test_next_float_up_down(void **state)
     assert_true(isnan(tb_next_float_down(NAN)));
 }
 
+/* Directed rounding from double: exact values stay, others go to the float
+ * neighbour on the asked side, beyond the float range to +-FLT_MAX or +-inf. */
+static void test_float_round_down_up(void **state)
+{
+    (void)state;
+    assert_float_bits(tb_float_round_down(1.0), 1.0f);
+    assert_float_bits(tb_float_round_up(1.0), 1.0f);
+    assert_float_bits(tb_float_round_down(-0.0), -0.0f);
+    assert_float_bits(tb_float_round_up(0.0), 0.0f);
+    /* 1 + 2^-30 lies between 1 and 1 + 2^-23; (float) rounds it to 1. */
+    assert_float_bits(tb_float_round_down(1.0 + 0x1p-30), 1.0f);
+    assert_float_bits(tb_float_round_up(1.0 + 0x1p-30), 1.0f + 0x1p-23f);
+    assert_float_bits(tb_float_round_down(-1.0 - 0x1p-30), -1.0f - 0x1p-23f);
+    assert_float_bits(tb_float_round_up(-1.0 - 0x1p-30), -1.0f);
+    /* 1 - 2^-26 rounds to 1 by (float): down must step below. */
+    assert_float_bits(tb_float_round_down(1.0 - 0x1p-26), 1.0f - 0x1p-24f);
+    assert_float_bits(tb_float_round_up(1.0 - 0x1p-26), 1.0f);
+    /* Below the smallest denormal. */
+    assert_float_bits(tb_float_round_down(0x1p-160), 0.0f);
+    assert_float_bits(tb_float_round_up(0x1p-160), 0x1p-149f);
+    assert_float_bits(tb_float_round_down(-0x1p-160), -0x1p-149f);
+    /* Beyond the float range. */
+    assert_float_bits(tb_float_round_down(1e39), FLT_MAX);
+    assert_float_bits(tb_float_round_up(1e39), INFINITY);
+    assert_float_bits(tb_float_round_down(-1e39), -INFINITY);
+    assert_float_bits(tb_float_round_up(-1e39), -FLT_MAX);
+    assert_float_bits(tb_float_round_up(INFINITY), INFINITY);
+    assert_true(isnan(tb_float_round_down(NAN)) && isnan(tb_float_round_up(NAN)));
+}
+
 static void test_next_double_up_down(void **state)
 {
     (void)state;
@@ -213,6 +243,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_next_float_up_down),
         cmocka_unit_test(test_next_double_up_down),
+        cmocka_unit_test(test_float_round_down_up),
         cmocka_unit_test(test_gamma),
         cmocka_unit_test(test_ulp_distance_and_bits),
         cmocka_unit_test(test_clamp_sqrt_finite),

@@ -132,6 +132,20 @@ static inline double tb_next_double_down(double v)
     return tb_bits_to_double(u);
 }
 
+/* The largest float <= v (v rounded toward -inf to float; NaN stays NaN):
+ * a conservative lower bound, e.g. for a box holding double points. */
+static inline float tb_float_round_down(double v)
+{
+    float f = (float)v;
+    return (double)f > v ? tb_next_float_down(f) : f;
+}
+/* The smallest float >= v (v rounded toward +inf to float; NaN stays NaN). */
+static inline float tb_float_round_up(double v)
+{
+    float f = (float)v;
+    return (double)f < v ? tb_next_float_up(f) : f;
+}
+
 /* pbrt's gamma(n) = n u / (1 - n u) with u = 2^-24 (TB_FLOAT_UNIT_ROUNDOFF):
  * (1 +- u)^n lies within 1 +- gamma(n), so a value computed with n float
  * operations has relative error at most gamma(n) (Higham, "Accuracy and
