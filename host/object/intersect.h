@@ -51,12 +51,6 @@ bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *
  * the line parameter in *t (double); the ray's [tmin, tmax] is NOT checked. */
 bool tb_object_triangle_crossing(const tb_object *obj, uint32_t tri, const tb_ray *ray, double *t);
 
-/* The same test on a triangle's world corners given directly, x y z each
- * (copies of obj->mesh->wvertices for the triangle's vertices give exactly
- * tb_object_triangle_crossing's answer): lets a caller keep a triangle's
- * corners next to each other in memory. */
-bool tb_triangle_crossing_world(const double *v0, const double *v1, const double *v2, const tb_ray *ray, double *t);
-
 /* Unit world-space geometric normal of triangle `tri`, as tb_object_intersect
  * reports it for a hit on that triangle (kept per triangle: a load). */
 tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t tri);

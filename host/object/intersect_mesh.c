@@ -652,44 +652,18 @@ void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out)
 
 /* ------------------------------------------------------------ one triangle */
 
-/* The last prepared ray of this thread. A scene query tests triangles of
- * one or more meshes with the same ray, and preparing it (the shear
- * constants, the reciprocal direction) costs about as much as the test
- * itself. It depends on the world ray only (the test is in world space), so
- * the key is the ray's origin and direction compared bit for bit, and a memo
- * hit gives exactly what recomputing gives, whichever mesh asks. */
-typedef struct tb__wray_memo {
-    bool valid;
-    tb_vec3 o, d;
-    tb_wt_ray w;
-} tb__wray_memo;
-
-static _Thread_local tb__wray_memo tb__memo;
-
-static const tb_wt_ray *tb__memo_ray(const tb_ray *ray)
-{
-    tb__wray_memo *c = &tb__memo;
-    if (c->valid && memcmp(&c->o, &ray->o, sizeof c->o) == 0 && memcmp(&c->d, &ray->d, sizeof c->d) == 0)
-        return &c->w;
-    tb_wt_ray_init(&c->w, ray);
-    c->o = ray->o;
-    c->d = ray->d;
-    c->valid = true;
-    return &c->w;
-}
-
-bool tb_triangle_crossing_world(const double *v0, const double *v1, const double *v2, const tb_ray *ray, double *t)
-{
-    int dir;
-    return tb_wt_triangle(tb__memo_ray(ray), v0, v1, v2, t, &dir);
-}
+/* The last prepared ray of this thread: a scene query may test several
+ * triangles with one ray, and preparing it costs about as much as a test.
+ * It depends on the world ray only (the test is in world space), whichever
+ * mesh asks. */
+static _Thread_local tb_wt_memo tb__memo;
 
 bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray *ray, double *t)
 {
     const tb_object_mesh *m = o->mesh;
     if (!m || tri >= m->ntris)
         return false;
-    const tb_wt_ray *w = tb__memo_ray(ray);
+    const tb_wt_ray *w = tb_wt_memo_ray(&tb__memo, ray);
     const uint32_t *tv = &m->tris[3 * (size_t)tri];
     int dir;
     return tb_wt_triangle(w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],

@@ -9,6 +9,7 @@
 
 #include <math.h>
 #include <stdbool.h>
+#include <string.h>
 
 #include "util/math/ray.h"
 
@@ -44,6 +45,27 @@ static inline void tb_wt_ray_init(tb_wt_ray *w, const tb_ray *r)
     w->sx = d[kx] / d[kz];
     w->sy = d[ky] / d[kz];
     w->sz = 1.0 / d[kz];
+}
+
+/* A thread's last prepared ray (each user keeps one, thread-local): a query
+ * tests several triangles with one ray. */
+typedef struct tb_wt_memo {
+    bool valid;
+    tb_vec3 o, d;   /* the key: what the preparation depends on, compared bit for bit */
+    tb_wt_ray w;
+} tb_wt_memo;
+
+/* The prepared ray for `ray`, from memo c when it holds that ray (then it is
+ * what tb_wt_ray_init gives), else prepared now and kept. */
+static inline const tb_wt_ray *tb_wt_memo_ray(tb_wt_memo *c, const tb_ray *ray)
+{
+    if (!c->valid || memcmp(&c->o, &ray->o, sizeof c->o) != 0 || memcmp(&c->d, &ray->d, sizeof c->d) != 0) {
+        tb_wt_ray_init(&c->w, ray);
+        c->o = ray->o;
+        c->d = ray->d;
+        c->valid = true;
+    }
+    return &c->w;
 }
 
 /* The rare case of tb_wt_triangle: an edge function came out exactly 0.

@@ -33,30 +33,15 @@
 #include "util/math/mat.h"
 #include "util/math/transform.h"
 
-/* This thread's last prepared ray: a query tests several triangles with one
- * ray. Keyed by the ray's origin and direction bit for bit (what the
- * preparation depends on), so a memo hit gives what recomputing gives. */
-typedef struct tb__wt_memo {
-    bool valid;
-    tb_vec3 o, d;
-    tb_wt_ray w;
-} tb__wt_memo;
-
-static _Thread_local tb__wt_memo tb__wt;
+/* This thread's last prepared ray (host/object/watertight.h). */
+static _Thread_local tb_wt_memo tb__wt;
 
 /* Tests triangle reference r with the object level's watertight test
  * (inline: it runs for every triangle a query meets); t in the ray's range
  * on the float t. */
 static inline bool tb__hit_tri(const tb__scene_tri *r, const tb_ray *ray, double *t, int *dir)
 {
-    tb__wt_memo *c = &tb__wt;
-    if (!c->valid || memcmp(&c->o, &ray->o, sizeof c->o) != 0 || memcmp(&c->d, &ray->d, sizeof c->d) != 0) {
-        tb_wt_ray_init(&c->w, ray);
-        c->o = ray->o;
-        c->d = ray->d;
-        c->valid = true;
-    }
-    if (!tb_wt_triangle(&c->w, &r->v[0], &r->v[3], &r->v[6], t, dir))
+    if (!tb_wt_triangle(tb_wt_memo_ray(&tb__wt, ray), &r->v[0], &r->v[3], &r->v[6], t, dir))
         return false;
     return (float)*t >= ray->tmin && (float)*t <= ray->tmax;
 }
