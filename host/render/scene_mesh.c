@@ -5,15 +5,15 @@
  * its triangles). To let the scene's BVH or grid split a big mesh like any
  * other geometry, each triangle is tested here on its own, with exactly the
  * object level's method and conventions (docs/primitives.md, "Watertight
- * triangles"): the world ray mapped to object space by the inverse transform
- * in double, Woop, Benthin and Wald's watertight test in double with exact
- * signs for zero edge functions and the same tie rule for rays through edges
- * and vertices, the range checked on the float t, the face ID of the polygon
- * the triangle came from, (u, v) from host/object/param.h, the normal
- * (v1 - v0) x (v2 - v0) transformed by the inverse transpose. The crossing
- * test and the normal are the object level's own (tb_object_triangle_crossing,
- * tb_object_triangle_normal), so a hit is the record tb_object_intersect gives
- * for the same triangle, and rays never leak between the triangles of a mesh.
+ * triangles"): Woop, Benthin and Wald's watertight test in double on the
+ * mesh's world-space corners (the inline code of host/object/watertight.h,
+ * on a copy of the corners kept in the reference's record), exact signs for
+ * zero edge functions and the same tie rule for rays through edges and
+ * vertices, the range checked on the float t, the face ID of the polygon the
+ * triangle came from, (u, v) from host/object/param.h's frame functions, the
+ * normal the mesh keeps per triangle (tb_object_triangle_normal). So a hit is
+ * the record tb_object_intersect gives for the same triangle, and rays never
+ * leak between the triangles of a mesh.
  *
  * (u, v) and the world normal are computed once per query, for the winning
  * triangle only: the callback keeps the best triangle candidate of the
@@ -30,8 +30,6 @@
 #include "host/object/intersect.h"
 #include "host/object/param.h"
 #include "host/object/watertight.h"
-#include "util/math/mat.h"
-#include "util/math/transform.h"
 
 /* This thread's last prepared ray (host/object/watertight.h). */
 static _Thread_local tb_wt_memo tb__wt;
