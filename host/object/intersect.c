@@ -102,8 +102,7 @@ static bool tb__closest(const tb_object *obj, const tb_ray *ray, double tmin, do
 {
     if (obj->kind == TB_PRIM_POLYGONS) {
         tb__count_kind(obj->kind);
-        tb__oray r = tb__object_ray(obj, ray);
-        return tb__mesh_closest(obj, &r, tmin, tmax, hit);
+        return tb__mesh_closest(obj, ray, tmin, tmax, hit); /* world space: no object ray */
     }
     tb__xbuf b;
     tb__xbuf_init(&b);
@@ -224,8 +223,7 @@ bool tb_object_occluded(const tb_object *obj, const tb_ray *ray)
         return false;
     if (obj->kind == TB_PRIM_POLYGONS) {
         tb__count_kind(obj->kind);
-        tb__oray r = tb__object_ray(obj, ray);
-        return tb__mesh_any(obj, &r, ray->tmin, ray->tmax);
+        return tb__mesh_any(obj, ray, ray->tmin, ray->tmax);
     }
     if (!tb_prim_is_csg(obj->kind)) { /* any-hit: no list, no normals */
         tb__oray r = tb__object_ray(obj, ray);

@@ -19,7 +19,7 @@
  * normalised, so t means the same as in world space). */
 typedef struct tb__oray {
     tb_dvec3 o, d;
-    const tb_ray *world; /* the world ray it came from (polygons test in world space) */
+    const tb_ray *world; /* the world ray it came from (tb__xings_mesh tests in world space) */
 } tb__oray;
 
 /* One crossing of the line o + t d with a primitive's surface. */
@@ -98,10 +98,11 @@ bool tb__any_revolved(const tb_object *o, const tb__oray *r, double tmin, double
  * object.c), once instead of at every ray. */
 void tb__revolved_prepare(tb_object *o);
 
-/* Closest triangle hit with t in [tmin, tmax] (polygons); false if none. */
-bool tb__mesh_closest(const tb_object *o, const tb__oray *r, double tmin, double tmax, tb__xing *hit);
+/* Closest triangle hit of the world ray with t in [tmin, tmax] (polygons,
+ * tested in world space: no object ray needed); false if none. */
+bool tb__mesh_closest(const tb_object *o, const tb_ray *ray, double tmin, double tmax, tb__xing *hit);
 /* True if any triangle is hit with t in [tmin, tmax]. */
-bool tb__mesh_any(const tb_object *o, const tb__oray *r, double tmin, double tmax);
+bool tb__mesh_any(const tb_object *o, const tb_ray *ray, double tmin, double tmax);
 
 /* Triangulates o->geom.polygons into o->mesh and builds its BVH (object.c
  * calls it after copying the polygons). */

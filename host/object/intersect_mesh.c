@@ -519,14 +519,14 @@ static tb_dvec3 tb__tri_normal(const tb_object_mesh *m, uint32_t i)
 
 /* Visits triangles whose boxes the ray passes within [tmin, *tmax]; `mode`
  * 0: closest (shrinks *tmax), 1: any (stops), 2: all (collects into out). */
-static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, double *tmax, int mode, tb__xing *hit,
+static bool tb__traverse(const tb_object *o, const tb_ray *ray, double tmin, double *tmax, int mode, tb__xing *hit,
                          tb__xbuf *out)
 {
     const tb_object_mesh *m = o->mesh;
     if (!m || m->nnodes == 0)
         return false;
     tb__wray w;
-    tb__wray_init(&w, r->world);
+    tb__wray_init(&w, ray);
     uint32_t stack[TB__BVH_STACK];
     int sp = 0;
     stack[sp++] = 0;
@@ -593,14 +593,14 @@ static bool tb__traverse(const tb_object *o, const tb__oray *r, double tmin, dou
     return found;
 }
 
-bool tb__mesh_closest(const tb_object *o, const tb__oray *r, double tmin, double tmax, tb__xing *hit)
+bool tb__mesh_closest(const tb_object *o, const tb_ray *ray, double tmin, double tmax, tb__xing *hit)
 {
-    return tb__traverse(o, r, tmin, &tmax, 0, hit, NULL);
+    return tb__traverse(o, ray, tmin, &tmax, 0, hit, NULL);
 }
 
-bool tb__mesh_any(const tb_object *o, const tb__oray *r, double tmin, double tmax)
+bool tb__mesh_any(const tb_object *o, const tb_ray *ray, double tmin, double tmax)
 {
-    return tb__traverse(o, r, tmin, &tmax, 1, NULL, NULL);
+    return tb__traverse(o, ray, tmin, &tmax, 1, NULL, NULL);
 }
 
 static int tb__xing_cmp(const void *pa, const void *pb)
@@ -616,7 +616,7 @@ void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out)
     tb__xbuf all;
     tb__xbuf_init(&all);
     double tmax = INFINITY;
-    tb__traverse(o, r, -INFINITY, &tmax, 2, NULL, &all);
+    tb__traverse(o, r->world, -INFINITY, &tmax, 2, NULL, &all);
     if (all.oom)
         out->oom = true;
     qsort(all.x, (size_t)all.n, sizeof *all.x, tb__xing_cmp);
