@@ -491,6 +491,14 @@ static bool tb__claims(int s, double px, double py, double qx, double qy)
     return ey > 0.0 || (ey == 0.0 && ex < 0.0);
 }
 
+void tb_wt_memo_fill(tb_wt_memo *c, const tb_ray *ray)
+{
+    tb_wt_ray_init(&c->w, ray);
+    c->o = ray->o;
+    c->d = ray->d;
+    c->valid = true;
+}
+
 bool tb_wt_edge_ties(double U, double V, double W, double ax, double ay, double bx, double by, double cx, double cy)
 {
     int su = tb__edge_sign(U, bx, by, cx, cy);

@@ -55,16 +55,16 @@ typedef struct tb_wt_memo {
     tb_wt_ray w;
 } tb_wt_memo;
 
+/* Prepares c for `ray` (the memo's miss path, out of line: it runs once per
+ * query, the check below once per triangle). */
+void tb_wt_memo_fill(tb_wt_memo *c, const tb_ray *ray);
+
 /* The prepared ray for `ray`, from memo c when it holds that ray (then it is
  * what tb_wt_ray_init gives), else prepared now and kept. */
 static inline const tb_wt_ray *tb_wt_memo_ray(tb_wt_memo *c, const tb_ray *ray)
 {
-    if (!c->valid || memcmp(&c->o, &ray->o, sizeof c->o) != 0 || memcmp(&c->d, &ray->d, sizeof c->d) != 0) {
-        tb_wt_ray_init(&c->w, ray);
-        c->o = ray->o;
-        c->d = ray->d;
-        c->valid = true;
-    }
+    if (!c->valid || memcmp(&c->o, &ray->o, sizeof c->o) != 0 || memcmp(&c->d, &ray->d, sizeof c->d) != 0)
+        tb_wt_memo_fill(c, ray);
     return &c->w;
 }
 
