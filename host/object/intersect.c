@@ -146,11 +146,10 @@ static tb_vec3 tb__world_normal(const tb__xing *x)
     return (tb_vec3){(float)(n.x * s), (float)(n.y * s), (float)(n.z * s)};
 }
 
-/* The crossing of this thread's last successful tb_object_intersect, with
+/* The crossing of this thread's last successful tb_object_intersect (or
+ * the triangle tb_object_note_triangle_hit was given, without x.n), with
  * its object and ray (o, d, tmin), so that tb_object_hit_point on the
- * winner of a scene query need not sweep (CSG trees) again. */
-/* (Filled by tb_object_intersect, or by tb_object_note_triangle_hit
- * without x.n.) */
+ * winner of a scene query need not sweep (CSG trees, meshes) again. */
 typedef struct tb__last_xing {
     const tb_object *obj;
     unsigned long gen; /* tb__object_generation when stored: x.leaf points into obj's tree */

@@ -48,7 +48,8 @@ _Static_assert(sizeof(tb_object_bvh_node) == 32, "BVH nodes are 32 bytes");
 typedef struct tb_object_mesh {
     uint32_t nvertices;
     tb_vec3 *vertices;          /* object-space positions */
-    double *wvertices;          /* the same mapped to world space by to_world in double, x y z per vertex (what the test uses) */
+    double *wvertices;          /* the same mapped to world space by to_world in double, x y z per
+                                   vertex (what the test uses) */
     int wsign;                  /* +1, or -1 if to_world mirrors (swaps which side is counter-clockwise) */
     uint32_t ntris;
     uint32_t *tris;             /* 3 vertex indices per triangle, counter-clockwise seen from the front; BVH leaf order */

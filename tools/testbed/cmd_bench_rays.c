@@ -442,7 +442,8 @@ int tb_cmd_bench_rays(int argc, char **argv)
 #ifndef TB_HAVE_EMBREE
     if (embree) {
         fprintf(stderr, "testbed bench rays: this testbed was built without Embree 3 (install libembree-dev and "
-                        "reconfigure); --embree is not available\n");
+                        "reconfigure); %s is not available\n",
+                robust ? "--embree-robust" : "--embree");
         return TB_EXIT_USAGE;
     }
 #endif
