@@ -36,23 +36,12 @@ typedef struct tp_scene {
     size_t n, cap;
 } tp_scene;
 
-static inline float tp_down(double v)
-{
-    float f = (float)v;
-    return (double)f > v ? tb_next_float_down(f) : f;
-}
-static inline float tp_up(double v)
-{
-    float f = (float)v;
-    return (double)f < v ? tb_next_float_up(f) : f;
-}
-
 /* The box of a primitive: exact for triangles, rounded outward for spheres. */
 static inline tb_aabb tp_bounds(const tp_prim *p)
 {
     if (p->kind == TP_SPHERE)
-        return (tb_aabb){{tp_down((double)p->c[0] - p->r), tp_down((double)p->c[1] - p->r), tp_down((double)p->c[2] - p->r)},
-                         {tp_up((double)p->c[0] + p->r), tp_up((double)p->c[1] + p->r), tp_up((double)p->c[2] + p->r)}};
+        return (tb_aabb){{tb_float_round_down((double)p->c[0] - p->r), tb_float_round_down((double)p->c[1] - p->r), tb_float_round_down((double)p->c[2] - p->r)},
+                         {tb_float_round_up((double)p->c[0] + p->r), tb_float_round_up((double)p->c[1] + p->r), tb_float_round_up((double)p->c[2] + p->r)}};
     tb_aabb b = tb_aabb_empty();
     for (int i = 0; i < 3; i++)
         b = tb_aabb_union_point(b, (tb_vec3){p->v[i][0], p->v[i][1], p->v[i][2]});
