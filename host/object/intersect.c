@@ -169,13 +169,16 @@ bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
         return false;
     tb__last = (tb__last_xing){obj, tb__object_generation, ray->o, ray->d, ray->tmin, x};
     const tb_object *leaf = x.leaf;
-    tb__oray r = tb__object_ray(leaf, ray);
-    tb_dvec3 p = {r.o.x + x.t * r.d.x, r.o.y + x.t * r.d.y, r.o.z + x.t * r.d.z};
-    int face = (int)x.face;
-    double u = 0.0, v = 0.0;
-    if (tb_param_from_point(leaf->kind, &leaf->geom, p, face, &face, &u, &v) != TB_OK) {
-        u = v = 0.0;
-        face = (int)x.face;
+    double u = 0.0, v = 0.0, uvw[3];
+    /* A triangle's (u, v): the mix of its corners' by the test's weights
+     * (docs/primitives.md, "Parametric coordinates"), else from the point. */
+    if (!(leaf->kind == TB_PRIM_POLYGONS && tb__mesh_tri_weights(leaf, x.tri, ray, uvw) &&
+          tb_object_triangle_uv(leaf, x.tri, uvw, &u, &v))) {
+        tb__oray r = tb__object_ray(leaf, ray);
+        tb_dvec3 p = {r.o.x + x.t * r.d.x, r.o.y + x.t * r.d.y, r.o.z + x.t * r.d.z};
+        int face = (int)x.face;
+        if (tb_param_from_point(leaf->kind, &leaf->geom, p, face, &face, &u, &v) != TB_OK)
+            u = v = 0.0;
     }
     hit->t = (float)x.t;
     hit->object = obj->index;

@@ -55,6 +55,14 @@ bool tb_object_triangle_crossing(const tb_object *obj, uint32_t tri, const tb_ra
  * reports it for a hit on that triangle (kept per triangle: a load). */
 tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t tri);
 
+/* (u, v) of a crossing of triangle `tri` of a polygons object's mesh from
+ * the edge functions U V W the watertight test gave for it (tb_wt_triangle's
+ * uvw): the mix of the face's (u, v) at the triangle's corners, which is
+ * tb_param_from_point's (u, v) of the crossing up to rounding (clamped to
+ * [0, 1]). False, with u and v untouched, for a triangle of a face of more
+ * than 3 corners with uvs (param splits those its own way): use the point. */
+bool tb_object_triangle_uv(const tb_object *obj, uint32_t tri, const double uvw[3], double *u, double *v);
+
 /* Tells the object level that triangle `tri` of the top-level polygons
  * object obj, crossed at line parameter t with direction dir (both as
  * tb_wt_triangle gave them, host/object/watertight.h), is the closest

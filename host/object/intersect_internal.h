@@ -104,6 +104,11 @@ bool tb__mesh_closest(const tb_object *o, const tb_ray *ray, double tmin, double
 /* True if any triangle is hit with t in [tmin, tmax]. */
 bool tb__mesh_any(const tb_object *o, const tb_ray *ray, double tmin, double tmax);
 
+/* The watertight test's edge functions U V W (tb_wt_triangle's uvw) for the
+ * world ray's crossing of triangle `tri` of polygons object o; false if it
+ * does not cross (not for a triangle a query of that ray reported). */
+bool tb__mesh_tri_weights(const tb_object *o, uint32_t tri, const tb_ray *ray, double uvw[3]);
+
 /* Triangulates o->geom.polygons into o->mesh and builds its BVH (object.c
  * calls it after copying the polygons). */
 tb_status tb__mesh_build(tb_object *o);

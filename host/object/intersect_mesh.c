@@ -26,6 +26,7 @@
 
 #include "host/object/intersect.h"
 #include "host/object/intersect_internal.h"
+#include "host/object/param.h"
 #include "host/object/watertight.h"
 #include "util/container/array.h"
 #include "util/math/float.h"
@@ -53,6 +54,7 @@ void tb__mesh_free(tb_object_mesh *m)
     free(m->tris);
     free(m->tri_face);
     free(m->wnormal);
+    free(m->tri_uv);
     free(m->nodes);
     free(m);
 }
@@ -267,6 +269,40 @@ static bool tb__polygons_closed(const tb_geom_polygons *g)
 
 static tb_vec3 tb__tri_world_normal(const tb_object *o, uint32_t tri);
 
+/* The (u, v) of face f's corners-to-be for the nt triangles tv[] (all of
+ * face f): where f's (u, v) is affine over each triangle, the exact (u, v)
+ * of its corners, so a hit's barycentric mix is tb_param_from_point's
+ * (u, v) of the hit point up to rounding. A face without uvs: the frame
+ * projection (affine; param's nearest-point step does nothing for points of
+ * the triangles, which lie in the loop); no area: 0, param's error answer. A
+ * triangle with uvs: its uvs. More corners with uvs: param's fan or ear
+ * clipping need not be the mesh's triangles, so NaN (the hit point path). */
+static void tb__face_corner_uv(const tb_object_mesh *m, const tb_geom_polygons *g, int f, const uint32_t *tv,
+                               size_t nt, float *out)
+{
+    int b = g->face_start[f], nv = g->face_start[f + 1] - b;
+    if (g->uvs) {
+        for (size_t i = 0; i < nt; i++)
+            for (int k = 0; k < 3; k++) {
+                tb_vec2 uv = nv == 3 ? g->uvs[tv[3 * i + k]] : (tb_vec2){NAN, NAN};
+                out[6 * i + 2 * k] = uv.x;
+                out[6 * i + 2 * k + 1] = uv.y;
+            }
+        return;
+    }
+    tb_poly_frame fr;
+    bool ok = tb_poly_frame_make(g->vertices, &g->indices[b], nv, &fr);
+    for (size_t i = 0; i < nt; i++)
+        for (int k = 0; k < 3; k++) {
+            double u = 0.0, v = 0.0;
+            if (ok)
+                tb_poly_frame_uv(&fr, g->vertices, &g->indices[b], nv, tb_vec3_to_d(m->vertices[tv[3 * i + k]]), &u,
+                                 &v);
+            out[6 * i + 2 * k] = (float)u;
+            out[6 * i + 2 * k + 1] = (float)v;
+        }
+}
+
 tb_status tb__mesh_build(tb_object *o)
 {
     const tb_geom_polygons *g = &o->geom.polygons;
@@ -369,10 +405,13 @@ tb_status tb__mesh_build(tb_object *o)
     c.nodes = malloc(sizeof *c.nodes * (nt ? 2 * nt : 1));
     m->tris = malloc(sizeof(uint32_t) * 3 * (nt ? nt : 1));
     m->tri_face = malloc(sizeof(uint32_t) * (nt ? nt : 1));
-    if (!c.prims || !c.order || !c.nodes || !m->tris || !m->tri_face) {
+    m->tri_uv = malloc(sizeof(float) * 6 * (nt ? nt : 1));
+    float *uv0 = malloc(sizeof(float) * 6 * (nt ? nt : 1));
+    if (!c.prims || !c.order || !c.nodes || !m->tris || !m->tri_face || !m->tri_uv || !uv0) {
         free(c.prims);
         free(c.order);
         free(c.nodes);
+        free(uv0);
         tb_array_free(&tris);
         tb_array_free(&faces);
         return tb_error(TB_ERR_NOMEM, "polygons: out of memory for %zu triangles", nt);
@@ -394,13 +433,24 @@ tb_status tb__mesh_build(tb_object *o)
             p->c[a] = 0.5f * p->lo[a] + 0.5f * p->hi[a];
         c.order[i] = (uint32_t)i;
     }
+    /* Corner (u, v), a face at a time (its triangles are consecutive here). */
+    for (size_t i = 0; i < nt;) {
+        uint32_t f = TB_ARRAY_AT(&faces, uint32_t, i);
+        size_t j = i;
+        while (j < nt && TB_ARRAY_AT(&faces, uint32_t, j) == f)
+            j++;
+        tb__face_corner_uv(m, g, (int)f, &tv[3 * i], j - i, &uv0[6 * i]);
+        i = j;
+    }
     if (nt > 0)
         tb__build_node(&c, 0, (uint32_t)nt, 0);
     for (size_t i = 0; i < nt; i++) {
         uint32_t t = c.order[i];
         memcpy(&m->tris[3 * i], &tv[3 * t], sizeof(uint32_t) * 3);
         m->tri_face[i] = TB_ARRAY_AT(&faces, uint32_t, t);
+        memcpy(&m->tri_uv[6 * i], &uv0[6 * (size_t)t], sizeof(float) * 6);
     }
+    free(uv0);
     m->nnodes = c.nnodes;
     m->nodes = c.nodes;
     free(c.prims);
@@ -568,7 +618,7 @@ static bool tb__traverse(const tb_object *o, const tb_ray *ray, double tmin, dou
             double t;
             int dir;
             if (!tb_wt_triangle(&w.t, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
-                         &m->wvertices[3 * (size_t)tv[2]], &t, &dir))
+                         &m->wvertices[3 * (size_t)tv[2]], &t, &dir, NULL))
                 continue;
             dir *= m->wsign;
             if (!((float)t >= tmin && (float)t <= *tmax)) /* on the float t, as intersect.c */
@@ -675,7 +725,7 @@ bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray 
     const uint32_t *tv = &m->tris[3 * (size_t)tri];
     int dir;
     return tb_wt_triangle(w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
-                   &m->wvertices[3 * (size_t)tv[2]], t, &dir);
+                   &m->wvertices[3 * (size_t)tv[2]], t, &dir, NULL);
 }
 
 /* The unit world normal of triangle tri: its object-space normal by the
@@ -693,4 +743,30 @@ static tb_vec3 tb__tri_world_normal(const tb_object *o, uint32_t tri)
 tb_vec3 tb_object_triangle_normal(const tb_object *o, uint32_t tri)
 {
     return o->mesh->wnormal[tri];
+}
+
+bool tb_object_triangle_uv(const tb_object *o, uint32_t tri, const double uvw[3], double *u, double *v)
+{
+    const float *c = &o->mesh->tri_uv[6 * (size_t)tri];
+    if (isnan(c[0]))
+        return false;
+    /* U V W share one sign (or are 0) and det is their sum: a convex mix. */
+    double det = uvw[0] + uvw[1] + uvw[2];
+    double a = uvw[0] / det, b = uvw[1] / det, g = uvw[2] / det;
+    double su = a * c[0] + b * c[2] + g * c[4], sv = a * c[1] + b * c[3] + g * c[5];
+    /* Rounding may step past the corners' range by an ulp: [0, 1] as param. */
+    *u = su < 0.0 ? 0.0 : su > 1.0 ? 1.0 : su;
+    *v = sv < 0.0 ? 0.0 : sv > 1.0 ? 1.0 : sv;
+    return true;
+}
+
+bool tb__mesh_tri_weights(const tb_object *o, uint32_t tri, const tb_ray *ray, double uvw[3])
+{
+    const tb_object_mesh *m = o->mesh;
+    const tb_wt_ray *w = tb_wt_memo_ray(&tb__memo, ray);
+    const uint32_t *tv = &m->tris[3 * (size_t)tri];
+    double t;
+    int dir;
+    return tb_wt_triangle(w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
+                          &m->wvertices[3 * (size_t)tv[2]], &t, &dir, uvw);
 }

@@ -55,6 +55,9 @@ typedef struct tb_object_mesh {
     uint32_t *tris;             /* 3 vertex indices per triangle, counter-clockwise seen from the front; BVH leaf order */
     uint32_t *tri_face;         /* polygon index (face ID) of each triangle */
     tb_vec3 *wnormal;           /* unit world normal of each triangle, as hits report it (flip included) */
+    float *tri_uv;              /* the face's (u, v) at each triangle's corners (u0 v0 u1 v1 u2 v2): a hit's
+                                   (u, v) is their mix by the test's weights; u0 NaN where (u, v) is not affine
+                                   over the triangle (a face of > 3 corners with uvs): from the hit point then */
     uint32_t nnodes;
     tb_object_bvh_node *nodes;  /* BVH over the triangles' world boxes; node 0 is the root (nnodes == 0 when ntris == 0) */
     bool closed;                /* every polygon edge is matched by exactly one edge running the other way: a solid */

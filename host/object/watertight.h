@@ -75,9 +75,12 @@ bool tb_wt_edge_ties(double U, double V, double W, double ax, double ay, double 
 
 /* The test on corners v0 v1 v2 (x y z each, world space); on a hit writes
  * the line parameter t and dir (+1: the ray meets the side from which the
- * corners run counter-clockwise). The ray's [tmin, tmax] is not checked. */
+ * corners run counter-clockwise) and, when uvw is not NULL, the edge
+ * functions U V W: the crossing is (U v0 + V v1 + W v2) / (U + V + W), all
+ * three of one sign or 0 (the barycentric weights, unnormalised). The ray's
+ * [tmin, tmax] is not checked. */
 static inline bool tb_wt_triangle(const tb_wt_ray *w, const double *v0, const double *v1, const double *v2,
-                                  double *t, int *dir)
+                                  double *t, int *dir, double *uvw)
 {
     /* Corners relative to the origin, permuted so the ray runs along z. */
     int kx = w->kx, ky = w->ky, kz = w->kz;
@@ -101,6 +104,11 @@ static inline bool tb_wt_triangle(const tb_wt_ray *w, const double *v0, const do
     double T = U * az + V * bz + W * cz;
     *t = T / det;
     *dir = det > 0.0 ? 1 : -1;
+    if (uvw) {
+        uvw[0] = U;
+        uvw[1] = V;
+        uvw[2] = W;
+    }
     return isfinite(*t);
 }
 

@@ -37,9 +37,9 @@ static _Thread_local tb_wt_memo tb__wt;
 /* Tests triangle reference r with the object level's watertight test
  * (inline: it runs for every triangle a query meets); t in the ray's range
  * on the float t. */
-static inline bool tb__hit_tri(const tb__scene_tri *r, const tb_ray *ray, double *t, int *dir)
+static inline bool tb__hit_tri(const tb__scene_tri *r, const tb_ray *ray, double *t, int *dir, double *uvw)
 {
-    if (!tb_wt_triangle(tb_wt_memo_ray(&tb__wt, ray), &r->v[0], &r->v[3], &r->v[6], t, dir))
+    if (!tb_wt_triangle(tb_wt_memo_ray(&tb__wt, ray), &r->v[0], &r->v[3], &r->v[6], t, dir, uvw))
         return false;
     return (float)*t >= ray->tmin && (float)*t <= ray->tmax;
 }
@@ -62,6 +62,7 @@ typedef struct tb__tri_best {
     int dir;    /* the test's crossing direction (for the object level's hit-point memo) */
     float tf;   /* the reported t */
     double t;   /* the line parameter in double, as the object level uses it for (u, v) */
+    double uvw[3]; /* the test's edge functions: (u, v) by tb_object_triangle_uv */
 } tb__tri_best;
 
 static _Thread_local tb__tri_best tb__best;
@@ -83,17 +84,16 @@ static bool tb__better(float t, uint32_t object, uint32_t face, uint32_t index)
 
 /* ------------------------------------------------------ (u, v) of a face
  *
- * tb_param_from_point recomputes the polygon's frame (Newell normal, in-plane
- * axes, the face's extent in them) on every call, which is most of the cost
- * of a hit's (u, v) on triangle scenes. For faces without per-vertex uvs the
- * code below memoises the frame per thread and projects with param.h's
- * tb_poly_frame_make / tb_poly_frame_uv, the functions tb_param_from_point
- * itself uses, so (u, v) are the object level's bit for bit
- * (tests/render/test_scene_accel.c compares every hit with
- * tb_object_intersect's byte for byte). Convex faces with uvs likewise
- * (tb_poly_fan_uv); non-convex faces with uvs
- * (ear-clipped by param) or more than TB__UV_MAX_NV corners use
- * tb_param_from_point. */
+ * A triangle's (u, v) is the mix of its corners' by the test's weights
+ * (tb_object_triangle_uv), as the object level computes it. Only faces of
+ * more than 3 corners with uvs take it from the hit point (param splits
+ * those its own way), and tb_param_from_point recomputes the polygon's frame
+ * on every call: the code below memoises the frame per thread and uses
+ * param.h's tb_poly_frame_make / tb_poly_fan_uv, the functions
+ * tb_param_from_point itself uses, so (u, v) are the object level's bit for
+ * bit (tests/render/test_scene_accel.c compares every hit with
+ * tb_object_intersect's byte for byte). Non-convex faces (ear-clipped by
+ * param) or more than TB__UV_MAX_NV corners use tb_param_from_point. */
 #define TB__UV_MAX_NV 8
 #define TB__UV_SLOTS 256u
 
@@ -145,22 +145,18 @@ void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
     if (!b->valid || hit->t != b->tf || hit->object != b->obj->index || hit->face != b->face)
         return; /* the winner is not a triangle reference */
     const tb_object *o = b->obj;
-    tb_dvec3 p = tb_object_ray_point(o, ray, b->t);
-    uint32_t face = o->mesh->tri_face[b->tri];
-    int pf = (int)face;
     double u = 0.0, v = 0.0;
-    const tb_geom_polygons *g = &o->geom.polygons;
-    const tb__uv_frame *f = tb_dvec3_isfinite(p) ? tb__uv_frame_of(g, (int)face) : NULL;
-    if (f && g->uvs && !f->fan)
-        f = NULL; /* ear-clipped or no area: param's own path */
-    if (f) {
-        /* !f->ok: no area, param's error path (u = v = 0) */
-        if (f->ok && g->uvs)
+    if (!tb_object_triangle_uv(o, b->tri, b->uvw, &u, &v)) {
+        /* A face of more than 3 corners with uvs: from the point. */
+        tb_dvec3 p = tb_object_ray_point(o, ray, b->t);
+        uint32_t face = o->mesh->tri_face[b->tri];
+        int pf = (int)face;
+        const tb_geom_polygons *g = &o->geom.polygons;
+        const tb__uv_frame *f = tb_dvec3_isfinite(p) ? tb__uv_frame_of(g, (int)face) : NULL;
+        if (f && f->fan) /* (fan implies a frame; otherwise ear-clipped or no area: param's own path) */
             tb_poly_fan_uv(&f->frame, f->corner, NULL, f->uv, f->nv, p, &u, &v);
-        else if (f->ok)
-            tb_poly_frame_uv(&f->frame, f->corner, NULL, f->nv, p, &u, &v);
-    } else if (tb_param_from_point(o->kind, &o->geom, p, (int)face, &pf, &u, &v) != TB_OK) {
-        u = v = 0.0;
+        else if (tb_param_from_point(o->kind, &o->geom, p, (int)face, &pf, &u, &v) != TB_OK)
+            u = v = 0.0;
     }
     hit->u = (float)u;
     hit->v = (float)v;
@@ -172,9 +168,9 @@ void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
 
 bool tb__scene_tri_intersect(const tb__scene_tri *r, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {
-    double t;
+    double t, uvw[3];
     int dir;
-    if (!tb__hit_tri(r, ray, &t, &dir))
+    if (!tb__hit_tri(r, ray, &t, &dir, uvw))
         return false;
     const tb_object *o = r->o;
     uint32_t face = r->face;
@@ -185,7 +181,7 @@ bool tb__scene_tri_intersect(const tb__scene_tri *r, uint32_t index, const tb_ra
     hit->u = hit->v = 0.0f;
     hit->ng = (tb_vec3){0.0f, 0.0f, 0.0f};
     if (tb__better(hit->t, o->index, face, index))
-        tb__best = (tb__tri_best){true, o, r->tri, index, face, dir, hit->t, t};
+        tb__best = (tb__tri_best){true, o, r->tri, index, face, dir, hit->t, t, {uvw[0], uvw[1], uvw[2]}};
     return true;
 }
 
@@ -193,7 +189,7 @@ bool tb__scene_tri_occluded(const tb__scene_tri *r, const tb_ray *ray)
 {
     double t;
     int dir;
-    return tb__hit_tri(r, ray, &t, &dir);
+    return tb__hit_tri(r, ray, &t, &dir, NULL);
 }
 
 tb_status tb__scene_tri_bounds(const tb_object *o, uint32_t tri, tb_aabb *out)

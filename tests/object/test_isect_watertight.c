@@ -11,6 +11,7 @@
 
 #include "host/object/csg.h"
 #include "host/object/intersect.h"
+#include "host/object/param.h"
 #include "host/object/watertight.h"
 
 typedef struct ti_leaks {
@@ -188,7 +189,7 @@ static void test_triangle_calls(void **state)
                 tb_wt_ray w;
                 tb_wt_ray_init(&w, &ray);
                 int dir;
-                bool b = tb_wt_triangle(&w, &c[0], &c[3], &c[6], &tb, &dir);
+                bool b = tb_wt_triangle(&w, &c[0], &c[3], &c[6], &tb, &dir, NULL);
                 if (a != b || (a && memcmp(&ta, &tb, sizeof ta) != 0))
                     mismatches++;
                 float tf = (float)ta;
@@ -231,12 +232,128 @@ static void test_triangle_calls(void **state)
     ti_mesh_free(&mesh);
 }
 
+/* A triangle hit's (u, v) is the mix of the triangle's corner (u, v) by the
+ * test's edge functions (tb_object_triangle_uv): it must be
+ * tb_param_from_point's (u, v) of the hit point (the double t, mapped to
+ * object space as tb_object_intersect does) within a few float ulps on faces
+ * where (u, v) is affine over the triangles (without uvs: a trapezoid, a
+ * non-convex L, a slightly non-planar quad, a triangle; with uvs: a
+ * triangle), and exactly the point's on faces of more than 3 corners with
+ * uvs (a trapezoid with a square's uvs, a non-convex pentagon), which keep
+ * that path. Meshes placed by the identity, a random and a mirroring
+ * transform; rays from random points aimed at random points of the faces. */
+static void test_triangle_uv(void **state)
+{
+    (void)state;
+    static const tb_vec3 va[] = {
+        {0, 0, 0}, {2, 0, 0}, {1.5f, 1, 0}, {0.25f, 1, 0},                            /* trapezoid (z = 0) */
+        {0, 0, 1}, {2, 0, 1}, {2, 1, 1}, {1, 1, 1}, {1, 2, 1}, {0, 2, 1},              /* L (z = 1) */
+        {0, 0, 2}, {1, 0, 2.05f}, {1, 1, 2}, {0, 1, 1.95f},                            /* non-planar quad */
+        {0, 0, 3}, {1, 0.2f, 3}, {0.3f, 1, 3.1f},                                      /* triangle */
+    };
+    static const int sa[] = {0, 4, 10, 14, 17};
+    static const int ia[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
+    static const tb_vec3 vb[] = {
+        {0, 0, 0}, {1, 0.1f, 0}, {0.2f, 1, 0.1f},                                     /* triangle */
+        {0, 0, 1}, {2, 0, 1}, {1.5f, 1, 1}, {0.5f, 1, 1},                              /* trapezoid */
+        {0, 0, 2}, {2, 0, 2}, {2, 2, 2}, {1, 0.8f, 2}, {0, 2, 2},                      /* non-convex pentagon */
+    };
+    static const tb_vec2 uvb[] = {
+        {0.1f, 0.2f}, {0.9f, 0.3f}, {0.4f, 0.95f},
+        {0, 0}, {1, 0}, {1, 1}, {0, 1},
+        {0, 0}, {1, 0}, {1, 1}, {0.5f, 0.3f}, {0, 1},
+    };
+    static const int sb[] = {0, 3, 7, 12};
+    static const int ib[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+    tb_rng r;
+    tb_rng_seed(&r, tb_test_seed("triangle_uv", 20261205), 1);
+    long nrays = ti_count(20000, 600), hits = 0, affine = 0, from_point = 0, far = 0, differ = 0;
+    double worst = 0.0;
+    for (int g = 0; g < 2; g++) {
+        tb_mid_geometry geom;
+        memset(&geom, 0, sizeof geom);
+        geom.polygons.nvertices = g ? 12 : 17;
+        geom.polygons.vertices = g ? vb : va;
+        geom.polygons.uvs = g ? uvb : NULL;
+        geom.polygons.nfaces = g ? 3 : 4;
+        geom.polygons.face_start = g ? sb : sa;
+        geom.polygons.indices = g ? ib : ia;
+        for (int x = 0; x < 3; x++) {
+            tb_transform xf = x == 0 ? tb_transform_identity() : ti_random_transform(&r, 0.5, 3.0, 5.0, x == 2);
+            tb_mid_object mo = ti_prim(TB_PRIM_POLYGONS, geom, xf);
+            tb_object *o = ti_build(&mo, 0);
+            const tb_object_mesh *m = o->mesh;
+            for (long k = 0; k < nrays / 6; k++) {
+                /* A random point of a random triangle, shot at from a random point around the mesh. */
+                uint32_t tri = tb_rng_below(&r, m->ntris);
+                const uint32_t *tv = &m->tris[3 * tri];
+                double a = tb_rng_double(&r), b = tb_rng_double(&r);
+                if (a + b > 1.0)
+                    a = 1.0 - a, b = 1.0 - b;
+                tb_vec3 p0 = m->vertices[tv[0]], p1 = m->vertices[tv[1]], p2 = m->vertices[tv[2]];
+                tb_dvec3 target = {p0.x + a * (p1.x - p0.x) + b * (p2.x - p0.x),
+                                   p0.y + a * (p1.y - p0.y) + b * (p2.y - p0.y),
+                                   p0.z + a * (p1.z - p0.z) + b * (p2.z - p0.z)};
+                tb_dvec3 u = ti_sphere_dir(&r), orig = {target.x + 4.0 * u.x, target.y + 4.0 * u.y, target.z + 4.0 * u.z};
+                tb_dvec3 ow = tb_transform_dpoint(&o->to_world, orig), tw = tb_transform_dpoint(&o->to_world, target);
+                tb_vec3 of = {(float)ow.x, (float)ow.y, (float)ow.z};
+                tb_ray ray = tb_ray_make(
+                    of, (tb_vec3){(float)(tw.x - of.x), (float)(tw.y - of.y), (float)(tw.z - of.z)}, 0.0f, INFINITY);
+                tb_hit h;
+                if (!tb_object_intersect(o, &ray, &h))
+                    continue;
+                /* The winning triangle (the least in float t, face, triangle) and its double t. */
+                bool found = false;
+                double best_t = 0.0;
+                for (uint32_t t = 0; t < m->ntris; t++) {
+                    double tt;
+                    if (tb_object_triangle_crossing(o, t, &ray, &tt) && (float)tt == h.t &&
+                        m->tri_face[t] == h.face && !found) {
+                        found = true;
+                        best_t = tt;
+                    }
+                }
+                assert_true(found);
+                hits++;
+                tb_dvec3 p = tb_object_ray_point(o, &ray, best_t);
+                int pf;
+                double pu, pv;
+                if (tb_param_from_point(TB_PRIM_POLYGONS, &o->geom, p, (int)h.face, &pf, &pu, &pv) != TB_OK)
+                    pu = pv = 0.0;
+                int nv = o->geom.polygons.face_start[h.face + 1] - o->geom.polygons.face_start[h.face];
+                if (g && nv > 3) {
+                    from_point++;
+                    if (h.u != (float)pu || h.v != (float)pv)
+                        differ++;
+                } else {
+                    affine++;
+                    double e = fmax(fabs(h.u - pu), fabs(h.v - pv));
+                    worst = fmax(worst, e);
+                    if (!(e <= 4.0 * 0x1p-24)) /* corners and result rounded to float */
+                        if (far++ < 3)
+                            print_message("face %u: (u, v) = (%.9g, %.9g), param (%.9g, %.9g)\n", h.face, h.u, h.v,
+                                          pu, pv);
+                }
+            }
+            tb_object_free(o);
+        }
+    }
+    print_message("[ triangle uv ] %ld hits: %ld by the corners' mix (largest difference from param %.3g), %ld "
+                  "from the point (%ld differ)\n",
+                  hits, affine, worst, from_point, differ);
+    assert_true(affine > nrays / 4);
+    assert_true(from_point > nrays / 20);
+    assert_int_equal(far, 0);
+    assert_int_equal(differ, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_watertight_sphere),
         cmocka_unit_test(test_watertight_cube),
         cmocka_unit_test(test_triangle_calls),
+        cmocka_unit_test(test_triangle_uv),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
