@@ -92,7 +92,7 @@ static tb_status tb__upload_occluders(tb_gpu_ff_scene *g, const tb_ff_polygon *p
     tb_accel *acc = NULL;
     tb_status st = TB_OK;
     if (nt) {
-        tb_accel_callbacks cb = {tb__ff_no_intersect, NULL, NULL};
+        tb_accel_callbacks cb = {tb__ff_no_intersect, NULL, NULL, NULL};
         st = tb_accel_build(TB_ACCEL_BVH, prims, nt, &cb, NULL, &acc);
     }
     if (!st && acc) {

@@ -85,7 +85,7 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
 {
     const tb_scene *s = g->scene;
     tb_accel *acc = NULL;
-    tb_accel_callbacks cb = {tb__never, NULL, NULL};
+    tb_accel_callbacks cb = {tb__never, NULL, NULL, NULL};
     tb_status st = tb_accel_build(TB_ACCEL_BVH, refs, n, &cb, NULL, &acc);
     if (st)
         return st;
@@ -293,7 +293,7 @@ tb_gpu_scene *tb_gpu_scene_create_ex(tb_gpu_device *dev, const tb_scene *scene, 
     g->info.gpu_cubes = g->ncubes;
     g->info.gpu_quadrics = g->nquadrics;
     if (!st && nc) {
-        tb_accel_callbacks cb = {tb__cpu_isect, tb__cpu_occl, (void *)scene};
+        tb_accel_callbacks cb = {tb__cpu_isect, tb__cpu_occl, (void *)scene, NULL};
         st = tb_accel_build(TB_ACCEL_BVH, cref, nc, &cb, NULL, &g->cpu_accel);
     }
     if (!st) {

@@ -288,7 +288,7 @@ tb_status tb_ff_occluders_build(const tb_ff_polygon *polys, size_t n, tb_ff_occl
         }
     }
     if (!st) {
-        tb_accel_callbacks cb = {tb__occ_intersect, tb__occ_occluded, occ->mesh};
+        tb_accel_callbacks cb = {tb__occ_intersect, tb__occ_occluded, occ->mesh, NULL};
         st = tb_accel_build(TB_ACCEL_BVH, prims, mesh->ntris, &cb, NULL, &occ->acc);
         if (st)
             tb_error_context(st, "tb_ff_occluders_build");

@@ -103,6 +103,7 @@ tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t 
         return tb_error(TB_ERR_NOMEM, "accel: out of memory");
     acc->kind = kind;
     acc->cb = *cb;
+    acc->cb.tris = NULL; /* copied below; the caller's array need not outlive the build */
     acc->n = nkept;
     acc->bounds = tb_aabb_empty();
     if (nkept > 0) {
@@ -134,6 +135,15 @@ tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t 
         else if (kind == TB_ACCEL_GRID)
             st = tb__grid_build(acc, &o);
     }
+    /* Triangle references in stored order, so a leaf's lie side by side. */
+    if (!st && nkept > 0 && cb->tris) {
+        acc->tris = malloc(nkept * sizeof *acc->tris);
+        if (!acc->tris)
+            st = tb_error(TB_ERR_NOMEM, "accel: out of memory for %zu triangle references", nkept);
+        for (size_t k = 0; !st && k < nkept; k++)
+            acc->tris[k] = cb->tris[acc->index[k]];
+        acc->stats.memory_bytes += nkept * sizeof *acc->tris;
+    }
     if (st) {
         tb_accel_free(acc);
         return st;
@@ -153,8 +163,12 @@ static bool tb__list_intersect(const tb_accel *acc, tb__accel_best *best)
 
 static bool tb__list_occluded(const tb_accel *acc, const tb_ray *ray)
 {
+    tb__accel_any q;
+    q.ray = ray;
+    q.wready = false;
+    q.w = (tb_wt_ray){{0.0, 0.0, 0.0}, 0, 0, 0, 0.0, 0.0, 0.0}; /* (prepared on the first triangle; set for the compiler) */
     for (size_t k = 0; k < acc->n; k++) {
-        if (tb__accel_test_any(acc, k, ray)) {
+        if (tb__accel_test_any(acc, k, &q)) {
             tb_stat_add(&tb__list_tested, (int64_t)k + 1);
             return true;
         }
@@ -165,13 +179,25 @@ static bool tb__list_occluded(const tb_accel *acc, const tb_ray *ray)
 
 bool tb_accel_intersect(const tb_accel *acc, const tb_ray *ray, tb_hit *hit)
 {
+    return tb_accel_intersect_tri(acc, ray, hit, NULL);
+}
+
+bool tb_accel_intersect_tri(const tb_accel *acc, const tb_ray *ray, tb_hit *hit, tb_accel_tri_hit *tri)
+{
+    if (tri)
+        tri->index = TB_ACCEL_TRI_NONE;
     if (!tb_ray_is_valid(ray)) {
         TB_STAT_INC(tb__invalid_rays);
         return false;
     }
     if (acc->n == 0)
         return false;
-    tb__accel_best best = {.ray = *ray, .found = false};
+    /* Field by field: an initialiser would clear the whole record (a
+     * rep stos costing more than a small query's traversal). */
+    tb__accel_best best;
+    best.ray = *ray;
+    best.found = false;
+    best.wready = false;
     bool found = false;
     switch (acc->kind) {
     case TB_ACCEL_BVH:
@@ -185,8 +211,11 @@ bool tb_accel_intersect(const tb_accel *acc, const tb_ray *ray, tb_hit *hit)
         found = tb__list_intersect(acc, &best);
         break;
     }
-    if (found)
+    if (found) {
         *hit = best.hit;
+        if (tri)
+            *tri = best.tri;
+    }
     return found;
 }
 
@@ -246,5 +275,6 @@ void tb_accel_free(tb_accel *acc)
     tb__grid_free(acc);
     free(acc->prims);
     free(acc->index);
+    free(acc->tris);
     free(acc);
 }

@@ -9,7 +9,7 @@
  * for the references it cannot rule out by their boxes.
  *
  *     tb_accel_prim *prims = ...;   // boxes + (object, sub)
- *     tb_accel_callbacks cb = {my_intersect, my_occluded, my_ctx};
+ *     tb_accel_callbacks cb = {my_intersect, my_occluded, my_ctx, NULL};
  *     tb_accel *acc;
  *     if (tb_accel_build(TB_ACCEL_BVH, prims, n, &cb, NULL, &acc)) fail(tb_last_error());
  *     tb_hit hit;
@@ -60,12 +60,39 @@ typedef bool (*tb_accel_intersect_fn)(void *ctx, const tb_accel_prim *prim, uint
 typedef bool (*tb_accel_occluded_fn)(void *ctx, const tb_accel_prim *prim, uint32_t index,
                                      const tb_ray *ray);
 
+/* A triangle reference the structure tests itself, without a callback
+ * (docs/accel.md, "Triangle references"): the watertight test of
+ * host/object/watertight.h in double on the world corners, the range checked
+ * on the float t, the hit reported with hit.u, hit.v and hit.ng 0 (the
+ * caller completes them from tb_accel_tri_hit). 80 bytes. */
+typedef struct tb_accel_tri {
+    double v[9];     /* world corners x y z, counter-clockwise seen from the front */
+    uint32_t object; /* hit.object; TB_ACCEL_TRI_NONE: not a triangle, the callbacks test this reference */
+    uint32_t face;   /* hit.face */
+} tb_accel_tri;
+
+_Static_assert(sizeof(tb_accel_tri) == 80, "tb_accel_tri is 80 bytes");
+
+/* tb_accel_tri.object of a reference that is not a triangle. */
+#define TB_ACCEL_TRI_NONE UINT32_MAX
+
 /* How leaf references are intersected. */
 typedef struct tb_accel_callbacks {
     tb_accel_intersect_fn intersect; /* required */
     tb_accel_occluded_fn occluded;   /* NULL: tb_accel_occluded uses `intersect` */
     void *ctx;                       /* passed to both */
+    const tb_accel_tri *tris;        /* optional, one per reference (input numbering): those whose object is
+                                        not TB_ACCEL_TRI_NONE are tested by the structure (copied at build) */
 } tb_accel_callbacks;
+
+/* What a closest hit on a triangle reference (tb_accel_tri) adds to the hit
+ * record, for completing its (u, v) and normal. */
+typedef struct tb_accel_tri_hit {
+    uint32_t index;  /* input index of the reference; TB_ACCEL_TRI_NONE when the hit came from a callback */
+    int dir;         /* +1: the ray meets the side from which the corners run counter-clockwise, else -1 */
+    double t;        /* the line parameter in double (hit.t is it rounded to float) */
+    double uvw[3];   /* the test's edge functions: the crossing is (U v0 + V v1 + W v2) / (U + V + W) */
+} tb_accel_tri_hit;
 
 /* Build options; a zeroed struct (or NULL) means every default. */
 typedef struct tb_accel_options {
@@ -118,6 +145,10 @@ tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t 
  * zero direction, tmin > tmax) are never hit and counted as
  * "Accel/invalid rays". */
 bool tb_accel_intersect(const tb_accel *acc, const tb_ray *ray, tb_hit *hit);
+
+/* tb_accel_intersect, and when the hit is on a triangle reference fills
+ * *tri (tri->index is TB_ACCEL_TRI_NONE otherwise, or on a miss). */
+bool tb_accel_intersect_tri(const tb_accel *acc, const tb_ray *ray, tb_hit *hit, tb_accel_tri_hit *tri);
 
 /* True if anything is hit with ray->tmin <= t <= ray->tmax (stops at the
  * first hit found). False for invalid rays. */

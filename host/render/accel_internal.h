@@ -7,6 +7,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "host/object/watertight.h"
 #include "host/render/accel.h"
 #include "util/math/float.h"
 
@@ -69,6 +70,7 @@ struct tb_accel {
     size_t n;              /* references stored */
     tb_accel_prim *prims;  /* stored references: BVH leaf order, else input order (empty boxes dropped) */
     uint32_t *index;       /* input index of each stored reference (the tie rule's last key) */
+    tb_accel_tri *tris;    /* cb.tris in stored order (a leaf's triangles side by side), or NULL */
     tb_aabb bounds;        /* union of the stored boxes */
     tb_accel_stats stats;  /* filled at build */
     tb_bvh_node *nodes;    /* BVH: depth-first binary nodes (the layout tb_accel_bvh_nodes exposes) */
@@ -158,11 +160,45 @@ typedef struct tb__accel_best {
     tb_hit hit;      /* valid when found */
     uint32_t index;  /* input index of hit's reference */
     bool found;
+    bool wready;     /* w is prepared (on the first triangle reference the query tests) */
+    tb_wt_ray w;     /* the ray prepared for the watertight test */
+    tb_accel_tri_hit tri; /* the hit's triangle details when it came from a triangle reference */
 } tb__accel_best;
+
+/* The triangle test on stored reference k (acc->tris[k] is a triangle): the
+ * crossing's float t in [tmin, tmax]. */
+static inline __attribute__((always_inline)) bool tb__accel_tri_test(const tb_accel_tri *tr, const tb_ray *ray,
+                                                                     tb_wt_ray *w, bool *wready, double *t,
+                                                                     int *dir, double *uvw)
+{
+    if (!*wready) {
+        tb_wt_ray_init(w, ray);
+        *wready = true;
+    }
+    if (!tb_wt_triangle(w, &tr->v[0], &tr->v[3], &tr->v[6], t, dir, uvw))
+        return false;
+    return (float)*t >= ray->tmin && (float)*t <= ray->tmax;
+}
 
 /* Tests stored reference k against the running best; true if it improved it. */
 static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best *b)
 {
+    const tb_accel_tri *tr = acc->tris ? &acc->tris[k] : NULL;
+    if (tr && tr->object != TB_ACCEL_TRI_NONE) {
+        double t, uvw[3];
+        int dir;
+        if (!tb__accel_tri_test(tr, &b->ray, &b->w, &b->wready, &t, &dir, uvw))
+            return false;
+        tb_hit h = {(float)t, tr->object, tr->face, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
+        if (b->found && !tb__accel_before(&h, acc->index[k], &b->hit, b->index))
+            return false;
+        b->hit = h;
+        b->index = acc->index[k];
+        b->found = true;
+        b->ray.tmax = h.t;
+        b->tri = (tb_accel_tri_hit){acc->index[k], dir, t, {uvw[0], uvw[1], uvw[2]}};
+        return true;
+    }
     tb_hit h;
     if (!acc->cb.intersect(acc->cb.ctx, &acc->prims[k], acc->index[k], &b->ray, &h))
         return false;
@@ -175,12 +211,27 @@ static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best 
     b->index = acc->index[k];
     b->found = true;
     b->ray.tmax = h.t;
+    b->tri.index = TB_ACCEL_TRI_NONE;
     return true;
 }
 
+/* One any-hit query: the ray, and its preparation for triangle references. */
+typedef struct tb__accel_any {
+    const tb_ray *ray;
+    bool wready;     /* w is prepared */
+    tb_wt_ray w;
+} tb__accel_any;
+
 /* True if stored reference k is hit within the ray's [tmin, tmax]. */
-static inline bool tb__accel_test_any(const tb_accel *acc, size_t k, const tb_ray *ray)
+static inline bool tb__accel_test_any(const tb_accel *acc, size_t k, tb__accel_any *q)
 {
+    const tb_ray *ray = q->ray;
+    const tb_accel_tri *tr = acc->tris ? &acc->tris[k] : NULL;
+    if (tr && tr->object != TB_ACCEL_TRI_NONE) {
+        double t;
+        int dir;
+        return tb__accel_tri_test(tr, ray, &q->w, &q->wready, &t, &dir, NULL);
+    }
     if (acc->cb.occluded)
         return acc->cb.occluded(acc->cb.ctx, &acc->prims[k], acc->index[k], ray);
     tb_hit h;

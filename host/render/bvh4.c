@@ -413,8 +413,9 @@ static bool tb__bvh_box_hit(const tb_aabb *b, const tb_ray *ray)
 /* Any-hit traversal; *who is the blocking reference. Children met are
  * followed near first (the same octant order as the closest hit) and the
  * first reference that blocks ends the query. */
-static bool tb__bvh4_traverse_any(const tb_accel *acc, const tb_ray *ray, uint32_t *who)
+static bool tb__bvh4_traverse_any(const tb_accel *acc, tb__accel_any *q, uint32_t *who)
 {
+    const tb_ray *ray = q->ray;
     const tb__bvh4_node *nodes = acc->wide;
     tb__bvh4_ray r;
     tb__bvh4_ray_init(&r, ray);
@@ -456,7 +457,7 @@ static bool tb__bvh4_traverse_any(const tb_accel *acc, const tb_ray *ray, uint32
         } else {
             for (uint32_t k = cur, e = cur + cur_count; k < e && !hit; k++) {
                 tested++;
-                hit = tb__accel_test_any(acc, k, ray);
+                hit = tb__accel_test_any(acc, k, q);
                 *who = k;
             }
             if (hit)
@@ -483,17 +484,21 @@ bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
     }
     unsigned slot = tb__occ_slot(ray->d);
     uint32_t k = c->k[slot];
+    tb__accel_any q;
+    q.ray = ray;
+    q.wready = false;
+    q.w = (tb_wt_ray){{0.0, 0.0, 0.0}, 0, 0, 0, 0.0, 0.0, 0.0}; /* (prepared on the first triangle; set for the compiler) */
     /* The hint's box first: a miss there costs a slab test, not a callback. */
     if (k < acc->n && tb__bvh_box_hit(&acc->prims[k].bounds, ray)) {
         tb_stat_add(&tb__bvh_prims_tested, 1);
-        if (tb__accel_test_any(acc, k, ray)) {
+        if (tb__accel_test_any(acc, k, &q)) {
             TB_STAT_INC(tb__bvh_shadow_rays);
             TB_STAT_INC(tb__bvh_occ_hits);
             return true;
         }
     }
     uint32_t who = UINT32_MAX;
-    bool hit = tb__bvh4_traverse_any(acc, ray, &who);
+    bool hit = tb__bvh4_traverse_any(acc, &q, &who);
     if (hit)
         c->k[slot] = who;
     return hit;

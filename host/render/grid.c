@@ -318,6 +318,10 @@ bool tb__grid_occluded(const tb_accel *acc, const tb_ray *ray)
     tb__dda w;
     int64_t visited = 0, tested = 0;
     bool hit = false;
+    tb__accel_any q;
+    q.ray = ray;
+    q.wready = false;
+    q.w = (tb_wt_ray){{0.0, 0.0, 0.0}, 0, 0, 0, 0.0, 0.0, 0.0}; /* (prepared on the first triangle; set for the compiler) */
     if (tb__dda_start(g, ray, &w)) {
         const size_t sy = (size_t)g->res[0], sz = (size_t)g->res[0] * (size_t)g->res[1];
         do {
@@ -325,7 +329,7 @@ bool tb__grid_occluded(const tb_accel *acc, const tb_ray *ray)
             size_t c = (size_t)w.idx[0] + sy * (size_t)w.idx[1] + sz * (size_t)w.idx[2];
             for (uint32_t j = g->cell_start[c], e = g->cell_start[c + 1]; j < e && !hit; j++) {
                 tested++;
-                hit = tb__accel_test_any(acc, g->cell_refs[j], ray);
+                hit = tb__accel_test_any(acc, g->cell_refs[j], &q);
             }
         } while (!hit && tb__dda_step(g, &w));
     }

@@ -625,8 +625,7 @@ static tb_status tb__make_prims(tb_scene *s)
         n += o->kind == TB_PRIM_POLYGONS && o->mesh ? o->mesh->ntris : 1;
     }
     s->prims = n ? malloc(sizeof *s->prims * n) : NULL;
-    s->tris = n ? malloc(sizeof *s->tris * n) : NULL;
-    if (n && (!s->prims || !s->tris))
+    if (n && !s->prims)
         return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", n);
     s->bounds = tb_aabb_empty();
     size_t k = 0;
@@ -638,7 +637,6 @@ static tb_status tb__make_prims(tb_scene *s)
                 tb_accel_prim *r = &s->prims[k++];
                 r->object = i;
                 r->sub = t;
-                tb__scene_tri_make(o, t, &s->tris[k - 1]);
                 if ((st = tb__scene_tri_bounds(o, t, &r->bounds)))
                     return st;
                 s->bounds = tb_aabb_union(s->bounds, r->bounds);
@@ -660,33 +658,46 @@ static tb_status tb__make_prims(tb_scene *s)
 
 /* ------------------------------------------------------------------ accel callbacks */
 
+/* Whole objects only: the structure tests the triangle references itself
+ * (tb_accel_tri, made by tb__scene_tri_make). */
 static bool tb__cb_intersect(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {
+    (void)index;
     const tb_scene *s = ctx;
-    const tb_object *o = s->objects[prim->object];
-    if (prim->sub == TB_SCENE_WHOLE_OBJECT)
-        return tb_object_intersect(o, ray, hit);
-    return tb__scene_tri_intersect(&s->tris[index], index, ray, hit);
+    return tb_object_intersect(s->objects[prim->object], ray, hit);
 }
 
 static bool tb__cb_occluded(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray)
 {
+    (void)index;
     const tb_scene *s = ctx;
-    if (prim->sub == TB_SCENE_WHOLE_OBJECT)
-        return tb_object_occluded(s->objects[prim->object], ray);
-    return tb__scene_tri_occluded(&s->tris[index], ray);
+    return tb_object_occluded(s->objects[prim->object], ray);
 }
 
 tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel_options *opt)
 {
     if (!s)
         return tb_error(TB_ERR_ARG, "scene: NULL argument");
-    tb_accel_callbacks cb = {tb__cb_intersect, tb__cb_occluded, s};
-    tb_accel *acc;
     int64_t t0 = tb_stats_now_ns();
     tb_timer_token tt = tb_timer_start(&tb__t_accel);
+    /* The triangle references' corners, for the build to copy in its order. */
+    tb_accel_tri *tris = s->nprims ? malloc(sizeof *tris * s->nprims) : NULL;
+    if (s->nprims && !tris) {
+        tb_timer_stop(tt);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", s->nprims);
+    }
+    for (size_t k = 0; k < s->nprims; k++) {
+        const tb_accel_prim *r = &s->prims[k];
+        if (r->sub == TB_SCENE_WHOLE_OBJECT)
+            tris[k] = (tb_accel_tri){.object = TB_ACCEL_TRI_NONE};
+        else
+            tb__scene_tri_make(s->objects[r->object], r->sub, &tris[k]);
+    }
+    tb_accel_callbacks cb = {tb__cb_intersect, tb__cb_occluded, s, tris};
+    tb_accel *acc;
     tb_status st = tb_accel_build(kind, s->prims, s->nprims, &cb, opt, &acc);
     tb_timer_stop(tt);
+    free(tris);
     if (st)
         return tb_error_context(st, "scene");
     tb_accel_free(s->accel);
@@ -812,7 +823,6 @@ void tb_scene_free(tb_scene *s)
     free(s->emissive);
     free(s->emitters);
     free(s->prims);
-    free(s->tris);
     tb__scene_priv *p = s->priv;
     if (p) {
         for (int i = 0; i < p->nmats; i++)
@@ -842,10 +852,11 @@ bool tb_scene_intersect(const tb_scene *s, const tb_ray *ray, tb_hit *hit)
 {
     if (!s || !s->accel)
         return false;
-    tb__scene_tri_begin();
-    if (!tb_accel_intersect(s->accel, ray, hit))
+    tb_accel_tri_hit tri;
+    if (!tb_accel_intersect_tri(s->accel, ray, hit, &tri))
         return false;
-    tb__scene_tri_finish(ray, hit);
+    if (tri.index != TB_ACCEL_TRI_NONE)
+        tb__scene_tri_finish(s, ray, &tri, hit);
     return true;
 }
 

@@ -143,12 +143,11 @@ typedef struct tb_scene {
     tb_camera camera;           /* ready to make rays, at the file's resolution */
     tb_aabb bounds;             /* world box of every object */
     tb_accel *accel;            /* NULL with no_accel. Query it through tb_scene_intersect, which
-                                   completes the (u, v) of hits on mesh triangles (left 0 by the
-                                   callbacks); tb_accel_occluded may be called directly */
+                                   completes the (u, v) and normal of hits on mesh triangles (left 0
+                                   by the structure); tb_accel_occluded may be called directly */
     size_t nprims;
-    tb_accel_prim *prims;       /* the acceleration references in build order */
-    struct tb__scene_tri *tris; /* per reference (same numbering): a triangle's test data (scene_internal.h);
-                                   unused entries for whole objects */
+    tb_accel_prim *prims;       /* the acceleration references in build order (a triangle: object, sub =
+                                   its index in the object's mesh) */
     tb_scene_stats stats;
     tb__scene_priv *priv;       /* owned storage (strings, IES tables) */
 } tb_scene;

@@ -3,23 +3,19 @@
  *
  * The object level intersects a polygons object as a whole (its own BVH over
  * its triangles). To let the scene's BVH or grid split a big mesh like any
- * other geometry, each triangle is tested here on its own, with exactly the
- * object level's method and conventions (docs/primitives.md, "Watertight
- * triangles"): Woop, Benthin and Wald's watertight test in double on the
- * mesh's world-space corners (the inline code of host/object/watertight.h,
- * on a copy of the corners kept in the reference's record), exact signs for
- * zero edge functions and the same tie rule for rays through edges and
- * vertices, the range checked on the float t, the face ID of the polygon the
- * triangle came from, (u, v) from host/object/param.h's frame functions, the
- * normal the mesh keeps per triangle (tb_object_triangle_normal). So a hit is
- * the record tb_object_intersect gives for the same triangle, and rays never
- * leak between the triangles of a mesh.
- *
- * (u, v) and the world normal are computed once per query, for the winning
- * triangle only: the callback keeps the best triangle candidate of the
- * current query in thread-local storage, ordered by the structure's own tie rule (t, object,
- * face, reference index), so the candidate kept is the one the structure
- * returns whenever it returns a triangle. */
+ * other geometry, each triangle is a reference the structure tests itself
+ * (tb_accel_tri, host/render/accel.h) with exactly the object level's method
+ * and conventions (docs/primitives.md, "Watertight triangles"): Woop, Benthin
+ * and Wald's watertight test in double on the mesh's world-space corners (the
+ * inline code of host/object/watertight.h, on a copy of the corners kept in
+ * the reference's record), exact signs for zero edge functions and the same
+ * tie rule for rays through edges and vertices, the range checked on the
+ * float t, the face ID of the polygon the triangle came from. The winner's
+ * (u, v) (the mix of its corners' by the test's edge functions,
+ * tb_object_triangle_uv) and normal (kept per triangle by the mesh) are
+ * filled in here, once per query. So a hit is the record tb_object_intersect
+ * gives for the same triangle, and rays never leak between the triangles of
+ * a mesh. */
 #include "host/render/scene_internal.h"
 
 #include <math.h>
@@ -29,57 +25,14 @@
 #include "host/object/bounds.h"
 #include "host/object/intersect.h"
 #include "host/object/param.h"
-#include "host/object/watertight.h"
 
-/* This thread's last prepared ray (host/object/watertight.h). */
-static _Thread_local tb_wt_memo tb__wt;
-
-/* Tests triangle reference r with the object level's watertight test
- * (inline: it runs for every triangle a query meets); t in the ray's range
- * on the float t. */
-static inline bool tb__hit_tri(const tb__scene_tri *r, const tb_ray *ray, double *t, int *dir, double *uvw)
-{
-    if (!tb_wt_triangle(tb_wt_memo_ray(&tb__wt, ray), &r->v[0], &r->v[3], &r->v[6], t, dir, uvw))
-        return false;
-    return (float)*t >= ray->tmin && (float)*t <= ray->tmax;
-}
-
-void tb__scene_tri_make(const tb_object *o, uint32_t tri, tb__scene_tri *r)
+void tb__scene_tri_make(const tb_object *o, uint32_t tri, tb_accel_tri *r)
 {
     const tb_object_mesh *m = o->mesh;
     for (int k = 0; k < 3; k++)
         memcpy(&r->v[3 * k], &m->wvertices[3 * (size_t)m->tris[3 * (size_t)tri + k]], sizeof(double) * 3);
-    r->o = o;
-    r->tri = tri;
+    r->object = o->index;
     r->face = o->face_base + m->tri_face[tri];
-}
-
-/* The best triangle candidate of this thread's current query. */
-typedef struct tb__tri_best {
-    bool valid;
-    const tb_object *obj;
-    uint32_t tri, index, face;
-    int dir;    /* the test's crossing direction (for the object level's hit-point memo) */
-    float tf;   /* the reported t */
-    double t;   /* the line parameter in double, as the object level uses it for (u, v) */
-    double uvw[3]; /* the test's edge functions: (u, v) by tb_object_triangle_uv */
-} tb__tri_best;
-
-static _Thread_local tb__tri_best tb__best;
-
-void tb__scene_tri_begin(void) { tb__best.valid = false; }
-
-/* True if candidate (t, object, face, index) precedes the kept one. */
-static bool tb__better(float t, uint32_t object, uint32_t face, uint32_t index)
-{
-    const tb__tri_best *b = &tb__best;
-    if (!b->valid || t != b->tf)
-        return !b->valid || t < b->tf;
-    if (object != b->obj->index)
-        return object < b->obj->index;
-    if (face != b->face)
-        return face < b->face;
-    return index < b->index;
 }
 
 /* ------------------------------------------------------ (u, v) of a face
@@ -139,17 +92,16 @@ static const tb__uv_frame *tb__uv_frame_of(const tb_geom_polygons *g, int face)
     return f;
 }
 
-void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
+void tb__scene_tri_finish(const tb_scene *s, const tb_ray *ray, const tb_accel_tri_hit *th, tb_hit *hit)
 {
-    const tb__tri_best *b = &tb__best;
-    if (!b->valid || hit->t != b->tf || hit->object != b->obj->index || hit->face != b->face)
-        return; /* the winner is not a triangle reference */
-    const tb_object *o = b->obj;
+    const tb_accel_prim *r = &s->prims[th->index];
+    const tb_object *o = s->objects[r->object];
+    uint32_t tri = r->sub;
     double u = 0.0, v = 0.0;
-    if (!tb_object_triangle_uv(o, b->tri, b->uvw, &u, &v)) {
+    if (!tb_object_triangle_uv(o, tri, th->uvw, &u, &v)) {
         /* A face of more than 3 corners with uvs: from the point. */
-        tb_dvec3 p = tb_object_ray_point(o, ray, b->t);
-        uint32_t face = o->mesh->tri_face[b->tri];
+        tb_dvec3 p = tb_object_ray_point(o, ray, th->t);
+        uint32_t face = o->mesh->tri_face[tri];
         int pf = (int)face;
         const tb_geom_polygons *g = &o->geom.polygons;
         const tb__uv_frame *f = tb_dvec3_isfinite(p) ? tb__uv_frame_of(g, (int)face) : NULL;
@@ -160,36 +112,10 @@ void tb__scene_tri_finish(const tb_ray *ray, tb_hit *hit)
     }
     hit->u = (float)u;
     hit->v = (float)v;
-    hit->ng = tb_object_triangle_normal(o, b->tri);
+    hit->ng = tb_object_triangle_normal(o, tri);
     /* The shading point comes next (tb_object_hit_point): give the object
      * level the crossing so it need not search the mesh for it again. */
-    tb_object_note_triangle_hit(o, ray, b->tri, b->t, b->dir);
-}
-
-bool tb__scene_tri_intersect(const tb__scene_tri *r, uint32_t index, const tb_ray *ray, tb_hit *hit)
-{
-    double t, uvw[3];
-    int dir;
-    if (!tb__hit_tri(r, ray, &t, &dir, uvw))
-        return false;
-    const tb_object *o = r->o;
-    uint32_t face = r->face;
-    hit->t = (float)t;
-    hit->object = o->index;
-    hit->face = face;
-    /* (u, v) and the normal: tb__scene_tri_finish, for the winner only. */
-    hit->u = hit->v = 0.0f;
-    hit->ng = (tb_vec3){0.0f, 0.0f, 0.0f};
-    if (tb__better(hit->t, o->index, face, index))
-        tb__best = (tb__tri_best){true, o, r->tri, index, face, dir, hit->t, t, {uvw[0], uvw[1], uvw[2]}};
-    return true;
-}
-
-bool tb__scene_tri_occluded(const tb__scene_tri *r, const tb_ray *ray)
-{
-    double t;
-    int dir;
-    return tb__hit_tri(r, ray, &t, &dir, NULL);
+    tb_object_note_triangle_hit(o, ray, tri, th->t, th->dir);
 }
 
 tb_status tb__scene_tri_bounds(const tb_object *o, uint32_t tri, tb_aabb *out)

@@ -4,9 +4,11 @@
  * ignores the range, build errors, the grid resolution rule. */
 #include "tb_test.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 #include "host/render/accel.h"
+#include "host/object/watertight.h"
 #include "host/render/accel_internal.h"
 #include "test_accel_prims.h"
 #include "util/base/error.h"
@@ -17,7 +19,7 @@ static const tb_accel_kind kinds[] = {TB_ACCEL_BVH, TB_ACCEL_GRID, TB_ACCEL_LIST
 
 static tb_accel *build(tb_accel_kind k, tp_scene *s, const tb_accel_options *opt)
 {
-    tb_accel_callbacks cb = {tp_cb_intersect, tp_cb_occluded, s};
+    tb_accel_callbacks cb = {tp_cb_intersect, tp_cb_occluded, s, NULL};
     tb_accel *acc = NULL;
     if (tb_accel_build(k, s->refs, s->n, &cb, opt, &acc))
         fail_msg("build %s: %s", tb_accel_kind_name(k), tb_last_error());
@@ -316,13 +318,140 @@ static bool liar(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_
     return true;
 }
 
+/* Triangle references (tb_accel_tri): a random scene whose triangles are
+ * given as records the structure tests itself and whose spheres go through
+ * the callback. Every kind must return the brute-force answer over the same
+ * tests (the watertight test of host/object/watertight.h on the records, the
+ * spheres' callback; ties by (t, object, face, index)) bit for bit, with
+ * u, v and the normal 0 on triangle hits, and tb_accel_intersect_tri's
+ * details (reference, double t, direction, edge functions) those of that
+ * reference's test; occlusion agrees with the closest hit. The callback must
+ * never see a triangle (it aborts). */
+typedef struct tt_ctx {
+    tp_scene *s;
+} tt_ctx;
+
+static bool tt_sphere_only(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray, tb_hit *hit)
+{
+    tp_scene *s = ((tt_ctx *)ctx)->s;
+    if (s->prims[prim->sub].kind != TP_SPHERE || prim->sub != index)
+        abort(); /* triangles belong to the structure */
+    return tp_intersect_prim(&s->prims[prim->sub], ray, hit);
+}
+
+/* The record's test as the reference computes it: true with t and details if hit in range. */
+static bool tt_tri(const tb_accel_tri *tr, const tb_ray *ray, tb_accel_tri_hit *d)
+{
+    tb_wt_ray w;
+    tb_wt_ray_init(&w, ray);
+    if (!tb_wt_triangle(&w, &tr->v[0], &tr->v[3], &tr->v[6], &d->t, &d->dir, d->uvw))
+        return false;
+    return (float)d->t >= ray->tmin && (float)d->t <= ray->tmax;
+}
+
+static void test_triangle_references(void **state)
+{
+    (void)state;
+    tb_rng r;
+    tb_rng_seed(&r, tb_test_seed("triangle_references", 77), 0);
+    tp_scene s = {0};
+    tp_random_scene(&s, &r, 3000, 1.0f, 0.0f);
+    tb_accel_tri *tris = malloc(s.n * sizeof *tris);
+    assert_non_null(tris);
+    size_t ntri = 0;
+    for (size_t i = 0; i < s.n; i++) {
+        const tp_prim *p = &s.prims[i];
+        tris[i].object = TB_ACCEL_TRI_NONE;
+        if (p->kind != TP_TRIANGLE)
+            continue;
+        for (int j = 0; j < 9; j++)
+            tris[i].v[j] = p->v[j / 3][j % 3];
+        tris[i].object = p->object;
+        tris[i].face = p->face;
+        ntri++;
+    }
+    assert_true(ntri > s.n / 4);
+    tt_ctx ctx = {&s};
+    tb_accel_callbacks cb = {tt_sphere_only, NULL, &ctx, tris};
+    tb_accel *acc[NKINDS];
+    for (int k = 0; k < NKINDS; k++)
+        assert_int_equal(tb_accel_build(kinds[k], s.refs, s.n, &cb, NULL, &acc[k]), TB_OK);
+    /* The structures copied the records: the caller's array may go. */
+    tb_accel_tri *kept = malloc(s.n * sizeof *kept);
+    assert_non_null(kept);
+    memcpy(kept, tris, s.n * sizeof *kept);
+    memset(tris, 0xFF, s.n * sizeof *tris);
+    free(tris);
+    long nrays = 20000, hits = 0, tri_hits = 0;
+    for (long i = 0; i < nrays; i++) {
+        tb_ray ray = tp_random_ray(&r, &s, 1.0f, 0.0f);
+        /* Brute force. */
+        bool found = false;
+        tb_hit best = {0};
+        uint32_t best_i = 0;
+        tb_accel_tri_hit best_d = {TB_ACCEL_TRI_NONE, 0, 0.0, {0, 0, 0}};
+        if (tb_ray_is_valid(&ray)) {
+            for (size_t j = 0; j < s.n; j++) {
+                if (tb_aabb_is_empty(&s.refs[j].bounds))
+                    continue;
+                tb_hit h;
+                tb_accel_tri_hit d = {(uint32_t)j, 0, 0.0, {0, 0, 0}};
+                if (kept[j].object != TB_ACCEL_TRI_NONE) {
+                    if (!tt_tri(&kept[j], &ray, &d))
+                        continue;
+                    h = (tb_hit){(float)d.t, kept[j].object, kept[j].face, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
+                } else {
+                    if (!tp_intersect_prim(&s.prims[j], &ray, &h))
+                        continue;
+                    d.index = TB_ACCEL_TRI_NONE;
+                }
+                if (!found || tb__accel_before(&h, (uint32_t)j, &best, best_i)) {
+                    found = true;
+                    best = h;
+                    best_i = (uint32_t)j;
+                    best_d = d;
+                }
+            }
+        }
+        hits += found;
+        tri_hits += found && best_d.index != TB_ACCEL_TRI_NONE;
+        for (int k = 0; k < NKINDS; k++) {
+            tb_hit h;
+            tb_accel_tri_hit d;
+            memset(&d, 0xAB, sizeof d);
+            bool f = tb_accel_intersect_tri(acc[k], &ray, &h, &d);
+            assert_int_equal(f, found);
+            assert_int_equal(tb_accel_occluded(acc[k], &ray), found);
+            if (!f) {
+                assert_int_equal(d.index, TB_ACCEL_TRI_NONE);
+                continue;
+            }
+            assert_memory_equal(&h, &best, sizeof h);
+            assert_int_equal(d.index, best_d.index);
+            if (d.index != TB_ACCEL_TRI_NONE) {
+                assert_int_equal(d.dir, best_d.dir);
+                assert_memory_equal(&d.t, &best_d.t, sizeof d.t);
+                assert_memory_equal(d.uvw, best_d.uvw, sizeof d.uvw);
+            }
+        }
+    }
+    print_message("[ tri refs ] %zu references (%zu triangles), %ld rays, %ld hits (%ld on triangles)\n", s.n, ntri,
+                  nrays, hits, tri_hits);
+    assert_true(tri_hits > nrays / 50); /* small triangles among spheres */
+    assert_true(hits - tri_hits > nrays / 10);
+    for (int k = 0; k < NKINDS; k++)
+        tb_accel_free(acc[k]);
+    free(kept);
+    tp_free(&s);
+}
+
 static void test_callback_range_not_trusted(void **state)
 {
     (void)state;
     tp_scene s = {0};
     tp_add_sphere(&s, 0, 0, 0, 10, 1, 0);
     float t = 4.0f;
-    tb_accel_callbacks cb = {liar, NULL, &t};
+    tb_accel_callbacks cb = {liar, NULL, &t, NULL};
     for (int k = 0; k < NKINDS; k++) {
         tb_accel *acc;
         assert_int_equal(tb_accel_build(kinds[k], s.refs, s.n, &cb, NULL, &acc), TB_OK);
@@ -390,7 +519,7 @@ static void test_t_tolerance(void **state)
         {{{0, -0.5f, -0.5f}, {1, 0.5f, 0.5f}}, 0, 0x1p-17},              /* A, placed below */
         {{{0, -0.5f, -0.5f}, {0, 0.5f, 0.5f}}, 1, 0.0},                  /* B, placed below */
     };
-    tb_accel_callbacks cb = {box_intersect, NULL, bp};
+    tb_accel_callbacks cb = {box_intersect, NULL, bp, NULL};
     tb_accel_prim refs[4];
     for (int i = 0; i < 4; i++)
         refs[i] = (tb_accel_prim){bp[i].box, bp[i].object, 0};
@@ -645,7 +774,7 @@ static void test_build_errors(void **state)
     tp_scene s = {0};
     tp_add_sphere(&s, 0, 0, 0, 1, 0, 0);
     tp_add_sphere(&s, 1, 0, 0, 1, 1, 0);
-    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s};
+    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s, NULL};
     tb_accel *acc = (tb_accel *)&s; /* must be reset to NULL on failure */
 
     s.refs[1].bounds.hi.y = NAN;
@@ -659,7 +788,7 @@ static void test_build_errors(void **state)
 
     assert_int_equal(tb_accel_build((tb_accel_kind)7, s.refs, s.n, &cb, NULL, &acc), TB_ERR_ARG);
     assert_non_null(strstr(tb_last_error(), "kind"));
-    tb_accel_callbacks nocb = {NULL, NULL, NULL};
+    tb_accel_callbacks nocb = {NULL, NULL, NULL, NULL};
     assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &nocb, NULL, &acc), TB_ERR_ARG);
     assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, NULL, NULL, &acc), TB_ERR_ARG);
     assert_int_equal(tb_accel_build(TB_ACCEL_BVH, NULL, 2, &cb, NULL, &acc), TB_ERR_ARG);
@@ -760,6 +889,7 @@ int main(void)
         cmocka_unit_test(test_invalid_rays),
         cmocka_unit_test(test_tmin_tmax_exact),
         cmocka_unit_test(test_callback_range_not_trusted),
+        cmocka_unit_test(test_triangle_references),
         cmocka_unit_test(test_t_tolerance),
         cmocka_unit_test(test_slab_matches_util),
         cmocka_unit_test(test_bvh4_slab_matches_scalar),

@@ -26,7 +26,7 @@ static int divisor(void)
 
 static void build_all(tp_scene *s, tb_accel *acc[NKINDS], const tb_accel_options *opt)
 {
-    tb_accel_callbacks cb = {tp_cb_intersect, tp_cb_occluded, s};
+    tb_accel_callbacks cb = {tp_cb_intersect, tp_cb_occluded, s, NULL};
     for (int k = 0; k < NKINDS; k++) {
         tb_status st = tb_accel_build(kinds[k], s->refs, s->n, &cb, opt, &acc[k]);
         if (st)
@@ -360,7 +360,7 @@ static void test_bvh_structure(void **state)
     tb_rng_seed(&r, seed, 4);
     tp_scene s = {0};
     tp_random_scene(&s, &r, 5000, 1.0f, 0.0f);
-    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s};
+    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s, NULL};
     for (int leaf = 1; leaf <= 16; leaf *= 4) {
         tb_accel_options opt = {.bvh_max_leaf = leaf};
         tb_accel *acc;
@@ -389,7 +389,7 @@ static void test_bvh_deterministic(void **state)
     tb_rng_seed(&r, seed, 5);
     tp_scene s = {0};
     tp_random_scene(&s, &r, (size_t)(30000 / divisor()), 1.0f, 0.0f);
-    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s};
+    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s, NULL};
     tb_accel *a[3];
     for (int t = 0; t < 3; t++) {
         tb_accel_options opt = {.threads = t + 1};
@@ -476,7 +476,7 @@ static void test_bvh_near_first(void **state)
     tp_scene s = {0};
     for (int i = 0; i < 1024; i++)
         tp_add_sphere(&s, (float)i, 0, 0, 0.4f, (uint32_t)i, 0);
-    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s};
+    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s, NULL};
     tb_accel *acc;
     assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &cb, NULL, &acc), TB_OK);
     tb_accel_stats st;
@@ -506,7 +506,7 @@ static void test_concurrent_queries(void **state)
     tb_rng_seed(&r, seed, 6);
     tp_scene s = {0};
     tp_random_scene(&s, &r, 1000, 1.0f, 0.0f);
-    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s};
+    tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s, NULL};
     int n = 2000 / divisor();
     tb_ray *rays = malloc((size_t)n * sizeof *rays);
     tb_hit *want = malloc((size_t)n * sizeof *want);

@@ -164,7 +164,7 @@ static tb_vec3 random_dir(tb_rng *r)
  * at the objects' box centres. Returns the number of hits. */
 static long compare(objscene *s, uint64_t seed, long nrays)
 {
-    tb_accel_callbacks cb = {obj_intersect, obj_occluded, s};
+    tb_accel_callbacks cb = {obj_intersect, obj_occluded, s, NULL};
     tb_accel *acc[NKINDS];
     for (int k = 0; k < NKINDS; k++)
         if (tb_accel_build(kinds[k], s->refs, s->n, &cb, NULL, &acc[k]) != TB_OK)

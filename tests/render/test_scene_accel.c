@@ -1,7 +1,7 @@
 /* The scene's acceleration references (host/render/scene.h): every triangle
- * of a polygons object is a reference of its own, tested by the scene's
- * per-triangle callback; everything else is one reference through
- * tb_object_intersect. The scene's answer must be, bit for bit, what the
+ * of a polygons object is a reference of its own, tested by the structure
+ * (tb_accel_tri) and completed by tb_scene_intersect; everything else is one
+ * reference through tb_object_intersect. The scene's answer must be, bit for bit, what the
  * object level gives when every object is intersected whole (brute force,
  * ties to the lower object index), for the BVH, the grid and the list, on
  * the bundled scenes and on meshes under mirroring transforms, with rays

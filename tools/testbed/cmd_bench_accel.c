@@ -236,7 +236,7 @@ static int tb__parse_list(const char *s, long max, long *out, int cap)
 static long tb__bench_scene(tb__bscene *s, long nrays, const long *threads, int nthreads, uint64_t seed,
                             const bool use[3])
 {
-    tb_accel_callbacks cb = {tb__btri_intersect, tb__btri_occluded, s};
+    tb_accel_callbacks cb = {tb__btri_intersect, tb__btri_occluded, s, NULL};
     tb_accel *acc[3] = {NULL, NULL, NULL};
     long bad = 0;
     for (int k = 0; k < 3; k++) {
