@@ -162,15 +162,16 @@ static void tb__user_occluded(const struct RTCOccludedFunctionNArguments *args)
 }
 
 /* Builds the Embree scene of `s`; 0 on failure (message printed). *user_objects counts user geometries. */
-static int tb__embree_build(const tb_scene *s, tb__embree *e, bool robust, size_t *user_objects,
-                            double *build_seconds)
+static int tb__embree_build(const tb_scene *s, tb__embree *e, bool robust, const char *config,
+                            size_t *user_objects, double *build_seconds)
 {
     *user_objects = 0;
     e->s = s;
     tb__user_scene = s;
-    e->dev = rtcNewDevice(NULL);
+    e->dev = rtcNewDevice(config);
     if (!e->dev) {
-        fprintf(stderr, "testbed bench rays: rtcNewDevice failed (error %d)\n", (int)rtcGetDeviceError(NULL));
+        fprintf(stderr, "testbed bench rays: rtcNewDevice(%s%s%s) failed (error %d)\n", config ? "\"" : "",
+                config ? config : "NULL", config ? "\"" : "", (int)rtcGetDeviceError(NULL));
         return 0;
     }
     double t0 = tb__wall();
@@ -336,8 +337,9 @@ static int64_t tb__counter(const char *name)
 static void tb__rays_usage(FILE *out)
 {
     fprintf(out,
-            "usage: testbed bench rays SCENE.mid [--embree | --embree-robust] [--rays N] [--threads T,...]\n"
-            "                                    [--seed S] [--repeat R] [--no-stats]\n"
+            "usage: testbed bench rays SCENE.mid [--embree | --embree-robust] [--embree-config CFG]\n"
+            "                                    [--rays N] [--threads T,...] [--seed S] [--repeat R]\n"
+            "                                    [--no-stats]\n"
             "\n"
             "Primary (the scene camera), shadow (primary hit to a point on a light, any hit) and\n"
             "diffuse (cosine bounce from primary hits, closest hit) rays through the scene's BVH\n"
@@ -351,6 +353,9 @@ static void tb__rays_usage(FILE *out)
             "  --embree     also trace with Embree (needs a build configured with Embree 3)\n"
             "  --embree-robust  the same with Embree's robust mode (RTC_SCENE_FLAG_ROBUST: watertight\n"
             "               traversal and triangle test, as ours always is)\n"
+            "  --embree-config CFG  Embree's device configuration string (rtcNewDevice), e.g.\n"
+            "               'max_isa=sse2' to compare at the instruction set ours is built for\n"
+            "               (by default Embree picks the widest the CPU has: AVX2 or AVX-512)\n"
             "  --rays N     N random camera rays (default: one per pixel at the file's resolution)\n"
             "  --threads T  comma-separated thread counts (default 1,2)\n"
             "  --seed S     random seed (default 1)\n"
@@ -383,6 +388,7 @@ int tb_cmd_bench_rays(int argc, char **argv)
     }
     const char *path = NULL;
     bool embree = false, robust = false;
+    const char *embree_config = NULL;
     uint64_t nrays = 0, seed = 1, repeat = 3;
     int threads[8] = {1, 2}, nthreads = 2;
     for (int i = 1; i < argc; i++) {
@@ -391,6 +397,8 @@ int tb_cmd_bench_rays(int argc, char **argv)
             embree = true;
         else if (strcmp(a, "--embree-robust") == 0)
             embree = robust = true;
+        else if (strcmp(a, "--embree-config") == 0 && i + 1 < argc)
+            embree_config = argv[++i];
         else if (strcmp(a, "--no-stats") == 0)
             tb_stats_set_enabled(0); /* the BVH's per-ray counters (util/stats) cost time */
         else if (strcmp(a, "--rays") == 0 && i + 1 < argc) {
@@ -439,6 +447,10 @@ int tb_cmd_bench_rays(int argc, char **argv)
         tb__rays_usage(stderr);
         return TB_EXIT_USAGE;
     }
+    if (embree_config && !embree) {
+        fprintf(stderr, "testbed bench rays: --embree-config needs --embree or --embree-robust\n");
+        return TB_EXIT_USAGE;
+    }
 #ifndef TB_HAVE_EMBREE
     if (embree) {
         fprintf(stderr, "testbed bench rays: this testbed was built without Embree 3 (install libembree-dev and "
@@ -481,12 +493,13 @@ int tb_cmd_bench_rays(int argc, char **argv)
     if (embree) {
         size_t nu;
         double bs;
-        if (!tb__embree_build(s, &e, robust, &nu, &bs)) {
+        if (!tb__embree_build(s, &e, robust, embree_config, &nu, &bs)) {
             status = TB_EXIT_FAIL;
             goto done;
         }
-        printf("Embree %d.%d.%d scene built in %.3f s (%zu user geometries%s)\n", RTC_VERSION_MAJOR,
-               RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu, robust ? ", RTC_SCENE_FLAG_ROBUST" : "");
+        printf("Embree %d.%d.%d scene built in %.3f s (%zu user geometries%s%s%s)\n", RTC_VERSION_MAJOR,
+               RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu, robust ? ", RTC_SCENE_FLAG_ROBUST" : "",
+               embree_config ? ", device config " : "", embree_config ? embree_config : "");
     }
 #endif
     double load[1] = {0};
