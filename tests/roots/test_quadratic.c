@@ -6,6 +6,10 @@
  * per root (D: 2u, sqrt, add, divide: one rounding each), which is <= 4 ulps;
  * this holds for every finite input without overflow, conditioning plays no
  * part, so the property tests also use near-tangent coefficients. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
 #include "tb_test.h"
 
 #include "roots_ref.h"
@@ -290,6 +294,41 @@ static void test_quadratic_wide_range(void **state)
                   worst, worst_f);
 }
 
+/* tb_quadratic's inline common case (roots.h) against its general path:
+ * the same count and roots bit for bit, on random coefficients of every
+ * sign and magnitude 2^-1000..2^1000 (the inline range tests meet both
+ * sides of 2^+-480, and outside them b^2 and 4ac over- or underflow), with b = 0 and near-tangent cases mixed in. Fails
+ * when the inline path takes a case it should leave, or computes it
+ * differently. */
+static void test_quadratic_inline_matches_general(void **state)
+{
+    (void)state;
+    uint64_t x = 0x9e3779b97f4a7c15u;
+    int inline_cases = 0;
+    for (int i = 0; i < 200000; i++) {
+        double co[3];
+        for (int j = 0; j < 3; j++) {
+            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+            double m = 1.0 + (double)(x >> 12) * 0x1p-52;   /* [1, 2) */
+            int e = (int)((x >> 3) % 2001) - 1000;           /* -1000..1000 */
+            co[j] = ldexp((x & 1) ? -m : m, e);
+        }
+        if (i % 7 == 0)
+            co[1] = 0.0;
+        if (i % 11 == 0) /* near-tangent: b^2 close to 4ac */
+            co[2] = co[1] * co[1] / (4.0 * co[0]) * (1.0 + 0x1p-50 * (double)(i % 5));
+        double r1[2] = {-7.0, -7.0}, r2[2] = {-7.0, -7.0};
+        int n1 = tb_quadratic(co[0], co[1], co[2], r1);
+        int n2 = tb__quadratic_general(co[0], co[1], co[2], r2);
+        if (n1 != n2 || memcmp(r1, r2, sizeof(double) * (size_t)n1) != 0)
+            fail_msg("quadratic(%a, %a, %a): inline %d roots, general %d", co[0], co[1], co[2], n1, n2);
+        double fa = fabs(co[0]), fc = fabs(co[2]);
+        inline_cases += fa >= 0x1p-480 && fa <= 0x1p480 && fc >= 0x1p-480 && fc <= 0x1p480;
+    }
+    assert_true(inline_cases > 1000); /* both paths were exercised */
+    assert_true(inline_cases < 190000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -299,6 +338,7 @@ int main(void)
         cmocka_unit_test(test_quadratic_property_double),
         cmocka_unit_test(test_quadratic_property_float),
         cmocka_unit_test(test_quadratic_wide_range),
+        cmocka_unit_test(test_quadratic_inline_matches_general),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -12,7 +12,9 @@
 
 #include "util/math/float.h"
 
-/* Both solvers follow the same steps; the double one is commented.
+/* Both solvers follow the same steps; the double one is commented. (The
+ * double one's common case, no early exit and no rescaling, is also inline
+ * in roots.h as tb_quadratic; this is its general path.)
  *
  * Overflow and underflow: when every nonzero coefficient lies within
  * 2^+-480 (2^+-60 for float) no product in the discriminant can overflow or
@@ -20,7 +22,7 @@
  * so that the y^2 and constant coefficients have about the same exponent,
  * then all three are scaled by one power of two to a largest in [1, 2): all
  * exact, and it leaves b^2 or 4ac negligible whenever either underflows. */
-int tb_quadratic(double a, double b, double c, double r[2])
+int tb__quadratic_general(double a, double b, double c, double r[2])
 {
     if (!(isfinite(a) && isfinite(b) && isfinite(c)))
         return 0;

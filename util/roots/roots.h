@@ -15,13 +15,47 @@
 #ifndef TB_UTIL_ROOTS_ROOTS_H
 #define TB_UTIL_ROOTS_ROOTS_H
 
+#include <math.h>
+
 #include "util/base/error.h"
+#include "util/math/float.h"
 
 /* Highest degree tb_poly_roots() accepts. */
 #define TB_POLY_MAX_DEGREE 4
 
-/* Real roots of a x^2 + b x + c = 0 (0, 1 or 2; a == 0 solves the linear equation). */
-int tb_quadratic(double a, double b, double c, double r[2]);
+/* tb_quadratic's general path (quadratic.c): every coefficient case, with
+ * the rescaling for extreme magnitudes. Private; call tb_quadratic. */
+int tb__quadratic_general(double a, double b, double c, double r[2]);
+
+/* Real roots of a x^2 + b x + c = 0 (0, 1 or 2; a == 0 solves the linear equation).
+ * Inline for the common case, every nonzero coefficient within 2^+-480 with
+ * a, c != 0 (a ray against a quadric: about a million calls per frame), where
+ * the general path would take no early exit and no rescaling: the same
+ * operations, so the same roots bit for bit; anything else goes there. */
+static inline int tb_quadratic(double a, double b, double c, double r[2])
+{
+    const double lo = 0x1p-480, hi = 0x1p480;
+    double fa = fabs(a), fb = fabs(b), fc = fabs(c);
+    /* NaN and infinities fail these comparisons, so they go the general way. */
+    if (!(fa >= lo && fa <= hi && fc >= lo && fc <= hi && (b == 0.0 || (fb >= lo && fb <= hi))))
+        return tb__quadratic_general(a, b, c, r);
+    double disc = tb_diff_of_products(b, b, 4.0 * a, c);
+    if (disc < 0.0)
+        return 0;
+    double q = -0.5 * (b + copysign(sqrt(disc), b));
+    double x0 = q / a, x1 = c / q; /* q != 0: c != 0 */
+    if (x0 > x1) {
+        double t = x0;
+        x0 = x1;
+        x1 = t;
+    }
+    int n = 0;
+    if (isfinite(x0))
+        r[n++] = x0;
+    if (isfinite(x1))
+        r[n++] = x1;
+    return n;
+}
 
 /* tb_quadratic() in float arithmetic (same method, fmaf() for the discriminant). */
 int tb_quadraticf(float a, float b, float c, float r[2]);
