@@ -197,9 +197,10 @@ bool tb__rt_hit_surface(const tb_raytracer *rt, const tb_hit *hit, tb_vec3 p, tb
 }
 
 /* The colour of material m's `slot` pattern (0 diffuse, 1 specular) at g, or
- * `base` without one: a + f (b - a) per channel. */
-static tb_channels tb__patterned(const tb_raytracer *rt, const tb_material *m, int slot, tb_channels base,
-                                 const tb__rt_surface *g)
+ * `base` without one: a + f (b - a) per channel. Returns base itself, or out
+ * holding the patterned colour (no 132-byte copy for the common plain case). */
+static const tb_channels *tb__patterned(const tb_raytracer *rt, const tb_material *m, int slot,
+                                        const tb_channels *base, const tb__rt_surface *g, tb_channels *out)
 {
     double f;
     if (!g || !tb__rt_pattern_factor(rt->patterns, (int)(m - rt->scene->materials), slot, g, &f))
@@ -208,7 +209,8 @@ static tb_channels tb__patterned(const tb_raytracer *rt, const tb_material *m, i
     tb_channels c = p->a;
     for (int k = 0; k < c.n; k++)
         c.v[k] = (float)((double)p->a.v[k] + f * ((double)p->b.v[k] - (double)p->a.v[k]));
-    return c;
+    *out = c;
+    return out;
 }
 
 /* The specular lobe of a non-Lambert model, without the colour: f / ks of
@@ -230,14 +232,18 @@ static double tb__lobe(const tb_material *m, tb_vec3 n, tb_vec3 wo, tb_vec3 wi)
 }
 
 /* `base` times texture `slot` of material m at the hit (footprint fp, NULL:
- * point sample), or `base` if there is no such texture. */
-static tb_channels tb__textured(const tb_raytracer *rt, const tb_material *m, int slot, tb_channels base,
-                                const tb_hit *hit, const float *fp)
+ * point sample), or `base` if there is no such texture. Returns base itself,
+ * or out holding the product (out may be base). */
+static const tb_channels *tb__textured(const tb_raytracer *rt, const tb_material *m, int slot,
+                                       const tb_channels *base, const tb_hit *hit, const float *fp,
+                                       tb_channels *out)
 {
     const tb_scene *s = rt->scene;
     double rgb[3];
+    if (!rt->textures)
+        return base;
     int i = slot * s->nmaterials + (int)(m - s->materials);
-    if (!rt->textures || !tb__rt_texture_rgb(rt->textures, i, rt->texture_filter, hit->u, hit->v, fp, rgb))
+    if (!tb__rt_texture_rgb(rt->textures, i, rt->texture_filter, hit->u, hit->v, fp, rgb))
         return base;
     tb_channels t;
     if (s->spectral) {
@@ -250,7 +256,17 @@ static tb_channels tb__textured(const tb_raytracer *rt, const tb_material *m, in
     } else {
         t = tb_channels_rgb((float)rgb[0], (float)rgb[1], (float)rgb[2]);
     }
-    return tb_channels_mul(base, t);
+    *out = tb_channels_mul(*base, t);
+    return out;
+}
+
+/* tb_channels_is_black(*c), without the copy. */
+static inline bool tb__black_p(const tb_channels *c)
+{
+    for (int k = 0; k < c->n; k++)
+        if (c->v[k] != 0.0f)
+            return false;
+    return true;
 }
 
 /* What a glossy ray needs to weight the emission it finds against the light
@@ -331,21 +347,30 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
         double w = 1.0;
         if (mis)
             w = tb_rt_mis_weight(rt, mis);
+        tb_channels em;
         L = tb_channels_add_scaled(
-            L, tb_radiance_from_exitance(tb__textured(rt, m, TB__RT_SLOT_EMISSION, m->emission, &hit, fp)),
+            L, tb_radiance_from_exitance(*tb__textured(rt, m, TB__RT_SLOT_EMISSION, &m->emission, &hit, fp, &em)),
             (float)w);
     }
 
-    tb_channels diffuse =
-        tb__textured(rt, m, TB__RT_SLOT_DIFFUSE, tb__patterned(rt, m, 0, m->diffuse, g), &hit, fp);
-    tb_channels specular =
-        m->model == TB_MID_MODEL_LAMBERT
-            ? tb_channels_splat(nch, 0.0f)
-            : tb__textured(rt, m, TB__RT_SLOT_SPECULAR, tb__patterned(rt, m, 1, m->specular, g), &hit, fp);
-    tb_channels transmission = tb__textured(rt, m, TB__RT_SLOT_TRANSMISSION, m->transmission, &hit, fp);
-    bool has_diffuse = !tb_channels_is_black(diffuse);
-    bool has_specular = !tb_channels_is_black(specular);
-    bool has_transmission = !tb_channels_is_black(transmission);
+    /* The material's colours by pointer: to the material's own, or to the
+     * buffers below when a pattern or texture changes them. */
+    tb_channels dbuf, sbuf, tbuf;
+    const tb_channels *diffuse =
+        tb__textured(rt, m, TB__RT_SLOT_DIFFUSE, tb__patterned(rt, m, 0, &m->diffuse, g, &dbuf), &hit, fp, &dbuf);
+    const tb_channels *specular;
+    if (m->model == TB_MID_MODEL_LAMBERT) {
+        sbuf = tb_channels_splat(nch, 0.0f);
+        specular = &sbuf;
+    } else {
+        specular = tb__textured(rt, m, TB__RT_SLOT_SPECULAR, tb__patterned(rt, m, 1, &m->specular, g, &sbuf),
+                                &hit, fp, &sbuf);
+    }
+    const tb_channels *transmission =
+        tb__textured(rt, m, TB__RT_SLOT_TRANSMISSION, &m->transmission, &hit, fp, &tbuf);
+    bool has_diffuse = !tb__black_p(diffuse);
+    bool has_specular = !tb__black_p(specular);
+    bool has_transmission = !tb__black_p(transmission);
 
     /* The GGX lobe of model ggx: Schlick Fresnel with F0 = specular. */
     const bool ggx = has_specular && m->model == TB_MID_MODEL_GGX;
@@ -353,7 +378,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
     tb_frame frame = {0};
     tb_vec3 wo_local = {0, 0, 1};
     if (ggx) {
-        lobe = tb_bsdf_ggx(specular, m->roughness, TB_FRESNEL_SCHLICK, 1.0);
+        lobe = tb_bsdf_ggx(*specular, m->roughness, TB_FRESNEL_SCHLICK, 1.0);
         frame = tb_frame_from_normal(n);
         wo_local = tb_frame_to_local(&frame, wo);
     }
@@ -369,21 +394,36 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             if (!tb_light_sample_li(&s->lights[i], p, &ls))
                 continue;
             float cosi = tb_vec3_dot(n, ls.wi);
-            if (cosi <= 0.0f || tb_channels_is_black(ls.L))
+            if (cosi <= 0.0f || tb__black_p(&ls.L))
                 continue;
-            tb_channels f = tb_channels_scale(diffuse, (float)(1.0 / TB_PI));
-            if (ggx)
-                f = tb_channels_add(f, tb_bsdf_eval(&lobe, wo_local, tb_frame_to_local(&frame, ls.wi)));
-            else if (has_specular)
-                f = tb_channels_add_scaled(f, specular, (float)tb__lobe(m, n, wo, ls.wi));
+            /* f = diffuse / pi + the specular lobe, channel by channel with
+             * the operations of tb_channels_scale / add / add_scaled. */
+            float f[TB_CHANNELS_MAX];
+            const int nf = diffuse->n;
+            for (int k = 0; k < nf; k++)
+                f[k] = diffuse->v[k] * (float)(1.0 / TB_PI);
+            if (ggx) {
+                tb_channels b = tb_bsdf_eval(&lobe, wo_local, tb_frame_to_local(&frame, ls.wi));
+                for (int k = 0; k < nf; k++)
+                    f[k] += b.v[k];
+            } else if (has_specular) {
+                float w = (float)tb__lobe(m, n, wo, ls.wi);
+                for (int k = 0; k < nf; k++)
+                    f[k] += specular->v[k] * w;
+            }
             /* A zero BRDF adds exactly +0 (ls.L is finite), so its shadow ray
              * is not traced: mirrors and glass (no diffuse part, a lobe of
              * exponent 10^4 that is 0 in float away from the reflection). */
-            if (tb_channels_is_black(f))
+            bool black = true;
+            for (int k = 0; k < nf; k++)
+                black = black && f[k] == 0.0f;
+            if (black)
                 continue;
             if (tb__shadowed(s, p, perr, ng, &ls))
                 continue;
-            L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(f, ls.L), cosi));
+            /* L + (f ls.L) cosi: tb_channels_add(L, scale(mul(f, ls.L), cosi)). */
+            for (int k = 0; k < nch; k++)
+                L.v[k] += (k < nf ? f[k] * ls.L.v[k] : 0.0f) * cosi;
         }
     }
 
@@ -395,7 +435,10 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
         tb_channels G = tb_channels_splat(nch, 0.0f);
         float u[2 * TB__RT_MAX_LIGHT_SAMPLES];
         tb_stratified_2d(rng, rt->lsx, rt->lsy, u);
-        tb_channels E = tb_channels_splat(nch, 0.0f);
+        /* E: the sum of L cos / pdf, channel by channel as tb_channels_add_scaled. */
+        float E[TB_CHANNELS_MAX];
+        for (int c = 0; c < nch; c++)
+            E[c] = 0.0f;
         for (int k = 0; k < rt->light_samples; k++) {
             tb_light_sample ls;
             if (!tb_area_light_sample(&rt->area, p, u[2 * k], u[2 * k + 1], &ls) || ls.pdf <= 0.0)
@@ -405,7 +448,9 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
                 continue;
             if (tb__shadowed(s, p, perr, ng, &ls))
                 continue;
-            E = tb_channels_add_scaled(E, ls.L, (float)(cosi / ls.pdf));
+            const float we = (float)(cosi / ls.pdf);
+            for (int c = 0; c < nch; c++)
+                E[c] += ls.L.v[c] * we;
             if (ggx) {
                 tb_vec3 wi = tb_frame_to_local(&frame, ls.wi);
                 double w = tb__power(rt->light_samples * ls.pdf, nglossy * tb_bsdf_pdf(&lobe, wo_local, wi));
@@ -413,8 +458,11 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
                                                          (float)(cosi / ls.pdf * w)));
             }
         }
-        L = tb_channels_add(L, tb_channels_mul(diffuse,
-                                               tb_channels_scale(E, (float)(1.0 / (TB_PI * rt->light_samples)))));
+        /* L + diffuse (E / (pi N)): tb_channels_add(L, mul(diffuse, scale(E, ...))). */
+        const float es = (float)(1.0 / (TB_PI * rt->light_samples));
+        const int nd = diffuse->n;
+        for (int c = 0; c < nch; c++)
+            L.v[c] += c < nd ? diffuse->v[c] * (E[c] * es) : 0.0f;
         if (ggx)
             L = tb_channels_add_scaled(L, G, (float)(1.0 / rt->light_samples));
     }
@@ -436,7 +484,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             tb_ray r = tb__spawn(p, perr, ng, tb_vec3_normalize(tb_frame_to_world(&fr, sp.wt)));
             TB_STAT_INC(tb__rt_secondary_rays);
             tb_channels Lt = tb__trace(rt, &r, NULL, rng, depth + 1, NULL);
-            L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(transmission, Lt), (float)sp.T));
+            L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(*transmission, Lt), (float)sp.T));
         }
     } else if (glossy_rays) {
         /* Glossy reflection (distributed ray tracing): rays sampled from the
@@ -465,7 +513,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
         if ((tb_vec3_dot(wr, ng) > 0.0f) == front) { /* a bumped normal can mirror into the surface */
             tb_ray r = tb__spawn(p, perr, ng, wr);
             TB_STAT_INC(tb__rt_secondary_rays);
-            L = tb_channels_add(L, tb_channels_mul(specular, tb__trace(rt, &r, NULL, rng, depth + 1, NULL)));
+            L = tb_channels_add(L, tb_channels_mul(*specular, tb__trace(rt, &r, NULL, rng, depth + 1, NULL)));
         }
     }
     return L;
