@@ -161,14 +161,21 @@ tb_channels tb_light_intensity(const tb_light *l, tb_vec3 w)
     return tb_channels_scale(l->intensity, (float)k);
 }
 
-bool tb_light_sample_li(const tb_light *l, tb_vec3 p, tb_light_sample *s)
+/* The delta-light sample record before its light-specific fields: zeroed,
+ * with the channel count, no emitter, delta, pdf 1. */
+static void tb__delta_blank(const tb_light *l, tb_light_sample *s)
 {
     *s = (tb_light_sample){0};
     s->L.n = tb__black_n(l->intensity.n);
     s->emitter = -1;
     s->delta = true;
     s->pdf = 1.0;
+}
+
+bool tb_light_sample_li(const tb_light *l, tb_vec3 p, tb_light_sample *s)
+{
     if (l->kind == TB_LIGHT_DIRECTIONAL) {
+        tb__delta_blank(l, s);
         tb_vec3 wi = tb_vec3_neg(l->axis);
         s->wi = wi;
         s->dist = INFINITY;
@@ -179,12 +186,22 @@ bool tb_light_sample_li(const tb_light *l, tb_vec3 p, tb_light_sample *s)
     }
     tb_dvec3 d = tb_dvec3_sub(tb__d(l->position), tb__d(p));
     double dist = tb_dvec3_length(d);
-    if (!(dist > 0.0) || !isfinite(dist))
+    if (!(dist > 0.0) || !isfinite(dist)) {
+        tb__delta_blank(l, s);
         return false;
+    }
     tb_dvec3 wi = tb_dvec3_scale(d, 1.0 / dist);
     double k = tb__shape(l, tb_dvec3_neg(wi));
-    if (!(k > 0.0))
+    if (!(k > 0.0)) {
+        tb__delta_blank(l, s);
         return false;
+    }
+    /* Every field set, without zeroing the record first (s->L is written
+     * whole below, its channels past n zero as tb_channels_scale keeps them). */
+    s->delta = true;
+    s->pdf = 1.0;
+    s->normal = (tb_vec3){0.0f, 0.0f, 0.0f};
+    s->emitter = -1;
     s->wi = tb_dvec3_to_f(wi);
     s->dist = (float)dist;
     s->point = l->position;
@@ -463,9 +480,27 @@ static void tb__cone(double r, double dc, double *sin2, double *one_minus_cos)
     *one_minus_cos = s2 / (1.0 + sqrt(tb__pos(1.0 - s2)));
 }
 
-/* Samples emitter e seen from p: point q, front normal nq, solid-angle density. */
-static bool tb__sample_emitter(const tb_emitter *e, double area, tb_dvec3 p, float u1, float u2,
-                               tb_dvec3 *q, tb_dvec3 *nq, double *pdf_sa)
+/* The per-point values of sphere emitter i (e) seen from at->pf. */
+static void tb__sphere_at(const tb_emitter *e, int i, tb_dvec3 p, tb_area_light_at *at)
+{
+    tb_dvec3 c = tb__d(e->v[0]), pc = tb_dvec3_sub(p, c);
+    double r = e->radius, dc = tb_dvec3_length(pc);
+    at->emitter = i;
+    at->c = c;
+    at->dc = dc;
+    at->outside = dc > r * (1.0 + 1e-7);
+    if (!at->outside)
+        return;
+    tb__cone(r, dc, &at->s2max, &at->omc_max);
+    at->sqrt_s2max = sqrt(at->s2max);
+    at->axis = tb_dvec3_scale(pc, 1.0 / dc);
+    tb_dvec3_basis(at->axis, &at->b1, &at->b2);
+}
+
+/* Samples emitter e (index i) seen from p = at->pf: point q, front normal
+ * nq, solid-angle density. */
+static bool tb__sample_emitter(const tb_emitter *e, int i, double area, tb_dvec3 p, tb_area_light_at *at,
+                               float u1, float u2, tb_dvec3 *q, tb_dvec3 *nq, double *pdf_sa)
 {
     double pdf_a = 1.0 / area;
     switch (e->kind) {
@@ -494,25 +529,24 @@ static bool tb__sample_emitter(const tb_emitter *e, double area, tb_dvec3 p, flo
         break;
     }
     case TB_EMITTER_SPHERE: {
-        tb_dvec3 c = tb__d(e->v[0]), pc = tb_dvec3_sub(p, c);
-        double r = e->radius, dc = tb_dvec3_length(pc);
-        if (dc > r * (1.0 + 1e-7)) {
+        if (at->emitter != i)
+            tb__sphere_at(e, i, p, at);
+        tb_dvec3 c = at->c;
+        double r = e->radius;
+        if (at->outside) {
             /* Uniform in the cone of directions the sphere subtends (the
              * visible cap): theta from the axis p -> c, then the point where
              * that direction meets the sphere, found through the angle alpha
              * at the centre (sin alpha / sin theta = dc / r). */
-            double s2max, omc_max;
-            tb__cone(r, dc, &s2max, &omc_max);
+            double s2max = at->s2max, omc_max = at->omc_max;
             double omc = u1 * omc_max; /* 1 - cos theta, uniform */
             double ct = 1.0 - omc, s2 = omc * (2.0 - omc);
-            double cos_alpha = s2 / sqrt(s2max) + ct * sqrt(tb__pos(1.0 - s2 / s2max));
+            double cos_alpha = s2 / at->sqrt_s2max + ct * sqrt(tb__pos(1.0 - s2 / s2max));
             double sin_alpha = sqrt(tb__pos(1.0 - cos_alpha * cos_alpha));
             double phi = TB_2PI * u2;
-            tb_dvec3 axis = tb_dvec3_scale(pc, 1.0 / dc), b1, b2;
-            tb_dvec3_basis(axis, &b1, &b2);
-            *nq = tb_dvec3_add(tb_dvec3_add(tb_dvec3_scale(b1, sin_alpha * cos(phi)),
-                                            tb_dvec3_scale(b2, sin_alpha * sin(phi))),
-                               tb_dvec3_scale(axis, cos_alpha));
+            *nq = tb_dvec3_add(tb_dvec3_add(tb_dvec3_scale(at->b1, sin_alpha * cos(phi)),
+                                            tb_dvec3_scale(at->b2, sin_alpha * sin(phi))),
+                               tb_dvec3_scale(at->axis, cos_alpha));
             *nq = tb_dvec3_normalize(*nq);
             *q = tb_dvec3_add(c, tb_dvec3_scale(*nq, r));
             *pdf_sa = 1.0 / (TB_2PI * omc_max);
@@ -546,34 +580,56 @@ static bool tb__sample_emitter(const tb_emitter *e, double area, tb_dvec3 p, flo
     return isfinite(*pdf_sa);
 }
 
-bool tb_area_light_sample(const tb_area_light *a, tb_vec3 pf, float u1, float u2, tb_light_sample *s)
+void tb_area_light_at_init(tb_area_light_at *at, tb_vec3 p)
+{
+    *at = (tb_area_light_at){.pf = p, .emitter = -1};
+}
+
+/* The sample that gives no light: zeroed, with the channel count. */
+static bool tb__no_sample(const tb_area_light *a, tb_light_sample *s)
 {
     *s = (tb_light_sample){0};
     s->L.n = tb__black_n(a->emitters[0].radiance.n);
     s->emitter = -1;
+    return false;
+}
+
+bool tb_area_light_sample_at(const tb_area_light *a, tb_area_light_at *at, float u1, float u2,
+                             tb_light_sample *s)
+{
     double pmf, ur;
     int i = tb_distrib1d_sample_discrete(&a->select, u1, &pmf, &ur);
     float u1r = (float)ur;
     if (u1r >= 1.0f)
         u1r = 0x1.fffffep-1f;
     const tb_emitter *e = &a->emitters[i];
+    const tb_vec3 pf = at->pf;
     tb_dvec3 p = tb__d(pf), q, nq;
     double pdf;
-    if (!tb__sample_emitter(e, a->areas[i], p, u1r, u2, &q, &nq, &pdf))
-        return false;
+    if (!tb__sample_emitter(e, i, a->areas[i], p, at, u1r, u2, &q, &nq, &pdf))
+        return tb__no_sample(a, s);
     tb_dvec3 d = tb_dvec3_sub(q, p);
     double dist = tb_dvec3_length(d);
     if (!(dist > 0.0))
-        return false;
+        return tb__no_sample(a, s);
+    /* Every field set (no zeroing of the whole record first). */
+    s->L = e->radiance;
     s->wi = tb_dvec3_to_f(tb_dvec3_scale(d, 1.0 / dist));
     s->dist = (float)dist;
     s->pdf = pmf * pdf;
+    s->delta = false;
     s->point = tb_dvec3_to_f(q);
     s->normal = tb_dvec3_to_f(nq);
     s->emitter = i;
-    s->L = e->radiance;
     s->shadow = tb_ray_make(pf, tb_dvec3_to_f(d), 0.0f, 1.0f - TB_SHADOW_EPSILON);
     return s->pdf > 0.0 && !tb_channels_is_black(s->L);
+}
+
+bool tb_area_light_sample(const tb_area_light *a, tb_vec3 pf, float u1, float u2, tb_light_sample *s)
+{
+    tb_area_light_at at;
+    tb_area_light_at_init(&at, pf);
+    return tb_area_light_sample_at(a, &at, u1, u2, s);
 }
 
 double tb_area_light_pdf(const tb_area_light *a, int emitter, tb_vec3 pf, tb_vec3 qf, tb_vec3 nqf)

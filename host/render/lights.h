@@ -204,6 +204,29 @@ void tb_area_light_release(tb_area_light *a);
  * inside a one-sided sphere, p on the emitter. */
 bool tb_area_light_sample(const tb_area_light *a, tb_vec3 p, float u1, float u2, tb_light_sample *s);
 
+/* What tb_area_light_sample computes from the shading point alone, kept
+ * for the next samples from the same point: the point, and for the last
+ * sphere emitter sampled (emitter >= 0) its centre, the cone it subtends
+ * and the frame about the axis p -> centre. Set up by
+ * tb_area_light_at_init; filled by tb_area_light_sample_at. */
+typedef struct tb_area_light_at {
+    tb_vec3 pf;         /* the shading point */
+    int emitter;        /* sphere emitter the fields below belong to; -1: none yet */
+    bool outside;       /* p is outside that sphere (dc > r (1 + 1e-7)): the cone sampler applies */
+    tb_dvec3 c, axis, b1, b2; /* centre, unit axis (p - c) / dc, and the basis about it */
+    double dc;          /* distance p - centre */
+    double s2max, sqrt_s2max, omc_max; /* sin^2, sin and 1 - cos of the cone's half-angle */
+} tb_area_light_at;
+
+/* Starts the samples of one shading point p (no emitter cached). */
+void tb_area_light_at_init(tb_area_light_at *at, tb_vec3 p);
+
+/* tb_area_light_sample(a, at->pf, u1, u2, s), bit for bit, reusing the
+ * per-point values of the sphere emitter at holds (and caching them when it
+ * samples another): a shading point's several samples compute them once. */
+bool tb_area_light_sample_at(const tb_area_light *a, tb_area_light_at *at, float u1, float u2,
+                             tb_light_sample *s);
+
 /* Solid-angle density with which tb_area_light_sample returns the point q
  * (normal nq) of emitter `emitter` seen from p: for multiple importance
  * sampling when a BSDF-sampled ray hits an emitter. 0 where the sampler never

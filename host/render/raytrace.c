@@ -439,9 +439,11 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
         float E[TB_CHANNELS_MAX];
         for (int c = 0; c < nch; c++)
             E[c] = 0.0f;
+        tb_area_light_at at; /* the per-point part of the sampler, computed once for all samples */
+        tb_area_light_at_init(&at, p);
         for (int k = 0; k < rt->light_samples; k++) {
             tb_light_sample ls;
-            if (!tb_area_light_sample(&rt->area, p, u[2 * k], u[2 * k + 1], &ls) || ls.pdf <= 0.0)
+            if (!tb_area_light_sample_at(&rt->area, &at, u[2 * k], u[2 * k + 1], &ls) || ls.pdf <= 0.0)
                 continue;
             float cosi = tb_vec3_dot(n, ls.wi);
             if (cosi <= 0.0f)

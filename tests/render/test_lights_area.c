@@ -11,6 +11,8 @@
  * plus a blocker that hides half of the disc (half the irradiance), the
  * chi-square test of the sampled directions against tb_area_light_pdf, and
  * the one-sided / two-sided rules. */
+#include <string.h>
+
 #include "tb_test.h"
 
 #include "host/render/lights.h"
@@ -336,6 +338,66 @@ static void test_chi2(void **state)
     tb_area_light_release(&b);
 }
 
+/* The same sample, field by field (bits, not tolerances). */
+static void expect_same_sample(const tb_light_sample *a, const tb_light_sample *b, bool ra, bool rb, int k)
+{
+    if (ra != rb || memcmp(&a->L, &b->L, sizeof a->L) != 0 || memcmp(&a->wi, &b->wi, sizeof a->wi) != 0 ||
+        memcmp(&a->dist, &b->dist, sizeof a->dist) != 0 || memcmp(&a->pdf, &b->pdf, sizeof a->pdf) != 0 ||
+        a->delta != b->delta || memcmp(&a->point, &b->point, sizeof a->point) != 0 ||
+        memcmp(&a->normal, &b->normal, sizeof a->normal) != 0 || a->emitter != b->emitter ||
+        memcmp(&a->shadow, &b->shadow, sizeof a->shadow) != 0)
+        fail_msg("sample %d: tb_area_light_sample_at differs from tb_area_light_sample (emitter %d vs %d)", k,
+                 a->emitter, b->emitter);
+}
+
+/* tb_area_light_sample_at, which keeps a sphere's per-point values between
+ * the samples of one point, against tb_area_light_sample, bit for bit:
+ * several samples per point over two spheres (one two-sided, with points
+ * inside it), a disc, a triangle and a parallelogram, so the cached sphere
+ * changes between samples. Fails when the cache is used for another
+ * emitter or point, or its values differ from the direct computation. */
+static void test_sample_at_matches(void **state)
+{
+    (void)state;
+    tb_emitter e[5] = {
+        tb_emitter_sphere(tb_vec3_make(0.3f, 0.2f, 1.0f), 0.6f, tb_channels_rgb(1.0f, 2.0f, 3.0f)),
+        tb_emitter_disc(tb_vec3_make(-1.0f, 0.5f, 2.0f), tb_vec3_make(0.2f, 0.1f, -1.0f), 0.7f,
+                        tb_channels_rgb(2.0f, 1.0f, 0.5f)),
+        tb_emitter_sphere(tb_vec3_make(2.0f, -1.0f, 0.5f), 1.2f, tb_channels_rgb(0.5f, 0.5f, 4.0f)),
+        tb_emitter_triangle(tb_vec3_make(0, 0, 3), tb_vec3_make(1, 0, 3), tb_vec3_make(0, 1, 3),
+                            tb_channels_rgb(3.0f, 3.0f, 3.0f)),
+        tb_emitter_parallelogram(tb_vec3_make(-2, -2, 4), tb_vec3_make(-1, -2, 4), tb_vec3_make(-2, -1, 4.5f),
+                                 tb_channels_rgb(1.0f, 1.0f, 1.0f)),
+    };
+    e[2].two_sided = true;
+    tb_area_light a;
+    assert_int_equal(tb_area_light_init(&a, e, 5), TB_OK);
+    tb_rng rng;
+    tb_rng_seed(&rng, tb_test_seed("area sample_at", 7), 1);
+    int k = 0, inside = 0, spheres = 0;
+    for (int i = 0; i < 2000; i++) {
+        tb_vec3 p = tb_vec3_make(4.0f * tb_rng_float(&rng) - 2.0f, 4.0f * tb_rng_float(&rng) - 2.0f,
+                                 3.0f * tb_rng_float(&rng) - 1.0f);
+        if (i % 10 == 0) /* inside the two-sided sphere */
+            p = tb_vec3_make(2.0f + 0.5f * tb_rng_float(&rng), -1.0f, 0.5f);
+        tb_area_light_at at;
+        tb_area_light_at_init(&at, p);
+        for (int j = 0; j < 8; j++, k++) {
+            float u1 = tb_rng_float(&rng), u2 = tb_rng_float(&rng);
+            tb_light_sample s1, s2;
+            memset(&s1, 0x5a, sizeof s1);
+            memset(&s2, 0xa5, sizeof s2);
+            bool r1 = tb_area_light_sample_at(&a, &at, u1, u2, &s1);
+            bool r2 = tb_area_light_sample(&a, p, u1, u2, &s2);
+            expect_same_sample(&s1, &s2, r1, r2, k);
+            spheres += r1 && (s1.emitter == 0 || s1.emitter == 2);
+            inside += r1 && s1.emitter == 2 && i % 10 == 0;
+        }
+    }
+    assert_true(spheres > 2000 && inside > 100); /* the sphere paths ran, also from inside */
+    tb_area_light_release(&a);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -347,6 +409,7 @@ int main(void)
         cmocka_unit_test(test_sides_and_units),
         cmocka_unit_test(test_stratified_points),
         cmocka_unit_test(test_chi2),
+        cmocka_unit_test(test_sample_at_matches),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

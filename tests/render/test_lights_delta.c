@@ -2,6 +2,8 @@
  * d^2 and E = E0 cos(theta), the spot falloff at and between its edges, the
  * placement of MID lights and their IES frames, power against quadrature, and
  * emission sampling against its density. */
+#include <string.h>
+
 #include "tb_test.h"
 
 #include "host/render/lights.h"
@@ -228,6 +230,44 @@ static void test_power_and_emission(void **state)
     assert_false(tb_light_sample_emission(&d, 0.5f, 0.5f, &w, &pdf, &I));
 }
 
+/* tb_light_sample_li sets every field of the record, whatever it held
+ * before (it no longer zeroes it first): the same call on two records
+ * filled with different bytes gives the same fields, and a sample that
+ * gives no light (p at the point light, p outside a spot's cone) is the
+ * zeroed delta record. Fails when a field is left unset. */
+static void test_sample_record_complete(void **state)
+{
+    (void)state;
+    const tb_light lights[3] = {
+        tb_light_point(tb_vec3_make(1, 2, 3), tb_channels_rgb(1.0f, 2.0f, 3.0f)),
+        tb_light_spot(tb_vec3_make(0, 0, 5), tb_vec3_make(0, 0, -1), tb_channels_rgb(8.0f, 4.0f, 2.0f), 30.0, 10.0),
+        tb_light_directional(tb_vec3_make(0.3f, 0.2f, -1), tb_channels_rgb(2.0f, 2.0f, 1.0f)),
+    };
+    const tb_vec3 pts[4] = {{0, 0, 0}, {0.5f, -0.5f, 0.25f}, {1, 2, 3}, {20, 0, 0}};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 4; j++) {
+            tb_light_sample a, b;
+            memset(&a, 0x5a, sizeof a);
+            memset(&b, 0xa5, sizeof b);
+            bool ra = tb_light_sample_li(&lights[i], pts[j], &a);
+            bool rb = tb_light_sample_li(&lights[i], pts[j], &b);
+            assert_int_equal(ra, rb);
+            assert_memory_equal(&a.L, &b.L, sizeof a.L);
+            assert_memory_equal(&a.wi, &b.wi, sizeof a.wi);
+            assert_memory_equal(&a.dist, &b.dist, sizeof a.dist);
+            assert_memory_equal(&a.pdf, &b.pdf, sizeof a.pdf);
+            assert_memory_equal(&a.point, &b.point, sizeof a.point);
+            assert_memory_equal(&a.normal, &b.normal, sizeof a.normal);
+            assert_memory_equal(&a.shadow, &b.shadow, sizeof a.shadow);
+            assert_int_equal(a.delta, b.delta);
+            assert_true(a.delta);
+            assert_int_equal(a.emitter, -1);
+            assert_true(a.pdf == 1.0);
+            if (!ra && i < 2) /* no light: the zeroed record */
+                assert_true(a.L.n == 3 && a.L.v[0] == 0.0f && a.dist == 0.0f && a.wi.x == 0.0f);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -236,6 +276,7 @@ int main(void)
         cmocka_unit_test(test_spot_falloff),
         cmocka_unit_test(test_from_mid),
         cmocka_unit_test(test_power_and_emission),
+        cmocka_unit_test(test_sample_record_complete),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
