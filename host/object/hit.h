@@ -72,4 +72,23 @@ static inline tb_vec3 tb_spawn_ray_origin(tb_vec3 p, tb_vec3 perr, tb_vec3 ng, t
     return (tb_vec3){po[0], po[1], po[2]};
 }
 
+/* The two origins tb_spawn_ray_origin(p, perr, ng, w) can return for the
+ * point: *front for every w with w . ng >= 0 (in double, as it computes
+ * it), *back for w . ng < 0. A shading point's many shadow rays then pick
+ * one by that sign instead of repeating the offset arithmetic. */
+static inline void tb_spawn_ray_origins(tb_vec3 p, tb_vec3 perr, tb_vec3 ng, tb_vec3 *front, tb_vec3 *back)
+{
+    *front = tb_spawn_ray_origin(p, perr, ng, ng);
+    /* -ng . ng < 0 in double unless ng = 0, where both sides give p offset by +0. */
+    *back = tb_spawn_ray_origin(p, perr, ng, (tb_vec3){-ng.x, -ng.y, -ng.z});
+}
+
+/* The side test of tb_spawn_ray_origin: true if w leaves on ng's side
+ * (w . ng >= 0 in double), i.e. tb_spawn_ray_origins' *front applies. */
+static inline bool tb_spawn_front(tb_vec3 ng, tb_vec3 w)
+{
+    double side = (double)w.x * ng.x + (double)w.y * ng.y + (double)w.z * ng.z;
+    return !(side < 0.0);
+}
+
 #endif

@@ -102,12 +102,14 @@ void tb_rt_release(tb_raytracer *rt)
     rt->patterns = NULL;
 }
 
-/* True if the shadow segment of light sample `s` from the surface point p
- * (error bound perr, geometric normal ng) is blocked. */
-static bool tb__shadowed(const tb_scene *s, tb_vec3 p, tb_vec3 perr, tb_vec3 ng, const tb_light_sample *ls)
+/* True if the shadow segment of light sample `s` from a surface point with
+ * geometric normal ng is blocked. org: the point's two spawned origins
+ * (tb_spawn_ray_origins: front, back), the one on ls->wi's side is
+ * tb_spawn_ray_origin's for that direction. */
+static bool tb__shadowed(const tb_scene *s, const tb_vec3 org[2], tb_vec3 ng, const tb_light_sample *ls)
 {
     tb_ray r;
-    r.o = tb_spawn_ray_origin(p, perr, ng, ls->wi);
+    r.o = org[tb_spawn_front(ng, ls->wi) ? 0 : 1];
     r.tmin = 0.0f;
     if (isinf(ls->dist)) {
         r.d = ls->wi;
@@ -387,6 +389,10 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
     const bool glossy_rays = ggx && !has_transmission && depth < rt->max_depth;
     const int nglossy = glossy_rays ? (depth == 0 ? rt->glossy_samples : 1) : 0;
 
+    /* The shadow rays' origins, on either side of the surface. */
+    tb_vec3 org[2];
+    tb_spawn_ray_origins(p, perr, ng, &org[0], &org[1]);
+
     /* Point, spot and directional lights: Lambert + the model's specular lobe. */
     if ((has_diffuse || has_specular) && s->nlights > 0) {
         for (int i = 0; i < s->nlights; i++) {
@@ -419,7 +425,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
                 black = black && f[k] == 0.0f;
             if (black)
                 continue;
-            if (tb__shadowed(s, p, perr, ng, &ls))
+            if (tb__shadowed(s, org, ng, &ls))
                 continue;
             /* L + (f ls.L) cosi: tb_channels_add(L, scale(mul(f, ls.L), cosi)). */
             for (int k = 0; k < nch; k++)
@@ -448,7 +454,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             float cosi = tb_vec3_dot(n, ls.wi);
             if (cosi <= 0.0f)
                 continue;
-            if (tb__shadowed(s, p, perr, ng, &ls))
+            if (tb__shadowed(s, org, ng, &ls))
                 continue;
             const float we = (float)(cosi / ls.pdf);
             for (int c = 0; c < nch; c++)

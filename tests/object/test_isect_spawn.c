@@ -10,6 +10,8 @@
  * point's size (checked), so the test cannot pass by pushing origins away. */
 #include "test_isect_common.h"
 
+#include <string.h>
+
 #include "host/object/hit.h"
 #include "host/object/intersect.h"
 
@@ -149,12 +151,55 @@ static void test_spawn_meshes(void **state)
     ti_mesh_free(&b);
 }
 
+/* tb_spawn_ray_origins + tb_spawn_front (the two origins of a point, picked
+ * by side) against tb_spawn_ray_origin for each direction, bit for bit:
+ * random points, error bounds and directions, unit and axis normals, a zero
+ * normal, and directions exactly in the tangent plane (w . ng = 0, which
+ * take the front origin). Fails when a side is swapped or the tie goes to
+ * the back. */
+static void test_spawn_origins_pair(void **state)
+{
+    (void)state;
+    tb_rng r;
+    tb_rng_seed(&r, tb_test_seed("spawn_origins_pair", 7003), 1);
+    long ties = 0, backs = 0;
+    for (int i = 0; i < 20000; i++) {
+        tb_dvec3 nd = ti_sphere_dir(&r);
+        tb_vec3 ng = {(float)nd.x, (float)nd.y, (float)nd.z};
+        if (i % 5 == 1)
+            ng = (tb_vec3){0.0f, 0.0f, i % 2 ? 1.0f : -1.0f};
+        if (i % 97 == 0)
+            ng = (tb_vec3){0.0f, 0.0f, 0.0f};
+        double sc = exp(ti_uniform(&r, log(1e-3), log(1e3)));
+        tb_vec3 p = {(float)ti_uniform(&r, -sc, sc), (float)ti_uniform(&r, -sc, sc), (float)ti_uniform(&r, -sc, sc)};
+        tb_vec3 perr = {(float)(sc * 1e-6 * tb_rng_double(&r)), (float)(sc * 1e-6 * tb_rng_double(&r)),
+                        (float)(sc * 1e-6 * tb_rng_double(&r))};
+        tb_vec3 front, back;
+        tb_spawn_ray_origins(p, perr, ng, &front, &back);
+        for (int k = 0; k < 8; k++) {
+            tb_dvec3 wd = ti_sphere_dir(&r);
+            tb_vec3 w = {(float)wd.x, (float)wd.y, (float)wd.z};
+            if (k == 0 && i % 5 == 1)
+                w.z = 0.0f; /* in the tangent plane of an axis normal: w . ng = 0 */
+            tb_vec3 want = tb_spawn_ray_origin(p, perr, ng, w);
+            bool f = tb_spawn_front(ng, w);
+            tb_vec3 got = f ? front : back;
+            if (memcmp(&want, &got, sizeof want) != 0)
+                fail_msg("point %d dir %d: the %s origin differs from tb_spawn_ray_origin", i, k, f ? "front" : "back");
+            ties += (double)w.x * ng.x + (double)w.y * ng.y + (double)w.z * ng.z == 0.0;
+            backs += !f;
+        }
+    }
+    assert_true(ties > 1000 && backs > 50000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_spawn_quadrics),
         cmocka_unit_test(test_spawn_polyhedra),
         cmocka_unit_test(test_spawn_meshes),
+        cmocka_unit_test(test_spawn_origins_pair),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
