@@ -106,7 +106,8 @@ void tb_rt_release(tb_raytracer *rt)
  * geometric normal ng is blocked. org: the point's two spawned origins
  * (tb_spawn_ray_origins: front, back), the one on ls->wi's side is
  * tb_spawn_ray_origin's for that direction. */
-static bool tb__shadowed(const tb_scene *s, const tb_vec3 org[2], tb_vec3 ng, const tb_light_sample *ls)
+static bool tb__shadowed(const tb_scene *s, const tb_vec3 org[2], tb_vec3 ng, const tb_light_sample *ls,
+                         uint32_t skip)
 {
     tb_ray r;
     r.o = org[tb_spawn_front(ng, ls->wi) ? 0 : 1];
@@ -119,7 +120,22 @@ static bool tb__shadowed(const tb_scene *s, const tb_vec3 org[2], tb_vec3 ng, co
         r.tmax = 1.0f - TB_SHADOW_EPSILON;
     }
     TB_STAT_INC(tb__rt_shadow_rays);
-    return tb_scene_occluded(s, &r);
+    return tb_scene_occluded_except(s, &r, skip);
+}
+
+/* The top-level object a shadow ray to a sample of area-light emitter i may
+ * leave out: a sphere emitter's own object when that is a plain sphere
+ * (convex: it cannot block the segment from outside to a point of its
+ * visible cap); UINT32_MAX otherwise. */
+static uint32_t tb__self_object(const tb_raytracer *rt, int i)
+{
+    if (i < 0 || i >= rt->area.n)
+        return UINT32_MAX;
+    const tb_emitter *e = &rt->area.emitters[i];
+    const tb_scene *s = rt->scene;
+    if (e->kind != TB_EMITTER_SPHERE || e->object >= s->nobjects || s->objects[e->object]->kind != TB_PRIM_SPHERE)
+        return UINT32_MAX;
+    return e->object;
 }
 
 /* A ray leaving the surface point p in unit direction w. */
@@ -425,7 +441,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
                 black = black && f[k] == 0.0f;
             if (black)
                 continue;
-            if (tb__shadowed(s, org, ng, &ls))
+            if (tb__shadowed(s, org, ng, &ls, UINT32_MAX))
                 continue;
             /* L + (f ls.L) cosi: tb_channels_add(L, scale(mul(f, ls.L), cosi)). */
             for (int k = 0; k < nch; k++)
@@ -454,7 +470,7 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             float cosi = tb_vec3_dot(n, ls.wi);
             if (cosi <= 0.0f)
                 continue;
-            if (tb__shadowed(s, org, ng, &ls))
+            if (tb__shadowed(s, org, ng, &ls, tb__self_object(rt, ls.emitter)))
                 continue;
             const float we = (float)(cosi / ls.pdf);
             for (int c = 0; c < nch; c++)

@@ -667,10 +667,16 @@ static bool tb__cb_intersect(void *ctx, const tb_accel_prim *prim, uint32_t inde
     return tb_object_intersect(s->objects[prim->object], ray, hit);
 }
 
+/* The object tb_scene_occluded_except leaves out of this thread's current
+ * occlusion query (UINT32_MAX: none). */
+static _Thread_local uint32_t tb__occ_skip = UINT32_MAX;
+
 static bool tb__cb_occluded(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray)
 {
     (void)index;
     const tb_scene *s = ctx;
+    if (prim->object == tb__occ_skip)
+        return false;
     return tb_object_occluded(s->objects[prim->object], ray);
 }
 
@@ -863,6 +869,16 @@ bool tb_scene_intersect(const tb_scene *s, const tb_ray *ray, tb_hit *hit)
 bool tb_scene_occluded(const tb_scene *s, const tb_ray *ray)
 {
     return s && s->accel && tb_accel_occluded(s->accel, ray);
+}
+
+bool tb_scene_occluded_except(const tb_scene *s, const tb_ray *ray, uint32_t object)
+{
+    if (!s || !s->accel)
+        return false;
+    tb__occ_skip = object;
+    bool blocked = tb_accel_occluded(s->accel, ray);
+    tb__occ_skip = UINT32_MAX;
+    return blocked;
 }
 
 const tb_object *tb_scene_hit_leaf(const tb_scene *s, const tb_hit *hit, uint32_t *local)

@@ -180,6 +180,11 @@ bool tb_scene_intersect(const tb_scene *s, const tb_ray *ray, tb_hit *hit);
 /* True if anything is hit with ray->tmin <= t <= ray->tmax. */
 bool tb_scene_occluded(const tb_scene *s, const tb_ray *ray);
 
+/* tb_scene_occluded with top-level object `object` left out (UINT32_MAX:
+ * none): for a shadow ray to a point sampled on a convex emitter, which
+ * cannot block the segment to its own visible side. */
+bool tb_scene_occluded_except(const tb_scene *s, const tb_ray *ray, uint32_t object);
+
 /* The primitive (CSG leaf, or the object itself) a hit is on, and the face
  * ID within it (*local, may be NULL); NULL for a hit not from this scene. */
 const tb_object *tb_scene_hit_leaf(const tb_scene *s, const tb_hit *hit, uint32_t *local);

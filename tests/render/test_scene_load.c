@@ -531,6 +531,41 @@ static void test_stats(void **state)
     tb_scene_free(s);
 }
 
+/* tb_scene_occluded_except: two spheres on the x axis (0 at x = 5, 1 at
+ * x = 10); a shadow segment across both is blocked whichever is left out,
+ * one across the first only is free when that one is left out. Also the
+ * emitter record the ray tracer reads to choose what to leave out: a
+ * top-level emissive sphere's emitter names that sphere, an emissive sphere
+ * inside a union names an object that is not a plain sphere (so the ray
+ * tracer never leaves out a non-convex object). */
+static void test_occluded_except(void **state)
+{
+    (void)state;
+    tb_scene *s = load_ok("mid 1\n"
+                          "sphere { transform = [translate([5 0 0])] rendering = { emission = 1 } }\n"
+                          "sphere { transform = [translate([10 0 0])] }\n"
+                          "union { transform = [translate([0 10 0])] sphere {} sphere { transform = [translate([0 0 1])]"
+                          " rendering = { emission = 2 } } }\n",
+                          NULL);
+    tb_ray both = tb_ray_make(tb_vec3_make(0, 0, 0), tb_vec3_make(20, 0, 0), 0.0f, 1.0f);
+    tb_ray first = tb_ray_make(tb_vec3_make(0, 0, 0), tb_vec3_make(7, 0, 0), 0.0f, 1.0f);
+    assert_true(tb_scene_occluded(s, &both));
+    assert_true(tb_scene_occluded_except(s, &both, UINT32_MAX));
+    assert_true(tb_scene_occluded_except(s, &both, 0));
+    assert_true(tb_scene_occluded_except(s, &both, 1));
+    assert_true(tb_scene_occluded_except(s, &first, UINT32_MAX));
+    assert_true(tb_scene_occluded_except(s, &first, 1));
+    assert_false(tb_scene_occluded_except(s, &first, 0));
+    assert_true(tb_scene_occluded(s, &first)); /* the left-out object is back for the next query */
+    assert_int_equal(s->nemissive, 2);
+    const tb_emitter *e0 = &s->emitters[s->emissive[0].first_emitter];
+    assert_int_equal(e0->kind, TB_EMITTER_SPHERE);
+    assert_int_equal(e0->object, 0);
+    const tb_emitter *e2 = &s->emitters[s->emissive[1].first_emitter];
+    assert_true(e2->object >= s->nobjects || s->objects[e2->object]->kind != TB_PRIM_SPHERE);
+    tb_scene_free(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -538,6 +573,7 @@ int main(void)
         cmocka_unit_test(test_material_dedup),   cmocka_unit_test(test_lights),
         cmocka_unit_test(test_emissive),         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_stats),
+        cmocka_unit_test(test_occluded_except),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
