@@ -154,14 +154,15 @@ static inline tb__oray tb__object_ray(const tb_object *o, const tb_ray *r)
      * operations in the same order (so bit for bit the same), without the
      * calls: this runs for every primitive a ray tests. The inverse of an
      * accepted transform is affine (projective ones are rejected when the
-     * object is built), so its w row is 0 0 0 1 and mul_point's w is exactly
-     * 1 for a finite origin; anything else takes the general path. */
+     * object is built, which records it in inv_affine), so its w row is
+     * 0 0 0 1 and mul_point's w is exactly 1 for a finite origin; anything
+     * else takes the general path. */
     const double(*m)[4] = o->to_world.inv.m;
     double ox = r->o.x, oy = r->o.y, oz = r->o.z, dx = r->d.x, dy = r->d.y, dz = r->d.z;
     tb__oray q;
     /* ox + oy + oz is finite exactly when all three are: they are floats, so
      * their double sum cannot overflow. One test instead of three. */
-    if (m[3][0] == 0.0 && m[3][1] == 0.0 && m[3][2] == 0.0 && m[3][3] == 1.0 && isfinite(ox + oy + oz)) {
+    if (o->inv_affine && isfinite(ox + oy + oz)) {
         q.o = (tb_dvec3){m[0][0] * ox + m[0][1] * oy + m[0][2] * oz + m[0][3],
                          m[1][0] * ox + m[1][1] * oy + m[1][2] * oz + m[1][3],
                          m[2][0] * ox + m[2][1] * oy + m[2][2] * oz + m[2][3]};

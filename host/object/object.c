@@ -355,6 +355,7 @@ static tb_status tb__build(tb_object *o, const tb_mid_object *m, uint32_t index,
     tb_status st = tb__check_transform(&o->to_world);
     if (st)
         return st;
+    o->inv_affine = tb_mat4_is_affine(&o->to_world.inv);
     tb_mat3 l = tb_mat4_linear(&o->to_world.m);
     double s2 = 0.0;
     for (int i = 0; i < 3; i++)

@@ -95,6 +95,8 @@ struct tb_object {
     double profile_orient;   /* prism: +1 if the profile turns counter-clockwise, -1 if clockwise */
     bool profile_convex;     /* prism: the profile is convex (clipped by planes, else crossings are counted) */
     double scale;            /* Frobenius norm of the linear part of to_world (bounds world error from object error) */
+    bool inv_affine;         /* to_world.inv's last row is exactly 0 0 0 1 (checked at build): the world -> object
+                                ray mapping's fast path; false (the general path) for an object not built here */
 };
 
 /* Maps a resolved MID material to the renderer's material index; returns

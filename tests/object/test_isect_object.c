@@ -459,6 +459,67 @@ static void test_fed_mesh(void **state)
     assert_non_null(strstr(tb_last_error(), "nowhere.fed"));
 }
 
+/* Clears inv_affine in o's tree (the world -> object mapping's general
+ * path, tb_mat4_mul_point / mul_vec); returns how many nodes had it set. */
+static int ti_clear_affine(tb_object *o)
+{
+    int n = o->inv_affine ? 1 : 0;
+    o->inv_affine = false;
+    for (int i = 0; i < o->nchildren; i++)
+        n += ti_clear_affine(&o->children[i]);
+    return n;
+}
+
+/* inv_affine is set on every built node, and its fast path maps rays as the
+ * general path does: hits (t, face, u, v, normal) and occlusion of a
+ * sphere, a cylinder and a CSG difference under random transforms (mirrors
+ * included) are bit for bit the same with the flag cleared. Fails when the
+ * fast path's arithmetic differs from tb_mat4_mul_point / mul_vec. */
+static void test_affine_fast_path(void **state)
+{
+    (void)state;
+    tb_rng r;
+    tb_rng_seed(&r, tb_test_seed("affine_fast_path", 11), 1);
+    const tb_prim_kind kinds[2] = {TB_PRIM_SPHERE, TB_PRIM_CYLINDER};
+    long hits = 0;
+    for (int i = 0; i < 30; i++) {
+        tb_transform xf = ti_random_transform(&r, 0.2, 5.0, 10.0, true);
+        tb_mid_object m = ti_prim(kinds[i % 2], tb_mid_geometry_default(kinds[i % 2]), xf);
+        tb_mid_object kids[2] = {ti_prim(TB_PRIM_CUBE, tb_mid_geometry_default(TB_PRIM_CUBE),
+                                         ti_random_transform(&r, 0.5, 2.0, 0.3, true)),
+                                 ti_prim(TB_PRIM_SPHERE, tb_mid_geometry_default(TB_PRIM_SPHERE),
+                                         ti_random_transform(&r, 0.5, 1.5, 0.5, false))};
+        if (i % 3 == 2) { /* a difference of a cube and a sphere */
+            m.kind = TB_PRIM_DIFFERENCE;
+            m.children = kids;
+            m.nchildren = 2;
+        }
+        tb_object *fast = ti_build(&m, 0), *slow = ti_build(&m, 0);
+        assert_int_equal(ti_clear_affine(slow), 1 + slow->nchildren);
+        for (int k = 0; k < 300; k++) {
+            tb_dvec3 c = tb_transform_dpoint(&fast->to_world, (tb_dvec3){0, 0, 0});
+            tb_dvec3 u = ti_sphere_dir(&r), v = ti_sphere_dir(&r);
+            double dist = 3.0 * fast->scale;
+            tb_vec3 o = {(float)(c.x + dist * u.x), (float)(c.y + dist * u.y), (float)(c.z + dist * u.z)};
+            tb_vec3 d = {(float)(c.x + 0.5 * fast->scale * v.x - o.x), (float)(c.y + 0.5 * fast->scale * v.y - o.y),
+                         (float)(c.z + 0.5 * fast->scale * v.z - o.z)};
+            tb_ray ray = tb_ray_make(o, d, 0.0f, INFINITY);
+            tb_hit h1, h2;
+            bool b1 = tb_object_intersect(fast, &ray, &h1), b2 = tb_object_intersect(slow, &ray, &h2);
+            assert_int_equal(b1, b2);
+            if (b1) {
+                hits++;
+                assert_memory_equal(&h1, &h2, sizeof h1);
+                ray.tmax = h1.t;
+            }
+            assert_int_equal(tb_object_occluded(fast, &ray), tb_object_occluded(slow, &ray));
+        }
+        tb_object_free(fast);
+        tb_object_free(slow);
+    }
+    assert_true(hits > 3000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -466,6 +527,7 @@ int main(void)
         cmocka_unit_test(test_tmin_tmax),     cmocka_unit_test(test_deep_copy),
         cmocka_unit_test(test_csg_numbering), cmocka_unit_test(test_rejections),
         cmocka_unit_test(test_fed_mesh),
+        cmocka_unit_test(test_affine_fast_path),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
