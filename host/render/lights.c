@@ -175,7 +175,11 @@ static void tb__delta_blank(const tb_light *l, tb_light_sample *s)
 bool tb_light_sample_li(const tb_light *l, tb_vec3 p, tb_light_sample *s)
 {
     if (l->kind == TB_LIGHT_DIRECTIONAL) {
-        tb__delta_blank(l, s);
+        /* Every field set below (no zeroing first). */
+        s->delta = true;
+        s->pdf = 1.0;
+        s->normal = (tb_vec3){0.0f, 0.0f, 0.0f};
+        s->emitter = -1;
         tb_vec3 wi = tb_vec3_neg(l->axis);
         s->wi = wi;
         s->dist = INFINITY;
