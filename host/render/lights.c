@@ -547,9 +547,10 @@ static bool tb__sample_emitter(const tb_emitter *e, int i, double area, tb_dvec3
             double ct = 1.0 - omc, s2 = omc * (2.0 - omc);
             double cos_alpha = s2 / at->sqrt_s2max + ct * sqrt(tb__pos(1.0 - s2 / s2max));
             double sin_alpha = sqrt(tb__pos(1.0 - cos_alpha * cos_alpha));
-            double phi = TB_2PI * u2;
-            *nq = tb_dvec3_add(tb_dvec3_add(tb_dvec3_scale(at->b1, sin_alpha * cos(phi)),
-                                            tb_dvec3_scale(at->b2, sin_alpha * sin(phi))),
+            double cphi, sphi; /* of phi = 2 pi u2, uniform about the axis */
+            tb_sincos_2pi(u2, &cphi, &sphi);
+            *nq = tb_dvec3_add(tb_dvec3_add(tb_dvec3_scale(at->b1, sin_alpha * cphi),
+                                            tb_dvec3_scale(at->b2, sin_alpha * sphi)),
                                tb_dvec3_scale(at->axis, cos_alpha));
             *nq = tb_dvec3_normalize(*nq);
             *q = tb_dvec3_add(c, tb_dvec3_scale(*nq, r));

@@ -18,6 +18,44 @@
 #include "util/math/rng.h"
 #include "util/math/vec.h"
 
+/* cos(2 pi u) and sin(2 pi u) for u in [0, 1] (a uniform angle from a
+ * sample), without libm: 4u is split into the nearest quadrant k and a rest
+ * f in [-1/2, 1/2] (both exact), the angle f pi/2 in [-pi/4, pi/4] goes
+ * through Taylor polynomials of sin (to x^15) and cos (to x^16), whose
+ * truncation is below 1e-16 there, and the quadrant turns the pair. Within
+ * a few units in the last place of libm's cos / sin of the rounded 2 pi u
+ * (tests/render/test_shading_sampling.c), at a third of the cost; exact
+ * (up to the sign of a zero) at u = 0, 1/4, 1/2, 3/4, 1. */
+static inline void tb_sincos_2pi(double u, double *c, double *s)
+{
+    double t = 4.0 * u;
+    double k = (double)(long)(t + 0.5); /* nearest quadrant (t >= 0) */
+    double f = t - k;
+    double a = f * 1.5707963267948966; /* pi / 2 */
+    double a2 = a * a;
+    double sp = a + a * a2 *
+                        (-1.0 / 6.0 +
+                         a2 * (1.0 / 120.0 +
+                               a2 * (-1.0 / 5040.0 +
+                                     a2 * (1.0 / 362880.0 +
+                                           a2 * (-1.0 / 39916800.0 +
+                                                 a2 * (1.0 / 6227020800.0 + a2 * (-1.0 / 1307674368000.0)))))));
+    double cp = 1.0 + a2 * (-0.5 +
+                            a2 * (1.0 / 24.0 +
+                                  a2 * (-1.0 / 720.0 +
+                                        a2 * (1.0 / 40320.0 +
+                                              a2 * (-1.0 / 3628800.0 +
+                                                    a2 * (1.0 / 479001600.0 +
+                                                          a2 * (-1.0 / 87178291200.0 +
+                                                                a2 * (1.0 / 20922789888000.0))))))));
+    switch ((long)k & 3) {
+    case 0: *c = cp, *s = sp; break;
+    case 1: *c = -sp, *s = cp; break;
+    case 2: *c = -cp, *s = -sp; break;
+    default: *c = sp, *s = -cp; break;
+    }
+}
+
 /* Shirley-Chiu concentric map of the square onto the unit disc (area
  * preserving, low distortion, continuous); density 1/pi per unit area. */
 tb_vec2 tb_sample_disk_concentric(float u1, float u2);
