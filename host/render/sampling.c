@@ -6,9 +6,6 @@
 
 #include "util/math/float.h"
 
-/* Largest double below 1: where a u of 1 (or more) is clamped to. */
-#define TB__ONE_MINUS_EPS 0x1.fffffffffffffp-1
-
 /* Unit direction from cos theta (with 1 - cos theta given separately, for
  * accuracy near the pole) and phi. */
 static tb_vec3 tb__dir(double cos_theta, double one_minus_cos, double phi)
@@ -180,33 +177,7 @@ void tb_distrib1d_release(tb_distrib1d *d)
     *d = (tb_distrib1d){0};
 }
 
-int tb_distrib1d_sample_discrete(const tb_distrib1d *d, double u, double *pmf, double *u_remap)
-{
-    if (!(u >= 0.0))
-        u = 0.0;
-    if (u >= 1.0)
-        u = TB__ONE_MINUS_EPS;
-    /* First j with cdf[j] > u; item j - 1 has cdf[j-1] <= u < cdf[j], so a
-     * positive width: items of weight 0 are never picked. */
-    int lo = 1, hi = d->n;
-    while (lo < hi) {
-        int mid = lo + (hi - lo) / 2;
-        if (d->cdf[mid] > u)
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
-    int i = lo - 1;
-    /* cdf[n] = 1 > u always, so i is in 0..n-1 with cdf[i] <= u < cdf[i+1]. */
-    double w = d->cdf[i + 1] - d->cdf[i];
-    if (pmf)
-        *pmf = d->f[i] / d->total;
-    if (u_remap) {
-        double r = (u - d->cdf[i]) / w;
-        *u_remap = r < 1.0 ? (r > 0.0 ? r : 0.0) : TB__ONE_MINUS_EPS;
-    }
-    return i;
-}
+/* tb_distrib1d_sample_discrete is inline in sampling.h. */
 
 double tb_distrib1d_pmf(const tb_distrib1d *d, int i)
 {

@@ -134,7 +134,34 @@ void tb_distrib1d_release(tb_distrib1d *d);
  * *pmf (if not NULL) gets that probability and *u_remap (if not NULL) the
  * position of u within the item's slice of [0,1), rescaled to [0,1), so the
  * same number can drive a further choice without losing stratification. */
-int tb_distrib1d_sample_discrete(const tb_distrib1d *d, double u, double *pmf, double *u_remap);
+static inline int tb_distrib1d_sample_discrete(const tb_distrib1d *d, double u, double *pmf, double *u_remap)
+{
+    /* Inline: once per light sample. 0x1.fffffffffffffp-1 is the largest double below 1. */
+    if (!(u >= 0.0))
+        u = 0.0;
+    if (u >= 1.0)
+        u = 0x1.fffffffffffffp-1;
+    /* First j with cdf[j] > u; item j - 1 has cdf[j-1] <= u < cdf[j], so a
+     * positive width: items of weight 0 are never picked. */
+    int lo = 1, hi = d->n;
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (d->cdf[mid] > u)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    int i = lo - 1;
+    /* cdf[n] = 1 > u always, so i is in 0..n-1 with cdf[i] <= u < cdf[i+1]. */
+    double w = d->cdf[i + 1] - d->cdf[i];
+    if (pmf)
+        *pmf = d->f[i] / d->total;
+    if (u_remap) {
+        double r = (u - d->cdf[i]) / w;
+        *u_remap = r < 1.0 ? (r > 0.0 ? r : 0.0) : 0x1.fffffffffffffp-1;
+    }
+    return i;
+}
 
 /* Probability of item i (0 outside 0 .. n-1). */
 double tb_distrib1d_pmf(const tb_distrib1d *d, int i);

@@ -358,9 +358,42 @@ static void test_sincos_2pi(void **state)
     }
 }
 
+/* tb_distrib1d_sample_discrete (inline in sampling.h) on weights {1, 0, 3}
+ * (cdf 0, 1/4, 1/4, 1): the item, its probability and the remapped u, at
+ * slice ends, inside slices, for u = 1 and NaN; the weight-0 item is never
+ * picked. A single item gives back u itself. Fails when the search, the
+ * clamps or the remap change. */
+static void test_distrib_discrete(void **state)
+{
+    (void)state;
+    tb_distrib1d d;
+    assert_int_equal(tb_distrib1d_init(&d, (const double[]){1.0, 0.0, 3.0}, 3), TB_OK);
+    const double cases[][4] = {
+        /* u, item, pmf, remapped u */
+        {0.0, 0, 0.25, 0.0},   {0.125, 0, 0.25, 0.5}, {0.25, 2, 0.75, 0.0},
+        {0.625, 2, 0.75, 0.5}, {-1.0, 0, 0.25, 0.0},  {NAN, 0, 0.25, 0.0},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        double pmf = -1.0, ur = -1.0;
+        int i = tb_distrib1d_sample_discrete(&d, cases[k][0], &pmf, &ur);
+        assert_int_equal(i, (int)cases[k][1]);
+        assert_true(pmf == cases[k][2] && ur == cases[k][3]);
+    }
+    double pmf, ur;
+    assert_int_equal(tb_distrib1d_sample_discrete(&d, 1.0, &pmf, &ur), 2);
+    assert_true(ur < 1.0 && ur > 0.999999);
+    assert_int_equal(tb_distrib1d_sample_discrete(&d, 0.9, NULL, NULL), 2);
+    tb_distrib1d_release(&d);
+    assert_int_equal(tb_distrib1d_init(&d, (const double[]){2.5}, 1), TB_OK);
+    assert_int_equal(tb_distrib1d_sample_discrete(&d, 0.3f, &pmf, &ur), 0);
+    assert_true(pmf == 1.0 && ur == (double)0.3f);
+    tb_distrib1d_release(&d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_distrib_discrete),
         cmocka_unit_test(test_sincos_2pi),
         cmocka_unit_test(test_warps),
         cmocka_unit_test(test_disc_triangle),
