@@ -101,6 +101,8 @@ typedef struct tb_accel_options {
     int bvh_max_leaf;      /* most references in a leaf, 1..255 (0: 8) */
     float bvh_cost_node;   /* SAH cost of visiting an inner node (0: 1.0) */
     float bvh_cost_prim;   /* SAH cost of one reference test (0: 1.0) */
+    int bvh_no_avx;        /* non-zero: traverse with the SSE2 node test even where the CPU has AVX (tests,
+                              comparisons; the answers are the same) */
     double grid_density;   /* voxels along the longest axis = density * cbrt(N) (0: 3.0) */
     int grid_max_res;      /* most voxels along one axis, 1..1024 (0: 256) */
 } tb_accel_options;

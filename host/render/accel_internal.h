@@ -25,31 +25,34 @@
 #define TB__BVH_SAH_MAX_DEPTH 64
 #define TB__BVH_STACK 128
 
-/* One node of the 4-wide BVH the CPU queries traverse (bvh4.c, docs/accel.md
- * "4-wide traversal"): the binary tree collapsed so that a node holds up to
- * four children, whose boxes are stored by coordinate (structure of arrays)
- * for one SSE slab test. The binary nodes stay as they are (host/gpu converts
- * them for the Vulkan kernels). 128 bytes, two cache lines. */
-typedef struct tb__bvh4_node {
+/* Children per node of the wide BVH the CPU queries traverse. */
+#define TB__BVHW 8
+
+/* One node of the wide BVH the CPU queries traverse (bvh_wide.c,
+ * docs/accel.md "Wide nodes"): the binary tree collapsed so that a node
+ * holds up to eight children, whose boxes are stored by coordinate
+ * (structure of arrays) for one AVX slab test, or two SSE ones. The binary
+ * nodes stay as they are (host/gpu converts them for the Vulkan kernels).
+ * 288 bytes, 32-byte aligned. */
+typedef struct tb__bvhw_node {
     /* Rows lo x, hi x, lo y, hi y, lo z, hi z; column i is child i. An unused
      * slot holds lo = +inf, hi = -inf, which no valid ray meets. */
-    _Alignas(16) float box[6][4];
-    uint32_t child[4]; /* inner child: its wide node; leaf child: its first stored reference */
-    uint8_t count[4];  /* leaf child: its references (1..255); 0: an inner child or an unused slot */
+    _Alignas(32) float box[6][TB__BVHW];
+    uint32_t child[TB__BVHW]; /* inner child: its wide node; leaf child: its first stored reference */
     /* Per ray octant (bit a set: the direction's sign bit is set along axis
-     * a), the children in traversal order far to near, 2 bits each from bit
+     * a), the children in traversal order far to near, 3 bits each from bit
      * 0: the binary tree's near-child-first order below this node. */
-    uint8_t order[8];
-    uint8_t n;         /* children used, 1..4 (slots 0 .. n-1) */
-    uint8_t used;      /* (1 << n) - 1: the node test's mask is cut to it, so an unused slot is never followed
-                        * even if a ray met its empty box (it cannot: docs/accel.md, "4-wide nodes") */
-    uint8_t pad[2];
-} tb__bvh4_node;
+    uint32_t order[8];
+    uint8_t count[TB__BVHW];  /* leaf child: its references (1..255); 0: an inner child or an unused slot */
+    uint8_t n;                /* children used, 1..8 (slots 0 .. n-1) */
+    uint8_t used;             /* (1 << n) - 1: the node test's mask is cut to it, so an unused slot is never
+                               * followed even if a ray met its empty box (it cannot: docs/accel.md) */
+} tb__bvhw_node;
 
-_Static_assert(sizeof(tb__bvh4_node) == 128, "tb__bvh4_node is 128 bytes");
+_Static_assert(sizeof(tb__bvhw_node) == 288, "tb__bvhw_node is 288 bytes");
 
-/* Wide levels are at most the binary depth, each pushing at most 3 children. */
-#define TB__BVH4_STACK (3 * TB__BVH_STACK)
+/* Wide levels are at most the binary depth, each pushing at most 7 children. */
+#define TB__BVHW_STACK (7 * TB__BVH_STACK)
 
 /* The uniform grid (grid.c). Voxel (x, y, z) is cell x + res[0] (y + res[1] z)
  * and covers lo + (x, y, z) * cell .. lo + (x + 1, y + 1, z + 1) * cell. */
@@ -75,8 +78,9 @@ struct tb_accel {
     tb_accel_stats stats;  /* filled at build */
     tb_bvh_node *nodes;    /* BVH: depth-first binary nodes (the layout tb_accel_bvh_nodes exposes) */
     size_t nnodes;
-    tb__bvh4_node *wide;   /* BVH: the binary tree collapsed 4-wide, depth-first (what the CPU traverses) */
+    tb__bvhw_node *wide;   /* BVH: the binary tree collapsed 8-wide, depth-first (what the CPU traverses) */
     size_t nwide;
+    bool wide_avx;         /* traverse with the AVX node test (the CPU has AVX and the options allow it) */
     tb__grid grid;         /* grid */
 };
 
@@ -244,12 +248,30 @@ static inline bool tb__accel_test_any(const tb_accel *acc, size_t k, tb__accel_a
  * filling the kind's part of acc->stats; then closest hit and any hit for
  * valid rays. */
 tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt);
-/* Collapses acc->nodes into acc->wide (bvh4.c; called by tb__bvh_build). */
-tb_status tb__bvh4_build(tb_accel *acc);
-/* The 4-wide node test on its own, for tests: bit i of the result is set if
+/* Collapses acc->nodes into acc->wide (bvh_wide.c; called by tb__bvh_build). */
+tb_status tb__bvhw_build(tb_accel *acc, const tb_accel_options *opt);
+/* The wide node test on its own, for tests: bit i of the result is set if
  * child i's box meets [tmin, tmax] under tb__accel_slab_t's arithmetic (the
- * same bits per child), and tnear[i] is then that test's entry distance. */
-unsigned tb__bvh4_slab_test(const tb__bvh4_node *nd, const tb_ray *ray, float tmin, float tmax, float tnear[4]);
+ * same bits per child), and tnear[i] is then that test's entry distance.
+ * avx: the AVX test (only where tb__bvhw_have_avx()), else the SSE2 one. */
+unsigned tb__bvhw_slab_test(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
+                            float tnear[TB__BVHW], bool avx);
+/* True if this build has the AVX traversal and the CPU runs it. */
+bool tb__bvhw_have_avx(void);
+/* The traversal loops (bvh_wide_traverse.inc) per instruction set; the AVX
+ * ones are compiled in bvh_wide_avx.c when TB_BVH_AVX is defined. */
+bool tb__bvhw_closest_sse(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best, int64_t *visited,
+                          int64_t *tested);
+bool tb__bvhw_any_sse(const tb_accel *acc, tb__accel_any *q, uint32_t *who, int64_t *visited, int64_t *tested);
+unsigned tb__bvhw_slab_test_sse(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
+                                float tnear[TB__BVHW]);
+#if defined(TB_BVH_AVX)
+bool tb__bvhw_closest_avx(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best, int64_t *visited,
+                          int64_t *tested);
+bool tb__bvhw_any_avx(const tb_accel *acc, tb__accel_any *q, uint32_t *who, int64_t *visited, int64_t *tested);
+unsigned tb__bvhw_slab_test_avx(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
+                                float tnear[TB__BVHW]);
+#endif
 bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best);
 bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray);
 void tb__bvh_free(tb_accel *acc);

@@ -2,7 +2,7 @@
  * binned SAH build (Wald 2007, "On fast construction of SAH-based bounding
  * volume hierarchies"), subtrees built as OpenMP tasks, flattened depth-first
  * into 32-byte nodes (the layout tb_accel_bvh_nodes exposes), then collapsed
- * into the 4-wide tree that the CPU queries traverse (bvh4.c). */
+ * into the 8-wide tree that the CPU queries traverse (bvh_wide.c). */
 #include <omp.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -397,11 +397,11 @@ tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt)
     acc->stats.bvh_sah_cost = f.sah;
     acc->stats.memory_bytes += (size_t)nnodes * sizeof(tb_bvh_node);
     tb_stat_add(&tb__bvh_memory, (int64_t)((size_t)nnodes * sizeof(tb_bvh_node)));
-    st = tb__bvh4_build(acc);
+    st = tb__bvhw_build(acc, opt);
     if (st == TB_OK) {
         acc->stats.bvh_wide_nodes = acc->nwide;
-        acc->stats.memory_bytes += acc->nwide * sizeof(tb__bvh4_node);
-        tb_stat_add(&tb__bvh_memory, (int64_t)(acc->nwide * sizeof(tb__bvh4_node)));
+        acc->stats.memory_bytes += acc->nwide * sizeof(tb__bvhw_node);
+        tb_stat_add(&tb__bvh_memory, (int64_t)(acc->nwide * sizeof(tb__bvhw_node)));
     }
 
 done:
@@ -420,7 +420,7 @@ void tb__bvh_free(tb_accel *acc)
     if (acc->nodes)
         tb_stat_add(&tb__bvh_memory, -(int64_t)(acc->nnodes * sizeof(tb_bvh_node)));
     if (acc->wide)
-        tb_stat_add(&tb__bvh_memory, -(int64_t)(acc->nwide * sizeof(tb__bvh4_node)));
+        tb_stat_add(&tb__bvh_memory, -(int64_t)(acc->nwide * sizeof(tb__bvhw_node)));
     free(acc->nodes);
     free(acc->wide);
     acc->nodes = NULL;

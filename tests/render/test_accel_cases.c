@@ -601,25 +601,26 @@ static void test_slab_matches_util(void **state)
     assert_true(agree_hit < 360000);
 }
 
-/* The 4-wide node test (one SSE test for four children) answers, lane for
- * lane, exactly as the scalar tb__accel_slab_t: the same met/missed bit and,
- * when met, the same entry distance bit for bit, on random boxes with flat
- * sides, origins on the planes of a child's box, signed zero directions and
- * random ranges; an unused slot (lo +inf, hi -inf) is never met. */
-static void test_bvh4_slab_matches_scalar(void **state)
+/* The wide node test (eight children: two SSE2 tests, or one AVX test
+ * where the CPU has AVX) answers, lane for lane, exactly as the scalar
+ * tb__accel_slab_t: the same met/missed bit and, when met, the same entry
+ * distance bit for bit, on random boxes with flat sides, origins on the
+ * planes of a child's box, signed zero directions and random ranges; an
+ * unused slot (lo +inf, hi -inf) is never met. Both instruction sets. */
+static void test_bvhw_slab_matches_scalar(void **state)
 {
     (void)state;
-    uint64_t seed = tb_test_seed("slab4", 23);
+    uint64_t seed = tb_test_seed("slab8", 23);
     tb_rng r;
     tb_rng_seed(&r, seed, 4);
     const float vals[] = {-2, -1, -0.5f, 0, 0.5f, 1, 2};
-    long met = 0, lanes = 0;
+    long met = 0, lanes = 0, avx_cases = 0;
     for (long i = 0; i < 100000; i++) {
-        tb__bvh4_node nd;
+        tb__bvhw_node nd;
         memset(&nd, 0, sizeof nd);
-        tb_aabb b[4];
-        int used = 1 + (int)tb_rng_below(&r, 4);
-        for (int c = 0; c < 4; c++) {
+        tb_aabb b[TB__BVHW];
+        int used = 1 + (int)tb_rng_below(&r, TB__BVHW);
+        for (int c = 0; c < TB__BVHW; c++) {
             float lo[3], hi[3];
             for (int a = 0; a < 3; a++) {
                 lo[a] = vals[tb_rng_below(&r, 7)];
@@ -652,19 +653,21 @@ static void test_bvh4_slab_matches_scalar(void **state)
         bool neg[3] = {signbit(inv.x) != 0, signbit(inv.y) != 0, signbit(inv.z) != 0};
         float tmin = tb_rng_below(&r, 2) ? 0.0f : tp_uniform(&r, -3, 3);
         float tmax = tb_rng_below(&r, 2) ? INFINITY : tmin + tp_uniform(&r, 0, 3);
-        float tn4[4];
-        unsigned mask = tb__bvh4_slab_test(&nd, &ry, tmin, tmax, tn4);
-        assert_true(mask < 16u);
-        for (int c = 0; c < 4; c++) {
+        float tn4[TB__BVHW];
+        bool avx = tb__bvhw_have_avx() && (i & 1);
+        avx_cases += avx;
+        unsigned mask = tb__bvhw_slab_test(&nd, &ry, tmin, tmax, tn4, avx);
+        assert_true(mask < 1u << TB__BVHW);
+        for (int c = 0; c < TB__BVHW; c++) {
             float tn;
             bool want = tb__accel_slab_t(&b[c], ry.o, inv, neg, tmin, tmax, &tn);
             bool got = (mask >> c & 1u) != 0;
             if (c >= used)
                 assert_false(got);
             if (want != got || (want && memcmp(&tn, &tn4[c], sizeof tn) != 0))
-                fail_msg("case %ld child %d: box (%a %a %a)..(%a %a %a) o %a %a %a d %a %a %a [%a, %a]: scalar %d "
-                         "t %a, wide %d t %a",
-                         i, c, (double)b[c].lo.x, (double)b[c].lo.y, (double)b[c].lo.z, (double)b[c].hi.x,
+                fail_msg("case %ld child %d (%s): box (%a %a %a)..(%a %a %a) o %a %a %a d %a %a %a [%a, %a]: scalar "
+                         "%d t %a, wide %d t %a",
+                         i, c, avx ? "AVX" : "SSE2", (double)b[c].lo.x, (double)b[c].lo.y, (double)b[c].lo.z, (double)b[c].hi.x,
                          (double)b[c].hi.y, (double)b[c].hi.z, (double)o[0], (double)o[1], (double)o[2], (double)d[0],
                          (double)d[1], (double)d[2], (double)tmin, (double)tmax, want, (double)tn, got,
                          (double)tn4[c]);
@@ -672,22 +675,25 @@ static void test_bvh4_slab_matches_scalar(void **state)
             lanes += c < used;
         }
     }
-    assert_true(met > lanes / 20); /* both answers occur often */
+    assert_true(met > lanes / 40); /* both answers occur often (a ray is aimed at one of up to 8 boxes) */
     assert_true(met < lanes * 9 / 10);
+    print_message("[ slab8 ] %ld lanes, %ld met; %ld of 100000 nodes through the AVX test%s\n", lanes, met, avx_cases,
+                  tb__bvhw_have_avx() ? "" : " (no AVX here)");
 }
 
-/* Checks the 4-wide tree against the binary one it collapses: nodes in
+/* Checks the wide tree against the binary one it collapses: nodes in
  * depth-first order, reached once each; every reference in exactly one leaf
  * child, leaves as the binary ones (same ranges); each child's box exactly
  * the union of what lies below it; unused slots empty; each octant's order a
  * permutation of the children; fewer nodes than the binary inner nodes. */
-static void check_bvh4(const tb_accel *acc, int max_leaf)
+static void check_bvhw(const tb_accel *acc, int max_leaf)
 {
     tb_accel_stats st;
     tb_accel_get_stats(acc, &st);
     assert_int_equal(st.bvh_wide_nodes, acc->nwide);
     assert_true(acc->nwide >= 1 && acc->nwide <= (st.bvh_nodes - st.bvh_leaves > 0 ? st.bvh_nodes - st.bvh_leaves : 1));
     assert_true(((uintptr_t)acc->wide & 63u) == 0);
+    assert_int_equal(acc->wide_avx, tb__bvhw_have_avx()); /* built with the default options */
     /* Binary leaves by first reference: the wide leaves must be exactly these. */
     uint16_t *bin_count = calloc(acc->n, sizeof *bin_count);
     char *seen = calloc(acc->n, 1), *reached = calloc(acc->nwide, 1);
@@ -696,18 +702,19 @@ static void check_bvh4(const tb_accel *acc, int max_leaf)
         if (acc->nodes[i].count)
             bin_count[acc->nodes[i].offset] = acc->nodes[i].count;
     for (size_t w = 0; w < acc->nwide; w++) {
-        const tb__bvh4_node *nd = &acc->wide[w];
-        assert_true(nd->n >= 1 && nd->n <= 4);
+        const tb__bvhw_node *nd = &acc->wide[w];
+        assert_true(nd->n >= 1 && nd->n <= TB__BVHW);
         assert_int_equal(nd->used, (1u << nd->n) - 1u);
         if (w > 0)
             assert_true(reached[w]); /* parents come first (depth-first) */
         for (unsigned oct = 0; oct < 8; oct++) {
             unsigned used = 0;
             for (unsigned j = 0; j < nd->n; j++)
-                used |= 1u << (nd->order[oct] >> (2 * j) & 3u);
+                used |= 1u << (nd->order[oct] >> (3 * j) & 7u);
             assert_int_equal(used, (1u << nd->n) - 1u);
+            assert_int_equal(nd->order[oct] >> (3 * nd->n), 0);
         }
-        for (int c = 0; c < 4; c++) {
+        for (int c = 0; c < TB__BVHW; c++) {
             tb_aabb box = {{nd->box[0][c], nd->box[2][c], nd->box[4][c]}, {nd->box[1][c], nd->box[3][c], nd->box[5][c]}};
             if (c >= nd->n) {
                 assert_true(box.lo.x == INFINITY && box.lo.y == INFINITY && box.lo.z == INFINITY);
@@ -730,7 +737,7 @@ static void check_bvh4(const tb_accel *acc, int max_leaf)
                 assert_true(ch > w && ch < acc->nwide);
                 assert_int_equal(reached[ch], 0);
                 reached[ch] = 1;
-                const tb__bvh4_node *cn = &acc->wide[ch];
+                const tb__bvhw_node *cn = &acc->wide[ch];
                 for (int j = 0; j < cn->n; j++)
                     u = tb_aabb_union(u, (tb_aabb){{cn->box[0][j], cn->box[2][j], cn->box[4][j]},
                                                   {cn->box[1][j], cn->box[3][j], cn->box[5][j]}});
@@ -745,10 +752,10 @@ static void check_bvh4(const tb_accel *acc, int max_leaf)
     free(reached);
 }
 
-static void test_bvh4_structure(void **state)
+static void test_bvhw_structure(void **state)
 {
     (void)state;
-    uint64_t seed = tb_test_seed("bvh4", 24);
+    uint64_t seed = tb_test_seed("bvhw", 24);
     tb_rng r;
     tb_rng_seed(&r, seed, 5);
     const size_t sizes[] = {1, 2, 3, 5, 17, 1000, 20000};
@@ -757,15 +764,69 @@ static void test_bvh4_structure(void **state)
             tp_scene s = {0};
             tp_random_scene(&s, &r, sizes[i], 1.0f, 0.0f);
             tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = max_leaf});
-            check_bvh4(acc, max_leaf);
+            check_bvhw(acc, max_leaf);
             tb_accel_stats st;
             tb_accel_get_stats(acc, &st);
-            /* Collapsing 4-wide keeps about a third of the binary inner nodes. */
+            /* Collapsing 8-wide keeps well under half of the binary inner nodes. */
             if (sizes[i] >= 1000)
-                assert_true(3 * st.bvh_wide_nodes < 2 * (st.bvh_nodes - st.bvh_leaves));
+                assert_true(5 * st.bvh_wide_nodes < 2 * (st.bvh_nodes - st.bvh_leaves));
             tb_accel_free(acc);
             tp_free(&s);
         }
+}
+
+/* The current total of counter `name` (0 when it has not been touched). */
+static int64_t counter(const char *name)
+{
+    tb_stat_total t;
+    return tb_stats_get(name, TB_STAT_KIND_COUNTER, &t) == TB_OK ? t.v[0] : 0;
+}
+
+/* The SSE2 and the AVX traversal of one tree (tb_accel_options.bvh_no_avx)
+ * give the same answers, bit for bit, and visit the same nodes and test the
+ * same references (the counters), closest and any hit, on random scenes
+ * with the random rays of render_accel_compare. Where the CPU lacks AVX
+ * both runs take the SSE2 path (the test then says so). */
+static void test_bvhw_avx_matches_sse(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("bvhw_isa", 25);
+    tb_rng r;
+    tb_rng_seed(&r, seed, 6);
+    tp_scene s = {0};
+    tp_random_scene(&s, &r, 5000, 1.0f, 0.0f);
+    tb_accel *fast = build(TB_ACCEL_BVH, &s, NULL);
+    tb_accel *sse = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_no_avx = 1});
+    assert_false(sse->wide_avx);
+    assert_int_equal(fast->wide_avx, tb__bvhw_have_avx());
+    assert_int_equal(fast->nwide, sse->nwide);
+    assert_memory_equal(fast->wide, sse->wide, fast->nwide * sizeof *fast->wide);
+    int was = tb_stats_enabled();
+    tb_stats_set_enabled(1);
+    long hits = 0;
+    for (long i = 0; i < 20000; i++) {
+        tb_ray ry = tp_random_ray(&r, &s, 1.0f, 0.0f);
+        tb_hit a, b;
+        int64_t n0 = counter("BVH/nodes visited"), p0 = counter("BVH/primitives tested");
+        bool fa = tb_accel_intersect(fast, &ry, &a);
+        int64_t n1 = counter("BVH/nodes visited"), p1 = counter("BVH/primitives tested");
+        bool fb = tb_accel_intersect(sse, &ry, &b);
+        int64_t n2 = counter("BVH/nodes visited"), p2 = counter("BVH/primitives tested");
+        assert_int_equal(fa, fb);
+        if (fa)
+            assert_memory_equal(&a, &b, sizeof a);
+        assert_int_equal(n1 - n0, n2 - n1);
+        assert_int_equal(p1 - p0, p2 - p1);
+        assert_int_equal(tb_accel_occluded(fast, &ry), tb_accel_occluded(sse, &ry));
+        hits += fa;
+    }
+    tb_stats_set_enabled(was);
+    print_message("[ bvhw isa ] 20000 rays, %ld hits: AVX %s\n", hits,
+                  tb__bvhw_have_avx() ? "and SSE2 traversals agree" : "not available here (SSE2 twice)");
+    assert_true(hits > 2000);
+    tb_accel_free(fast);
+    tb_accel_free(sse);
+    tp_free(&s);
 }
 
 static void test_build_errors(void **state)
@@ -892,8 +953,9 @@ int main(void)
         cmocka_unit_test(test_triangle_references),
         cmocka_unit_test(test_t_tolerance),
         cmocka_unit_test(test_slab_matches_util),
-        cmocka_unit_test(test_bvh4_slab_matches_scalar),
-        cmocka_unit_test(test_bvh4_structure),
+        cmocka_unit_test(test_bvhw_slab_matches_scalar),
+        cmocka_unit_test(test_bvhw_structure),
+        cmocka_unit_test(test_bvhw_avx_matches_sse),
         cmocka_unit_test(test_build_errors),
         cmocka_unit_test(test_kind_names),
         cmocka_unit_test(test_grid_resolution),

@@ -1,12 +1,13 @@
-/* The 4-wide BVH the CPU queries traverse (docs/accel.md, "4-wide
- * traversal"): bvh.c's binary SAH tree collapsed so that a node holds up to
- * four children (the inner child of largest surface area is replaced by its
- * two children until there are four), the children's boxes stored by
- * coordinate and tested by one SSE slab test with tb__accel_slab_t's
- * arithmetic (so every box is met or missed exactly as the binary traversal
- * decided it). Closest hit goes near child first by a per-octant order table
- * (the binary tree's split-axis order), any hit tries the occluder cache
- * first. The order never changes the answer (the tie rule). */
+/* The wide BVH the CPU queries traverse (docs/accel.md, "Wide nodes" and
+ * "Wide traversal"): bvh.c's binary SAH tree collapsed so that a node holds
+ * up to eight children (the inner child of largest surface area is replaced
+ * by its two children until there are eight), the children's boxes stored by
+ * coordinate and tested by one AVX slab test (bvh_wide_avx.c, where the CPU
+ * has AVX) or two SSE2 ones (here) with tb__accel_slab_t's arithmetic, so
+ * every box is met or missed exactly as the binary traversal decided it.
+ * Closest hit goes near child first by a per-octant order table (the binary
+ * tree's split-axis order), any hit tries the occluder cache first. The
+ * order never changes the answer (the tie rule). */
 #include <stdlib.h>
 #include <string.h>
 #if defined(__SSE2__)
@@ -22,16 +23,25 @@ TB_STAT_COUNTER(tb__bvh_nodes_visited, "BVH/nodes visited");
 TB_STAT_COUNTER(tb__bvh_prims_tested, "BVH/primitives tested");
 TB_STAT_COUNTER(tb__bvh_occ_hits, "BVH/occluder cache hits");
 
+bool tb__bvhw_have_avx(void)
+{
+#if defined(TB_BVH_AVX)
+    return __builtin_cpu_supports("avx");
+#else
+    return false;
+#endif
+}
+
 /* ------------------------------------------------------------ collapse */
 
 typedef struct tb__collapse {
     const tb_bvh_node *bin;
-    tb__bvh4_node *out;
+    tb__bvhw_node *out;
     uint32_t next;
 } tb__collapse;
 
 /* Half surface area in double, the build's measure (only compared here). */
-static double tb__bvh4_area(const tb_aabb *b)
+static double tb__bvhw_area(const tb_aabb *b)
 {
     double ex = (double)b->hi.x - b->lo.x, ey = (double)b->hi.y - b->lo.y, ez = (double)b->hi.z - b->lo.z;
     return ex * ey + ey * ez + ez * ex;
@@ -40,7 +50,7 @@ static double tb__bvh4_area(const tb_aabb *b)
 /* Appends to seq the positions in kids[] of the children below binary node
  * b, in the binary traversal's order for octant `oct`: a node that was
  * collapsed away visits its first child first unless the ray goes toward -axis. */
-static void tb__bvh4_order(const tb_bvh_node *bin, uint32_t b, const uint32_t *kids, int nk, unsigned oct,
+static void tb__bvhw_order(const tb_bvh_node *bin, uint32_t b, const uint32_t *kids, int nk, unsigned oct,
                            uint8_t *seq, int *len)
 {
     for (int i = 0; i < nk; i++)
@@ -50,20 +60,20 @@ static void tb__bvh4_order(const tb_bvh_node *bin, uint32_t b, const uint32_t *k
         }
     uint32_t first = b + 1, second = bin[b].offset;
     if (oct >> bin[b].axis & 1u) {
-        tb__bvh4_order(bin, second, kids, nk, oct, seq, len);
-        tb__bvh4_order(bin, first, kids, nk, oct, seq, len);
+        tb__bvhw_order(bin, second, kids, nk, oct, seq, len);
+        tb__bvhw_order(bin, first, kids, nk, oct, seq, len);
     } else {
-        tb__bvh4_order(bin, first, kids, nk, oct, seq, len);
-        tb__bvh4_order(bin, second, kids, nk, oct, seq, len);
+        tb__bvhw_order(bin, first, kids, nk, oct, seq, len);
+        tb__bvhw_order(bin, second, kids, nk, oct, seq, len);
     }
 }
 
 /* Writes the wide node for binary node b (an inner node, or the root when
  * it is a leaf) and, depth-first, those of its inner children; returns its index. */
-static uint32_t tb__bvh4_collapse(tb__collapse *c, uint32_t b)
+static uint32_t tb__bvhw_collapse(tb__collapse *c, uint32_t b)
 {
     const tb_bvh_node *bin = c->bin;
-    uint32_t kids[4];
+    uint32_t kids[TB__BVHW];
     int nk;
     if (bin[b].count) {
         kids[0] = b;
@@ -74,11 +84,11 @@ static uint32_t tb__bvh4_collapse(tb__collapse *c, uint32_t b)
         nk = 2;
         /* Open the inner child of largest area (the first on a tie) in place,
          * so kids[] keeps the binary tree's left-to-right order. */
-        while (nk < 4) {
+        while (nk < TB__BVHW) {
             int best = -1;
             double best_area = -1.0;
             for (int i = 0; i < nk; i++) {
-                double a = tb__bvh4_area(&bin[kids[i]].bounds);
+                double a = tb__bvhw_area(&bin[kids[i]].bounds);
                 if (bin[kids[i]].count == 0 && a > best_area) {
                     best = i;
                     best_area = a;
@@ -94,11 +104,11 @@ static uint32_t tb__bvh4_collapse(tb__collapse *c, uint32_t b)
         }
     }
     uint32_t me = c->next++;
-    tb__bvh4_node *o = &c->out[me];
+    tb__bvhw_node *o = &c->out[me];
     memset(o, 0, sizeof *o);
     o->n = (uint8_t)nk;
     o->used = (uint8_t)((1u << nk) - 1u);
-    for (int i = 0; i < 4; i++) {
+    for (int i = 0; i < TB__BVHW; i++) {
         tb_aabb bx = i < nk ? bin[kids[i]].bounds : (tb_aabb){{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
         o->box[0][i] = bx.lo.x;
         o->box[1][i] = bx.hi.x;
@@ -108,13 +118,13 @@ static uint32_t tb__bvh4_collapse(tb__collapse *c, uint32_t b)
         o->box[5][i] = bx.hi.z;
     }
     for (unsigned oct = 0; oct < 8; oct++) {
-        uint8_t seq[4];
+        uint8_t seq[TB__BVHW];
         int len = 0;
-        tb__bvh4_order(bin, b, kids, nk, oct, seq, &len);
-        unsigned packed = 0;
+        tb__bvhw_order(bin, b, kids, nk, oct, seq, &len);
+        uint32_t packed = 0;
         for (int j = 0; j < len; j++) /* far to near */
-            packed |= (unsigned)seq[len - 1 - j] << (2 * j);
-        o->order[oct] = (uint8_t)packed;
+            packed |= (uint32_t)seq[len - 1 - j] << (3 * j);
+        o->order[oct] = packed;
     }
     for (int i = 0; i < nk; i++) {
         const tb_bvh_node *k = &bin[kids[i]];
@@ -122,36 +132,39 @@ static uint32_t tb__bvh4_collapse(tb__collapse *c, uint32_t b)
             o->child[i] = k->offset;
             o->count[i] = (uint8_t)k->count; /* leaves hold at most 255 references */
         } else {
-            uint32_t w = tb__bvh4_collapse(c, kids[i]);
+            uint32_t w = tb__bvhw_collapse(c, kids[i]);
             c->out[me].child[i] = w; /* `o` stays valid: the array does not move */
         }
     }
     return me;
 }
 
-tb_status tb__bvh4_build(tb_accel *acc)
+tb_status tb__bvhw_build(tb_accel *acc, const tb_accel_options *opt)
 {
     /* Every wide node but a leaf root consumes at least one binary inner node. */
     size_t bound = acc->nnodes / 2 + 1;
-    tb__bvh4_node *tmp = malloc(bound * sizeof *tmp);
+    tb__bvhw_node *tmp = malloc(bound * sizeof *tmp);
     if (!tmp)
-        return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the 4-wide nodes");
+        return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the wide nodes");
     tb__collapse c = {acc->nodes, tmp, 0};
-    tb__bvh4_collapse(&c, 0);
-    /* Exact size, 64-byte aligned so a node is two whole cache lines. */
-    tb__bvh4_node *wide = aligned_alloc(64, (size_t)c.next * sizeof *wide);
+    tb__bvhw_collapse(&c, 0);
+    /* Exact size, 64-byte aligned (a node's box rows are 32-byte aligned for AVX loads). */
+    /* (C11 wants the size a multiple of the alignment: 288-byte nodes are not.) */
+    size_t bytes = ((size_t)c.next * sizeof(tb__bvhw_node) + 63u) & ~(size_t)63u;
+    tb__bvhw_node *wide = aligned_alloc(64, bytes);
     if (!wide) {
         free(tmp);
-        return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the 4-wide nodes");
+        return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the wide nodes");
     }
     memcpy(wide, tmp, (size_t)c.next * sizeof *wide);
     free(tmp);
     acc->wide = wide;
     acc->nwide = c.next;
+    acc->wide_avx = !opt->bvh_no_avx && tb__bvhw_have_avx();
     return TB_OK;
 }
 
-/* ------------------------------------------------------------ node test */
+/* ------------------------------------------------------------ node test (SSE2) */
 
 #if defined(__SSE2__)
 /* v, with its value unknown to the optimiser (an empty asm that may change it). */
@@ -163,7 +176,7 @@ static inline __m128 tb__f4_opaque(__m128 v)
 #endif
 
 /* A query ray prepared for the node test. */
-typedef struct tb__bvh4_ray {
+typedef struct tb__wray {
 #if defined(__SSE2__)
     __m128 o[3], inv[3];  /* broadcasts */
     /* The test's constants, made once per ray and hidden from the optimiser
@@ -175,9 +188,9 @@ typedef struct tb__bvh4_ray {
     bool neg[3];
     size_t near[3], far[3];   /* per axis, the byte offset in a node of the near and far planes' row */
     unsigned oct;             /* the direction's octant: bit a set when inv_d along a has its sign bit set */
-} tb__bvh4_ray;
+} tb__wray;
 
-static inline void tb__bvh4_ray_init(tb__bvh4_ray *r, const tb_ray *ray)
+static inline void tb__wray_init(tb__wray *r, const tb_ray *ray)
 {
     r->ov = ray->o;
     r->invv = (tb_vec3){1.0f / ray->d.x, 1.0f / ray->d.y, 1.0f / ray->d.z};
@@ -186,8 +199,8 @@ static inline void tb__bvh4_ray_init(tb__bvh4_ray *r, const tb_ray *ray)
     r->neg[2] = signbit(r->invv.z) != 0;
     r->oct = 0;
     for (unsigned a = 0; a < 3; a++) {
-        r->near[a] = (2 * a + r->neg[a]) * sizeof(((tb__bvh4_node *)0)->box[0]);
-        r->far[a] = (2 * a + 1 - r->neg[a]) * sizeof(((tb__bvh4_node *)0)->box[0]);
+        r->near[a] = (2 * a + r->neg[a]) * sizeof(((tb__bvhw_node *)0)->box[0]);
+        r->far[a] = (2 * a + 1 - r->neg[a]) * sizeof(((tb__bvhw_node *)0)->box[0]);
         r->oct |= (unsigned)r->neg[a] << a;
     }
 #if defined(__SSE2__)
@@ -206,20 +219,20 @@ static inline void tb__bvh4_ray_init(tb__bvh4_ray *r, const tb_ray *ray)
 }
 
 #if defined(__SSE2__)
-typedef __m128 tb__f4;
+typedef __m128 tb__wvec;
 
-static inline tb__f4 tb__f4_set1(float x) { return _mm_set1_ps(x); }
+static inline tb__wvec tb__wvec_set1(float x) { return _mm_set1_ps(x); }
 
-/* The four children's slab tests at once, lane for lane the arithmetic of
- * tb__accel_slab_t: (plane - o) * inv, widened outward by the factor
- * 1 -+ copysign(2 gamma(3), t), then `x > t ? x : t` (MAXPS returns its
- * second operand when either is NaN, exactly that rule) and the mirror for
- * the far planes. Returns the mask of children met; *tnear their entry distances. */
-static inline __attribute__((always_inline)) unsigned tb__bvh4_test(const tb__bvh4_node *nd, const tb__bvh4_ray *r,
-                                                                    tb__f4 tmin, tb__f4 tmax, tb__f4 *tnear)
+/* Four children's slab tests at once (columns of the rows at byte offset
+ * `half` of the node), lane for lane the arithmetic of tb__accel_slab_t:
+ * (plane - o) * inv, widened outward by the factor 1 -+ copysign(2 gamma(3), t),
+ * then `x > t ? x : t` (MAXPS returns its second operand when either is
+ * NaN, exactly that rule) and the mirror for the far planes. Returns the
+ * mask of children met; tn their entry distances. */
+static inline __attribute__((always_inline)) unsigned tb__wtest4(const char *b, const tb__wray *r, tb__wvec tmin,
+                                                                 tb__wvec tmax, float *tn)
 {
     /* The plane distances, unwidened. */
-    const char *b = (const char *)nd;
     __m128 nx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->near[0])), r->o[0]), r->inv[0]);
     __m128 fx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->far[0])), r->o[0]), r->inv[0]);
     __m128 ny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->near[1])), r->o[1]), r->inv[1]);
@@ -243,134 +256,78 @@ static inline __attribute__((always_inline)) unsigned tb__bvh4_test(const tb__bv
     f = _mm_mul_ps(f, _mm_add_ps(one, _mm_or_ps(_mm_and_ps(f, sign), k)));
     tmin = _mm_max_ps(n, tmin);
     tmax = _mm_min_ps(f, tmax);
-    *tnear = tmin;
+    _mm_storeu_ps(tn, tmin);
     return (unsigned)_mm_movemask_ps(_mm_cmple_ps(tmin, tmax));
 }
 
-static inline float tb__f4_get(tb__f4 v, unsigned i)
+/* The eight children: two four-lane tests. */
+static inline __attribute__((always_inline)) unsigned tb__wtest(const tb__bvhw_node *nd, const tb__wray *r,
+                                                                tb__wvec tmin, tb__wvec tmax, float tn[TB__BVHW])
 {
-    float f[4];
-    _mm_storeu_ps(f, v);
-    return f[i];
+    const char *b = (const char *)nd;
+    return tb__wtest4(b, r, tmin, tmax, tn) | tb__wtest4(b + 16, r, tmin, tmax, tn + 4) << 4;
 }
 #else
 /* Without SSE2: the same test one child at a time. */
-typedef struct tb__f4 {
-    float v[4];
-} tb__f4;
-static inline tb__f4 tb__f4_set1(float x) { return (tb__f4){{x, x, x, x}}; }
+typedef float tb__wvec;
 
-static inline unsigned tb__bvh4_test(const tb__bvh4_node *nd, const tb__bvh4_ray *r, tb__f4 tmin, tb__f4 tmax,
-                                     tb__f4 *tnear)
+static inline tb__wvec tb__wvec_set1(float x) { return x; }
+
+static inline unsigned tb__wtest(const tb__bvhw_node *nd, const tb__wray *r, tb__wvec tmin, tb__wvec tmax,
+                                 float tn[TB__BVHW])
 {
     unsigned m = 0;
-    for (int i = 0; i < 4; i++) {
+    for (int i = 0; i < TB__BVHW; i++) {
         tb_aabb b = {{nd->box[0][i], nd->box[2][i], nd->box[4][i]}, {nd->box[1][i], nd->box[3][i], nd->box[5][i]}};
-        if (tb__accel_slab_t(&b, r->ov, r->invv, r->neg, tmin.v[i], tmax.v[i], &tnear->v[i]))
+        if (tb__accel_slab_t(&b, r->ov, r->invv, r->neg, tmin, tmax, &tn[i]))
             m |= 1u << i;
         else
-            tnear->v[i] = tmin.v[i];
+            tn[i] = tmin;
     }
     return m;
 }
-
-static inline float tb__f4_get(tb__f4 v, unsigned i) { return v.v[i]; }
 #endif
 
-unsigned tb__bvh4_slab_test(const tb__bvh4_node *nd, const tb_ray *ray, float tmin, float tmax, float tnear[4])
+unsigned tb__bvhw_slab_test_sse(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
+                                float tnear[TB__BVHW])
 {
-    tb__bvh4_ray r;
-    tb__bvh4_ray_init(&r, ray);
-    tb__f4 tn;
-    unsigned m = tb__bvh4_test(nd, &r, tb__f4_set1(tmin), tb__f4_set1(tmax), &tn);
-    for (unsigned i = 0; i < 4; i++)
-        tnear[i] = tb__f4_get(tn, i);
-    return m;
+    tb__wray r;
+    tb__wray_init(&r, ray);
+    return tb__wtest(nd, &r, tb__wvec_set1(tmin), tb__wvec_set1(tmax), tnear);
 }
 
-/* ------------------------------------------------------------ closest hit */
+unsigned tb__bvhw_slab_test(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
+                            float tnear[TB__BVHW], bool avx)
+{
+#if defined(TB_BVH_AVX)
+    if (avx && tb__bvhw_have_avx())
+        return tb__bvhw_slab_test_avx(nd, ray, tmin, tmax, tnear);
+#else
+    (void)avx;
+#endif
+    return tb__bvhw_slab_test_sse(nd, ray, tmin, tmax, tnear);
+}
 
-/* A pending child: a wide node (count 0) or a leaf's references, with the
- * distance where the widened ray enters its box. */
-typedef struct tb__bvh4_item {
-    uint32_t child;
-    uint32_t count;
-    float t;
-} tb__bvh4_item;
+/* ------------------------------------------------------------ traversal */
 
-/* Closest hit. At a node the four children's boxes are tested together over
- * the widened [tmin, best t]; the traversal goes on with the nearest child
- * met (octant order, see tb__bvh4_node.order) and pushes the others far
- * first with their entry distances. A popped child whose entry distance lies
- * beyond the widened best t found since is dropped without a test: its slab
- * test with the shrunken range fails exactly then. "BVH/nodes visited"
- * counts the wide nodes whose children were tested. */
+#define TB__WNAME(name) name##_sse
+#include "host/render/bvh_wide_traverse.inc"
+#undef TB__WNAME
+
 bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best)
 {
-    const tb__bvh4_node *nodes = acc->wide;
-    tb__bvh4_ray r;
-    tb__bvh4_ray_init(&r, ray);
-    const tb__f4 lo4 = tb__f4_set1(tb__accel_widen_lo(ray->tmin));
-    float hi_t = tb__accel_widen_hi(ray->tmax);
-    tb__f4 hi4 = tb__f4_set1(hi_t);
-    tb__bvh4_item stack[TB__BVH4_STACK];
-    int sp = 0;
-    uint32_t cur = 0, cur_count = 0;
-    int64_t visited = 0, tested = 0;
-    for (;;) {
-        if (cur_count == 0) {
-            const tb__bvh4_node *nd = &nodes[cur];
-            tb__f4 tn4;
-            visited++;
-            unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4) & nd->used;
-            if (m && !(m & (m - 1))) { /* one child met: nothing to order or push */
-                unsigned c = (unsigned)__builtin_ctz(m);
-                cur = nd->child[c];
-                cur_count = nd->count[c];
-                continue;
-            }
-            if (m) {
-                float tn[4];
-#if defined(__SSE2__)
-                _mm_storeu_ps(tn, tn4);
-#else
-                memcpy(tn, tn4.v, sizeof tn);
+    int64_t visited, tested;
+    bool found;
+#if defined(TB_BVH_AVX)
+    if (acc->wide_avx)
+        found = tb__bvhw_closest_avx(acc, ray, best, &visited, &tested);
+    else
 #endif
-                /* Far to near: each child met is pushed when a nearer one follows. */
-                unsigned ord = nd->order[r.oct], pend = 4;
-                for (unsigned i = 0; i < nd->n; i++, ord >>= 2) {
-                    unsigned c = ord & 3u;
-                    if (!(m >> c & 1u))
-                        continue;
-                    if (pend < 4)
-                        stack[sp++] = (tb__bvh4_item){nd->child[pend], nd->count[pend], tn[pend]};
-                    pend = c;
-                }
-                cur = nd->child[pend];
-                cur_count = nd->count[pend];
-                continue;
-            }
-        } else {
-            for (uint32_t k = cur, e = cur + cur_count; k < e; k++) {
-                tested++;
-                if (tb__accel_test(acc, k, best)) {
-                    hi_t = tb__accel_widen_hi(best->ray.tmax);
-                    hi4 = tb__f4_set1(hi_t);
-                }
-            }
-        }
-        while (sp > 0 && stack[sp - 1].t > hi_t)
-            sp--;
-        if (sp == 0)
-            break;
-        sp--;
-        cur = stack[sp].child;
-        cur_count = stack[sp].count;
-    }
+        found = tb__bvhw_closest_sse(acc, ray, best, &visited, &tested);
     TB_STAT_INC(tb__bvh_rays);
     tb_stat_add(&tb__bvh_nodes_visited, visited);
     tb_stat_add(&tb__bvh_prims_tested, tested);
-    return best->found;
+    return found;
 }
 
 /* ------------------------------------------------------------ any hit */
@@ -410,71 +367,6 @@ static bool tb__bvh_box_hit(const tb_aabb *b, const tb_ray *ray)
     return tb__accel_slab(b, ray->o, inv, neg, tb__accel_widen_lo(ray->tmin), tb__accel_widen_hi(ray->tmax));
 }
 
-/* Any-hit traversal; *who is the blocking reference. Children met are
- * followed near first (the same octant order as the closest hit) and the
- * first reference that blocks ends the query. */
-static bool tb__bvh4_traverse_any(const tb_accel *acc, tb__accel_any *q, uint32_t *who)
-{
-    const tb_ray *ray = q->ray;
-    const tb__bvh4_node *nodes = acc->wide;
-    tb__bvh4_ray r;
-    tb__bvh4_ray_init(&r, ray);
-    const tb__f4 lo4 = tb__f4_set1(tb__accel_widen_lo(ray->tmin));
-    const tb__f4 hi4 = tb__f4_set1(tb__accel_widen_hi(ray->tmax));
-    uint32_t stack[TB__BVH4_STACK], stack_n[TB__BVH4_STACK];
-    int sp = 0;
-    uint32_t cur = 0, cur_count = 0;
-    int64_t visited = 0, tested = 0;
-    bool hit = false;
-    for (;;) {
-        if (cur_count == 0) {
-            const tb__bvh4_node *nd = &nodes[cur];
-            tb__f4 tn4;
-            visited++;
-            unsigned m = tb__bvh4_test(nd, &r, lo4, hi4, &tn4) & nd->used;
-            if (m && !(m & (m - 1))) {
-                unsigned c = (unsigned)__builtin_ctz(m);
-                cur = nd->child[c];
-                cur_count = nd->count[c];
-                continue;
-            }
-            if (m) {
-                unsigned ord = nd->order[r.oct], pend = 4;
-                for (unsigned i = 0; i < nd->n; i++, ord >>= 2) {
-                    unsigned c = ord & 3u;
-                    if (!(m >> c & 1u))
-                        continue;
-                    if (pend < 4) {
-                        stack[sp] = nd->child[pend];
-                        stack_n[sp++] = nd->count[pend];
-                    }
-                    pend = c;
-                }
-                cur = nd->child[pend];
-                cur_count = nd->count[pend];
-                continue;
-            }
-        } else {
-            for (uint32_t k = cur, e = cur + cur_count; k < e && !hit; k++) {
-                tested++;
-                hit = tb__accel_test_any(acc, k, q);
-                *who = k;
-            }
-            if (hit)
-                break;
-        }
-        if (sp == 0)
-            break;
-        sp--;
-        cur = stack[sp];
-        cur_count = stack_n[sp];
-    }
-    TB_STAT_INC(tb__bvh_shadow_rays);
-    tb_stat_add(&tb__bvh_nodes_visited, visited);
-    tb_stat_add(&tb__bvh_prims_tested, tested);
-    return hit;
-}
-
 bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
 {
     tb__occ_cache *c = &tb__occ;
@@ -498,7 +390,17 @@ bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
         }
     }
     uint32_t who = UINT32_MAX;
-    bool hit = tb__bvh4_traverse_any(acc, &q, &who);
+    int64_t visited, tested;
+    bool hit;
+#if defined(TB_BVH_AVX)
+    if (acc->wide_avx)
+        hit = tb__bvhw_any_avx(acc, &q, &who, &visited, &tested);
+    else
+#endif
+        hit = tb__bvhw_any_sse(acc, &q, &who, &visited, &tested);
+    TB_STAT_INC(tb__bvh_shadow_rays);
+    tb_stat_add(&tb__bvh_nodes_visited, visited);
+    tb_stat_add(&tb__bvh_prims_tested, tested);
     if (hit)
         c->k[slot] = who;
     return hit;
