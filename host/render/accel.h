@@ -120,7 +120,7 @@ typedef struct tb_accel_stats {
     int bvh_depth;         /* longest root-to-leaf path in edges (0: the root is a leaf) */
     int bvh_max_leaf_prims; /* references in the largest leaf */
     double bvh_sah_cost;   /* SAH cost of the tree (docs/accel.md, "SAH cost"), with the build's constants */
-    size_t bvh_wide_nodes; /* nodes of the 4-wide tree the CPU queries traverse (the binary one collapsed) */
+    size_t bvh_wide_nodes; /* nodes of the 8-wide tree the CPU queries traverse (the binary one collapsed) */
     /* grid */
     int grid_res[3];       /* voxels along x, y, z */
     size_t grid_cells;     /* res[0] * res[1] * res[2] */

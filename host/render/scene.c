@@ -928,7 +928,7 @@ void tb_scene_print_summary(const tb_scene *s, FILE *out)
         fprintf(out, "accel: %s over %zu references, built in %.3f ms", tb_accel_kind_name(as.kind), as.nprims,
                 as.build_seconds * 1e3);
         if (as.kind == TB_ACCEL_BVH)
-            fprintf(out, " (%zu nodes, %zu 4-wide, depth %d, SAH cost %.2f)", as.bvh_nodes, as.bvh_wide_nodes,
+            fprintf(out, " (%zu nodes, %zu 8-wide, depth %d, SAH cost %.2f)", as.bvh_nodes, as.bvh_wide_nodes,
                     as.bvh_depth, as.bvh_sah_cost);
         else if (as.kind == TB_ACCEL_GRID)
             fprintf(out, " (%dx%dx%d voxels, %zu pairs)", as.grid_res[0], as.grid_res[1], as.grid_res[2],

@@ -249,7 +249,7 @@ static long tb__bench_scene(tb__bscene *s, long nrays, const long *threads, int 
     tb_accel_stats bs, gs;
     tb_accel_get_stats(acc[TB_ACCEL_BVH], &bs);
     tb_accel_get_stats(acc[TB_ACCEL_GRID], &gs);
-    printf("# %s, %zu triangles: BVH %zu nodes (%zu 4-wide), depth %d, SAH cost %.2f, %.1f MiB, built in %.1f ms; "
+    printf("# %s, %zu triangles: BVH %zu nodes (%zu 8-wide), depth %d, SAH cost %.2f, %.1f MiB, built in %.1f ms; "
            "grid %dx%dx%d, %zu refs, %.1f MiB, built in %.1f ms\n",
            s->name, s->n, bs.bvh_nodes, bs.bvh_wide_nodes, bs.bvh_depth, bs.bvh_sah_cost, (double)bs.memory_bytes / 1048576.0,
            bs.build_seconds * 1e3, gs.grid_res[0], gs.grid_res[1], gs.grid_res[2], gs.grid_refs,
