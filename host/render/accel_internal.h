@@ -184,6 +184,19 @@ static inline __attribute__((always_inline)) bool tb__accel_tri_test(const tb_ac
     return (float)*t >= ray->tmin && (float)*t <= ray->tmax;
 }
 
+/* Hit h of the reference with input index idx becomes the running best if
+ * it comes first in the tie rule; true if it did. */
+static inline bool tb__accel_offer(tb__accel_best *b, const tb_hit *h, uint32_t idx)
+{
+    if (b->found && !tb__accel_before(h, idx, &b->hit, b->index))
+        return false;
+    b->hit = *h;
+    b->index = idx;
+    b->found = true;
+    b->ray.tmax = h->t;
+    return true;
+}
+
 /* Tests stored reference k against the running best; true if it improved it. */
 static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best *b)
 {
@@ -194,12 +207,8 @@ static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best 
         if (!tb__accel_tri_test(tr, &b->ray, &b->w, &b->wready, &t, &dir, uvw))
             return false;
         tb_hit h = {(float)t, tr->object, tr->face, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
-        if (b->found && !tb__accel_before(&h, acc->index[k], &b->hit, b->index))
+        if (!tb__accel_offer(b, &h, acc->index[k]))
             return false;
-        b->hit = h;
-        b->index = acc->index[k];
-        b->found = true;
-        b->ray.tmax = h.t;
         b->tri = (tb_accel_tri_hit){acc->index[k], dir, t, {uvw[0], uvw[1], uvw[2]}};
         return true;
     }
@@ -207,14 +216,8 @@ static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best 
     if (!acc->cb.intersect(acc->cb.ctx, &acc->prims[k], acc->index[k], &b->ray, &h))
         return false;
     /* The callback's range check is not trusted: hits outside [tmin, tmax] (or NaN) never pass. */
-    if (!(h.t >= b->ray.tmin && h.t <= b->ray.tmax))
+    if (!(h.t >= b->ray.tmin && h.t <= b->ray.tmax) || !tb__accel_offer(b, &h, acc->index[k]))
         return false;
-    if (b->found && !tb__accel_before(&h, acc->index[k], &b->hit, b->index))
-        return false;
-    b->hit = h;
-    b->index = acc->index[k];
-    b->found = true;
-    b->ray.tmax = h.t;
     b->tri.index = TB_ACCEL_TRI_NONE;
     return true;
 }

@@ -54,26 +54,7 @@ int tb__quadratic_general(double a, double b, double c, double r[2])
         b = ldexp(b, k - m);
         c = ldexp(c, -m);
     }
-    double disc = tb_diff_of_products(b, b, 4.0 * a, c);
-    if (disc < 0.0)
-        return 0;
-    double q = -0.5 * (b + copysign(sqrt(disc), b));
-    double x0 = q / a, x1 = c / q; /* q != 0: c != 0 here */
-    if (x0 > x1) {
-        double t = x0;
-        x0 = x1;
-        x1 = t;
-    }
-    if (k != 0) {
-        x0 = ldexp(x0, k);
-        x1 = ldexp(x1, k);
-    }
-    int n = 0;
-    if (isfinite(x0))
-        r[n++] = x0;
-    if (isfinite(x1))
-        r[n++] = x1;
-    return n;
+    return tb__quadratic_solve(a, b, c, k, r);
 }
 
 int tb_quadraticf(float a, float b, float c, float r[2])

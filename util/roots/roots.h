@@ -27,6 +27,33 @@
  * the rescaling for extreme magnitudes. Private; call tb_quadratic. */
 int tb__quadratic_general(double a, double b, double c, double r[2]);
 
+/* The solve both paths end with (quadratic.c explains it): a, c != 0 and
+ * every coefficient within 2^+-480, the roots scaled by 2^k (the general
+ * path's substitution x = 2^k y; 0 in the common case). Private. */
+static inline int tb__quadratic_solve(double a, double b, double c, int k, double r[2])
+{
+    double disc = tb_diff_of_products(b, b, 4.0 * a, c);
+    if (disc < 0.0)
+        return 0;
+    double q = -0.5 * (b + copysign(sqrt(disc), b));
+    double x0 = q / a, x1 = c / q; /* q != 0: c != 0 */
+    if (x0 > x1) {
+        double t = x0;
+        x0 = x1;
+        x1 = t;
+    }
+    if (k != 0) {
+        x0 = ldexp(x0, k);
+        x1 = ldexp(x1, k);
+    }
+    int n = 0;
+    if (isfinite(x0))
+        r[n++] = x0;
+    if (isfinite(x1))
+        r[n++] = x1;
+    return n;
+}
+
 /* Real roots of a x^2 + b x + c = 0 (0, 1 or 2; a == 0 solves the linear equation).
  * Inline for the common case, every nonzero coefficient within 2^+-480 with
  * a, c != 0 (a ray against a quadric: about a million calls per frame), where
@@ -39,22 +66,7 @@ static inline int tb_quadratic(double a, double b, double c, double r[2])
     /* NaN and infinities fail these comparisons, so they go the general way. */
     if (!(fa >= lo && fa <= hi && fc >= lo && fc <= hi && (b == 0.0 || (fb >= lo && fb <= hi))))
         return tb__quadratic_general(a, b, c, r);
-    double disc = tb_diff_of_products(b, b, 4.0 * a, c);
-    if (disc < 0.0)
-        return 0;
-    double q = -0.5 * (b + copysign(sqrt(disc), b));
-    double x0 = q / a, x1 = c / q; /* q != 0: c != 0 */
-    if (x0 > x1) {
-        double t = x0;
-        x0 = x1;
-        x1 = t;
-    }
-    int n = 0;
-    if (isfinite(x0))
-        r[n++] = x0;
-    if (isfinite(x1))
-        r[n++] = x1;
-    return n;
+    return tb__quadratic_solve(a, b, c, 0, r);
 }
 
 /* tb_quadratic() in float arithmetic (same method, fmaf() for the discriminant). */
