@@ -6,7 +6,9 @@
  * *references*, each a world-space box and an opaque (object, sub) pair: an
  * analytic primitive or a CSG object is one reference, a big mesh gives one
  * reference per triangle. Traversal calls the caller's intersection callback
- * for the references it cannot rule out by their boxes.
+ * for the references it cannot rule out by their boxes, except triangles
+ * given as tb_accel_tri records, which it tests itself (watertight, in
+ * double: the object level's own test).
  *
  *     tb_accel_prim *prims = ...;   // boxes + (object, sub)
  *     tb_accel_callbacks cb = {my_intersect, my_occluded, my_ctx, NULL};
