@@ -541,14 +541,6 @@ static bool tb__claims(int s, double px, double py, double qx, double qy)
     return ey > 0.0 || (ey == 0.0 && ex < 0.0);
 }
 
-void tb_wt_memo_fill(tb_wt_memo *c, const tb_ray *ray)
-{
-    tb_wt_ray_init(&c->w, ray);
-    c->o = ray->o;
-    c->d = ray->d;
-    c->valid = true;
-}
-
 bool tb_wt_edge_ties(double U, double V, double W, double ax, double ay, double bx, double by, double cx, double cy)
 {
     int su = tb__edge_sign(U, bx, by, cx, cy);
@@ -710,18 +702,39 @@ void tb__xings_mesh(const tb_object *o, const tb__oray *r, tb__xbuf *out)
 
 /* ------------------------------------------------------------ one triangle */
 
-/* The last prepared ray of this thread: a scene query may test several
- * triangles with one ray, and preparing it costs about as much as a test.
- * It depends on the world ray only (the test is in world space), whichever
- * mesh asks. */
-static _Thread_local tb_wt_memo tb__memo;
+/* A thread's last prepared ray: callers of the one-triangle functions below
+ * (the ray-cast form factors' triangle references, the winner's (u, v)
+ * after a mesh query) ask with one ray again and again, and preparing it
+ * costs about as much as a test. It depends on the world ray only (the test is in world space),
+ * whichever mesh asks. */
+typedef struct tb__wt_memo {
+    bool valid;
+    tb_vec3 o, d; /* the key: what the preparation depends on, compared bit for bit */
+    tb_wt_ray w;
+} tb__wt_memo;
+
+static _Thread_local tb__wt_memo tb__memo;
+
+/* The prepared ray for `ray`, from the memo when it holds that ray (then it
+ * is what tb_wt_ray_init gives), else prepared now and kept. */
+static const tb_wt_ray *tb__memo_ray(const tb_ray *ray)
+{
+    tb__wt_memo *c = &tb__memo;
+    if (!c->valid || memcmp(&c->o, &ray->o, sizeof c->o) != 0 || memcmp(&c->d, &ray->d, sizeof c->d) != 0) {
+        tb_wt_ray_init(&c->w, ray);
+        c->o = ray->o;
+        c->d = ray->d;
+        c->valid = true;
+    }
+    return &c->w;
+}
 
 bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray *ray, double *t)
 {
     const tb_object_mesh *m = o->mesh;
     if (!m || tri >= m->ntris)
         return false;
-    const tb_wt_ray *w = tb_wt_memo_ray(&tb__memo, ray);
+    const tb_wt_ray *w = tb__memo_ray(ray);
     const uint32_t *tv = &m->tris[3 * (size_t)tri];
     int dir;
     return tb_wt_triangle(w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
@@ -764,7 +777,7 @@ bool tb_object_triangle_uv(const tb_object *o, uint32_t tri, const double uvw[3]
 bool tb__mesh_tri_weights(const tb_object *o, uint32_t tri, const tb_ray *ray, double uvw[3])
 {
     const tb_object_mesh *m = o->mesh;
-    const tb_wt_ray *w = tb_wt_memo_ray(&tb__memo, ray);
+    const tb_wt_ray *w = tb__memo_ray(ray);
     const uint32_t *tv = &m->tris[3 * (size_t)tri];
     double t;
     int dir;

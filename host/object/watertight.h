@@ -1,15 +1,14 @@
 /* The watertight ray/triangle test (Woop, Benthin and Wald, JCGT 2(1), 2013)
  * in double on world-space corners (docs/primitives.md, "Watertight
  * triangles"), shared as inline code by the object level's meshes
- * (intersect_mesh.c) and the scene's triangle references
- * (host/render/scene_mesh.c), so both run the same arithmetic and a scene
- * query pays no call per triangle. */
+ * (intersect_mesh.c) and the acceleration structures' triangle references
+ * (host/render/accel_internal.h), so both run the same arithmetic and a
+ * scene query pays no call per triangle. */
 #ifndef TB_HOST_OBJECT_WATERTIGHT_H
 #define TB_HOST_OBJECT_WATERTIGHT_H
 
 #include <math.h>
 #include <stdbool.h>
-#include <string.h>
 
 #include "util/math/ray.h"
 
@@ -45,27 +44,6 @@ static inline void tb_wt_ray_init(tb_wt_ray *w, const tb_ray *r)
     w->sx = d[kx] / d[kz];
     w->sy = d[ky] / d[kz];
     w->sz = 1.0 / d[kz];
-}
-
-/* A thread's last prepared ray (each user keeps one, thread-local): a query
- * tests several triangles with one ray. */
-typedef struct tb_wt_memo {
-    bool valid;
-    tb_vec3 o, d;   /* the key: what the preparation depends on, compared bit for bit */
-    tb_wt_ray w;
-} tb_wt_memo;
-
-/* Prepares c for `ray` (the memo's miss path, out of line: it runs once per
- * query, the check below once per triangle). */
-void tb_wt_memo_fill(tb_wt_memo *c, const tb_ray *ray);
-
-/* The prepared ray for `ray`, from memo c when it holds that ray (then it is
- * what tb_wt_ray_init gives), else prepared now and kept. */
-static inline const tb_wt_ray *tb_wt_memo_ray(tb_wt_memo *c, const tb_ray *ray)
-{
-    if (!c->valid || memcmp(&c->o, &ray->o, sizeof c->o) != 0 || memcmp(&c->d, &ray->d, sizeof c->d) != 0)
-        tb_wt_memo_fill(c, ray);
-    return &c->w;
 }
 
 /* The rare case of tb_wt_triangle: an edge function came out exactly 0.
