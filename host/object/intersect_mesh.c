@@ -753,27 +753,6 @@ static tb_vec3 tb__tri_world_normal(const tb_object *o, uint32_t tri)
     return (tb_vec3){(float)(nw.x * s), (float)(nw.y * s), (float)(nw.z * s)};
 }
 
-tb_vec3 tb_object_triangle_normal(const tb_object *o, uint32_t tri)
-{
-    return o->mesh->wnormal[tri];
-}
-
-bool tb_object_triangle_uv(const tb_object *o, uint32_t tri, const double uvw[3], double *u, double *v)
-{
-    const float *c = &o->mesh->tri_uv[6 * (size_t)tri];
-    if (isnan(c[0]))
-        return false;
-    /* U V W share one sign (or are 0) and det is their sum: a convex mix. */
-    /* One division (its latency sits on the end of every closest-hit query). */
-    double inv = 1.0 / (uvw[0] + uvw[1] + uvw[2]);
-    double su = (uvw[0] * c[0] + uvw[1] * c[2] + uvw[2] * c[4]) * inv;
-    double sv = (uvw[0] * c[1] + uvw[1] * c[3] + uvw[2] * c[5]) * inv;
-    /* Rounding may step past the corners' range by an ulp: [0, 1] as param. */
-    *u = su < 0.0 ? 0.0 : su > 1.0 ? 1.0 : su;
-    *v = sv < 0.0 ? 0.0 : sv > 1.0 ? 1.0 : sv;
-    return true;
-}
-
 bool tb__mesh_tri_weights(const tb_object *o, uint32_t tri, const tb_ray *ray, double uvw[3])
 {
     const tb_object_mesh *m = o->mesh;
