@@ -163,10 +163,7 @@ static bool tb__list_intersect(const tb_accel *acc, tb__accel_best *best)
 
 static bool tb__list_occluded(const tb_accel *acc, const tb_ray *ray)
 {
-    tb__accel_any q;
-    q.ray = ray;
-    q.wready = false;
-    q.w = (tb_wt_ray){{0.0, 0.0, 0.0}, 0, 0, 0, 0.0, 0.0, 0.0}; /* (prepared on the first triangle; set for the compiler) */
+    tb__accel_any q = tb__accel_any_start(ray);
     for (size_t k = 0; k < acc->n; k++) {
         if (tb__accel_test_any(acc, k, &q)) {
             tb_stat_add(&tb__list_tested, (int64_t)k + 1);

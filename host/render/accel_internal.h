@@ -229,6 +229,19 @@ typedef struct tb__accel_any {
     tb_wt_ray w;
 } tb__accel_any;
 
+/* An any-hit query for `ray`, its triangle preparation not yet made. The
+ * prepared ray is zeroed rather than left unset: GCC cannot see that it is
+ * only read after tb__accel_tri_test prepares it, and the cost is a few
+ * stores where a designated initialiser would clear the struct with rep stos. */
+static inline tb__accel_any tb__accel_any_start(const tb_ray *ray)
+{
+    tb__accel_any q;
+    q.ray = ray;
+    q.wready = false;
+    q.w = (tb_wt_ray){{0.0, 0.0, 0.0}, 0, 0, 0, 0.0, 0.0, 0.0};
+    return q;
+}
+
 /* True if stored reference k is hit within the ray's [tmin, tmax]. */
 static inline bool tb__accel_test_any(const tb_accel *acc, size_t k, tb__accel_any *q)
 {
@@ -266,8 +279,6 @@ bool tb__bvhw_have_avx(void);
 bool tb__bvhw_closest_sse(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best, int64_t *visited,
                           int64_t *tested);
 bool tb__bvhw_any_sse(const tb_accel *acc, tb__accel_any *q, uint32_t *who, int64_t *visited, int64_t *tested);
-unsigned tb__bvhw_slab_test_sse(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
-                                float tnear[TB__BVHW]);
 #if defined(TB_BVH_AVX)
 bool tb__bvhw_closest_avx(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best, int64_t *visited,
                           int64_t *tested);

@@ -288,8 +288,8 @@ static inline unsigned tb__wtest(const tb__bvhw_node *nd, const tb__wray *r, tb_
 }
 #endif
 
-unsigned tb__bvhw_slab_test_sse(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
-                                float tnear[TB__BVHW])
+static unsigned tb__bvhw_slab_test_sse(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
+                                       float tnear[TB__BVHW])
 {
     tb__wray r;
     tb__wray_init(&r, ray);
@@ -376,10 +376,7 @@ bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
     }
     unsigned slot = tb__occ_slot(ray->d);
     uint32_t k = c->k[slot];
-    tb__accel_any q;
-    q.ray = ray;
-    q.wready = false;
-    q.w = (tb_wt_ray){{0.0, 0.0, 0.0}, 0, 0, 0, 0.0, 0.0, 0.0}; /* (prepared on the first triangle; set for the compiler) */
+    tb__accel_any q = tb__accel_any_start(ray);
     /* The hint's box first: a miss there costs a slab test, not a callback. */
     if (k < acc->n && tb__bvh_box_hit(&acc->prims[k].bounds, ray)) {
         tb_stat_add(&tb__bvh_prims_tested, 1);

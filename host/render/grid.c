@@ -318,10 +318,7 @@ bool tb__grid_occluded(const tb_accel *acc, const tb_ray *ray)
     tb__dda w;
     int64_t visited = 0, tested = 0;
     bool hit = false;
-    tb__accel_any q;
-    q.ray = ray;
-    q.wready = false;
-    q.w = (tb_wt_ray){{0.0, 0.0, 0.0}, 0, 0, 0, 0.0, 0.0, 0.0}; /* (prepared on the first triangle; set for the compiler) */
+    tb__accel_any q = tb__accel_any_start(ray);
     if (tb__dda_start(g, ray, &w)) {
         const size_t sy = (size_t)g->res[0], sz = (size_t)g->res[0] * (size_t)g->res[1];
         do {
