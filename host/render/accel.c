@@ -143,6 +143,8 @@ tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t 
         for (size_t k = 0; !st && k < nkept; k++)
             acc->tris[k] = cb->tris[acc->index[k]];
         acc->stats.memory_bytes += nkept * sizeof *acc->tris;
+        if (!st && kind == TB_ACCEL_BVH && !o.bvh_no_pack)
+            st = tb__bvhw_pack(acc);
     }
     if (st) {
         tb_accel_free(acc);

@@ -105,6 +105,8 @@ typedef struct tb_accel_options {
     float bvh_cost_prim;   /* SAH cost of one reference test (0: 1.0) */
     int bvh_no_avx;        /* non-zero: traverse with the SSE2 node test even where the CPU has AVX (tests,
                               comparisons; the answers are the same) */
+    int bvh_no_pack;       /* non-zero: test leaf triangles one by one instead of packed four (AVX) or two
+                              (SSE2) at once (tests, comparisons; the answers are the same) */
     double grid_density;   /* voxels along the longest axis = density * cbrt(N) (0: 3.0) */
     int grid_max_res;      /* most voxels along one axis, 1..1024 (0: 256) */
 } tb_accel_options;

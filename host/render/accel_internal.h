@@ -43,13 +43,34 @@ typedef struct tb__bvhw_node {
      * a), the children in traversal order far to near, 3 bits each from bit
      * 0: the binary tree's near-child-first order below this node. */
     uint32_t order[8];
-    uint8_t count[TB__BVHW];  /* leaf child: its references (1..255); 0: an inner child or an unused slot */
+    /* Leaf child: its references (1..255) in the low 8 bits, plus
+     * TB__BVHW_PACKED when they are all triangles packed in tb_accel.lanes;
+     * 0: an inner child or an unused slot. */
+    uint16_t count[TB__BVHW];
     uint8_t n;                /* children used, 1..8 (slots 0 .. n-1) */
     uint8_t used;             /* (1 << n) - 1: the node test's mask is cut to it, so an unused slot is never
                                * followed even if a ray met its empty box (it cannot: docs/accel.md) */
 } tb__bvhw_node;
 
 _Static_assert(sizeof(tb__bvhw_node) == 288, "tb__bvhw_node is 288 bytes");
+
+/* Flag in tb__bvhw_node.count: a leaf of triangle references only, whose
+ * corners are packed in tb_accel.lanes for the multi-triangle test. */
+#define TB__BVHW_PACKED 0x100u
+/* Doubles per reference in tb_accel.lanes: 9 corner values, one tb__lane_ids. */
+#define TB__LANE_ROWS 11u
+
+/* A packed triangle's identity, after its leaf's corner rows. */
+typedef struct tb__lane_ids {
+    uint32_t object, face; /* tb_accel_tri.object, .face */
+    uint32_t index;        /* tb_accel.index of the reference (the tie rule's last key) */
+    uint32_t pad;
+} tb__lane_ids;
+
+_Static_assert(sizeof(tb__lane_ids) == 2 * sizeof(double), "tb__lane_ids fills two lane rows");
+
+/* The reference count in tb__bvhw_node.count. */
+#define TB__BVHW_COUNT(c) ((c) & 0xffu)
 
 /* Wide levels are at most the binary depth, each pushing at most 7 children. */
 #define TB__BVHW_STACK (7 * TB__BVH_STACK)
@@ -81,6 +102,14 @@ struct tb_accel {
     tb__bvhw_node *wide;   /* BVH: the binary tree collapsed 8-wide, depth-first (what the CPU traverses) */
     size_t nwide;
     bool wide_avx;         /* traverse with the AVX node test (the CPU has AVX and the options allow it) */
+    /* BVH: the corners of each leaf of triangles only, packed by coordinate
+     * for the multi-triangle test (docs/accel.md "Packed leaves"): the leaf
+     * whose references are stored at s .. s + n - 1 has 11 n doubles from
+     * lanes[TB__LANE_ROWS s]: rows 3 c + a (corner c, axis a) holding its n
+     * triangles' values side by side, then n tb__lane_ids (what a hit
+     * needs, so a hit reads no other array). NULL when no leaf is packed. */
+    double *lanes;
+    size_t nlanes;         /* doubles allocated (11 n plus slack for the last partial vector) */
     tb__grid grid;         /* grid */
 };
 
@@ -197,6 +226,19 @@ static inline bool tb__accel_offer(tb__accel_best *b, const tb_hit *h, uint32_t 
     return true;
 }
 
+/* Offers the crossing (t in the ray's range, dir, edge functions uvw) of a
+ * triangle reference (its object, face and input index) to the running
+ * best; true if it became the best. */
+static inline bool tb__accel_tri_offer(tb__accel_best *b, uint32_t object, uint32_t face, uint32_t index, double t,
+                                       int dir, const double uvw[3])
+{
+    tb_hit h = {(float)t, object, face, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
+    if (!tb__accel_offer(b, &h, index))
+        return false;
+    b->tri = (tb_accel_tri_hit){index, dir, t, {uvw[0], uvw[1], uvw[2]}};
+    return true;
+}
+
 /* Tests stored reference k against the running best; true if it improved it. */
 static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best *b)
 {
@@ -206,11 +248,7 @@ static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best 
         int dir;
         if (!tb__accel_tri_test(tr, &b->ray, &b->w, &b->wready, &t, &dir, uvw))
             return false;
-        tb_hit h = {(float)t, tr->object, tr->face, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
-        if (!tb__accel_offer(b, &h, acc->index[k]))
-            return false;
-        b->tri = (tb_accel_tri_hit){acc->index[k], dir, t, {uvw[0], uvw[1], uvw[2]}};
-        return true;
+        return tb__accel_tri_offer(b, tr->object, tr->face, acc->index[k], t, dir, uvw);
     }
     tb_hit h;
     if (!acc->cb.intersect(acc->cb.ctx, &acc->prims[k], acc->index[k], &b->ray, &h))
@@ -266,6 +304,9 @@ static inline bool tb__accel_test_any(const tb_accel *acc, size_t k, tb__accel_a
 tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt);
 /* Collapses acc->nodes into acc->wide (bvh_wide.c; called by tb__bvh_build). */
 tb_status tb__bvhw_build(tb_accel *acc, const tb_accel_options *opt);
+/* Packs the corners of the wide tree's all-triangle leaves into acc->lanes
+ * and flags them (bvh_wide.c; called once acc->tris is in stored order). */
+tb_status tb__bvhw_pack(tb_accel *acc);
 /* The wide node test on its own, for tests: bit i of the result is set if
  * child i's box meets [tmin, tmax] under tb__accel_slab_t's arithmetic (the
  * same bits per child), and tnear[i] is then that test's entry distance.
@@ -279,10 +320,19 @@ bool tb__bvhw_have_avx(void);
 bool tb__bvhw_closest_sse(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best, int64_t *visited,
                           int64_t *tested);
 bool tb__bvhw_any_sse(const tb_accel *acc, tb__accel_any *q, uint32_t *who, int64_t *visited, int64_t *tested);
+/* The same for rays with tmin < 0 (the node test's full widening; the above need tmin >= 0). */
+bool tb__bvhw_closest_sse_full(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best, int64_t *visited,
+                               int64_t *tested);
+bool tb__bvhw_any_sse_full(const tb_accel *acc, tb__accel_any *q, uint32_t *who, int64_t *visited,
+                           int64_t *tested);
 #if defined(TB_BVH_AVX)
 bool tb__bvhw_closest_avx(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best, int64_t *visited,
                           int64_t *tested);
 bool tb__bvhw_any_avx(const tb_accel *acc, tb__accel_any *q, uint32_t *who, int64_t *visited, int64_t *tested);
+bool tb__bvhw_closest_avx_full(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best, int64_t *visited,
+                               int64_t *tested);
+bool tb__bvhw_any_avx_full(const tb_accel *acc, tb__accel_any *q, uint32_t *who, int64_t *visited,
+                           int64_t *tested);
 unsigned tb__bvhw_slab_test_avx(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
                                 float tnear[TB__BVHW]);
 #endif

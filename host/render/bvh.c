@@ -423,6 +423,9 @@ void tb__bvh_free(tb_accel *acc)
         tb_stat_add(&tb__bvh_memory, -(int64_t)(acc->nwide * sizeof(tb__bvhw_node)));
     free(acc->nodes);
     free(acc->wide);
+    free(acc->lanes);
+    acc->lanes = NULL;
+    acc->nlanes = 0;
     acc->nodes = NULL;
     acc->nnodes = 0;
     acc->wide = NULL;

@@ -130,7 +130,7 @@ static uint32_t tb__bvhw_collapse(tb__collapse *c, uint32_t b)
         const tb_bvh_node *k = &bin[kids[i]];
         if (k->count) {
             o->child[i] = k->offset;
-            o->count[i] = (uint8_t)k->count; /* leaves hold at most 255 references */
+            o->count[i] = (uint16_t)k->count; /* leaves hold at most 255 references */
         } else {
             uint32_t w = tb__bvhw_collapse(c, kids[i]);
             c->out[me].child[i] = w; /* `o` stays valid: the array does not move */
@@ -164,6 +164,54 @@ tb_status tb__bvhw_build(tb_accel *acc, const tb_accel_options *opt)
     return TB_OK;
 }
 
+tb_status tb__bvhw_pack(tb_accel *acc)
+{
+#if defined(__SSE2__)
+    if (!acc->tris || !acc->wide)
+        return TB_OK;
+    /* Slack of one vector after the last row: a leaf's last partial vector
+     * is read whole (its extra lanes are ignored). */
+    size_t nl = TB__LANE_ROWS * acc->n + 4;
+    size_t bytes = (nl * sizeof(double) + 63u) & ~(size_t)63u;
+    double *lanes = aligned_alloc(64, bytes);
+    if (!lanes)
+        return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the packed triangle corners");
+    memset(lanes, 0, bytes); /* lanes of unpacked leaves and the slack: defined values, never used */
+    bool any = false;
+    for (size_t w = 0; w < acc->nwide; w++) {
+        tb__bvhw_node *nd = &acc->wide[w];
+        for (unsigned i = 0; i < nd->n; i++) {
+            uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
+            bool all = n > 0;
+            for (uint32_t j = 0; all && j < n; j++)
+                all = acc->tris[s + j].object != TB_ACCEL_TRI_NONE;
+            if (!all)
+                continue;
+            double *base = lanes + TB__LANE_ROWS * (size_t)s;
+            tb__lane_ids *ids = (tb__lane_ids *)(base + 9 * (size_t)n);
+            for (uint32_t j = 0; j < n; j++) {
+                const tb_accel_tri *tr = &acc->tris[s + j];
+                for (unsigned r = 0; r < 9; r++) /* row 3 c + a is v[3 c + a] */
+                    base[r * n + j] = tr->v[r];
+                ids[j] = (tb__lane_ids){tr->object, tr->face, acc->index[s + j], 0};
+            }
+            nd->count[i] |= TB__BVHW_PACKED;
+            any = true;
+        }
+    }
+    if (!any) {
+        free(lanes);
+        return TB_OK;
+    }
+    acc->lanes = lanes;
+    acc->nlanes = nl;
+    acc->stats.memory_bytes += bytes;
+#else
+    (void)acc;
+#endif
+    return TB_OK;
+}
+
 /* ------------------------------------------------------------ node test (SSE2) */
 
 #if defined(__SSE2__)
@@ -183,6 +231,7 @@ typedef struct tb__wray {
      * (tb__f4_opaque): as known constants GCC rebuilt each of them (load +
      * shuffle) in every node step. */
     __m128 sign, k, one, minus_inf, plus_inf;
+    __m128 kn, kf;        /* 1 - k and 1 + k: the widening factors of t >= 0 */
 #endif
     tb_vec3 ov, invv;
     bool neg[3];
@@ -213,6 +262,8 @@ static inline void tb__wray_init(tb__wray *r, const tb_ray *ray)
     r->sign = tb__f4_opaque(_mm_set1_ps(-0.0f));
     r->k = tb__f4_opaque(_mm_set1_ps(2.0f * tb_gamma(3)));
     r->one = tb__f4_opaque(_mm_set1_ps(1.0f));
+    r->kn = tb__f4_opaque(_mm_set1_ps(1.0f - 2.0f * tb_gamma(3)));
+    r->kf = tb__f4_opaque(_mm_set1_ps(1.0f + 2.0f * tb_gamma(3)));
     r->minus_inf = tb__f4_opaque(_mm_set1_ps(-INFINITY));
     r->plus_inf = tb__f4_opaque(_mm_set1_ps(INFINITY));
 #endif
@@ -230,7 +281,7 @@ static inline tb__wvec tb__wvec_set1(float x) { return _mm_set1_ps(x); }
  * NaN, exactly that rule) and the mirror for the far planes. Returns the
  * mask of children met; tn their entry distances. */
 static inline __attribute__((always_inline)) unsigned tb__wtest4(const char *b, const tb__wray *r, tb__wvec tmin,
-                                                                 tb__wvec tmax, float *tn)
+                                                                 tb__wvec tmax, float *tn, bool full)
 {
     /* The plane distances, unwidened. */
     __m128 nx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps((const float *)(b + r->near[0])), r->o[0]), r->inv[0]);
@@ -252,8 +303,17 @@ static inline __attribute__((always_inline)) unsigned tb__wtest4(const char *b, 
     const __m128 sign = r->sign, k = r->k, one = r->one;
     __m128 n = _mm_max_ps(nz, _mm_max_ps(ny, _mm_max_ps(nx, r->minus_inf)));
     __m128 f = _mm_min_ps(fz, _mm_min_ps(fy, _mm_min_ps(fx, r->plus_inf)));
-    n = _mm_mul_ps(n, _mm_sub_ps(one, _mm_or_ps(_mm_and_ps(n, sign), k)));
-    f = _mm_mul_ps(f, _mm_add_ps(one, _mm_or_ps(_mm_and_ps(f, sign), k)));
+    if (full) {
+        n = _mm_mul_ps(n, _mm_sub_ps(one, _mm_or_ps(_mm_and_ps(n, sign), k)));
+        f = _mm_mul_ps(f, _mm_add_ps(one, _mm_or_ps(_mm_and_ps(f, sign), k)));
+    } else {
+        /* tmin >= 0 (the usual query): a negative near distance loses to
+         * tmin and a negative far one fails the test whichever factor
+         * widened it, so the sign-free factors give the same mask and entry
+         * distances (docs/accel.md, "Traversal"). */
+        n = _mm_mul_ps(n, r->kn);
+        f = _mm_mul_ps(f, r->kf);
+    }
     tmin = _mm_max_ps(n, tmin);
     tmax = _mm_min_ps(f, tmax);
     _mm_storeu_ps(tn, tmin);
@@ -262,11 +322,13 @@ static inline __attribute__((always_inline)) unsigned tb__wtest4(const char *b, 
 
 /* The eight children: two four-lane tests. */
 static inline __attribute__((always_inline)) unsigned tb__wtest(const tb__bvhw_node *nd, const tb__wray *r,
-                                                                tb__wvec tmin, tb__wvec tmax, float tn[TB__BVHW])
+                                                                tb__wvec tmin, tb__wvec tmax, float tn[TB__BVHW],
+                                                                bool full)
 {
     const char *b = (const char *)nd;
-    return tb__wtest4(b, r, tmin, tmax, tn) | tb__wtest4(b + 16, r, tmin, tmax, tn + 4) << 4;
+    return tb__wtest4(b, r, tmin, tmax, tn, full) | tb__wtest4(b + 16, r, tmin, tmax, tn + 4, full) << 4;
 }
+
 #else
 /* Without SSE2: the same test one child at a time. */
 typedef float tb__wvec;
@@ -274,8 +336,9 @@ typedef float tb__wvec;
 static inline tb__wvec tb__wvec_set1(float x) { return x; }
 
 static inline unsigned tb__wtest(const tb__bvhw_node *nd, const tb__wray *r, tb__wvec tmin, tb__wvec tmax,
-                                 float tn[TB__BVHW])
+                                 float tn[TB__BVHW], bool full)
 {
+    (void)full; /* the scalar test's widening is the full one */
     unsigned m = 0;
     for (int i = 0; i < TB__BVHW; i++) {
         tb_aabb b = {{nd->box[0][i], nd->box[2][i], nd->box[4][i]}, {nd->box[1][i], nd->box[3][i], nd->box[5][i]}};
@@ -293,7 +356,7 @@ static unsigned tb__bvhw_slab_test_sse(const tb__bvhw_node *nd, const tb_ray *ra
 {
     tb__wray r;
     tb__wray_init(&r, ray);
-    return tb__wtest(nd, &r, tb__wvec_set1(tmin), tb__wvec_set1(tmax), tnear);
+    return tb__wtest(nd, &r, tb__wvec_set1(tmin), tb__wvec_set1(tmax), tnear, !(tmin >= 0.0f));
 }
 
 unsigned tb__bvhw_slab_test(const tb__bvhw_node *nd, const tb_ray *ray, float tmin, float tmax,
@@ -310,20 +373,31 @@ unsigned tb__bvhw_slab_test(const tb__bvhw_node *nd, const tb_ray *ray, float tm
 
 /* ------------------------------------------------------------ traversal */
 
+#define TB__WFULL 0
 #define TB__WNAME(name) name##_sse
 #include "host/render/bvh_wide_traverse.inc"
 #undef TB__WNAME
+#undef TB__WFULL
+#define TB__WFULL 1
+#define TB__WNAME(name) name##_sse_full
+#include "host/render/bvh_wide_traverse.inc"
+#undef TB__WNAME
+#undef TB__WFULL
 
 bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *best)
 {
     int64_t visited, tested;
     bool found;
+    /* The short widening holds for tmin >= 0 (tb__wtest4). */
+    bool full = !(ray->tmin >= 0.0f);
 #if defined(TB_BVH_AVX)
     if (acc->wide_avx)
-        found = tb__bvhw_closest_avx(acc, ray, best, &visited, &tested);
+        found = full ? tb__bvhw_closest_avx_full(acc, ray, best, &visited, &tested)
+                     : tb__bvhw_closest_avx(acc, ray, best, &visited, &tested);
     else
 #endif
-        found = tb__bvhw_closest_sse(acc, ray, best, &visited, &tested);
+        found = full ? tb__bvhw_closest_sse_full(acc, ray, best, &visited, &tested)
+                     : tb__bvhw_closest_sse(acc, ray, best, &visited, &tested);
     TB_STAT_INC(tb__bvh_rays);
     tb_stat_add(&tb__bvh_nodes_visited, visited);
     tb_stat_add(&tb__bvh_prims_tested, tested);
@@ -389,12 +463,15 @@ bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
     uint32_t who = UINT32_MAX;
     int64_t visited, tested;
     bool hit;
+    bool full = !(ray->tmin >= 0.0f);
 #if defined(TB_BVH_AVX)
     if (acc->wide_avx)
-        hit = tb__bvhw_any_avx(acc, &q, &who, &visited, &tested);
+        hit = full ? tb__bvhw_any_avx_full(acc, &q, &who, &visited, &tested)
+                   : tb__bvhw_any_avx(acc, &q, &who, &visited, &tested);
     else
 #endif
-        hit = tb__bvhw_any_sse(acc, &q, &who, &visited, &tested);
+        hit = full ? tb__bvhw_any_sse_full(acc, &q, &who, &visited, &tested)
+                   : tb__bvhw_any_sse(acc, &q, &who, &visited, &tested);
     TB_STAT_INC(tb__bvh_shadow_rays);
     tb_stat_add(&tb__bvh_nodes_visited, visited);
     tb_stat_add(&tb__bvh_prims_tested, tested);

@@ -23,6 +23,7 @@ static inline __m256 tb__f8_opaque(__m256 v)
 typedef struct tb__wray {
     __m256 o[3], inv[3];                     /* broadcasts */
     __m256 sign, k, one, minus_inf, plus_inf; /* the test's constants, made once per ray */
+    __m256 kn, kf;                           /* 1 - k and 1 + k: the widening factors of t >= 0 */
     size_t near[3], far[3];                  /* per axis, the byte offset in a node of the near and far planes' row */
     unsigned oct;                            /* the direction's octant (bit a: inv_d's sign bit along a) */
 } tb__wray;
@@ -43,6 +44,8 @@ static inline void tb__wray_init(tb__wray *r, const tb_ray *ray)
     r->sign = tb__f8_opaque(_mm256_set1_ps(-0.0f));
     r->k = tb__f8_opaque(_mm256_set1_ps(2.0f * tb_gamma(3)));
     r->one = tb__f8_opaque(_mm256_set1_ps(1.0f));
+    r->kn = tb__f8_opaque(_mm256_set1_ps(1.0f - 2.0f * tb_gamma(3)));
+    r->kf = tb__f8_opaque(_mm256_set1_ps(1.0f + 2.0f * tb_gamma(3)));
     r->minus_inf = tb__f8_opaque(_mm256_set1_ps(-INFINITY));
     r->plus_inf = tb__f8_opaque(_mm256_set1_ps(INFINITY));
 }
@@ -53,9 +56,11 @@ static inline tb__wvec tb__wvec_set1(float x) { return _mm256_set1_ps(x); }
 
 /* The eight children's slab tests at once: bvh_wide.c's tb__wtest4 on
  * eight lanes (the same operations; VMAXPS/VMINPS return the second operand
- * when either is NaN as MAXPS/MINPS do; _CMP_LE_OQ is CMPLEPS). */
+ * when either is NaN as MAXPS/MINPS do; _CMP_LE_OQ is CMPLEPS), with its
+ * `full` widening or the short one for tmin >= 0. */
 static inline __attribute__((always_inline)) unsigned tb__wtest(const tb__bvhw_node *nd, const tb__wray *r,
-                                                                tb__wvec tmin, tb__wvec tmax, float tn[TB__BVHW])
+                                                                tb__wvec tmin, tb__wvec tmax, float tn[TB__BVHW],
+                                                                bool full)
 {
     const char *b = (const char *)nd;
     __m256 nx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps((const float *)(b + r->near[0])), r->o[0]), r->inv[0]);
@@ -67,8 +72,13 @@ static inline __attribute__((always_inline)) unsigned tb__wtest(const tb__bvhw_n
     const __m256 sign = r->sign, k = r->k, one = r->one;
     __m256 n = _mm256_max_ps(nz, _mm256_max_ps(ny, _mm256_max_ps(nx, r->minus_inf)));
     __m256 f = _mm256_min_ps(fz, _mm256_min_ps(fy, _mm256_min_ps(fx, r->plus_inf)));
-    n = _mm256_mul_ps(n, _mm256_sub_ps(one, _mm256_or_ps(_mm256_and_ps(n, sign), k)));
-    f = _mm256_mul_ps(f, _mm256_add_ps(one, _mm256_or_ps(_mm256_and_ps(f, sign), k)));
+    if (full) {
+        n = _mm256_mul_ps(n, _mm256_sub_ps(one, _mm256_or_ps(_mm256_and_ps(n, sign), k)));
+        f = _mm256_mul_ps(f, _mm256_add_ps(one, _mm256_or_ps(_mm256_and_ps(f, sign), k)));
+    } else {
+        n = _mm256_mul_ps(n, r->kn);
+        f = _mm256_mul_ps(f, r->kf);
+    }
     tmin = _mm256_max_ps(n, tmin);
     tmax = _mm256_min_ps(f, tmax);
     _mm256_storeu_ps(tn, tmin);
@@ -80,11 +90,18 @@ unsigned tb__bvhw_slab_test_avx(const tb__bvhw_node *nd, const tb_ray *ray, floa
 {
     tb__wray r;
     tb__wray_init(&r, ray);
-    return tb__wtest(nd, &r, tb__wvec_set1(tmin), tb__wvec_set1(tmax), tnear);
+    return tb__wtest(nd, &r, tb__wvec_set1(tmin), tb__wvec_set1(tmax), tnear, !(tmin >= 0.0f));
 }
 
+#define TB__WFULL 0
 #define TB__WNAME(name) name##_avx
 #include "host/render/bvh_wide_traverse.inc"
 #undef TB__WNAME
+#undef TB__WFULL
+#define TB__WFULL 1
+#define TB__WNAME(name) name##_avx_full
+#include "host/render/bvh_wide_traverse.inc"
+#undef TB__WNAME
+#undef TB__WFULL
 
 #endif
