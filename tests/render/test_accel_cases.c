@@ -910,8 +910,8 @@ static void test_packed_leaves(void **state)
     for (int li = 0; li < 3; li++) {
         tb_accel_callbacks cb = {pk_no_callback, NULL, NULL, tris};
         tb_accel *pk, *pk_sse, *one, *list;
-        assert_int_equal(tb_accel_build(TB_ACCEL_BVH, refs, n, &cb, &(tb_accel_options){.bvh_max_leaf = leaves[li]}, &pk),
-                         TB_OK);
+        assert_int_equal(
+            tb_accel_build(TB_ACCEL_BVH, refs, n, &cb, &(tb_accel_options){.bvh_max_leaf = leaves[li]}, &pk), TB_OK);
         assert_int_equal(tb_accel_build(TB_ACCEL_BVH, refs, n, &cb,
                                         &(tb_accel_options){.bvh_max_leaf = leaves[li], .bvh_no_avx = 1}, &pk_sse),
                          TB_OK);
@@ -950,7 +950,8 @@ static void test_packed_leaves(void **state)
                 float x = (float)tb_rng_below(&r, G), y = (float)tb_rng_below(&r, G);
                 if (kind == 1)
                     x += 0.5f;
-                float dx = i % 7 == 0 ? 0.0f : tb_rng_float(&r) - 0.5f, dy = i % 11 == 0 ? 0.0f : tb_rng_float(&r) - 0.5f;
+                float dx = i % 7 == 0 ? 0.0f : tb_rng_float(&r) - 0.5f;
+                float dy = i % 11 == 0 ? 0.0f : tb_rng_float(&r) - 0.5f;
                 ry = ray(x - 3 * dx, y - 3 * dy, 3.0f, dx, dy, -1.0f, tmin, INFINITY);
                 zero_rays++;
             } else if (kind == 2) { /* grazing: in the grid's plane */
