@@ -72,6 +72,17 @@ _Static_assert(sizeof(tb__lane_ids) == 2 * sizeof(double), "tb__lane_ids fills t
 /* The reference count in tb__bvhw_node.count. */
 #define TB__BVHW_COUNT(c) ((c) & 0xffu)
 
+/* 3 x the position of child c in a node's order word (tb__bvhw_node.order:
+ * far to near, 3 bits per position), without a loop: the fields equal to c
+ * become 0 under the xor, and the lowest zero field is c's (positions past
+ * the node's children read 0, but come later). c must be one of the node's
+ * children. Only compared, so the factor 3 stays. */
+static inline unsigned tb__bvhw_pos(uint32_t ord, unsigned c)
+{
+    uint32_t x = ord ^ (c * 0x249249u);
+    return (unsigned)__builtin_ctz(~(x | x >> 1 | x >> 2) & 0x249249u);
+}
+
 /* Wide levels are at most the binary depth, each pushing at most 7 children. */
 #define TB__BVHW_STACK (7 * TB__BVH_STACK)
 

@@ -830,6 +830,37 @@ static void test_bvhw_avx_matches_sse(void **state)
     tp_free(&s);
 }
 
+/* tb__bvhw_pos against a search of the order word, for every child of
+ * 20 000 random orders of 1 to 8 children. */
+static void test_bvhw_order_position(void **state)
+{
+    (void)state;
+    tb_rng r;
+    tb_rng_seed(&r, tb_test_seed("bvhw_pos", 32), 0);
+    long checked = 0;
+    for (int trial = 0; trial < 20000; trial++) {
+        unsigned n = 1 + tb_rng_below(&r, 8), perm[8];
+        for (unsigned i = 0; i < n; i++)
+            perm[i] = i;
+        for (unsigned i = n; i-- > 1;) {
+            unsigned j = tb_rng_below(&r, i + 1), t = perm[i];
+            perm[i] = perm[j];
+            perm[j] = t;
+        }
+        uint32_t ord = 0;
+        for (unsigned i = 0; i < n; i++)
+            ord |= (uint32_t)perm[i] << (3 * i);
+        for (unsigned c = 0; c < n; c++) {
+            unsigned want = 0;
+            while (perm[want] != c)
+                want++;
+            assert_int_equal(tb__bvhw_pos(ord, c), 3 * want);
+            checked++;
+        }
+    }
+    print_message("[ bvhw pos ] %ld positions\n", checked);
+}
+
 /* A never-called callback: every reference of the packed-leaf scenes is a triangle. */
 static bool pk_no_callback(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {
@@ -1140,6 +1171,7 @@ int main(void)
         cmocka_unit_test(test_bvhw_slab_matches_scalar),
         cmocka_unit_test(test_bvhw_structure),
         cmocka_unit_test(test_bvhw_avx_matches_sse),
+        cmocka_unit_test(test_bvhw_order_position),
         cmocka_unit_test(test_packed_leaves),
         cmocka_unit_test(test_build_errors),
         cmocka_unit_test(test_kind_names),
