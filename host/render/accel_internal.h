@@ -39,10 +39,6 @@ typedef struct tb__bvhw_node {
      * slot holds lo = +inf, hi = -inf, which no valid ray meets. */
     _Alignas(32) float box[6][TB__BVHW];
     uint32_t child[TB__BVHW]; /* inner child: its wide node; leaf child: its first stored reference */
-    /* Per ray octant (bit a set: the direction's sign bit is set along axis
-     * a), the children in traversal order far to near, 3 bits each from bit
-     * 0: the binary tree's near-child-first order below this node. */
-    uint32_t order[8];
     /* Leaf child: its references (1..255) in the low 8 bits, plus
      * TB__BVHW_PACKED when they are all triangles packed in tb_accel.lanes;
      * 0: an inner child or an unused slot. */
@@ -50,6 +46,11 @@ typedef struct tb__bvhw_node {
     uint8_t n;                /* children used, 1..8 (slots 0 .. n-1) */
     uint8_t used;             /* (1 << n) - 1: the node test's mask is cut to it, so an unused slot is never
                                * followed even if a ray met its empty box (it cannot: docs/accel.md) */
+    /* Per ray octant (bit a set: the direction's sign bit is set along axis
+     * a), the children in traversal order far to near, 3 bits each from bit
+     * 0: the binary tree's near-child-first order below this node. Last:
+     * only a step that meets two children or more reads it. */
+    _Alignas(32) uint32_t order[8];
 } tb__bvhw_node;
 
 _Static_assert(sizeof(tb__bvhw_node) == 288, "tb__bvhw_node is 288 bytes");
