@@ -91,6 +91,7 @@ typedef struct tb_accel_callbacks {
  * record, for completing its (u, v) and normal. */
 typedef struct tb_accel_tri_hit {
     uint32_t index;  /* input index of the reference; TB_ACCEL_TRI_NONE when the hit came from a callback */
+    uint32_t sub;    /* the reference's tb_accel_prim.sub (so the caller need not look the reference up) */
     int dir;         /* +1: the ray meets the side from which the corners run counter-clockwise, else -1 */
     double t;        /* the line parameter in double (hit.t is it rounded to float) */
     double uvw[3];   /* the test's edge functions: the crossing is (U v0 + V v1 + W v2) / (U + V + W) */

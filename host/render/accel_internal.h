@@ -65,7 +65,7 @@ _Static_assert(sizeof(tb__bvhw_node) == 288, "tb__bvhw_node is 288 bytes");
 typedef struct tb__lane_ids {
     uint32_t object, face; /* tb_accel_tri.object, .face */
     uint32_t index;        /* tb_accel.index of the reference (the tie rule's last key) */
-    uint32_t pad;
+    uint32_t sub;          /* its tb_accel_prim.sub */
 } tb__lane_ids;
 
 _Static_assert(sizeof(tb__lane_ids) == 2 * sizeof(double), "tb__lane_ids fills two lane rows");
@@ -239,15 +239,15 @@ static inline bool tb__accel_offer(tb__accel_best *b, const tb_hit *h, uint32_t 
 }
 
 /* Offers the crossing (t in the ray's range, dir, edge functions uvw) of a
- * triangle reference (its object, face and input index) to the running
+ * triangle reference (its object, face, input index and sub) to the running
  * best; true if it became the best. */
-static inline bool tb__accel_tri_offer(tb__accel_best *b, uint32_t object, uint32_t face, uint32_t index, double t,
-                                       int dir, const double uvw[3])
+static inline bool tb__accel_tri_offer(tb__accel_best *b, uint32_t object, uint32_t face, uint32_t index,
+                                       uint32_t sub, double t, int dir, const double uvw[3])
 {
     tb_hit h = {(float)t, object, face, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
     if (!tb__accel_offer(b, &h, index))
         return false;
-    b->tri = (tb_accel_tri_hit){index, dir, t, {uvw[0], uvw[1], uvw[2]}};
+    b->tri = (tb_accel_tri_hit){index, sub, dir, t, {uvw[0], uvw[1], uvw[2]}};
     return true;
 }
 
@@ -260,7 +260,7 @@ static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best 
         int dir;
         if (!tb__accel_tri_test(tr, &b->ray, &b->w, &b->wready, &t, &dir, uvw))
             return false;
-        return tb__accel_tri_offer(b, tr->object, tr->face, acc->index[k], t, dir, uvw);
+        return tb__accel_tri_offer(b, tr->object, tr->face, acc->index[k], acc->prims[k].sub, t, dir, uvw);
     }
     tb_hit h;
     if (!acc->cb.intersect(acc->cb.ctx, &acc->prims[k], acc->index[k], &b->ray, &h))

@@ -193,7 +193,7 @@ tb_status tb__bvhw_pack(tb_accel *acc)
                 const tb_accel_tri *tr = &acc->tris[s + j];
                 for (unsigned r = 0; r < 9; r++) /* row 3 c + a is v[3 c + a] */
                     base[r * n + j] = tr->v[r];
-                ids[j] = (tb__lane_ids){tr->object, tr->face, acc->index[s + j], 0};
+                ids[j] = (tb__lane_ids){tr->object, tr->face, acc->index[s + j], acc->prims[s + j].sub};
             }
             nd->count[i] |= TB__BVHW_PACKED;
             any = true;

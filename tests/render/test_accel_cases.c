@@ -389,13 +389,13 @@ static void test_triangle_references(void **state)
         bool found = false;
         tb_hit best = {0};
         uint32_t best_i = 0;
-        tb_accel_tri_hit best_d = {TB_ACCEL_TRI_NONE, 0, 0.0, {0, 0, 0}};
+        tb_accel_tri_hit best_d = {TB_ACCEL_TRI_NONE, 0, 0, 0.0, {0, 0, 0}};
         if (tb_ray_is_valid(&ray)) {
             for (size_t j = 0; j < s.n; j++) {
                 if (tb_aabb_is_empty(&s.refs[j].bounds))
                     continue;
                 tb_hit h;
-                tb_accel_tri_hit d = {(uint32_t)j, 0, 0.0, {0, 0, 0}};
+                tb_accel_tri_hit d = {(uint32_t)j, s.refs[j].sub, 0, 0.0, {0, 0, 0}};
                 if (kept[j].object != TB_ACCEL_TRI_NONE) {
                     if (!tt_tri(&kept[j], &ray, &d))
                         continue;
@@ -429,6 +429,7 @@ static void test_triangle_references(void **state)
             assert_memory_equal(&h, &best, sizeof h);
             assert_int_equal(d.index, best_d.index);
             if (d.index != TB_ACCEL_TRI_NONE) {
+                assert_int_equal(d.sub, best_d.sub);
                 assert_int_equal(d.dir, best_d.dir);
                 assert_memory_equal(&d.t, &best_d.t, sizeof d.t);
                 assert_memory_equal(d.uvw, best_d.uvw, sizeof d.uvw);
