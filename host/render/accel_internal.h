@@ -58,8 +58,11 @@ _Static_assert(sizeof(tb__bvhw_node) == 288, "tb__bvhw_node is 288 bytes");
 /* Flag in tb__bvhw_node.count: a leaf of triangle references only, whose
  * corners are packed in tb_accel.lanes for the multi-triangle test. */
 #define TB__BVHW_PACKED 0x100u
-/* Doubles per reference in tb_accel.lanes: 9 corner values, one tb__lane_ids. */
+/* Per reference in tb_accel.lanes: 9 corner values and one tb__lane_ids,
+ * in doubles (TB__LANE_ROWS) or, when every packed corner is a float, in
+ * floats (TB__LANE_ROWS_F). */
 #define TB__LANE_ROWS 11u
+#define TB__LANE_ROWS_F 13u
 
 /* A packed triangle's identity, after its leaf's corner rows. */
 typedef struct tb__lane_ids {
@@ -68,7 +71,8 @@ typedef struct tb__lane_ids {
     uint32_t sub;          /* its tb_accel_prim.sub */
 } tb__lane_ids;
 
-_Static_assert(sizeof(tb__lane_ids) == 2 * sizeof(double), "tb__lane_ids fills two lane rows");
+_Static_assert(sizeof(tb__lane_ids) == 2 * sizeof(double) && sizeof(tb__lane_ids) == 4 * sizeof(float),
+               "tb__lane_ids fills two double rows or four float rows");
 
 /* The reference count in tb__bvhw_node.count. */
 #define TB__BVHW_COUNT(c) ((c) & 0xffu)
@@ -116,12 +120,15 @@ struct tb_accel {
     bool wide_avx;         /* traverse with the AVX node test (the CPU has AVX and the options allow it) */
     /* BVH: the corners of each leaf of triangles only, packed by coordinate
      * for the multi-triangle test (docs/accel.md "Packed leaves"): the leaf
-     * whose references are stored at s .. s + n - 1 has 11 n doubles from
-     * lanes[TB__LANE_ROWS s]: rows 3 c + a (corner c, axis a) holding its n
-     * triangles' values side by side, then n tb__lane_ids (what a hit
-     * needs, so a hit reads no other array). NULL when no leaf is packed. */
-    double *lanes;
-    size_t nlanes;         /* doubles allocated (11 n plus slack for the last partial vector) */
+     * whose references are stored at s .. s + n - 1 has TB__LANE_ROWS n
+     * doubles from (double *)lanes + TB__LANE_ROWS s (or TB__LANE_ROWS_F n
+     * floats from (float *)lanes + TB__LANE_ROWS_F s when lanes_f32): rows
+     * 3 c + a (corner c, axis a) holding its n triangles' values side by
+     * side, then n tb__lane_ids (what a hit needs, so a hit reads no other
+     * array). NULL when no leaf is packed. */
+    void *lanes;
+    bool lanes_f32;        /* every packed corner is a float (exactly), stored as one: 52 bytes per reference, not 88 */
+    size_t lanes_bytes;    /* allocated (with slack for the last partial vector) */
     tb__grid grid;         /* grid */
 };
 

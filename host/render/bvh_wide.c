@@ -164,47 +164,73 @@ tb_status tb__bvhw_build(tb_accel *acc, const tb_accel_options *opt)
     return TB_OK;
 }
 
+/* True if leaf child i of nd holds triangle references only. */
+static bool tb__bvhw_all_tris(const tb_accel *acc, const tb__bvhw_node *nd, unsigned i)
+{
+    uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
+    bool all = n > 0;
+    for (uint32_t j = 0; all && j < n; j++)
+        all = acc->tris[s + j].object != TB_ACCEL_TRI_NONE;
+    return all;
+}
+
 tb_status tb__bvhw_pack(tb_accel *acc)
 {
 #if defined(__SSE2__)
     if (!acc->tris || !acc->wide)
         return TB_OK;
+    /* Floats when every corner to pack is one exactly (meshes read from
+     * files, placed without a transform): converted back on load they are
+     * the same doubles, at 52 bytes per reference instead of 88. */
+    bool any = false, f32 = true;
+    for (size_t w = 0; w < acc->nwide; w++) {
+        const tb__bvhw_node *nd = &acc->wide[w];
+        for (unsigned i = 0; i < nd->n; i++) {
+            if (!tb__bvhw_all_tris(acc, nd, i))
+                continue;
+            any = true;
+            uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
+            for (uint32_t j = 0; f32 && j < n; j++)
+                for (unsigned r = 0; r < 9; r++) {
+                    double v = acc->tris[s + j].v[r];
+                    f32 = f32 && (double)(float)v == v; /* (a zero keeps its sign through float) */
+                }
+        }
+    }
+    if (!any)
+        return TB_OK;
     /* Slack of one vector after the last row: a leaf's last partial vector
      * is read whole (its extra lanes are ignored). */
-    size_t nl = TB__LANE_ROWS * acc->n + 4;
-    size_t bytes = (nl * sizeof(double) + 63u) & ~(size_t)63u;
-    double *lanes = aligned_alloc(64, bytes);
+    size_t per = f32 ? TB__LANE_ROWS_F * sizeof(float) : TB__LANE_ROWS * sizeof(double);
+    size_t bytes = (acc->n * per + 2 * sizeof(double) + 63u) & ~(size_t)63u;
+    void *lanes = aligned_alloc(64, bytes);
     if (!lanes)
         return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the packed triangle corners");
     memset(lanes, 0, bytes); /* lanes of unpacked leaves and the slack: defined values, never used */
-    bool any = false;
     for (size_t w = 0; w < acc->nwide; w++) {
         tb__bvhw_node *nd = &acc->wide[w];
         for (unsigned i = 0; i < nd->n; i++) {
-            uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
-            bool all = n > 0;
-            for (uint32_t j = 0; all && j < n; j++)
-                all = acc->tris[s + j].object != TB_ACCEL_TRI_NONE;
-            if (!all)
+            if (!tb__bvhw_all_tris(acc, nd, i))
                 continue;
-            double *base = lanes + TB__LANE_ROWS * (size_t)s;
-            tb__lane_ids *ids = (tb__lane_ids *)(base + 9 * (size_t)n);
+            uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
+            char *base = (char *)lanes + per * s;
+            tb__lane_ids *ids = (tb__lane_ids *)(base + 9 * (size_t)n * (f32 ? sizeof(float) : sizeof(double)));
             for (uint32_t j = 0; j < n; j++) {
                 const tb_accel_tri *tr = &acc->tris[s + j];
-                for (unsigned r = 0; r < 9; r++) /* row 3 c + a is v[3 c + a] */
-                    base[r * n + j] = tr->v[r];
+                for (unsigned r = 0; r < 9; r++) { /* row 3 c + a is v[3 c + a] */
+                    if (f32)
+                        ((float *)base)[r * n + j] = (float)tr->v[r];
+                    else
+                        ((double *)base)[r * n + j] = tr->v[r];
+                }
                 ids[j] = (tb__lane_ids){tr->object, tr->face, acc->index[s + j], acc->prims[s + j].sub};
             }
             nd->count[i] |= TB__BVHW_PACKED;
-            any = true;
         }
     }
-    if (!any) {
-        free(lanes);
-        return TB_OK;
-    }
     acc->lanes = lanes;
-    acc->nlanes = nl;
+    acc->lanes_f32 = f32;
+    acc->lanes_bytes = bytes;
     acc->stats.memory_bytes += bytes;
 #else
     (void)acc;

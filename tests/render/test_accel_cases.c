@@ -869,15 +869,16 @@ static bool pk_no_callback(void *ctx, const tb_accel_prim *prim, uint32_t index,
     abort();
 }
 
-/* Appends triangle (a, b, c) to tris / refs (its box) as object obj, face f. */
+/* Appends triangle (a, b, c) to tris / refs (its box) as object obj, face
+ * f; f32: its corners rounded to float. */
 static void pk_add(tb_accel_tri *tris, tb_accel_prim *refs, size_t *n, const double a[3], const double b[3],
-                   const double c[3], uint32_t obj, uint32_t f)
+                   const double c[3], uint32_t obj, uint32_t f, bool f32)
 {
     tb_accel_tri *t = &tris[*n];
     for (int j = 0; j < 3; j++) {
-        t->v[j] = a[j];
-        t->v[3 + j] = b[j];
-        t->v[6 + j] = c[j];
+        t->v[j] = f32 ? (float)a[j] : a[j];
+        t->v[3 + j] = f32 ? (float)b[j] : b[j];
+        t->v[6 + j] = f32 ? (float)c[j] : c[j];
     }
     t->object = obj;
     t->face = f;
@@ -893,7 +894,8 @@ static void pk_add(tb_accel_tri *tris, tb_accel_prim *refs, size_t *n, const dou
     (*n)++;
 }
 
-/* Packed leaves (docs/accel.md "Packed leaves"): on triangles only, with the
+/* Packed leaves (docs/accel.md "Packed leaves"), in both layouts (float
+ * corners when all are floats, else double): on triangles only, with the
  * hard cases of the tie rule (a grid mesh whose shared edges and vertices
  * rays hit exactly, so edge functions come out 0), coincident duplicates,
  * zero-area and collinear triangles, huge and tiny scales, rays with
@@ -912,134 +914,146 @@ static void test_packed_leaves(void **state)
     tb_accel_prim *refs = malloc(NT * sizeof *refs);
     assert_non_null(tris);
     assert_non_null(refs);
-    size_t n = 0;
-    /* A G x G grid of quads in z = 0 (object 0), two triangles each, corners on integers. */
-    for (int y = 0; y < G; y++)
-        for (int x = 0; x < G; x++) {
-            double a[3] = {x, y, 0}, b[3] = {x + 1, y, 0}, c[3] = {x + 1, y + 1, 0}, d[3] = {x, y + 1, 0};
-            pk_add(tris, refs, &n, a, b, c, 0, (uint32_t)(2 * (y * G + x)));
-            pk_add(tris, refs, &n, a, c, d, 0, (uint32_t)(2 * (y * G + x) + 1));
-        }
-    /* Object 1: coincident copies of grid triangles, zero-area and collinear
-     * triangles, and triangles at huge and tiny scales. */
-    for (int i = 0; i < 40; i++) {
-        const tb_accel_tri *t = &tris[tb_rng_below(&r, (uint32_t)(2 * G * G))];
-        pk_add(tris, refs, &n, &t->v[0], &t->v[3], &t->v[6], 1, (uint32_t)i);
-    }
-    for (int i = 0; i < 40; i++) {
-        double p[3] = {tb_rng_float(&r) * G, tb_rng_float(&r) * G, tb_rng_float(&r) * 2 - 1};
-        double q[3] = {p[0] + 1, p[1] + 0.5, p[2]}, m[3] = {p[0] + 2, p[1] + 1, p[2]};
-        pk_add(tris, refs, &n, p, q, i % 2 ? m : p, 1, (uint32_t)(100 + i)); /* collinear, or two corners equal */
-    }
-    for (int i = 0; i < 60; i++) {
-        double s = i % 2 ? 1e-6 : 1e6;
-        double c0[3] = {tb_rng_float(&r) * G, tb_rng_float(&r) * G, 0.5 + tb_rng_float(&r)};
-        double a[3] = {c0[0], c0[1], c0[2]}, b[3] = {c0[0] + s, c0[1], c0[2] + s}, c[3] = {c0[0], c0[1] + s, c0[2]};
-        pk_add(tris, refs, &n, a, b, c, 1, (uint32_t)(200 + i));
-    }
-    int leaves[] = {1, 3, 8};
     long hits = 0, zero_rays = 0, total = 0;
-    for (int li = 0; li < 3; li++) {
-        tb_accel_callbacks cb = {pk_no_callback, NULL, NULL, tris};
-        tb_accel *pk, *pk_sse, *one, *list;
-        assert_int_equal(
-            tb_accel_build(TB_ACCEL_BVH, refs, n, &cb, &(tb_accel_options){.bvh_max_leaf = leaves[li]}, &pk), TB_OK);
-        assert_int_equal(tb_accel_build(TB_ACCEL_BVH, refs, n, &cb,
-                                        &(tb_accel_options){.bvh_max_leaf = leaves[li], .bvh_no_avx = 1}, &pk_sse),
-                         TB_OK);
-        assert_int_equal(tb_accel_build(TB_ACCEL_BVH, refs, n, &cb,
-                                        &(tb_accel_options){.bvh_max_leaf = leaves[li], .bvh_no_pack = 1}, &one),
-                         TB_OK);
-        assert_int_equal(tb_accel_build(TB_ACCEL_LIST, refs, n, &cb, NULL, &list), TB_OK);
-        assert_null(one->lanes);
-        assert_non_null(pk->lanes);
-        /* Every leaf is packed, its rows and identities as the records say. */
-        for (size_t w = 0; w < pk->nwide; w++) {
-            const tb__bvhw_node *nd = &pk->wide[w];
-            for (unsigned c = 0; c < nd->n; c++) {
-                if (!nd->count[c])
-                    continue;
-                assert_true(nd->count[c] & TB__BVHW_PACKED);
-                uint32_t s0 = nd->child[c], cnt = TB__BVHW_COUNT(nd->count[c]);
-                const double *base = pk->lanes + TB__LANE_ROWS * (size_t)s0;
-                const tb__lane_ids *ids = (const tb__lane_ids *)(base + 9 * (size_t)cnt);
-                for (uint32_t j = 0; j < cnt; j++) {
-                    for (unsigned row = 0; row < 9; row++)
-                        assert_memory_equal(&base[row * cnt + j], &pk->tris[s0 + j].v[row], sizeof(double));
-                    assert_int_equal(ids[j].object, pk->tris[s0 + j].object);
-                    assert_int_equal(ids[j].face, pk->tris[s0 + j].face);
-                    assert_int_equal(ids[j].index, pk->index[s0 + j]);
+    size_t n = 0;
+    for (int variant = 0; variant < 2; variant++) {
+        bool f32 = variant == 0;
+        n = 0;
+        /* A G x G grid of quads in z = 0 (object 0), two triangles each, corners on integers. */
+        for (int y = 0; y < G; y++)
+            for (int x = 0; x < G; x++) {
+                double a[3] = {x, y, 0}, b[3] = {x + 1, y, 0}, c[3] = {x + 1, y + 1, 0}, d[3] = {x, y + 1, 0};
+                pk_add(tris, refs, &n, a, b, c, 0, (uint32_t)(2 * (y * G + x)), f32);
+                pk_add(tris, refs, &n, a, c, d, 0, (uint32_t)(2 * (y * G + x) + 1), f32);
+            }
+        /* Object 1: coincident copies of grid triangles, zero-area and collinear
+         * triangles, and triangles at huge and tiny scales. */
+        for (int i = 0; i < 40; i++) {
+            const tb_accel_tri *t = &tris[tb_rng_below(&r, (uint32_t)(2 * G * G))];
+            pk_add(tris, refs, &n, &t->v[0], &t->v[3], &t->v[6], 1, (uint32_t)i, f32);
+        }
+        for (int i = 0; i < 40; i++) {
+            double p[3] = {tb_rng_float(&r) * G, tb_rng_float(&r) * G, tb_rng_float(&r) * 2 - 1};
+            double q[3] = {p[0] + 1, p[1] + 0.5, p[2]}, m[3] = {p[0] + 2, p[1] + 1, p[2]};
+            /* collinear, or two corners equal */
+            pk_add(tris, refs, &n, p, q, i % 2 ? m : p, 1, (uint32_t)(100 + i), f32);
+        }
+        for (int i = 0; i < 60; i++) {
+            double s = i % 2 ? 1e-6 : 1e6;
+            double c0[3] = {tb_rng_float(&r) * G, tb_rng_float(&r) * G, 0.5 + tb_rng_float(&r)};
+            double a[3] = {c0[0], c0[1], c0[2]}, b[3] = {c0[0] + s, c0[1], c0[2] + s};
+            double c[3] = {c0[0], c0[1] + s, c0[2]};
+            pk_add(tris, refs, &n, a, b, c, 1, (uint32_t)(200 + i), f32);
+        }
+        int leaves[] = {1, 3, 8};
+        for (int li = 0; li < 3; li++) {
+            tb_accel_callbacks cb = {pk_no_callback, NULL, NULL, tris};
+            tb_accel *pk, *pk_sse, *one, *list;
+            assert_int_equal(
+                tb_accel_build(TB_ACCEL_BVH, refs, n, &cb, &(tb_accel_options){.bvh_max_leaf = leaves[li]}, &pk), TB_OK);
+            assert_int_equal(tb_accel_build(TB_ACCEL_BVH, refs, n, &cb,
+                                            &(tb_accel_options){.bvh_max_leaf = leaves[li], .bvh_no_avx = 1}, &pk_sse),
+                             TB_OK);
+            assert_int_equal(tb_accel_build(TB_ACCEL_BVH, refs, n, &cb,
+                                            &(tb_accel_options){.bvh_max_leaf = leaves[li], .bvh_no_pack = 1}, &one),
+                             TB_OK);
+            assert_int_equal(tb_accel_build(TB_ACCEL_LIST, refs, n, &cb, NULL, &list), TB_OK);
+            assert_null(one->lanes);
+            assert_non_null(pk->lanes);
+            assert_int_equal(pk->lanes_f32, f32); /* the 1e-6 offsets of the double variant are no floats */
+            assert_int_equal(pk_sse->lanes_f32, f32);
+            /* Every leaf is packed, its rows and identities as the records say. */
+            for (size_t w = 0; w < pk->nwide; w++) {
+                const tb__bvhw_node *nd = &pk->wide[w];
+                for (unsigned c = 0; c < nd->n; c++) {
+                    if (!nd->count[c])
+                        continue;
+                    assert_true(nd->count[c] & TB__BVHW_PACKED);
+                    uint32_t s0 = nd->child[c], cnt = TB__BVHW_COUNT(nd->count[c]);
+                    const float *bf = (const float *)pk->lanes + TB__LANE_ROWS_F * (size_t)s0;
+                    const double *bd = (const double *)pk->lanes + TB__LANE_ROWS * (size_t)s0;
+                    const tb__lane_ids *ids = f32 ? (const tb__lane_ids *)(bf + 9 * (size_t)cnt)
+                                                  : (const tb__lane_ids *)(bd + 9 * (size_t)cnt);
+                    for (uint32_t j = 0; j < cnt; j++) {
+                        for (unsigned row = 0; row < 9; row++) {
+                            double v = f32 ? (double)bf[row * cnt + j] : bd[row * cnt + j];
+                            assert_memory_equal(&v, &pk->tris[s0 + j].v[row], sizeof(double));
+                        }
+                        assert_int_equal(ids[j].object, pk->tris[s0 + j].object);
+                        assert_int_equal(ids[j].face, pk->tris[s0 + j].face);
+                        assert_int_equal(ids[j].index, pk->index[s0 + j]);
+                    }
                 }
             }
-        }
-        int was = tb_stats_enabled();
-        tb_stats_set_enabled(1);
-        for (long i = 0; i < 12000; i++) {
-            tb_ray ry;
-            int kind = (int)(i % 6);
-            float tmin = i % 5 == 0 ? -3.0f : (i % 5 == 1 ? 0.0f : 1e-3f);
-            if (kind <= 1) { /* down onto a grid vertex or an edge's midpoint: edge functions 0 */
-                float x = (float)tb_rng_below(&r, G), y = (float)tb_rng_below(&r, G);
-                if (kind == 1)
-                    x += 0.5f;
-                float dx = i % 7 == 0 ? 0.0f : tb_rng_float(&r) - 0.5f;
-                float dy = i % 11 == 0 ? 0.0f : tb_rng_float(&r) - 0.5f;
-                ry = ray(x - 3 * dx, y - 3 * dy, 3.0f, dx, dy, -1.0f, tmin, INFINITY);
-                zero_rays++;
-            } else if (kind == 2) { /* grazing: in the grid's plane */
-                ry = ray(-1.0f, tb_rng_float(&r) * G, 0.0f, 1.0f, tb_rng_float(&r) - 0.5f, 0.0f, tmin, INFINITY);
-            } else if (kind == 3) { /* axis-parallel */
-                ry = ray(tb_rng_float(&r) * G, tb_rng_float(&r) * G, -2.0f, 0.0f, 0.0f, 1.0f, tmin, 10.0f);
-            } else { /* anywhere, short and long */
-                tb_vec3 o = {tb_rng_float(&r) * G, tb_rng_float(&r) * G, tb_rng_float(&r) * 4 - 2};
-                tb_vec3 d = {tb_rng_float(&r) - 0.5f, tb_rng_float(&r) - 0.5f, tb_rng_float(&r) - 0.5f};
-                ry = tb_ray_make(o, d, tmin, kind == 4 ? 2.0f : INFINITY);
-            }
-            tb_hit h[4];
-            tb_accel_tri_hit d[4];
-            bool f[4];
-            int64_t nodes[3], prims[3];
-            tb_accel *acc[4] = {pk, pk_sse, one, list};
-            for (int k = 0; k < 4; k++) {
-                int64_t n0 = counter("BVH/nodes visited"), p0 = counter("BVH/primitives tested");
-                memset(&h[k], 0, sizeof h[k]);
-                memset(&d[k], 0, sizeof d[k]);
-                f[k] = tb_accel_intersect_tri(acc[k], &ry, &h[k], &d[k]);
-                if (k < 3) {
-                    nodes[k] = counter("BVH/nodes visited") - n0;
+            int was = tb_stats_enabled();
+            tb_stats_set_enabled(1);
+            for (long i = 0; i < 8000; i++) {
+                tb_ray ry;
+                int kind = (int)(i % 6);
+                float tmin = i % 5 == 0 ? -3.0f : (i % 5 == 1 ? 0.0f : 1e-3f);
+                if (kind <= 1) { /* down onto a grid vertex or an edge's midpoint: edge functions 0 */
+                    float x = (float)tb_rng_below(&r, G), y = (float)tb_rng_below(&r, G);
+                    if (kind == 1)
+                        x += 0.5f;
+                    float dx = i % 7 == 0 ? 0.0f : tb_rng_float(&r) - 0.5f;
+                    float dy = i % 11 == 0 ? 0.0f : tb_rng_float(&r) - 0.5f;
+                    ry = ray(x - 3 * dx, y - 3 * dy, 3.0f, dx, dy, -1.0f, tmin, INFINITY);
+                    zero_rays++;
+                } else if (kind == 2) { /* grazing: in the grid's plane */
+                    ry = ray(-1.0f, tb_rng_float(&r) * G, 0.0f, 1.0f, tb_rng_float(&r) - 0.5f, 0.0f, tmin, INFINITY);
+                } else if (kind == 3) { /* axis-parallel */
+                    ry = ray(tb_rng_float(&r) * G, tb_rng_float(&r) * G, -2.0f, 0.0f, 0.0f, 1.0f, tmin, 10.0f);
+                } else { /* anywhere, short and long */
+                    tb_vec3 o = {tb_rng_float(&r) * G, tb_rng_float(&r) * G, tb_rng_float(&r) * 4 - 2};
+                    tb_vec3 d = {tb_rng_float(&r) - 0.5f, tb_rng_float(&r) - 0.5f, tb_rng_float(&r) - 0.5f};
+                    ry = tb_ray_make(o, d, tmin, kind == 4 ? 2.0f : INFINITY);
+                }
+                tb_hit h[4];
+                tb_accel_tri_hit d[4];
+                bool f[4];
+                int64_t nodes[3], prims[3];
+                tb_accel *acc[4] = {pk, pk_sse, one, list};
+                for (int k = 0; k < 4; k++) {
+                    int64_t n0 = counter("BVH/nodes visited"), p0 = counter("BVH/primitives tested");
+                    memset(&h[k], 0, sizeof h[k]);
+                    memset(&d[k], 0, sizeof d[k]);
+                    f[k] = tb_accel_intersect_tri(acc[k], &ry, &h[k], &d[k]);
+                    if (k < 3) {
+                        nodes[k] = counter("BVH/nodes visited") - n0;
+                        prims[k] = counter("BVH/primitives tested") - p0;
+                    }
+                }
+                for (int k = 1; k < 4; k++) {
+                    assert_int_equal(f[k], f[0]);
+                    if (f[0]) {
+                        assert_memory_equal(&h[k], &h[0], sizeof h[0]);
+                        assert_memory_equal(&d[k], &d[0], sizeof d[0]);
+                    }
+                }
+                for (int k = 1; k < 3; k++) {
+                    assert_int_equal(nodes[k], nodes[0]);
+                    assert_int_equal(prims[k], prims[0]);
+                }
+                bool occ = tb_accel_occluded(list, &ry);
+                for (int k = 0; k < 3; k++) {
+                    int64_t p0 = counter("BVH/primitives tested");
+                    assert_int_equal(tb_accel_occluded(acc[k], &ry), occ);
                     prims[k] = counter("BVH/primitives tested") - p0;
                 }
+                assert_int_equal(prims[1], prims[0]);
+                assert_int_equal(prims[2], prims[0]);
+                hits += f[0];
+                total++;
             }
-            for (int k = 1; k < 4; k++) {
-                assert_int_equal(f[k], f[0]);
-                if (f[0]) {
-                    assert_memory_equal(&h[k], &h[0], sizeof h[0]);
-                    assert_memory_equal(&d[k], &d[0], sizeof d[0]);
-                }
-            }
-            for (int k = 1; k < 3; k++) {
-                assert_int_equal(nodes[k], nodes[0]);
-                assert_int_equal(prims[k], prims[0]);
-            }
-            bool occ = tb_accel_occluded(list, &ry);
-            for (int k = 0; k < 3; k++) {
-                int64_t p0 = counter("BVH/primitives tested");
-                assert_int_equal(tb_accel_occluded(acc[k], &ry), occ);
-                prims[k] = counter("BVH/primitives tested") - p0;
-            }
-            assert_int_equal(prims[1], prims[0]);
-            assert_int_equal(prims[2], prims[0]);
-            hits += f[0];
-            total++;
+            tb_stats_set_enabled(was);
+            tb_accel_free(pk);
+            tb_accel_free(pk_sse);
+            tb_accel_free(one);
+            tb_accel_free(list);
         }
-        tb_stats_set_enabled(was);
-        tb_accel_free(pk);
-        tb_accel_free(pk_sse);
-        tb_accel_free(one);
-        tb_accel_free(list);
     }
-    print_message("[ packed leaves ] %zu triangles, %ld rays (%ld at vertices / edges), %ld hits\n", n, total,
-                  zero_rays, hits);
+    print_message("[ packed leaves ] %zu triangles, float and double layouts, %ld rays (%ld at vertices / edges), "
+                  "%ld hits\n", n, total, zero_rays, hits);
     assert_true(hits > total / 3);
     free(tris);
     free(refs);
