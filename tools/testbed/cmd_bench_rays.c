@@ -168,10 +168,19 @@ static int tb__embree_build(const tb_scene *s, tb__embree *e, bool robust, const
     *user_objects = 0;
     e->s = s;
     tb__user_scene = s;
-    e->dev = rtcNewDevice(config);
+    /* One build thread unless the configuration says otherwise: Embree's
+     * tasking worker threads outlive the build (sleeping, waking now and
+     * then) and cost the two-thread runs of both tracers 3-10 % on a 2-core
+     * machine; rtcIntersect1 / rtcOccluded1 run on the caller's thread and
+     * never use them (docs/performance.md, "Seventh pass"). */
+    char cfg[512];
+    snprintf(cfg, sizeof cfg, "%s%sthreads=1", config ? config : "", config && *config ? "," : "");
+    if (config && strstr(config, "threads="))
+        snprintf(cfg, sizeof cfg, "%s", config);
+    e->dev = rtcNewDevice(cfg);
     if (!e->dev) {
-        fprintf(stderr, "testbed bench rays: rtcNewDevice(%s%s%s) failed (error %d)\n", config ? "\"" : "",
-                config ? config : "NULL", config ? "\"" : "", (int)rtcGetDeviceError(NULL));
+        fprintf(stderr, "testbed bench rays: rtcNewDevice(\"%s\") failed (error %d)\n", cfg,
+                (int)rtcGetDeviceError(NULL));
         return 0;
     }
     double t0 = tb__wall();
@@ -355,13 +364,16 @@ static void tb__rays_usage(FILE *out)
             "               traversal and triangle test, as ours always is)\n"
             "  --embree-config CFG  Embree's device configuration string (rtcNewDevice), e.g.\n"
             "               'max_isa=sse2' to compare at the instruction set ours is built for\n"
-            "               (by default Embree picks the widest the CPU has: AVX2 or AVX-512)\n"
+            "               (by default Embree picks the widest the CPU has: AVX2 or AVX-512);\n"
+            "               'threads=1' is added unless CFG sets threads (the build's worker\n"
+            "               threads would otherwise disturb the timed runs; tracing never uses them)\n"
             "  --rays N     N random camera rays (default: one per pixel at the file's resolution)\n"
             "  --threads T  comma-separated thread counts (default 1,2)\n"
             "  --seed S     random seed (default 1)\n"
             "  --repeat R   timed rounds, best kept per measurement (default 3); each round runs\n"
-            "               every thread count, ours then Embree, so a short disturbance spoils one\n"
-            "               round of each, not every repeat of one\n"
+            "               every thread count, ours and Embree (who goes first alternates by\n"
+            "               round), so a short disturbance spoils one round of each, not every\n"
+            "               repeat of one\n"
             "  --no-stats   turn the statistics counters (util/stats) off while tracing\n"
             "\n"
             "Exit status: 0 done, 1 the scene could not be loaded or Embree failed, 2 usage error.\n");
@@ -523,32 +535,41 @@ int tb_cmd_bench_rays(int argc, char **argv)
         double rate_ours[8] = {0}, rate_em[8] = {0}, cpu_ours[8] = {0}, cpu_em[8] = {0};
         size_t hits = 0, differ = 0;
         double nodes = 0.0, tests = 0.0; /* our BVH per ray (0 with --no-stats) */
-        /* Repeats interleaved: each round runs every thread count, ours then
-         * Embree, so a disturbance of a few milliseconds (a short set takes
+        /* Repeats interleaved: each round runs every thread count, both
+         * tracers, so a disturbance of a few milliseconds (a short set takes
          * ~10 ms) costs one round of each measurement, not all the repeats of
-         * one of them; the best of the rounds is kept per measurement. */
+         * one of them; the best of the rounds is kept per measurement. Who
+         * goes first alternates by round: the first run at a thread count
+         * finds the extra cores idle (a vCPU the host has descheduled, a
+         * clock that has dropped), the second finds them warm, and a fixed
+         * order gave the second tracer a few % more scaling. */
         double best_ours[8], bestc_ours[8], best_em[8], bestc_em[8];
         for (int ti = 0; ti < nthreads; ti++)
             best_ours[ti] = bestc_ours[ti] = best_em[ti] = bestc_em[ti] = INFINITY;
         for (uint64_t r = 0; r < repeat; r++)
-            for (int ti = 0; ti < nthreads; ti++) {
-                double c;
-                int64_t nodes0 = tb__counter("BVH/nodes visited"), tests0 = tb__counter("BVH/primitives tested");
-                double t = tb__trace_ours(s, rs, k, threads[ti], ti == 0 && r == 0 ? ours : NULL, &c);
-                if (r == 0 && ti == 0) {
-                    nodes = (double)(tb__counter("BVH/nodes visited") - nodes0) / (double)rs->n;
-                    tests = (double)(tb__counter("BVH/primitives tested") - tests0) / (double)rs->n;
-                }
-                best_ours[ti] = t < best_ours[ti] ? t : best_ours[ti];
-                bestc_ours[ti] = c < bestc_ours[ti] ? c : bestc_ours[ti];
+            for (int ti = 0; ti < nthreads; ti++)
+                for (int pass = 0; pass < 2; pass++) {
+                    double c, t;
+                    bool theirs_now = (pass == 0) == (r % 2 == 1);
+                    if (!theirs_now) {
+                        int64_t nodes0 = tb__counter("BVH/nodes visited");
+                        int64_t tests0 = tb__counter("BVH/primitives tested");
+                        t = tb__trace_ours(s, rs, k, threads[ti], ti == 0 && r == 0 ? ours : NULL, &c);
+                        if (r == 0 && ti == 0) {
+                            nodes = (double)(tb__counter("BVH/nodes visited") - nodes0) / (double)rs->n;
+                            tests = (double)(tb__counter("BVH/primitives tested") - tests0) / (double)rs->n;
+                        }
+                        best_ours[ti] = t < best_ours[ti] ? t : best_ours[ti];
+                        bestc_ours[ti] = c < bestc_ours[ti] ? c : bestc_ours[ti];
+                    }
 #ifdef TB_HAVE_EMBREE
-                if (embree) {
-                    t = tb__trace_embree(&e, rs, k, threads[ti], ti == 0 && r == 0 ? theirs : NULL, &c);
-                    best_em[ti] = t < best_em[ti] ? t : best_em[ti];
-                    bestc_em[ti] = c < bestc_em[ti] ? c : bestc_em[ti];
-                }
+                    else if (embree) {
+                        t = tb__trace_embree(&e, rs, k, threads[ti], ti == 0 && r == 0 ? theirs : NULL, &c);
+                        best_em[ti] = t < best_em[ti] ? t : best_em[ti];
+                        bestc_em[ti] = c < bestc_em[ti] ? c : bestc_em[ti];
+                    }
 #endif
-            }
+                }
         for (int ti = 0; ti < nthreads; ti++) {
             rate_ours[ti] = (double)rs->n / best_ours[ti] * 1e-6;
             cpu_ours[ti] = (double)rs->n / bestc_ours[ti] * 1e-6;
