@@ -1,7 +1,7 @@
 /* The wide BVH the CPU queries traverse (docs/accel.md, "Wide nodes" and
  * "Wide traversal"): bvh.c's binary SAH tree collapsed so that a node holds
- * up to eight children (the inner child of largest surface area is replaced
- * by its two children until there are eight), the children's boxes stored by
+ * up to eight children (chosen by dynamic programming to minimise the sum of
+ * the wide nodes' areas, below), the children's boxes stored by
  * coordinate and tested by one AVX slab test (bvh_wide_avx.c, where the CPU
  * has AVX) or two SSE2 ones (here) with tb__accel_slab_t's arithmetic, so
  * every box is met or missed exactly as the binary traversal decided it.
@@ -34,18 +34,29 @@ bool tb__bvhw_have_avx(void)
 
 /* ------------------------------------------------------------ collapse */
 
+/* The collapse chooses, for every wide node, which binary descendants
+ * become its (up to eight) children by the SAH over the wide tree (after
+ * Ylitie, Karras and Laine, "Efficient incoherent ray traversal on GPUs
+ * through compressed wide BVHs", HPG 2017, section 4.1), by dynamic
+ * programming from the leaves up: cost[i] of binary node n is the least
+ * cost of its subtree given at most i + 1 child slots of a wide node. Every
+ * binary leaf stays one leaf child (the same references, in the same
+ * order), so the leaves' SAH terms are the same in every choice and the
+ * cost reduces to the sum of the wide nodes' areas (the expected number of
+ * node steps of a ray, up to a factor): no constants to tune. */
+typedef struct tb__cdp {
+    double cost[TB__BVHW];     /* [i]: with at most i + 1 slots (the sum of the wide nodes' areas below) */
+    uint8_t left[TB__BVHW];    /* [i]: slots given to the first child (0: n itself is one child) */
+    uint8_t right[TB__BVHW];   /* [i]: slots given to the second child */
+    uint8_t dl, dr;            /* the best split of all eight slots below n (when n becomes a wide node) */
+} tb__cdp;
+
 typedef struct tb__collapse {
     const tb_bvh_node *bin;
     tb__bvhw_node *out;
     uint32_t next;
+    tb__cdp *dp;               /* per binary node */
 } tb__collapse;
-
-/* Half surface area in double, the build's measure (only compared here). */
-static double tb__bvhw_area(const tb_aabb *b)
-{
-    double ex = (double)b->hi.x - b->lo.x, ey = (double)b->hi.y - b->lo.y, ez = (double)b->hi.z - b->lo.z;
-    return ex * ey + ey * ez + ez * ex;
-}
 
 /* Appends to seq the positions in kids[] of the children below binary node
  * b, in the binary traversal's order for octant `oct`: a node that was
@@ -68,40 +79,86 @@ static void tb__bvhw_order(const tb_bvh_node *bin, uint32_t b, const uint32_t *k
     }
 }
 
+/* Half surface area in double, the build's measure (only compared here). */
+static double tb__bvhw_area(const tb_aabb *b)
+{
+    double ex = (double)b->hi.x - b->lo.x, ey = (double)b->hi.y - b->lo.y, ez = (double)b->hi.z - b->lo.z;
+    return ex * ey + ey * ez + ez * ex;
+}
+
+/* Fills c->dp bottom-up (children come after their parent in the array). */
+static void tb__bvhw_dp(tb__collapse *c, size_t nnodes)
+{
+    const tb_bvh_node *bin = c->bin;
+    for (size_t k = nnodes; k-- > 0;) {
+        tb__cdp *d = &c->dp[k];
+        if (bin[k].count) {
+            for (int i = 0; i < TB__BVHW; i++) {
+                d->cost[i] = 0.0;
+                d->left[i] = d->right[i] = 0;
+            }
+            d->dl = d->dr = 0;
+            continue;
+        }
+        const tb__cdp *l = &c->dp[k + 1], *r = &c->dp[bin[k].offset];
+        /* dist[j]: the two children spread over at most j + 1 slots (j >= 1). */
+        double dist[TB__BVHW];
+        uint8_t dl[TB__BVHW], dr[TB__BVHW];
+        for (int j = 1; j < TB__BVHW; j++) {
+            dist[j] = INFINITY;
+            for (int kl = 0; kl < j; kl++) { /* kl + 1 slots left, j - kl right */
+                double v = l->cost[kl] + r->cost[j - 1 - kl];
+                if (v < dist[j]) {
+                    dist[j] = v;
+                    dl[j] = (uint8_t)(kl + 1);
+                    dr[j] = (uint8_t)(j - kl);
+                }
+            }
+        }
+        d->dl = dl[TB__BVHW - 1];
+        d->dr = dr[TB__BVHW - 1];
+        /* One slot: n becomes a wide node of its own. */
+        d->cost[0] = tb__bvhw_area(&bin[k].bounds) + dist[TB__BVHW - 1];
+        d->left[0] = d->right[0] = 0;
+        for (int i = 1; i < TB__BVHW; i++) {
+            d->cost[i] = d->cost[i - 1];
+            d->left[i] = d->left[i - 1];
+            d->right[i] = d->right[i - 1];
+            if (dist[i] < d->cost[i]) {
+                d->cost[i] = dist[i];
+                d->left[i] = dl[i];
+                d->right[i] = dr[i];
+            }
+        }
+    }
+}
+
+/* Appends to kids[] the children that binary node b becomes with `slots`
+ * slots (tb__cdp), in the binary tree's left-to-right order. */
+static void tb__bvhw_kids(const tb__collapse *c, uint32_t b, int slots, uint32_t *kids, int *nk)
+{
+    const tb__cdp *d = &c->dp[b];
+    if (d->left[slots - 1] == 0) {
+        kids[(*nk)++] = b;
+        return;
+    }
+    tb__bvhw_kids(c, b + 1, d->left[slots - 1], kids, nk);
+    tb__bvhw_kids(c, c->bin[b].offset, d->right[slots - 1], kids, nk);
+}
+
 /* Writes the wide node for binary node b (an inner node, or the root when
  * it is a leaf) and, depth-first, those of its inner children; returns its index. */
 static uint32_t tb__bvhw_collapse(tb__collapse *c, uint32_t b)
 {
     const tb_bvh_node *bin = c->bin;
     uint32_t kids[TB__BVHW];
-    int nk;
+    int nk = 0;
     if (bin[b].count) {
         kids[0] = b;
         nk = 1;
     } else {
-        kids[0] = b + 1;
-        kids[1] = bin[b].offset;
-        nk = 2;
-        /* Open the inner child of largest area (the first on a tie) in place,
-         * so kids[] keeps the binary tree's left-to-right order. */
-        while (nk < TB__BVHW) {
-            int best = -1;
-            double best_area = -1.0;
-            for (int i = 0; i < nk; i++) {
-                double a = tb__bvhw_area(&bin[kids[i]].bounds);
-                if (bin[kids[i]].count == 0 && a > best_area) {
-                    best = i;
-                    best_area = a;
-                }
-            }
-            if (best < 0)
-                break;
-            uint32_t k = kids[best];
-            memmove(&kids[best + 2], &kids[best + 1], (size_t)(nk - best - 1) * sizeof kids[0]);
-            kids[best] = k + 1;
-            kids[best + 1] = bin[k].offset;
-            nk++;
-        }
+        tb__bvhw_kids(c, b + 1, c->dp[b].dl, kids, &nk);
+        tb__bvhw_kids(c, bin[b].offset, c->dp[b].dr, kids, &nk);
     }
     uint32_t me = c->next++;
     tb__bvhw_node *o = &c->out[me];
@@ -146,8 +203,14 @@ tb_status tb__bvhw_build(tb_accel *acc, const tb_accel_options *opt)
     tb__bvhw_node *tmp = malloc(bound * sizeof *tmp);
     if (!tmp)
         return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the wide nodes");
-    tb__collapse c = {acc->nodes, tmp, 0};
+    tb__collapse c = {acc->nodes, tmp, 0, malloc(acc->nnodes * sizeof(tb__cdp))};
+    if (!c.dp) {
+        free(tmp);
+        return tb_error(TB_ERR_NOMEM, "BVH: out of memory for the wide collapse");
+    }
+    tb__bvhw_dp(&c, acc->nnodes);
     tb__bvhw_collapse(&c, 0);
+    free(c.dp);
     /* Exact size, 64-byte aligned (a node's box rows are 32-byte aligned for AVX loads). */
     /* (C11 wants the size a multiple of the alignment: 288-byte nodes are not.) */
     size_t bytes = ((size_t)c.next * sizeof(tb__bvhw_node) + 63u) & ~(size_t)63u;

@@ -754,6 +754,131 @@ static void check_bvhw(const tb_accel *acc, int max_leaf)
     free(reached);
 }
 
+/* Half surface area in double (the collapse's measure). */
+static double wide_area(const tb_aabb *b)
+{
+    double ex = (double)b->hi.x - b->lo.x, ey = (double)b->hi.y - b->lo.y, ez = (double)b->hi.z - b->lo.z;
+    return ex * ey + ey * ez + ez * ex;
+}
+
+/* The sum of the areas of acc's wide nodes (each the union of its children's boxes). */
+static double wide_total_area(const tb_accel *acc)
+{
+    double sum = 0.0;
+    for (size_t w = 0; w < acc->nwide; w++) {
+        const tb__bvhw_node *nd = &acc->wide[w];
+        tb_aabb u = tb_aabb_empty();
+        for (unsigned c = 0; c < nd->n; c++)
+            u = tb_aabb_union(u, (tb_aabb){{nd->box[0][c], nd->box[2][c], nd->box[4][c]},
+                                           {nd->box[1][c], nd->box[3][c], nd->box[5][c]}});
+        sum += wide_area(&u);
+    }
+    return sum;
+}
+
+/* The greedy collapse the wide tree had before (open the inner child of
+ * largest area until eight children): the sum of its nodes' areas. */
+static double greedy_total_area(const tb_bvh_node *bin, uint32_t b)
+{
+    if (bin[b].count)
+        return wide_area(&bin[b].bounds);
+    uint32_t kids[8] = {b + 1, bin[b].offset};
+    int nk = 2;
+    while (nk < 8) {
+        int best = -1;
+        double best_a = -1.0;
+        for (int i = 0; i < nk; i++)
+            if (bin[kids[i]].count == 0 && wide_area(&bin[kids[i]].bounds) > best_a) {
+                best = i;
+                best_a = wide_area(&bin[kids[i]].bounds);
+            }
+        if (best < 0)
+            break;
+        uint32_t k = kids[best];
+        memmove(&kids[best + 2], &kids[best + 1], (size_t)(nk - best - 1) * sizeof kids[0]);
+        kids[best] = k + 1;
+        kids[best + 1] = bin[k].offset;
+        nk++;
+    }
+    double sum = wide_area(&bin[b].bounds);
+    for (int i = 0; i < nk; i++)
+        if (bin[kids[i]].count == 0)
+            sum += greedy_total_area(bin, kids[i]);
+    return sum;
+}
+
+/* Children of binary node b when the inner nodes flagged in `roots` start wide nodes. */
+static int cut_children(const tb_bvh_node *bin, uint32_t b, const bool *roots)
+{
+    if (bin[b].count || roots[b])
+        return 1;
+    return cut_children(bin, b + 1, roots) + cut_children(bin, bin[b].offset, roots);
+}
+
+/* The least sum of wide-node areas over every way to collapse a small binary
+ * tree (every subset of inner nodes as wide-node roots, each with at most 8
+ * children), by exhaustion: an independent check of the dynamic programme. */
+static double best_total_area(const tb_bvh_node *bin, size_t nnodes)
+{
+    uint32_t inner[64];
+    int ni = 0;
+    for (size_t i = 1; i < nnodes; i++)
+        if (bin[i].count == 0)
+            inner[ni++] = (uint32_t)i;
+    assert_true(ni <= 20);
+    bool roots[128] = {0};
+    double best = INFINITY;
+    for (uint32_t mask = 0; mask < (1u << ni); mask++) {
+        for (int i = 0; i < ni; i++)
+            roots[inner[i]] = mask >> i & 1u;
+        roots[0] = true;
+        bool ok = true;
+        double sum = 0.0;
+        for (size_t i = 0; i < nnodes && ok; i++) {
+            if (!roots[i] || bin[i].count)
+                continue;
+            ok = cut_children(bin, (uint32_t)i + 1, roots) + cut_children(bin, bin[i].offset, roots) <= 8;
+            sum += wide_area(&bin[i].bounds);
+        }
+        if (ok && sum < best)
+            best = sum;
+    }
+    return best;
+}
+
+/* The collapse's choice: the least sum of wide-node areas (checked by
+ * exhaustion on small trees), never more than the greedy collapse's. */
+static void test_bvhw_collapse_optimal(void **state)
+{
+    (void)state;
+    tb_rng r;
+    tb_rng_seed(&r, tb_test_seed("bvhw_collapse", 33), 0);
+    for (int trial = 0; trial < 60; trial++) {
+        tp_scene s = {0};
+        size_t n = 6 + tb_rng_below(&r, 11); /* up to 15 inner nodes with leaves of 1 */
+        tp_random_scene(&s, &r, n, 1.0f, 0.0f);
+        tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = 1});
+        if (acc->nnodes > 1) {
+            double got = wide_total_area(acc), best = best_total_area(acc->nodes, acc->nnodes);
+            assert_true(fabs(got - best) <= 1e-9 * best);
+        }
+        tb_accel_free(acc);
+        tp_free(&s);
+    }
+    const size_t sizes[] = {1000, 20000};
+    for (int i = 0; i < 2; i++) {
+        tp_scene s = {0};
+        tp_random_scene(&s, &r, sizes[i], 1.0f, 0.0f);
+        tb_accel *acc = build(TB_ACCEL_BVH, &s, NULL);
+        double got = wide_total_area(acc), greedy = greedy_total_area(acc->nodes, 0);
+        print_message("[ bvhw collapse ] %zu references: wide-node area sum %.4g (greedy %.4g)\n", sizes[i], got,
+                      greedy);
+        assert_true(got <= greedy * (1.0 + 1e-12));
+        tb_accel_free(acc);
+        tp_free(&s);
+    }
+}
+
 static void test_bvhw_structure(void **state)
 {
     (void)state;
@@ -1185,6 +1310,7 @@ int main(void)
         cmocka_unit_test(test_slab_matches_util),
         cmocka_unit_test(test_bvhw_slab_matches_scalar),
         cmocka_unit_test(test_bvhw_structure),
+        cmocka_unit_test(test_bvhw_collapse_optimal),
         cmocka_unit_test(test_bvhw_avx_matches_sse),
         cmocka_unit_test(test_bvhw_order_position),
         cmocka_unit_test(test_packed_leaves),
