@@ -74,14 +74,17 @@ static double tb__cpu(void) { return tb__clock(CLOCK_THREAD_CPUTIME_ID); }
 /* ------------------------------------------------------------ our BVH */
 
 /* Traces set `k` through the scene with `threads` threads; answers into out (may be NULL). Wall seconds. */
-static double tb__trace_ours(const tb_scene *s, const tb__rayset *rs, int k, int threads, tb__answer *out,
-                             double *cpu)
+static double tb__trace_ours(const tb_scene *s, const tb__rayset *rs, int k, int threads, int passes,
+                             tb__answer *out, double *cpu)
 {
     double cpu_sum = 0.0, t0 = tb__wall();
     long n = (long)rs->n;
 #pragma omp parallel num_threads(threads) reduction(+ : cpu_sum)
     {
     double c0 = tb__cpu();
+    /* The passes without a barrier between them (nowait): a thread done
+     * with its chunks of one pass takes chunks of the next. */
+    for (int pass = 0; pass < passes; pass++)
 #pragma omp for schedule(dynamic, 1024) nowait
     for (long i = 0; i < n; i++) {
         tb__answer a = {0.0f, UINT32_MAX, 0};
@@ -93,7 +96,7 @@ static double tb__trace_ours(const tb_scene *s, const tb__rayset *rs, int k, int
             if (tb_scene_intersect(s, &rs->rays[i], &h))
                 a = (tb__answer){h.t, h.object, h.face};
         }
-        if (out)
+        if (out && pass == 0)
             out[i] = a;
     }
     cpu_sum += tb__cpu() - c0;
@@ -168,18 +171,9 @@ static int tb__embree_build(const tb_scene *s, tb__embree *e, bool robust, const
     *user_objects = 0;
     e->s = s;
     tb__user_scene = s;
-    /* One build thread unless the configuration says otherwise: Embree's
-     * tasking worker threads outlive the build (sleeping, waking now and
-     * then) and cost the two-thread runs of both tracers 3-10 % on a 2-core
-     * machine; rtcIntersect1 / rtcOccluded1 run on the caller's thread and
-     * never use them (docs/performance.md, "Seventh pass"). */
-    char cfg[512];
-    snprintf(cfg, sizeof cfg, "%s%sthreads=1", config ? config : "", config && *config ? "," : "");
-    if (config && strstr(config, "threads="))
-        snprintf(cfg, sizeof cfg, "%s", config);
-    e->dev = rtcNewDevice(cfg);
+    e->dev = rtcNewDevice(config);
     if (!e->dev) {
-        fprintf(stderr, "testbed bench rays: rtcNewDevice(\"%s\") failed (error %d)\n", cfg,
+        fprintf(stderr, "testbed bench rays: rtcNewDevice(\"%s\") failed (error %d)\n", config,
                 (int)rtcGetDeviceError(NULL));
         return 0;
     }
@@ -247,14 +241,15 @@ static void tb__embree_free(tb__embree *e)
         rtcReleaseDevice(e->dev);
 }
 
-static double tb__trace_embree(const tb__embree *e, const tb__rayset *rs, int k, int threads, tb__answer *out,
-                               double *cpu)
+static double tb__trace_embree(const tb__embree *e, const tb__rayset *rs, int k, int threads, int passes,
+                               tb__answer *out, double *cpu)
 {
     double cpu_sum = 0.0, t0 = tb__wall();
     long n = (long)rs->n;
 #pragma omp parallel num_threads(threads) reduction(+ : cpu_sum)
     {
     double c0 = tb__cpu();
+    for (int pass = 0; pass < passes; pass++)
 #pragma omp for schedule(dynamic, 1024) nowait
     for (long i = 0; i < n; i++) {
         const tb_ray *r = &rs->rays[i];
@@ -283,7 +278,7 @@ static double tb__trace_embree(const tb__embree *e, const tb__rayset *rs, int k,
                 a = (tb__answer){rh.ray.tfar, rh.hit.geomID, face};
             }
         }
-        if (out)
+        if (out && pass == 0)
             out[i] = a;
     }
     cpu_sum += tb__cpu() - c0;
@@ -348,7 +343,7 @@ static void tb__rays_usage(FILE *out)
     fprintf(out,
             "usage: testbed bench rays SCENE.mid [--embree | --embree-robust] [--embree-config CFG]\n"
             "                                    [--rays N] [--threads T,...] [--seed S] [--repeat R]\n"
-            "                                    [--no-stats]\n"
+            "                                    [--min-time S] [--no-stats]\n"
             "\n"
             "Primary (the scene camera), shadow (primary hit to a point on a light, any hit) and\n"
             "diffuse (cosine bounce from primary hits, closest hit) rays through the scene's BVH\n"
@@ -370,6 +365,9 @@ static void tb__rays_usage(FILE *out)
             "  --rays N     N random camera rays (default: one per pixel at the file's resolution)\n"
             "  --threads T  comma-separated thread counts (default 1,2)\n"
             "  --seed S     random seed (default 1)\n"
+            "  --min-time S each timed run traces the set as many times as makes our single-thread\n"
+            "               run last S seconds (default 0.1; 0: once): thread start-up and the last\n"
+            "               chunk's imbalance then weigh little in the scaling\n"
             "  --repeat R   timed rounds, best kept per measurement (default 3); each round runs\n"
             "               every thread count, ours and Embree (who goes first alternates by\n"
             "               round), so a short disturbance spoils one round of each, not every\n"
@@ -402,6 +400,7 @@ int tb_cmd_bench_rays(int argc, char **argv)
     bool embree = false, robust = false;
     const char *embree_config = NULL;
     uint64_t nrays = 0, seed = 1, repeat = 3;
+    double min_time = 0.1;
     int threads[8] = {1, 2}, nthreads = 2;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -426,6 +425,13 @@ int tb_cmd_bench_rays(int argc, char **argv)
         } else if (strcmp(a, "--repeat") == 0 && i + 1 < argc) {
             if (!tb__count(argv[++i], 100, &repeat) || repeat == 0) {
                 fprintf(stderr, "testbed bench rays: --repeat needs a whole number in 1 .. 100, not '%s'\n", argv[i]);
+                return TB_EXIT_USAGE;
+            }
+        } else if (strcmp(a, "--min-time") == 0 && i + 1 < argc) {
+            char *end;
+            min_time = strtod(argv[++i], &end);
+            if (*end || !(min_time >= 0.0 && min_time <= 60.0)) {
+                fprintf(stderr, "testbed bench rays: --min-time needs seconds in 0 .. 60, not '%s'\n", argv[i]);
                 return TB_EXIT_USAGE;
             }
         } else if (strcmp(a, "--threads") == 0 && i + 1 < argc) {
@@ -505,13 +511,24 @@ int tb_cmd_bench_rays(int argc, char **argv)
     if (embree) {
         size_t nu;
         double bs;
-        if (!tb__embree_build(s, &e, robust, embree_config, &nu, &bs)) {
+        /* One build thread unless the configuration says otherwise: Embree's
+         * tasking worker threads outlive the build (sleeping, waking now and
+         * then) and cost the two-thread runs of both tracers 3-10 % on a 2-core
+         * machine; rtcIntersect1 / rtcOccluded1 run on the caller's thread and
+         * never use them (docs/performance.md, "Seventh pass"). */
+        char cfg[512];
+        if (embree_config && strstr(embree_config, "threads="))
+            snprintf(cfg, sizeof cfg, "%s", embree_config);
+        else
+            snprintf(cfg, sizeof cfg, "%s%sthreads=1", embree_config ? embree_config : "",
+                     embree_config && *embree_config ? "," : "");
+        if (!tb__embree_build(s, &e, robust, cfg, &nu, &bs)) {
             status = TB_EXIT_FAIL;
             goto done;
         }
-        printf("Embree %d.%d.%d scene built in %.3f s (%zu user geometries%s%s%s)\n", RTC_VERSION_MAJOR,
-               RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu, robust ? ", RTC_SCENE_FLAG_ROBUST" : "",
-               embree_config ? ", device config " : "", embree_config ? embree_config : "");
+        printf("Embree %d.%d.%d scene built in %.3f s (%zu user geometries%s, device config %s)\n",
+               RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu,
+               robust ? ", RTC_SCENE_FLAG_ROBUST" : "", cfg);
     }
 #endif
     double load[1] = {0};
@@ -535,6 +552,18 @@ int tb_cmd_bench_rays(int argc, char **argv)
         double rate_ours[8] = {0}, rate_em[8] = {0}, cpu_ours[8] = {0}, cpu_em[8] = {0};
         size_t hits = 0, differ = 0;
         double nodes = 0.0, tests = 0.0; /* our BVH per ray (0 with --no-stats) */
+        /* Passes per timed run: a set of ~200 000 rays takes 15-40 ms, of which
+         * waking the threads and the last chunk's imbalance are a few %, enough
+         * to move the scaling figure; every timed run traces the set `passes`
+         * times (the same number for both tracers and every thread count), so
+         * that our single-thread run lasts at least --min-time. */
+        int passes = 1;
+        {
+            double c;
+            double t = tb__trace_ours(s, rs, k, 1, 1, NULL, &c);
+            if (t > 0.0 && t < min_time)
+                passes = (int)fmin(1000.0, ceil(min_time / t));
+        }
         /* Repeats interleaved: each round runs every thread count, both
          * tracers, so a disturbance of a few milliseconds (a short set takes
          * ~10 ms) costs one round of each measurement, not all the repeats of
@@ -554,28 +583,29 @@ int tb_cmd_bench_rays(int argc, char **argv)
                     if (!theirs_now) {
                         int64_t nodes0 = tb__counter("BVH/nodes visited");
                         int64_t tests0 = tb__counter("BVH/primitives tested");
-                        t = tb__trace_ours(s, rs, k, threads[ti], ti == 0 && r == 0 ? ours : NULL, &c);
+                        t = tb__trace_ours(s, rs, k, threads[ti], passes, ti == 0 && r == 0 ? ours : NULL, &c);
                         if (r == 0 && ti == 0) {
-                            nodes = (double)(tb__counter("BVH/nodes visited") - nodes0) / (double)rs->n;
-                            tests = (double)(tb__counter("BVH/primitives tested") - tests0) / (double)rs->n;
+                            nodes = (double)(tb__counter("BVH/nodes visited") - nodes0) / ((double)rs->n * passes);
+                            tests = (double)(tb__counter("BVH/primitives tested") - tests0) / ((double)rs->n * passes);
                         }
                         best_ours[ti] = t < best_ours[ti] ? t : best_ours[ti];
                         bestc_ours[ti] = c < bestc_ours[ti] ? c : bestc_ours[ti];
                     }
 #ifdef TB_HAVE_EMBREE
                     else if (embree) {
-                        t = tb__trace_embree(&e, rs, k, threads[ti], ti == 0 && r == 0 ? theirs : NULL, &c);
+                        t = tb__trace_embree(&e, rs, k, threads[ti], passes, ti == 0 && r == 0 ? theirs : NULL,
+                                             &c);
                         best_em[ti] = t < best_em[ti] ? t : best_em[ti];
                         bestc_em[ti] = c < bestc_em[ti] ? c : bestc_em[ti];
                     }
 #endif
                 }
         for (int ti = 0; ti < nthreads; ti++) {
-            rate_ours[ti] = (double)rs->n / best_ours[ti] * 1e-6;
-            cpu_ours[ti] = (double)rs->n / bestc_ours[ti] * 1e-6;
+            rate_ours[ti] = (double)rs->n * passes / best_ours[ti] * 1e-6;
+            cpu_ours[ti] = (double)rs->n * passes / bestc_ours[ti] * 1e-6;
             if (embree) {
-                rate_em[ti] = (double)rs->n / best_em[ti] * 1e-6;
-                cpu_em[ti] = (double)rs->n / bestc_em[ti] * 1e-6;
+                rate_em[ti] = (double)rs->n * passes / best_em[ti] * 1e-6;
+                cpu_em[ti] = (double)rs->n * passes / bestc_em[ti] * 1e-6;
             }
             if (ti == 0)
                 for (size_t i = 0; i < rs->n; i++) {
@@ -595,6 +625,9 @@ int tb_cmd_bench_rays(int argc, char **argv)
         if (nodes > 0.0)
             printf("%-8s our BVH per ray: %.1f nodes visited, %.1f references tested\n", tb__set_names[k], nodes,
                    tests);
+        if (passes > 1)
+            printf("%-8s each timed run traced the set %d times (--min-time %.2g s)\n", tb__set_names[k], passes,
+                   min_time);
         if (nthreads > 1) {
             printf("%-8s scaling %d -> %d threads: ours %.2fx", tb__set_names[k], threads[0], threads[nthreads - 1],
                    rate_ours[nthreads - 1] / rate_ours[0]);
