@@ -28,19 +28,28 @@ typedef struct tb__wray {
     unsigned oct;                            /* the direction's octant (bit a: inv_d's sign bit along a) */
 } tb__wray;
 
+/* Lane a of v in all eight lanes. */
+#define TB__F8_LANE(v, a) \
+    _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_shuffle_ps(v, v, (a) * 0x55)), _mm_shuffle_ps(v, v, (a) * 0x55), 1)
+
 static inline void tb__wray_init(tb__wray *r, const tb_ray *ray)
 {
-    float inv[3] = {1.0f / ray->d.x, 1.0f / ray->d.y, 1.0f / ray->d.z};
-    float o[3] = {ray->o.x, ray->o.y, ray->o.z};
+    /* The three reciprocals in one division (each lane rounds as 1.0f / d
+     * does); 1 / d has the sign bit of d, so the plane choice need not wait
+     * for it. */
+    __m128 inv = _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(ray->d.x, ray->d.y, ray->d.z, 1.0f));
+    const float d[3] = {ray->d.x, ray->d.y, ray->d.z}, o[3] = {ray->o.x, ray->o.y, ray->o.z};
     r->oct = 0;
     for (unsigned a = 0; a < 3; a++) {
-        unsigned neg = signbit(inv[a]) != 0;
+        unsigned neg = signbit(d[a]) != 0;
         r->near[a] = (2 * a + neg) * sizeof(((tb__bvhw_node *)0)->box[0]);
         r->far[a] = (2 * a + 1 - neg) * sizeof(((tb__bvhw_node *)0)->box[0]);
         r->oct |= neg << a;
         r->o[a] = _mm256_set1_ps(o[a]);
-        r->inv[a] = _mm256_set1_ps(inv[a]);
     }
+    r->inv[0] = TB__F8_LANE(inv, 0);
+    r->inv[1] = TB__F8_LANE(inv, 1);
+    r->inv[2] = TB__F8_LANE(inv, 2);
     r->sign = tb__f8_opaque(_mm256_set1_ps(-0.0f));
     r->k = tb__f8_opaque(_mm256_set1_ps(2.0f * tb_gamma(3)));
     r->one = tb__f8_opaque(_mm256_set1_ps(1.0f));
