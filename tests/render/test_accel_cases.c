@@ -853,9 +853,9 @@ static void test_bvhw_collapse_optimal(void **state)
     (void)state;
     tb_rng r;
     tb_rng_seed(&r, tb_test_seed("bvhw_collapse", 33), 0);
-    for (int trial = 0; trial < 60; trial++) {
+    for (int trial = 0; trial < 30; trial++) {
         tp_scene s = {0};
-        size_t n = 6 + tb_rng_below(&r, 11); /* up to 15 inner nodes with leaves of 1 */
+        size_t n = 6 + tb_rng_below(&r, 9); /* up to 13 inner nodes with leaves of 1 */
         tp_random_scene(&s, &r, n, 1.0f, 0.0f);
         tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = 1});
         if (acc->nnodes > 1) {
@@ -1112,7 +1112,7 @@ static void test_packed_leaves(void **state)
             }
             int was = tb_stats_enabled();
             tb_stats_set_enabled(1);
-            for (long i = 0; i < 8000; i++) {
+            for (long i = 0; i < 3000; i++) {
                 tb_ray ry;
                 int kind = (int)(i % 6);
                 float tmin = i % 5 == 0 ? -3.0f : (i % 5 == 1 ? 0.0f : 1e-3f);
