@@ -127,8 +127,7 @@ struct tb_accel {
      * side, then n tb__lane_ids (what a hit needs, so a hit reads no other
      * array). NULL when no leaf is packed. */
     void *lanes;
-    bool lanes_f32;        /* every packed corner is a float (exactly), stored as one: 52 bytes per reference, not 88 */
-    size_t lanes_bytes;    /* allocated (with slack for the last partial vector) */
+    bool lanes_f32;        /* every packed corner is a float (exactly), stored as one: 52 bytes per reference */
     tb__grid grid;         /* grid */
 };
 

@@ -426,7 +426,6 @@ void tb__bvh_free(tb_accel *acc)
     free(acc->lanes);
     acc->lanes = NULL;
     acc->lanes_f32 = false;
-    acc->lanes_bytes = 0;
     acc->nodes = NULL;
     acc->nnodes = 0;
     acc->wide = NULL;

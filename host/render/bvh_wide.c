@@ -293,7 +293,6 @@ tb_status tb__bvhw_pack(tb_accel *acc)
     }
     acc->lanes = lanes;
     acc->lanes_f32 = f32;
-    acc->lanes_bytes = bytes;
     acc->stats.memory_bytes += bytes;
 #else
     (void)acc;
