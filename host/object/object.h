@@ -17,7 +17,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/base/error.h"
 #include "util/math/aabb.h"
 #include "util/math/transform.h"

@@ -25,7 +25,7 @@
 
 #include <stdbool.h>
 
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/base/error.h"
 #include "util/math/transform.h"
 #include "util/math/vec.h"

@@ -19,7 +19,7 @@
 
 #include <stdbool.h>
 
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/base/error.h"
 #include "util/math/ray.h"
 #include "util/math/vec.h"

@@ -14,7 +14,7 @@
 #include <math.h>
 #include <stdbool.h>
 
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/base/error.h"
 #include "util/color/bands.h"
 

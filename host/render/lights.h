@@ -29,7 +29,7 @@
 #include "host/render/channels.h"
 #include "host/render/ies.h"
 #include "host/render/sampling.h"
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/math/ray.h"
 #include "util/math/rng.h"
 #include "util/math/vec.h"
@@ -57,7 +57,7 @@ typedef struct tb_light_sample {
 
 /* A point, spot or directional light in world space. */
 typedef struct tb_light {
-    tb_light_kind kind;    /* TB_LIGHT_POINT, TB_LIGHT_SPOT, TB_LIGHT_DIRECTIONAL (host/scene/mid.h) */
+    tb_light_kind kind;    /* TB_LIGHT_POINT, TB_LIGHT_SPOT, TB_LIGHT_DIRECTIONAL (host/mid/mid.h) */
     tb_vec3 position;      /* point, spot: world position */
     tb_vec3 axis;          /* unit: spot beam axis; directional: direction light travels;
                               point: the photometric nadir of an IES file (light-space -z) */

@@ -16,7 +16,7 @@
 #include "host/object/intersect.h"
 #include "host/render/ies.h"
 #include "host/render/scene_internal.h"
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 #include "util/container/hash_table.h"
 #include "util/stats/stats.h"
 

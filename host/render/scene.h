@@ -38,7 +38,7 @@
 #include "host/render/camera.h"
 #include "host/render/channels.h"
 #include "host/render/lights.h"
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/base/error.h"
 #include "util/color/bands.h"
 #include "util/math/aabb.h"

@@ -32,7 +32,7 @@
  * the item's index in the chunk) for its patterns, bump map and textures. */
 #define TB_GPU_SHADE_SURFACE 4u
 
-/* tb_gpu_pattern.kind (host/scene/mid.h's tb_mid_pattern_kind; image bumps are routed). */
+/* tb_gpu_pattern.kind (host/mid/mid.h's tb_mid_pattern_kind; image bumps are routed). */
 #define TB_GPU_PATTERN_NONE 0u
 #define TB_GPU_PATTERN_CHECKER 1u
 #define TB_GPU_PATTERN_NOISE 2u
@@ -72,7 +72,7 @@
 #define TB_GPU_EMITTER_DISC 2u
 #define TB_GPU_EMITTER_SPHERE 3u
 
-/* Delta light kinds (host/scene/mid.h's tb_light_kind values are mapped to these). */
+/* Delta light kinds (host/mid/mid.h's tb_light_kind values are mapped to these). */
 #define TB_GPU_LIGHT_POINT 0u
 #define TB_GPU_LIGHT_SPOT 1u
 #define TB_GPU_LIGHT_DIRECTIONAL 2u

@@ -15,7 +15,7 @@ check() { # check FOLDER FORBIDDEN-REGEX
   fi
 }
 check util 'host/|tools/'
-for d in host/scene host/object; do
+for d in host/mid host/object; do
   [[ -d $d ]] && check "$d" 'host/render|host/radiosity|host/gpu|host/dist|tools/'
 done
 for d in host/render host/radiosity host/gpu host/dist; do
@@ -24,7 +24,7 @@ done
 # The check itself must be able to fail: a planted violation must be found.
 tmp=$(mktemp -d)
 mkdir -p "$tmp/util/x"
-echo '#include "host/scene/mid.h"' > "$tmp/util/x/a.c"
+echo '#include "host/mid/mid.h"' > "$tmp/util/x/a.c"
 if ! (cd "$tmp" && grep -rqE '^[[:space:]]*#[[:space:]]*include[[:space:]]*["<](host/|tools/)' util); then
   echo "self-test failed: planted violation not detected"; bad=1
 fi

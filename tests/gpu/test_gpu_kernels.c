@@ -14,7 +14,7 @@
 #include "host/object/hit.h"
 #include "host/object/intersect.h"
 #include "host/object/object.h"
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "kernels/cases.h"
 #include "shared/hit.h"
 #include "shared/ray.h"

@@ -1,4 +1,4 @@
-/* tests/import: `testbed import` (host/scene/import.h) on hand-made files with
+/* tests/import: `testbed import` (host/mid/import.h) on hand-made files with
  * known values and on models of Debian's assimp-testmodels package.
  *
  * Every check compares with something the importer did not compute: the
@@ -20,8 +20,8 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include "host/scene/import.h"
-#include "host/scene/mid_reader.h"
+#include "host/mid/import.h"
+#include "host/mid/mid_reader.h"
 #include "util/mesh/fed.h"
 
 #ifndef TB_ASSIMP_MODELS

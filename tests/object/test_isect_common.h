@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "host/object/object.h"
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/math/rng.h"
 #include "util/math/transform.h"
 

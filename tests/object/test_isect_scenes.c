@@ -9,7 +9,7 @@
 
 #include "host/object/hit.h"
 #include "host/object/intersect.h"
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 #include "util/math/float.h"
 
 typedef struct ti_scene_stats {

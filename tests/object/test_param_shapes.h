@@ -9,7 +9,7 @@
 #include <stdbool.h>
 #include <string.h>
 
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/math/rng.h"
 #include "util/math/transform.h"
 

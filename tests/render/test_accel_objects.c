@@ -13,7 +13,7 @@
 #include "host/object/intersect.h"
 #include "host/object/object.h"
 #include "host/render/accel.h"
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 #include "util/math/aabb.h"
 #include "util/math/rng.h"
 

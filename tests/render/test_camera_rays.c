@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "host/render/camera.h"
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 #include "util/math/float.h"
 #include "util/math/rng.h"
 

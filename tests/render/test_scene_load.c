@@ -13,7 +13,7 @@
 
 #include "host/object/intersect.h"
 #include "host/render/scene.h"
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 #include "util/color/bands.h"
 #include "util/math/float.h"
 #include "util/stats/stats.h"

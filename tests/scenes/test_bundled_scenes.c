@@ -20,7 +20,7 @@
 
 #include <string.h>
 
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 #include "util/color/cie.h"
 #include "util/color/srgb.h"
 #include "util/math/float.h"

@@ -1,4 +1,4 @@
-/* The procedural scene generator (host/scene/generate.h):
+/* The procedural scene generator (host/mid/generate.h):
  *
  * - what it writes reads back, item by item, as exactly the items it
  *   generated (tb_mid_item_equal), for every kind and a random seed;
@@ -14,8 +14,8 @@
 
 #include <string.h>
 
-#include "host/scene/generate.h"
-#include "host/scene/mid_reader.h"
+#include "host/mid/generate.h"
+#include "host/mid/mid_reader.h"
 
 /* ----------------------------------------------------------- helpers */
 

@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "commands.h"
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 #include "util/container/hash_table.h"
 #include "util/math/aabb.h"
 #include "util/math/transform.h"

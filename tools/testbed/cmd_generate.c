@@ -1,4 +1,4 @@
-/* `testbed generate KIND`: writes a procedural MID scene (host/scene/generate.h)
+/* `testbed generate KIND`: writes a procedural MID scene (host/mid/generate.h)
  * to standard output or, all or nothing, to a file. */
 #include <errno.h>
 #include <inttypes.h>
@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "commands.h"
-#include "host/scene/generate.h"
+#include "host/mid/generate.h"
 #include "util/base/outfile.h"
 
 static void tb__generate_usage(FILE *out)

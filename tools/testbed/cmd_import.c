@@ -1,5 +1,5 @@
 /* `testbed import MODEL -o OUT.mid`: a model read through Assimp, written as
- * MID plus FED files (host/scene/import.h, docs/import.md). */
+ * MID plus FED files (host/mid/import.h, docs/import.md). */
 #include <signal.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "commands.h"
-#include "host/scene/import.h"
+#include "host/mid/import.h"
 
 static void tb__import_usage(FILE *out)
 {

@@ -12,8 +12,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "host/scene/mid.h"
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid.h"
+#include "host/mid/mid_reader.h"
 #include "util/base/error.h"
 #include "util/container/arena.h"
 #include "util/container/array.h"

@@ -1,7 +1,7 @@
 /* MID schema: turns the syntax tree of one top-level object into the typed
  * object model (docs/mid.md, sections 6 to 10), checking every known
  * attribute's shape and range and keeping unknown attributes. */
-#include "host/scene/mid_internal.h"
+#include "host/mid/mid_internal.h"
 
 #include <float.h>
 #include <math.h>

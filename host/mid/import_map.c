@@ -2,7 +2,7 @@
  * (docs/import.md, "Materials", "Lights", "Camera"). MID is strict about
  * ranges, so every value outside one is clamped here with a warning naming
  * the material or light. */
-#include "host/scene/import_internal.h"
+#include "host/mid/import_internal.h"
 
 #include <math.h>
 #include <stdarg.h>

@@ -1,4 +1,4 @@
-/* Internal interface of the importer (host/scene/import*.c): the mesh
+/* Internal interface of the importer (host/mid/import*.c): the mesh
  * conversion and the material, light and camera mappings, each testable on
  * its own. docs/import.md states every rule implemented here. */
 #ifndef TB_HOST_SCENE_IMPORT_INTERNAL_H
@@ -12,7 +12,7 @@
 #include <assimp/material.h>
 #include <assimp/mesh.h>
 
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/base/error.h"
 #include "util/mesh/fed.h"
 

@@ -11,7 +11,7 @@
  *     if exactly one neighbour is in C it is taken, otherwise a is kept and
  *     counted as undecided.
  * A replacement is always one ulp and always onto a number of the file. */
-#include "host/scene/import_internal.h"
+#include "host/mid/import_internal.h"
 
 #include <locale.h>
 #include <math.h>

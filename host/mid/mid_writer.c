@@ -1,5 +1,5 @@
 /* MID writer: the canonical form of docs/mid.md, section 12. */
-#include "host/scene/mid_writer.h"
+#include "host/mid/mid_writer.h"
 
 #include <locale.h>
 
@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "host/scene/mid_internal.h"
+#include "host/mid/mid_internal.h"
 
 /* The output stream and the first problem met (writing goes on, the status
  * is reported at the end). */

@@ -1,11 +1,11 @@
 /* The MID object model: names, defaults, transform composition, equality. */
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 
 #include <math.h>
 #include <pthread.h>
 #include <string.h>
 
-#include "host/scene/mid_internal.h"
+#include "host/mid/mid_internal.h"
 
 static const char *const tb__keywords[TB__K_COUNT] = {
     [TB_PRIM_SPHERE] = "sphere",

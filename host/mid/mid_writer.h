@@ -5,7 +5,7 @@
 
 #include <stdio.h>
 
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/base/error.h"
 
 /* Writes the header line "mid 1". TB_ERR_IO if the stream reports an error. */

@@ -16,7 +16,7 @@
 
 #include <stdio.h>
 
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/base/error.h"
 
 /* An open MID file being read. */

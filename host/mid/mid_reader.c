@@ -1,7 +1,7 @@
 /* The streaming MID reader: opens the input, checks the header, and for each
  * call parses one top-level object (mid_parser.c) and interprets it
  * (mid_schema.c) in an arena that is reset for the next one. */
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 #include "util/base/str.h"
 
 #include <errno.h>
@@ -11,7 +11,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "host/scene/mid_internal.h"
+#include "host/mid/mid_internal.h"
 
 /* The absolute form of folder `dir` (NULL or "": the current directory). */
 static char *tb__absolute_dir(const char *dir)

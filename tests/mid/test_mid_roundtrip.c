@@ -12,11 +12,11 @@
 #include <locale.h>
 #include <string.h>
 
-#include "host/scene/mid_reader.h"
-#include "host/scene/mid_writer.h"
+#include "host/mid/mid_reader.h"
+#include "host/mid/mid_writer.h"
 #include "util/container/arena.h"
 
-#define DATA TB_TESTS_DIR "/scene/data"
+#define DATA TB_TESTS_DIR "/mid/data"
 
 typedef struct gen {
     tb_rng rng;

@@ -3,7 +3,7 @@
  * tb_mid_value in the reader's item arena. Lists, blocks and bodies collect
  * their elements on scratch stacks (reused from item to item) and copy them
  * into the arena when they close, so nothing is reallocated in the arena. */
-#include "host/scene/mid_internal.h"
+#include "host/mid/mid_internal.h"
 
 #include <pthread.h>
 #include <stdlib.h>

@@ -1,11 +1,11 @@
 /* Procedural MID scenes (generate.h): a grid of mixed primitives, random CSG
  * trees, or tessellated meshes, made one object at a time. */
-#include "host/scene/generate.h"
+#include "host/mid/generate.h"
 
 #include <math.h>
 #include <string.h>
 
-#include "host/scene/mid_writer.h"
+#include "host/mid/mid_writer.h"
 #include "util/container/arena.h"
 #include "util/math/float.h"
 #include "util/math/rng.h"

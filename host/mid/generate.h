@@ -14,7 +14,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "host/scene/mid.h"
+#include "host/mid/mid.h"
 #include "util/base/error.h"
 
 /* What the objects are. */

@@ -6,7 +6,7 @@
  * written when first used). Everything goes to temporary names (the MID file
  * beside its final name, the FED files and textures into a fresh folder) and
  * is renamed into place only after the last write succeeded. */
-#include "host/scene/import.h"
+#include "host/mid/import.h"
 #include "util/base/str.h"
 
 #include <ctype.h>
@@ -24,8 +24,8 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include "host/scene/import_internal.h"
-#include "host/scene/mid_writer.h"
+#include "host/mid/import_internal.h"
+#include "host/mid/mid_writer.h"
 #include "util/base/outfile.h"
 #include "util/container/hash_table.h"
 

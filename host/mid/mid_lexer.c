@@ -2,7 +2,7 @@
  * section 2). The buffer ends in a zero byte, so the inner loops test one
  * byte and go to the slow path (refill, end of file, or a real NUL in the
  * input) only when they meet a zero. */
-#include "host/scene/mid_internal.h"
+#include "host/mid/mid_internal.h"
 
 #include <errno.h>
 #include <math.h>

@@ -6,9 +6,9 @@
 
 #include <string.h>
 
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 
-#define DATA TB_TESTS_DIR "/scene/data"
+#define DATA TB_TESTS_DIR "/mid/data"
 #define PI 3.14159265358979323846
 
 /* A reader over a copy of `text` (kept alive with the reader). */
@@ -419,7 +419,7 @@ static void test_lights_and_camera(void **state)
     close_text(&s);
 }
 
-/* The example scene in tests/scene/data reads whole, with the values it states. */
+/* The example scene in tests/mid/data reads whole, with the values it states. */
 static void test_example_scene(void **state)
 {
     (void)state;

@@ -5,7 +5,7 @@
  * import_text.c). Faces are filtered with the same rules tb_fed_build applies
  * (polygon.h's Newell area and size), so a model with a few degenerate
  * triangles loses those faces instead of failing as a whole. */
-#include "host/scene/import_internal.h"
+#include "host/mid/import_internal.h"
 
 #include <math.h>
 #include <stdarg.h>

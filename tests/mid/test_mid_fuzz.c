@@ -7,8 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "host/scene/mid_reader.h"
-#include "host/scene/mid_writer.h"
+#include "host/mid/mid_reader.h"
+#include "host/mid/mid_writer.h"
 
 #ifndef TB_FUZZ_DATA_DIR
 #define TB_FUZZ_DATA_DIR "/nonexistent"

@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # `testbed check` end to end: summary of the example scene (expected values
-# worked out by hand from tests/scene/data/example.mid), --warn-unknown,
+# worked out by hand from tests/mid/data/example.mid), --warn-unknown,
 # standard input, an invalid scene, a missing file, and usage errors.
 set -u
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
-data="$TB_SOURCE_DIR/tests/scene/data"
+data="$TB_SOURCE_DIR/tests/mid/data"
 tmp="$TB_TEST_TMPDIR/mid_check"
 rm -rf "$tmp" && mkdir -p "$tmp"
 fails=0

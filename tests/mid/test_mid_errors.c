@@ -5,9 +5,9 @@
 
 #include <string.h>
 
-#include "host/scene/mid_reader.h"
+#include "host/mid/mid_reader.h"
 
-#define DATA TB_TESTS_DIR "/scene/data"
+#define DATA TB_TESTS_DIR "/mid/data"
 
 /* One malformed input: text (len bytes, or strlen when 0) and the message
  * after "scene.mid:". */
