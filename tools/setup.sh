@@ -3,7 +3,7 @@
 # Idempotent: packages already installed are skipped, and apt is not touched
 # when nothing is missing. Run as root (or with sudo available).
 #   tools/setup.sh           build + test dependencies
-#   tools/setup.sh --bench   also the benchmark peers (Embree, POV-Ray, hyperfine)
+#   tools/setup.sh --bench   also the benchmark peers (POV-Ray, hyperfine)
 set -euo pipefail
 
 packages=(
@@ -13,11 +13,13 @@ packages=(
   libpng-dev libopenexr-dev libssl-dev libassimp-dev libopenmpi-dev openmpi-bin
   # Vulkan: loader, Mesa's CPU driver (lavapipe), shader compiler and tools, validation layers
   libvulkan-dev mesa-vulkan-drivers glslang-tools spirv-tools vulkan-validationlayers vulkan-tools
-  # tests: unit framework, independent RLE reader/writer, importer test models, plots
-  libcmocka-dev netpbm assimp-testmodels gnuplot-nox python3
+  # tests: unit framework, independent RLE reader/writer, importer test models, plots,
+  # Embree (an independent ray-tracing oracle in the default suite), the de_DE
+  # charmaps test_mid_roundtrip's locale test builds with localedef
+  libcmocka-dev netpbm assimp-testmodels gnuplot-nox python3 libembree-dev locales
 )
 if [[ "${1:-}" == "--bench" ]]; then
-  packages+=(libembree-dev povray hyperfine time)
+  packages+=(povray hyperfine time)
 fi
 
 missing=()

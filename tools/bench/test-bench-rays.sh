@@ -1,5 +1,5 @@
 #!/bin/sh
-# Script test (registered only when Embree 3 was found at configure time):
+# Script test (Embree 3 is required by the test build):
 # `testbed bench rays --embree` on the Cornell box must trace all three ray
 # sets and our BVH and Embree -- two independent implementations -- must
 # agree on hit/miss, object and face for all but a tiny fraction of rays
