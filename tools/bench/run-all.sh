@@ -7,10 +7,10 @@
 # Prints a header of machine facts, then per benchmark: the exact commands it
 # runs, the 1-minute load average before and after, and its results as the
 # markdown tables of docs/performance.md (the same titles, rows and columns:
-# --out FILE also writes them, with the machine table, ready to paste over the
-# doc's MEASURE cells). Figures are valid only on an idle machine: a benchmark
-# that starts with a 1-minute load average above 0.5 gets a loud warning here
-# and a "not idle" note under its tables.
+# --out FILE also writes them, with the machine and load-average tables, ready
+# to paste over the doc's MEASURE cells). Figures are valid only on an idle
+# machine: a benchmark that starts with a 1-minute load average above 0.5 gets
+# a loud warning here and "figures not valid" in the load table.
 #
 # Environment:
 #   TESTBED  the testbed binary (default: build/release/testbed, configured and
@@ -136,6 +136,7 @@ work=$(mktemp -d "${TMPDIR:-/tmp}/run-all.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 mkdir -p "$work/tables"
 : >"$work/tables.list"
+: >"$work/loads.tsv"
 
 # ------------------------------------------------------------------ helpers
 is_quick() { (( quick )); }
@@ -166,9 +167,7 @@ table() {
     cur_table=$work/tables/$bench.$id.md
     echo "$cur_table" >>"$work/tables.list"
     {
-        echo "<!-- run-all.sh table: $bench/$id -->"
-        echo "**$title**"
-        echo
+        echo "<!-- run-all.sh table: $bench/$id: $title -->"
         local IFS='|'
         local h="$*"
         echo "| ${h//|/ | } |"
@@ -270,17 +269,19 @@ bench_accel() {
     local tris=1000,100000 rays=200000
     is_quick && tris=1000 rays=5000
     cmd "$TB" bench accel --tris "$tris" --rays "$rays" --threads 1,2 --seed 1
-    table rates "BVH, grid and list ($rays rays per set)" scene N rays accel "Mrays/s 1T" "Mrays/s 2T" \
-        scaling "Mrays/CPU-s 1T" "steps/ray" "tests/ray"
+    table rates "BVH, grid and list ($rays rays per set)" scene N rays "BVH Mrays/s 1T" "BVH Mrays/s 2T" \
+        "grid Mrays/s 1T" "grid Mrays/s 2T" "list Mrays/s 1T" "BVH steps / tests per ray" "grid steps / tests per ray"
     last_output | awk -v sizes="$tris" '
-        BEGIN { ns = split(sizes, sz, ",") }
+        BEGIN { split(sizes, sz, ",") }
         /^# / { h++; next }
         $1 == "soup" || $1 == "sphere" {
-            k = $1 "\t" sz[int((h - 1) / 2) + 1] "\t" $3 "\t" $4
+            k = $1 "\t" sz[int((h - 1) / 2) + 1] "\t" $3
             if (!(k in seen)) { seen[k] = 1; order[++n] = k }
-            if ($5 == 1) { w1[k] = $6; c1[k] = $7; st[k] = $9; te[k] = $10 } else w2[k] = $6 }
+            v[k, $4, $5] = $6
+            if ($5 == 1) st[k, $4] = $9 " / " $10 }
         END { for (i = 1; i <= n; i++) { k = order[i]
-                printf "%s\t%s\t%s\t%.2fx\t%s\t%s\t%s\n", k, w1[k], w2[k], w2[k] / w1[k], c1[k], st[k], te[k] } }' | rows
+                printf "%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n", k, v[k, "bvh", 1], v[k, "bvh", 2], v[k, "grid", 1],
+                       v[k, "grid", 2], v[k, "list", 1], st[k, "bvh"], st[k, "grid"] } }' | rows
     table builds "Structures built" scene N "BVH and grid (nodes, depth, SAH cost, memory, build time)"
     last_output | awk -v sizes="$tris" 'BEGIN { split(sizes, sz, ",") }
         /^# / { h++; s = $0; sub(/^# /, "", s); name = s; sub(/,.*/, "", name); sub(/^[^:]*: /, "", s)
@@ -657,19 +658,13 @@ for bench in "${selected[@]}"; do
     set -e
     after=$(loadavg)
     echo "load average after:  $after"
-    # The load note goes under each table of this benchmark.
+    if (( idle )); then state=yes; else state="**no: figures not valid**"; fi
+    printf '%s\t%s\t%s\t%s\n' "$bench" "$before" "$after" "$state" >>"$work/loads.tsv"
     tail -n +"$((ntab_before + 1))" "$work/tables.list" | while read -r t; do
-        {
-            echo
-            if (( idle )); then
-                echo "_Load average before / after: $before / $after._"
-            else
-                echo "_Load average before / after: $before / $after: **machine not idle: figures not valid**._"
-            fi
-        } >>"$t"
         echo
         cat "$t"
     done
+    (( idle )) || echo "(load average $l1 at the start: machine not idle, figures not valid)"
     if (( rc == 0 )); then
         echo "status: $bench ok ($((SECONDS - start)) s)"
     else
@@ -685,6 +680,11 @@ if [[ -n "$out" ]]; then
         echo "| | |"
         echo "| --- | --- |"
         awk -F'\t' '{ printf "| %s | %s |\n", $1, $2 }' "$work/machine.tsv"
+        echo
+        echo "<!-- run-all.sh table: load -->"
+        echo "| benchmark | load average before | load average after | idle (1-minute load <= 0.5 at the start) |"
+        echo "| --- | --- | --- | --- |"
+        awk -F'\t' '{ printf "| %s | %s | %s | %s |\n", $1, $2, $3, $4 }' "$work/loads.tsv"
         while read -r t; do echo; cat "$t"; done <"$work/tables.list"
     } >"$out"
     echo
