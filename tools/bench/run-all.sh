@@ -167,7 +167,9 @@ table() {
     cur_table=$work/tables/$bench.$id.md
     echo "$cur_table" >>"$work/tables.list"
     {
-        echo "<!-- run-all.sh table: $bench/$id: $title -->"
+        echo "<!-- run-all.sh table: $bench/$id -->"
+        echo "*$title*"
+        echo
         local IFS='|'
         local h="$*"
         echo "| ${h//|/ | } |"
