@@ -5,6 +5,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+const tb_opt_choice tb_cli_backends[] = {
+    {"auto", TB_GPU_MODE_AUTO}, {"vulkan", TB_GPU_MODE_VULKAN}, {"cpu", TB_GPU_MODE_CPU}, {NULL, 0}};
+
 bool tb_cli_long(const char *s, long lo, long hi, long *out)
 {
     if (!s)
