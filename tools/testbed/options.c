@@ -25,11 +25,28 @@ static void tb__opt_label(const tb_opt *o, char *buf, size_t len)
         snprintf(buf, len, "-%c", o->short_name);
 }
 
+static FILE *tb__errout(const tb_cli *cli)
+{
+    return cli->errout ? cli->errout : stderr;
+}
+
 static void tb__verror(const tb_cli *cli, const char *fmt, va_list ap)
 {
-    fputs(cli->err, stderr);
-    vfprintf(stderr, fmt, ap);
-    fprintf(stderr, " (see `%s --help`)\n", cli->prog);
+    FILE *e = tb__errout(cli);
+    fputs(cli->err, e);
+    vfprintf(e, fmt, ap);
+    fprintf(e, " (see `%s --help`)\n", cli->prog);
+}
+
+int tb_wants_help(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--") == 0)
+            return 0;
+        if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0)
+            return 1;
+    }
+    return 0;
 }
 
 int tb_cli_usage_error(const tb_cli *cli, const char *fmt, ...)
@@ -96,32 +113,33 @@ static void tb__choice_list(const tb_opt *o, FILE *out)
 
 static int tb__bad_value(const tb_cli *cli, const tb_opt *o, const char *val, const char *why)
 {
+    FILE *e = tb__errout(cli);
     char label[64];
     tb__opt_label(o, label, sizeof label);
-    fprintf(stderr, "%s%s: expected ", cli->err, label);
+    fprintf(e, "%s%s: expected ", cli->err, label);
     switch (o->type) {
     case TB_OPT_INT:
-        fprintf(stderr, "an integer in [%.0f, %.0f]", o->min, o->max);
+        fprintf(e, "an integer in [%.0f, %.0f]", o->min, o->max);
         break;
     case TB_OPT_UINT64:
         if (o->max > 0)
-            fprintf(stderr, "an unsigned integer in [0, %.0f]", o->max);
+            fprintf(e, "an unsigned integer in [0, %.0f]", o->max);
         else
-            fprintf(stderr, "an unsigned integer");
+            fprintf(e, "an unsigned integer");
         break;
     case TB_OPT_DOUBLE:
-        fprintf(stderr, "a number in %c%g, %g%c", (o->flags & TB_OPTF_OPEN_MIN) ? '(' : '[', o->min, o->max,
+        fprintf(e, "a number in %c%g, %g%c", (o->flags & TB_OPTF_OPEN_MIN) ? '(' : '[', o->min, o->max,
                 (o->flags & TB_OPTF_OPEN_MAX) ? ')' : ']');
         break;
     case TB_OPT_CHOICE:
-        fprintf(stderr, "one of ");
-        tb__choice_list(o, stderr);
+        fprintf(e, "one of ");
+        tb__choice_list(o, e);
         break;
     default:
-        fprintf(stderr, "%s", why ? why : "a value");
+        fprintf(e, "%s", why ? why : "a value");
         break;
     }
-    fprintf(stderr, ", got '%s' (see `%s --help`)\n", val, cli->prog);
+    fprintf(e, ", got '%s' (see `%s --help`)\n", val, cli->prog);
     return TB_EXIT_USAGE;
 }
 
@@ -333,7 +351,7 @@ void tb_cli_help(const tb_cli *cli, FILE *out)
     fprintf(out, "usage: %s %s\n", cli->prog, cli->usage);
     if (cli->intro)
         fprintf(out, "%s\n", cli->intro);
-    int col = 0;
+    int col = 12; /* "  -h, --help" */
     char left[128];
     for (const tb_opt *o = cli->opts; !tb__opt_end(o); o++) {
         int n = tb__left(o, left, sizeof left);

@@ -77,6 +77,7 @@ typedef struct tb_cli {
     const char *outro;    /* text after the options (exit statuses, notes), or NULL */
     const char **pos;     /* where positional arguments go */
     int max_pos;          /* how many fit (more is a usage error) */
+    FILE *errout;         /* where errors go; NULL: stderr (tests set a memory stream) */
 } tb_cli;
 
 /* Result of tb_cli_parse besides an exit status. */
@@ -92,6 +93,9 @@ int tb_cli_parse(const tb_cli *cli, int argc, char **argv, int *npos);
 
 /* Prints the usage text generated from the table. */
 void tb_cli_help(const tb_cli *cli, FILE *out);
+
+/* True if argv[1..argc-1] holds -h or --help before any "--". */
+int tb_wants_help(int argc, char **argv);
 
 /* Prints "<err>MESSAGE (see `PROG --help`)" to stderr and returns the usage
  * exit status (2): for checks between options that the table cannot say. */
