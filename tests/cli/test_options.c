@@ -30,7 +30,7 @@ static tb__vars V;
 static int tb__pair(const char *val, void *dest, char *why, size_t len)
 {
     if (strlen(val) != 3 || val[1] != ':' || val[0] < '0' || val[0] > '9' || val[2] < '0' || val[2] > '9') {
-        snprintf(why, len, "a pair D:D");
+        snprintf(why, len, "expected a pair D:D, got '%s'", val);
         return 1;
     }
     *(int *)dest = (val[0] - '0') * 10 + (val[2] - '0');

@@ -58,6 +58,18 @@ int tb_cli_usage_error(const tb_cli *cli, const char *fmt, ...)
     return TB_EXIT_USAGE;
 }
 
+/* The value's name: the metavar, or for a choice without one the names
+ * themselves ("bvh|grid|list"), so the help cannot miss one. */
+static void tb__metavar(const tb_opt *o, char *buf, size_t len)
+{
+    buf[0] = '\0';
+    if (o->metavar)
+        snprintf(buf, len, (o->flags & TB_OPTF_OPTIONAL) ? "[%s]" : "%s", o->metavar);
+    else if (o->type == TB_OPT_CHOICE)
+        for (const tb_opt_choice *c = o->choices; c->name; c++)
+            snprintf(buf + strlen(buf), len - strlen(buf), "%s%s", c == o->choices ? "" : "|", c->name);
+}
+
 /* ---------------------------------------------------------------- values */
 
 static bool tb__parse_ll(const char *s, unsigned flags, long long *out)
@@ -116,6 +128,10 @@ static int tb__bad_value(const tb_cli *cli, const tb_opt *o, const char *val, co
     FILE *e = tb__errout(cli);
     char label[64];
     tb__opt_label(o, label, sizeof label);
+    if (o->type == TB_OPT_CUSTOM) { /* the parser's reason is the whole message */
+        fprintf(e, "%s%s: %s (see `%s --help`)\n", cli->err, label, why, cli->prog);
+        return TB_EXIT_USAGE;
+    }
     fprintf(e, "%s%s: expected ", cli->err, label);
     switch (o->type) {
     case TB_OPT_INT:
@@ -128,8 +144,13 @@ static int tb__bad_value(const tb_cli *cli, const tb_opt *o, const char *val, co
             fprintf(e, "an unsigned integer");
         break;
     case TB_OPT_DOUBLE:
-        fprintf(e, "a number in %c%g, %g%c", (o->flags & TB_OPTF_OPEN_MIN) ? '(' : '[', o->min, o->max,
-                (o->flags & TB_OPTF_OPEN_MAX) ? ')' : ']');
+        if (isinf(o->min) && isinf(o->max))
+            fprintf(e, "a finite number");
+        else if (isinf(o->max))
+            fprintf(e, "a number %s %g", (o->flags & TB_OPTF_OPEN_MIN) ? ">" : ">=", o->min);
+        else
+            fprintf(e, "a number in %c%g, %g%c", (o->flags & TB_OPTF_OPEN_MIN) ? '(' : '[', o->min, o->max,
+                    (o->flags & TB_OPTF_OPEN_MAX) ? ')' : ']');
         break;
     case TB_OPT_CHOICE:
         fprintf(e, "one of ");
@@ -149,6 +170,9 @@ static int tb__set(const tb_cli *cli, const tb_opt *o, const char *val)
     switch (o->type) {
     case TB_OPT_FLAG:
         *(bool *)o->dest = true;
+        break;
+    case TB_OPT_CONST:
+        *(int *)o->dest = (int)o->min;
         break;
     case TB_OPT_INT: {
         long long v;
@@ -273,7 +297,7 @@ int tb_cli_parse(const tb_cli *cli, int argc, char **argv, int *npos)
             return tb_cli_usage_error(cli, "unknown option '%s'", a);
         char label[64];
         tb__opt_label(o, label, sizeof label);
-        if (o->type == TB_OPT_FLAG) {
+        if (o->type == TB_OPT_FLAG || o->type == TB_OPT_CONST) {
             if (inline_val)
                 return tb_cli_usage_error(cli, "%s takes no value, got '%s'", label, inline_val);
             tb__set(cli, o, NULL);
@@ -287,8 +311,11 @@ int tb_cli_parse(const tb_cli *cli, int argc, char **argv, int *npos)
                 *o->seen = true;
             continue;
         }
-        if (!val)
-            return tb_cli_usage_error(cli, "%s: missing value %s", label, o->metavar ? o->metavar : "");
+        if (!val) {
+            char mv[96];
+            tb__metavar(o, mv, sizeof mv);
+            return tb_cli_usage_error(cli, "%s: missing value %s", label, mv);
+        }
         int rc = tb__set(cli, o, val);
         if (rc != TB_CLI_OK)
             return rc;
@@ -302,11 +329,7 @@ int tb_cli_parse(const tb_cli *cli, int argc, char **argv, int *npos)
 static int tb__left(const tb_opt *o, char *buf, size_t len)
 {
     char mvbuf[96] = "";
-    if (o->metavar)
-        snprintf(mvbuf, sizeof mvbuf, (o->flags & TB_OPTF_OPTIONAL) ? "[%s]" : "%s", o->metavar);
-    else if (o->type == TB_OPT_CHOICE) /* the names themselves: the help cannot miss one */
-        for (const tb_opt_choice *c = o->choices; c->name; c++)
-            snprintf(mvbuf + strlen(mvbuf), sizeof mvbuf - strlen(mvbuf), "%s%s", c == o->choices ? "" : "|", c->name);
+    tb__metavar(o, mvbuf, sizeof mvbuf);
     const char *mv = mvbuf;
     const char *sp = *mvbuf ? " " : "";
     if (o->name && o->short_name)

@@ -17,9 +17,10 @@
 /* What an option's value is, and so what `dest` points at. */
 typedef enum tb_opt_type {
     TB_OPT_FLAG,   /* no value; dest: bool, set true */
+    TB_OPT_CONST,  /* no value; dest: int, set to min (--join/--no-join: the last one given wins) */
     TB_OPT_INT,    /* whole number in [min, max]; dest: int */
     TB_OPT_UINT64, /* unsigned whole number <= max (max 0: any); dest: uint64_t */
-    TB_OPT_DOUBLE, /* finite number in [min, max] (see TB_OPTF_OPEN_*); dest: double */
+    TB_OPT_DOUBLE, /* finite number in [min, max] (see TB_OPTF_OPEN_*; either may be infinite); dest: double */
     TB_OPT_STRING, /* any text; dest: const char * */
     TB_OPT_CHOICE, /* one of `choices`; dest: int, set to the choice's value */
     TB_OPT_REPEAT, /* text, may be given again; dest: tb_opt_strings, appended to */
@@ -62,8 +63,8 @@ typedef struct tb_opt {
     unsigned flags;     /* TB_OPTF_* */
     const tb_opt_choice *choices; /* CHOICE: the names */
     bool *seen;         /* if not NULL, set true when the option is given */
-    /* CUSTOM: parses val into dest; 0 if fine, else writes a reason ("expected
-     * KIND[:RADIUS]") into why and returns nonzero. */
+    /* CUSTOM: parses val into dest; 0 if fine, else writes the message
+     * ("expected KIND[:RADIUS], got 'x'") into why and returns nonzero. */
     int (*parse)(const char *val, void *dest, char *why, size_t why_len);
 } tb_opt;
 
