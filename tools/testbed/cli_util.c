@@ -8,6 +8,9 @@
 const tb_opt_choice tb_cli_backends[] = {
     {"auto", TB_GPU_MODE_AUTO}, {"vulkan", TB_GPU_MODE_VULKAN}, {"cpu", TB_GPU_MODE_CPU}, {NULL, 0}};
 
+const tb_opt_choice tb_cli_accels[] = {
+    {"bvh", TB_ACCEL_BVH}, {"grid", TB_ACCEL_GRID}, {"list", TB_ACCEL_LIST}, {NULL, 0}};
+
 bool tb_cli_long(const char *s, long lo, long hi, long *out)
 {
     if (!s)

@@ -12,6 +12,9 @@
 /* The --backend names (auto, vulkan, cpu) as tb_gpu_mode values, for a TB_OPT_CHOICE. */
 extern const tb_opt_choice tb_cli_backends[];
 
+/* The --accel names (bvh, grid, list) as tb_accel_kind values, for a TB_OPT_CHOICE. */
+extern const tb_opt_choice tb_cli_accels[];
+
 /* Parses s (may be NULL) as a whole decimal number in [lo, hi] into *out;
  * false, *out untouched, for anything else (empty, trailing text, overflow). */
 bool tb_cli_long(const char *s, long lo, long hi, long *out);

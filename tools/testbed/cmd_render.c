@@ -81,8 +81,6 @@ int tb_cmd_render(int argc, char **argv)
     bool depth_seen = false, light_seen = false, glossy_seen = false, tf_seen = false, adaptive = false;
     double exposure = NAN;
     static const tb_opt_choice methods[] = {{"raytrace", 0}, {"radiosity", 1}, {NULL, 0}};
-    static const tb_opt_choice accels[] = {
-        {"bvh", TB_ACCEL_BVH}, {"grid", TB_ACCEL_GRID}, {"list", TB_ACCEL_LIST}, {NULL, 0}};
     static const tb_opt_choice criteria[] = {{"stderr", TB_AA_STDERR}, {"contrast", TB_AA_CONTRAST}, {NULL, 0}};
     static const tb_opt_choice patterns[] = {{"stratified", TB_AA_STRATIFIED}, {"sobol", TB_AA_SOBOL}, {NULL, 0}};
     static const tb_opt_choice tex_filters[] = {{"bilinear", 1}, {"trilinear", 2}, {"ewa", 3}, {NULL, 0}};
@@ -117,7 +115,7 @@ int tb_cmd_render(int argc, char **argv)
                  "cannot shade (textures, patterns, bump, GGX) run on the CPU: reported"},
         {"device", .type = TB_OPT_INT, .dest = &gdevice, .min = 0, .max = 1024, .metavar = "N",
          .help = "Vulkan device N (testbed devices lists them; implies Vulkan in auto)"},
-        {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = accels,
+        {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels,
          .help = "acceleration structure (default %D)"},
         {"max-depth", .type = TB_OPT_INT, .dest = &max_depth, .min = 0, .max = 64, .metavar = "N", .seen = &depth_seen,
          .help = "deepest reflected/refracted ray (default %D)"},
