@@ -42,7 +42,8 @@ static void tb__bench_usage(FILE *out)
             "               (default 200000) with T threads (default 1,2); prints Mrays/s\n"
             "               (wall clock) and Mrays per CPU second, then checks that the three\n"
             "               structures gave the same answers (exit status 1 if not). --accel\n"
-            "               bvh,grid,list chooses the structures; --no-stats turns counters off.\n"
+            "               bvh,grid,list chooses the structures; --no-stats turns counters off\n"
+            "               (details: testbed bench accel --help).\n"
             "  -h, --help   show this help\n"
             "\n"
             "usage: testbed bench tessellate [--angle A] [--edge E] [--seconds S] [--split]\n"
@@ -309,8 +310,8 @@ static const struct {
 
 int tb_cmd_bench(int argc, char **argv)
 {
-    /* `bench WHAT --help` is the benchmark's own help, except for accel, whose help is here. */
-    if (argc < 2 || tb_wants_help(2, argv) || (strcmp(argv[1], "accel") == 0 && tb_wants_help(argc, argv))) {
+    /* `bench WHAT --help` is the benchmark's own help (from its option table). */
+    if (argc < 2 || tb_wants_help(2, argv)) {
         tb__bench_usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? TB_EXIT_USAGE : TB_EXIT_OK;
     }
