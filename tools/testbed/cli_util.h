@@ -15,10 +15,6 @@ extern const tb_opt_choice tb_cli_backends[];
 /* The --accel names (bvh, grid, list) as tb_accel_kind values, for a TB_OPT_CHOICE. */
 extern const tb_opt_choice tb_cli_accels[];
 
-/* Parses s (may be NULL) as a whole decimal number in [lo, hi] into *out;
- * false, *out untouched, for anything else (empty, trailing text, overflow). */
-bool tb_cli_long(const char *s, long lo, long hi, long *out);
-
 /* Loads the scene at `path` and opens Vulkan device `device` (the same
  * choice as `--backend vulkan`). On failure prints `who` followed by the
  * error message to stderr, frees what it made and returns false. */
