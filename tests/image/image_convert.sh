@@ -53,16 +53,16 @@ expect 0 '^usage: testbed convert' -h
 "$TESTBED" help | grep -Eq '^ +convert +convert an image' || fail "convert missing from testbed help"
 expect 2 'need an input and an output'
 expect 2 'need an input and an output' base.png
-expect 2 'more than two files' base.png a.png b.png
+expect 2 "unexpected argument 'b.png'" base.png a.png b.png
 expect 2 "unknown option '--frobnicate'" base.png a.png --frobnicate
 expect 2 'unknown option' base.png a.png -x
-expect 2 'bits must be 8 or 16' base.png a.png --bits 12
-expect 2 'bits must be 8 or 16' base.png a.png --bits=abc
-expect 2 'option needs a value' base.png a.png --bits
-expect 2 'exposure needs a number' base.png a.png --exposure 1.5x
-expect 2 'exposure needs a number' base.png a.png --exposure=nan
-expect 2 'exposure needs a number' base.png a.png --exposure 1e9
-expect 2 'option needs a value' base.png a.png --exposure
+expect 2 "bits: expected one of 8, 16, got '12'" base.png a.png --bits 12
+expect 2 "bits: expected one of 8, 16, got 'abc'" base.png a.png --bits=abc
+expect 2 'bits: missing value 8|16' base.png a.png --bits
+expect 2 'exposure: expected a number in \[-100, 100\]' base.png a.png --exposure 1.5x
+expect 2 'exposure: expected a number' base.png a.png --exposure=nan
+expect 2 'exposure: expected a number' base.png a.png --exposure 1e9
+expect 2 'exposure: missing value STOPS' base.png a.png --exposure
 expect 2 'bits applies to PNG output only' base.png a.exr --bits 16
 expect 2 'half applies to OpenEXR output only' base.png a.png --half
 expect 2 'cannot tell the format' base.png a.jpg

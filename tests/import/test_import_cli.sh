@@ -28,9 +28,9 @@ expect 0 "usage: testbed import" -- help import
 grep -q "import" <("$tb" help) || fail "testbed help does not list import"
 expect 2 "no MODEL given" -- import
 expect 2 "no output given" -- import "$models/OBJ/box.obj"
-expect 2 "-o needs a file name" -- import "$models/OBJ/box.obj" -o
+expect 2 "-o: missing value OUT.mid" -- import "$models/OBJ/box.obj" -o
 expect 2 "unknown option '--bogus'" -- import --bogus "$models/OBJ/box.obj" -o "$w/x.mid"
-expect 2 "one model at a time" -- import a.obj b.obj -o "$w/x.mid"
+expect 2 "unexpected argument 'b.obj'" -- import a.obj b.obj -o "$w/x.mid"
 expect 2 "cannot go to standard output" -- import "$models/OBJ/box.obj" -o -
 
 mkdir -p "$w/out"

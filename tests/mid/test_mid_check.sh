@@ -68,7 +68,7 @@ expect_line "$tmp/err" "testbed check: error: $tmp/none.mid: cannot open: No suc
 # --- usage
 "$TESTBED" check >"$tmp/out" 2>"$tmp/err"; [[ $? == 2 ]] || fail "no argument: exit should be 2"
 "$TESTBED" check --bogus "$data/example.mid" >"$tmp/out" 2>"$tmp/err"; [[ $? == 2 ]] || fail "bad option: exit should be 2"
-expect_line "$tmp/err" "testbed check: error: unknown option '--bogus'"
+expect_line "$tmp/err" "testbed check: error: unknown option '--bogus' (see \`testbed check --help\`)"
 "$TESTBED" check a.mid b.mid >"$tmp/out" 2>"$tmp/err"; [[ $? == 2 ]] || fail "two scenes: exit should be 2"
 "$TESTBED" check --help >"$tmp/out" 2>"$tmp/err" || fail "--help: exit"
 grep -q '^usage: testbed check SCENE.mid \[--warn-unknown\]' "$tmp/out" || fail "--help text"

@@ -1,22 +1,13 @@
 /* Command-line pieces shared by the Vulkan commands (cli_util.h). */
 #include "cli_util.h"
 
-#include <errno.h>
 #include <stdio.h>
-#include <stdlib.h>
 
-bool tb_cli_long(const char *s, long lo, long hi, long *out)
-{
-    if (!s)
-        return false;
-    errno = 0;
-    char *end;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi)
-        return false;
-    *out = v;
-    return true;
-}
+const tb_opt_choice tb_cli_backends[] = {
+    {"auto", TB_GPU_MODE_AUTO}, {"vulkan", TB_GPU_MODE_VULKAN}, {"cpu", TB_GPU_MODE_CPU}, {NULL, 0}};
+
+const tb_opt_choice tb_cli_accels[] = {
+    {"bvh", TB_ACCEL_BVH}, {"grid", TB_ACCEL_GRID}, {"list", TB_ACCEL_LIST}, {NULL, 0}};
 
 bool tb_cli_open_vulkan(const char *who, const char *path, long device, tb_scene **s, tb_gpu_session *sess)
 {

@@ -1,5 +1,5 @@
 /* Command-line pieces shared by the testbed commands that run a Vulkan
- * kernel on a scene (bench gpu, bench formfactor, validate). */
+ * kernel on a scene (render, bench gpu, bench formfactor, validate). */
 #ifndef TB_TOOLS_TESTBED_CLI_UTIL_H
 #define TB_TOOLS_TESTBED_CLI_UTIL_H
 
@@ -7,10 +7,13 @@
 
 #include "host/gpu/gpu.h"
 #include "host/render/scene.h"
+#include "options.h"
 
-/* Parses s (may be NULL) as a whole decimal number in [lo, hi] into *out;
- * false, *out untouched, for anything else (empty, trailing text, overflow). */
-bool tb_cli_long(const char *s, long lo, long hi, long *out);
+/* The --backend names (auto, vulkan, cpu) as tb_gpu_mode values, for a TB_OPT_CHOICE. */
+extern const tb_opt_choice tb_cli_backends[];
+
+/* The --accel names (bvh, grid, list) as tb_accel_kind values, for a TB_OPT_CHOICE. */
+extern const tb_opt_choice tb_cli_accels[];
 
 /* Loads the scene at `path` and opens Vulkan device `device` (the same
  * choice as `--backend vulkan`). On failure prints `who` followed by the

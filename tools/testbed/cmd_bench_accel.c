@@ -323,59 +323,82 @@ done:
     return bad;
 }
 
+/* A comma-separated list of whole numbers 1 .. max (TB_OPT_CUSTOM dest). */
+typedef struct tb__blist {
+    long *v;
+    int n, cap;
+    long max;
+} tb__blist;
+
+static int tb__parse_blist(const char *val, void *dest, char *why, size_t len)
+{
+    tb__blist *l = dest;
+    int n = tb__parse_list(val, l->max, l->v, l->cap);
+    if (!n) {
+        snprintf(why, len, "expected up to %d numbers 1 .. %ld separated by commas, got '%s'", l->cap, l->max, val);
+        return 1;
+    }
+    l->n = n;
+    return 0;
+}
+
+/* --accel bvh,grid,list: which structures (TB_OPT_CUSTOM dest: bool[3]). */
+static int tb__parse_kinds(const char *val, void *dest, char *why, size_t len)
+{
+    bool *use = dest, pick[3] = {false, false, false};
+    char buf[64];
+    snprintf(buf, sizeof buf, "%s", val);
+    for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+        tb_accel_kind k;
+        if (tb_accel_kind_from_name(tok, &k)) {
+            snprintf(why, len, "%s", tb_last_error());
+            return 1;
+        }
+        pick[k] = true;
+    }
+    memcpy(use, pick, sizeof pick);
+    return 0;
+}
+
 int tb_cmd_bench_accel(int argc, char **argv)
 {
-    long sizes[8] = {1000, 100000}, threads[4] = {1, 2}, nrays = 200000, seedv = 1;
-    int nsizes = 2, nthreads = 2;
-    bool use[3] = {true, true, true};
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (strcmp(a, "--tris") == 0 && v) {
-            nsizes = tb__parse_list(v, 100000000, sizes, 8);
-            if (!nsizes) {
-                fprintf(stderr, "testbed bench accel: --tris needs numbers 1 .. 10^8 separated by commas, not '%s'\n", v);
-                return TB_EXIT_USAGE;
-            }
-            i++;
-        } else if (strcmp(a, "--threads") == 0 && v) {
-            nthreads = tb__parse_list(v, 1024, threads, 4);
-            if (!nthreads) {
-                fprintf(stderr, "testbed bench accel: --threads needs up to 4 numbers 1 .. 1024 separated by commas, not '%s'\n", v);
-                return TB_EXIT_USAGE;
-            }
-            i++;
-        } else if (strcmp(a, "--rays") == 0 && v) {
-            if (tb__parse_list(v, 100000000, &nrays, 1) != 1) {
-                fprintf(stderr, "testbed bench accel: --rays needs a number 1 .. 10^8, not '%s'\n", v);
-                return TB_EXIT_USAGE;
-            }
-            i++;
-        } else if (strcmp(a, "--seed") == 0 && v) {
-            if (tb__parse_list(v, 2147483647L, &seedv, 1) != 1) {
-                fprintf(stderr, "testbed bench accel: --seed needs a number 1 .. 2^31-1, not '%s'\n", v);
-                return TB_EXIT_USAGE;
-            }
-            i++;
-        } else if (strcmp(a, "--accel") == 0 && v) {
-            use[0] = use[1] = use[2] = false;
-            char buf[64];
-            snprintf(buf, sizeof buf, "%s", v);
-            for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-                tb_accel_kind k;
-                if (tb_accel_kind_from_name(tok, &k)) {
-                    fprintf(stderr, "testbed bench accel: %s\n", tb_last_error());
-                    return TB_EXIT_USAGE;
-                }
-                use[k] = true;
-            }
-            i++;
-        } else if (strcmp(a, "--no-stats") == 0) {
-            tb_stats_set_enabled(0);
-        } else {
-            fprintf(stderr, "testbed bench accel: unknown option '%s' (see testbed bench --help)\n", a);
-            return TB_EXIT_USAGE;
-        }
-    }
+    long sizes[8] = {1000, 100000}, threads[4] = {1, 2};
+    int nrays_i = 200000, seed_i = 1;
+    bool use[3] = {true, true, true}, no_stats = false;
+    tb__blist tris = {sizes, 2, 8, 100000000}, thr = {threads, 2, 4, 1024};
+    const tb_opt opts[] = {
+        {"tris", .type = TB_OPT_CUSTOM, .dest = &tris, .metavar = "N,...", .parse = tb__parse_blist,
+         .help = "triangle soups and tessellated spheres of N triangles, up to 8 sizes\n"
+                 "1 .. 10^8 (default 1000,100000)"},
+        {"rays", .type = TB_OPT_INT, .dest = &nrays_i, .min = 1, .max = 100000000, .metavar = "N",
+         .help = "rays per primary, diffuse and shadow set (default %D)"},
+        {"threads", .type = TB_OPT_CUSTOM, .dest = &thr, .metavar = "T,...", .parse = tb__parse_blist,
+         .help = "thread counts, up to 4 of 1 .. 1024 (default 1,2)"},
+        {"accel", .type = TB_OPT_CUSTOM, .dest = use, .metavar = "K,...", .parse = tb__parse_kinds,
+         .help = "the structures: bvh,grid,list (default all three)"},
+        {"seed", .type = TB_OPT_INT, .dest = &seed_i, .min = 1, .max = 2147483647, .metavar = "S",
+         .help = "random seed (default %D)"},
+        {"no-stats", .type = TB_OPT_FLAG, .dest = &no_stats, .help = "turn the counters off"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed bench accel",
+        .err = "testbed bench accel: ",
+        .usage = "[--tris N,...] [--rays N] [--threads T,...] [--accel K,...] [--seed S] [--no-stats]",
+        .intro = "\n"
+                 "The BVH, the uniform grid and the plain list (host/render/accel.h) on triangle soups\n"
+                 "and tessellated spheres: primary, diffuse and shadow ray sets; prints Mrays/s (wall\n"
+                 "clock) and Mrays per CPU second, then checks that the structures gave the same\n"
+                 "answers (exit status 1 if not).\n",
+        .opts = opts,
+    };
+    int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (prc != TB_CLI_OK)
+        return prc;
+    if (no_stats)
+        tb_stats_set_enabled(0);
+    long nrays = nrays_i, seedv = seed_i;
+    int nsizes = tris.n, nthreads = thr.n;
     printf("testbed bench accel: %ld rays per set; Mrays/s is wall-clock throughput, Mrays/CPU-s per second of\n"
            "process CPU time (equal to Mrays/s on an idle machine with one thread); steps are BVH nodes or\n"
            "grid voxels visited, tests are callback calls (0 with --no-stats)\n\n",

@@ -18,31 +18,6 @@
 #include "host/gpu/formfactor.h"
 #include "util/stats/stats.h"
 
-static void tb__ffb_usage(FILE *out)
-{
-    fprintf(out,
-            "usage: testbed bench formfactor SCENE.mid [--shooters N] [--samples N] [--repeat R]\n"
-            "                                [--seed S] [--device N]\n"
-            "\n"
-            "Ray-cast form factors (Wallace et al. 1989) per second, the Vulkan kernel against the CPU\n"
-            "batch (OpenMP over receivers), on the same work: the scene (e.g. scenes/cornell-box.mid)\n"
-            "meshed into elements as `testbed validate --kernel formfactor` does (edge: bounds\n"
-            "diagonal / 24; every element occludes), every element centroid and corner a receiver,\n"
-            "N shooters (emitting elements first, then random ones), each with S sample points.\n"
-            "Prints, for the best of R runs: form factors (receiver-shooter pairs) and sample\n"
-            "segments per second by wall clock, the process CPU seconds (the driver's threads\n"
-            "included), the kernel's device time (timestamp queries: the Vulkan path is timed\n"
-            "through tb_gpu_ff_raycast, which is tb_gpu_ff_batch plus timing), the ratio\n"
-            "vulkan/cpu, and the largest relative difference between the two (floor 1e-6) as a\n"
-            "sanity check. Pipeline creation is excluded (one untimed shot first).\n"
-            "\n"
-            "  --shooters N  shooters (default 16)\n"
-            "  --samples N   sample points per shooter (default 16)\n"
-            "  --repeat R    timed runs per path (default 3)\n"
-            "  --seed S      seed of the shooter choice and the sample points (default 1)\n"
-            "  --device N    Vulkan device (testbed devices; default: the best one, lavapipe included)\n");
-}
-
 /* User + system CPU seconds of the whole process. */
 static double tb__ffb_cpu(void)
 {
@@ -95,40 +70,49 @@ static double tb__ffb_run(const tb__ffb_work *w, tb_ff_batch_fn fn, void *ctx, d
 
 int tb_cmd_bench_formfactor(int argc, char **argv)
 {
-    if (tb_wants_help(argc, argv)) {
-        tb__ffb_usage(stdout);
-        return TB_EXIT_OK;
-    }
     const char *path = NULL;
-    long shooters = 16, samples = 16, repeat = 3, seed = 1, device = -1;
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        long *dst = !strcmp(a, "--shooters") ? &shooters
-                    : !strcmp(a, "--samples") ? &samples
-                    : !strcmp(a, "--repeat")  ? &repeat
-                    : !strcmp(a, "--seed")    ? &seed
-                    : !strcmp(a, "--device")  ? &device
-                                              : NULL;
-        if (dst) {
-            long lo = dst == &seed || dst == &device ? 0 : 1, hi = dst == &seed ? 1L << 40 : 4096;
-            if (!tb_cli_long(i + 1 < argc ? argv[++i] : NULL, lo, hi, dst)) {
-                fprintf(stderr, "testbed bench formfactor: %s needs a whole number in %ld..%ld\n", a, lo, hi);
-                return TB_EXIT_USAGE;
-            }
-        } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "testbed bench formfactor: unknown option '%s' (see testbed bench formfactor --help)\n", a);
-            return TB_EXIT_USAGE;
-        } else if (!path) {
-            path = a;
-        } else {
-            fprintf(stderr, "testbed bench formfactor: more than one scene\n");
-            return TB_EXIT_USAGE;
-        }
-    }
-    if (!path) {
-        tb__ffb_usage(stderr);
-        return TB_EXIT_USAGE;
-    }
+    int shooters_i = 16, samples_i = 16, repeat_i = 3, device_i = -1;
+    uint64_t seed_u = 1;
+    const tb_opt opts[] = {
+        {"shooters", .type = TB_OPT_INT, .dest = &shooters_i, .min = 1, .max = 4096, .metavar = "N",
+         .help = "shooters (default %D)"},
+        {"samples", .type = TB_OPT_INT, .dest = &samples_i, .min = 1, .max = 4096, .metavar = "N",
+         .help = "sample points per shooter (default %D)"},
+        {"repeat", .type = TB_OPT_INT, .dest = &repeat_i, .min = 1, .max = 4096, .metavar = "R",
+         .help = "timed runs per path (default %D)"},
+        {"seed", .type = TB_OPT_UINT64, .dest = &seed_u, .max = 1099511627776.0, .metavar = "S",
+         .help = "seed of the shooter choice and the sample points (default %D)"},
+        {"device", .type = TB_OPT_INT, .dest = &device_i, .min = 0, .max = 4096, .metavar = "N",
+         .help = "Vulkan device (testbed devices; default: the best one, lavapipe included)"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed bench formfactor",
+        .err = "testbed bench formfactor: ",
+        .usage = "SCENE.mid [--shooters N] [--samples N] [--repeat R]\n"
+                 "                                [--seed S] [--device N]",
+        .intro = "\n"
+                 "Ray-cast form factors (Wallace et al. 1989) per second, the Vulkan kernel against the CPU\n"
+                 "batch (OpenMP over receivers), on the same work: the scene (e.g. scenes/cornell-box.mid)\n"
+                 "meshed into elements as `testbed validate --kernel formfactor` does (edge: bounds\n"
+                 "diagonal / 24; every element occludes), every element centroid and corner a receiver,\n"
+                 "N shooters (emitting elements first, then random ones), each with S sample points.\n"
+                 "Prints, for the best of R runs: form factors (receiver-shooter pairs) and sample\n"
+                 "segments per second by wall clock, the process CPU seconds (the driver's threads\n"
+                 "included), the kernel's device time (timestamp queries: the Vulkan path is timed\n"
+                 "through tb_gpu_ff_raycast, which is tb_gpu_ff_batch plus timing), the ratio\n"
+                 "vulkan/cpu, and the largest relative difference between the two (floor 1e-6) as a\n"
+                 "sanity check. Pipeline creation is excluded (one untimed shot first).\n",
+        .opts = opts,
+        .pos = &path,
+        .max_pos = 1,
+    };
+    int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (prc != TB_CLI_OK)
+        return prc;
+    if (!path)
+        return tb_cli_usage_error(&cli, "no SCENE.mid given");
+    long shooters = shooters_i, samples = samples_i, repeat = repeat_i, seed = (long)seed_u, device = device_i;
     tb_scene *s;
     tb_gpu_session sess;
     if (!tb_cli_open_vulkan("testbed bench formfactor: ", path, device, &s, &sess))

@@ -26,33 +26,6 @@
 enum { TB__GSET_PRIMARY, TB__GSET_SHADOW, TB__GSET_DIFFUSE, TB__GSETS };
 static const char *const tb__gset_names[TB__GSETS] = {"primary", "shadow", "diffuse"};
 
-static void tb__gpu_usage(FILE *out)
-{
-    fprintf(out,
-            "usage: testbed bench gpu SCENE.mid [--rays N] [--repeat R] [--seed S] [--device N]\n"
-            "                         [--quadrics auto|gpu|cpu]\n"
-            "\n"
-            "Times the Vulkan intersect kernel (tb_gpu_intersect / tb_gpu_occluded) and the CPU path\n"
-            "(tb_scene_intersect / tb_scene_occluded, OpenMP over rays) on the same rays:\n"
-            "  primary  N camera rays in scanline order over a grid of the film (closest hit)\n"
-            "  shadow   from each primary hit toward a point on a light (any hit)\n"
-            "  diffuse  from each primary hit, cosine-distributed about the normal (closest hit)\n"
-            "Prints per set the median over R runs of Mrays/s (wall clock) of both paths, their ratio,\n"
-            "and the kernel's own rate from its device time (timestamp queries), then Mrays per CPU\n"
-            "second of the process (all threads, the driver's included) and their ratio: on a shared\n"
-            "machine this ratio is steadier than the wall-clock one. Pipeline creation is\n"
-            "excluded (one untimed call first). The Vulkan path includes the upload, download and the\n"
-            "host's part (routed CPU objects, (u, v)). Rays on which the two paths disagree (object,\n"
-            "or occlusion) are counted as a sanity check; `testbed validate` gives the full figures.\n"
-            "\n"
-            "  --rays N    primary rays (default 500000)\n"
-            "  --repeat R  timed runs per set and path (default 3)\n"
-            "  --seed S    seed of the shadow and diffuse sampling (default 1)\n"
-            "  --device N  Vulkan device (testbed devices; default: the best one)\n"
-            "  --quadrics auto|gpu|cpu  where cylinders, cones and conics run (default auto: in the\n"
-            "              kernel except on a CPU driver such as lavapipe; tb_gpu_scene_desc)\n");
-}
-
 /* The three sets (as `testbed bench rays` makes them, but primary rays in
  * scanline order: a renderer's order, which keeps neighbouring rays, and
  * so a SIMD group of the kernel, coherent). Returns false when out of memory. */
@@ -143,57 +116,53 @@ static double tb__ggpu(tb_gpu_scene *g, int k, const tb_ray *rays, size_t n, tb_
 int tb_cmd_bench_gpu(int argc, char **argv)
 {
     const char *path = NULL;
-    long nrays = 500000, repeat = 3, seed = 1, device = -1;
-    tb_gpu_scene_desc gdesc = {TB_GPU_QUADRICS_AUTO};
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            tb__gpu_usage(stdout);
-            return TB_EXIT_OK;
-        }
-        bool ok = true;
-        if (!strcmp(a, "--quadrics")) {
-            const char *v = i + 1 < argc ? argv[++i] : "";
-            if (!strcmp(v, "auto") || !strcmp(v, "gpu") || !strcmp(v, "cpu")) {
-                gdesc.quadrics = v[0] == 'a' ? TB_GPU_QUADRICS_AUTO : v[0] == 'g' ? TB_GPU_QUADRICS_GPU : TB_GPU_QUADRICS_CPU;
-                continue;
-            }
-            fprintf(stderr, "testbed bench gpu: error: --quadrics must be auto, gpu or cpu\n");
-            return TB_EXIT_USAGE;
-        }
-        if (!strcmp(a, "--rays") || !strcmp(a, "--repeat") || !strcmp(a, "--seed") || !strcmp(a, "--device")) {
-            if (i + 1 >= argc) {
-                fprintf(stderr, "testbed bench gpu: error: %s needs a value\n", a);
-                return TB_EXIT_USAGE;
-            }
-            const char *v = argv[++i];
-            if (!strcmp(a, "--rays"))
-                ok = tb_cli_long(v, 1, 1L << 28, &nrays);
-            else if (!strcmp(a, "--repeat"))
-                ok = tb_cli_long(v, 1, 1000, &repeat);
-            else if (!strcmp(a, "--seed"))
-                ok = tb_cli_long(v, 0, 1L << 62, &seed);
-            else
-                ok = tb_cli_long(v, 0, 1000, &device);
-            if (!ok) {
-                fprintf(stderr, "testbed bench gpu: error: bad value '%s' for %s\n", v, a);
-                return TB_EXIT_USAGE;
-            }
-        } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "testbed bench gpu: error: unknown option '%s'\n", a);
-            tb__gpu_usage(stderr);
-            return TB_EXIT_USAGE;
-        } else if (!path) {
-            path = a;
-        } else {
-            fprintf(stderr, "testbed bench gpu: error: more than one scene\n");
-            return TB_EXIT_USAGE;
-        }
-    }
-    if (!path) {
-        tb__gpu_usage(stderr);
-        return TB_EXIT_USAGE;
-    }
+    int nrays_i = 500000, repeat_i = 3, device_i = -1, quadrics = TB_GPU_QUADRICS_AUTO;
+    uint64_t seed_u = 1;
+    static const tb_opt_choice quadric_places[] = {
+        {"auto", TB_GPU_QUADRICS_AUTO}, {"gpu", TB_GPU_QUADRICS_GPU}, {"cpu", TB_GPU_QUADRICS_CPU}, {NULL, 0}};
+    const tb_opt opts[] = {
+        {"rays", .type = TB_OPT_INT, .dest = &nrays_i, .min = 1, .max = 1 << 28, .metavar = "N",
+         .help = "primary rays (default %D)"},
+        {"repeat", .type = TB_OPT_INT, .dest = &repeat_i, .min = 1, .max = 1000, .metavar = "R",
+         .help = "timed runs per set and path (default %D)"},
+        {"seed", .type = TB_OPT_UINT64, .dest = &seed_u, .max = 4611686018427387904.0, .metavar = "S",
+         .help = "seed of the shadow and diffuse sampling (default %D)"},
+        {"device", .type = TB_OPT_INT, .dest = &device_i, .min = 0, .max = 1000, .metavar = "N",
+         .help = "Vulkan device (testbed devices; default: the best one)"},
+        {"quadrics", .type = TB_OPT_CHOICE, .dest = &quadrics, .choices = quadric_places,
+         .help = "where cylinders, cones and conics run (default %D: in the\n"
+                 "kernel except on a CPU driver such as lavapipe; tb_gpu_scene_desc)"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed bench gpu",
+        .err = "testbed bench gpu: error: ",
+        .usage = "SCENE.mid [--rays N] [--repeat R] [--seed S] [--device N]\n"
+                 "                         [--quadrics auto|gpu|cpu]",
+        .intro = "\n"
+                 "Times the Vulkan intersect kernel (tb_gpu_intersect / tb_gpu_occluded) and the CPU path\n"
+                 "(tb_scene_intersect / tb_scene_occluded, OpenMP over rays) on the same rays:\n"
+                 "  primary  N camera rays in scanline order over a grid of the film (closest hit)\n"
+                 "  shadow   from each primary hit toward a point on a light (any hit)\n"
+                 "  diffuse  from each primary hit, cosine-distributed about the normal (closest hit)\n"
+                 "Prints per set the median over R runs of Mrays/s (wall clock) of both paths, their ratio,\n"
+                 "and the kernel's own rate from its device time (timestamp queries), then Mrays per CPU\n"
+                 "second of the process (all threads, the driver's included) and their ratio: on a shared\n"
+                 "machine this ratio is steadier than the wall-clock one. Pipeline creation is\n"
+                 "excluded (one untimed call first). The Vulkan path includes the upload, download and the\n"
+                 "host's part (routed CPU objects, (u, v)). Rays on which the two paths disagree (object,\n"
+                 "or occlusion) are counted as a sanity check; `testbed validate` gives the full figures.\n",
+        .opts = opts,
+        .pos = &path,
+        .max_pos = 1,
+    };
+    int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (prc != TB_CLI_OK)
+        return prc;
+    if (!path)
+        return tb_cli_usage_error(&cli, "no SCENE.mid given");
+    long nrays = nrays_i, repeat = repeat_i, seed = (long)seed_u, device = device_i;
+    tb_gpu_scene_desc gdesc = {(tb_gpu_quadrics)quadrics};
     tb_scene *s;
     tb_gpu_session sess;
     if (!tb_cli_open_vulkan("testbed bench gpu: error: ", path, device, &s, &sess))

@@ -19,68 +19,36 @@ static double tb__tess_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int tb__tess_number(const char *s, double *out)
-{
-    if (!s || !*s)
-        return 0;
-    errno = 0;
-    char *end;
-    double v = strtod(s, &end);
-    if (errno || *end || !isfinite(v) || v < 0.0)
-        return 0;
-    *out = v;
-    return 1;
-}
-
-static void tb__tess_usage(FILE *out)
-{
-    fprintf(out, "usage: testbed bench tessellate [--angle A] [--edge E] [--seconds S] [--split]\n"
-                 "\n"
-                 "Tessellates every primitive kind with its default geometry (polygons: the six\n"
-                 "faces of the cube [-1,1]^3) with tb_polygonize, one thread, repeatedly for at\n"
-                 "least S CPU seconds per kind, and prints the mesh size and the rate in meshes\n"
-                 "and in triangles per second (a FED face of n corners counts n - 2 triangles).\n"
-                 "\n"
-                 "  --angle A    angular tolerance in radians (default 0.05)\n"
-                 "  --edge E     largest edge length, object units (default 0: none)\n"
-                 "  --seconds S  CPU time per kind (default 0.3)\n"
-                 "  --split      one vertex per (point, face, u, v) instead of welded vertices\n"
-                 "  -h, --help   show this help\n"
-                 "\n"
-                 "Exit status: 0 done, 1 a tessellation failed, 2 usage error.\n");
-}
-
 int tb_cmd_bench_tessellate(int argc, char **argv)
 {
     tb_poly_options o = {.max_angle = 0.05};
     double seconds = 0.3;
-    for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0) {
-            tb__tess_usage(stdout);
-            return TB_EXIT_OK;
-        } else if (strcmp(argv[i], "--angle") == 0 && i + 1 < argc) {
-            if (!tb__tess_number(argv[++i], &o.max_angle)) {
-                fprintf(stderr, "testbed bench tessellate: --angle needs a number >= 0, not '%s'\n", argv[i]);
-                return TB_EXIT_USAGE;
-            }
-        } else if (strcmp(argv[i], "--edge") == 0 && i + 1 < argc) {
-            if (!tb__tess_number(argv[++i], &o.max_edge)) {
-                fprintf(stderr, "testbed bench tessellate: --edge needs a number >= 0, not '%s'\n", argv[i]);
-                return TB_EXIT_USAGE;
-            }
-        } else if (strcmp(argv[i], "--seconds") == 0 && i + 1 < argc) {
-            if (!tb__tess_number(argv[++i], &seconds) || seconds > 3600.0) {
-                fprintf(stderr, "testbed bench tessellate: --seconds needs a number in 0 .. 3600, not '%s'\n", argv[i]);
-                return TB_EXIT_USAGE;
-            }
-        } else if (strcmp(argv[i], "--split") == 0) {
-            o.split = true;
-        } else {
-            fprintf(stderr, "testbed bench tessellate: unknown option '%s' (see --help)\n", argv[i]);
-            tb__tess_usage(stderr);
-            return TB_EXIT_USAGE;
-        }
-    }
+    const tb_opt opts[] = {
+        {"angle", .type = TB_OPT_DOUBLE, .dest = &o.max_angle, .min = 0, .max = INFINITY, .metavar = "A",
+         .help = "angular tolerance in radians (default %D)"},
+        {"edge", .type = TB_OPT_DOUBLE, .dest = &o.max_edge, .min = 0, .max = INFINITY, .metavar = "E",
+         .help = "largest edge length, object units (default %D: none)"},
+        {"seconds", .type = TB_OPT_DOUBLE, .dest = &seconds, .min = 0, .max = 3600, .metavar = "S",
+         .help = "CPU time per kind (default %D)"},
+        {"split", .type = TB_OPT_FLAG, .dest = &o.split,
+         .help = "one vertex per (point, face, u, v) instead of welded vertices"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed bench tessellate",
+        .err = "testbed bench tessellate: ",
+        .usage = "[--angle A] [--edge E] [--seconds S] [--split]",
+        .intro = "\n"
+                 "Tessellates every primitive kind with its default geometry (polygons: the six\n"
+                 "faces of the cube [-1,1]^3) with tb_polygonize, one thread, repeatedly for at\n"
+                 "least S CPU seconds per kind, and prints the mesh size and the rate in meshes\n"
+                 "and in triangles per second (a FED face of n corners counts n - 2 triangles).\n",
+        .opts = opts,
+        .outro = "\nExit status: 0 done, 1 a tessellation failed, 2 usage error.",
+    };
+    int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (prc != TB_CLI_OK)
+        return prc;
     /* The cube as six quads, for the polygons row. */
     static const tb_vec3 cube_v[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
                                       {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};

@@ -12,26 +12,6 @@
 #include "util/math/aabb.h"
 #include "util/math/transform.h"
 
-static void tb__check_usage(FILE *out)
-{
-    fprintf(out,
-            "usage: testbed check SCENE.mid [--warn-unknown]\n"
-            "\n"
-            "Reads the MID scene SCENE.mid (- reads standard input) and checks it against the\n"
-            "MID specification (docs/mid.md): syntax, every known attribute's shape and range,\n"
-            "transforms, materials defined before use, and that every referenced data file\n"
-            "exists. The first error is printed as FILE:LINE:COL: error: MESSAGE. A valid scene\n"
-            "gets a summary: objects by kind, materials, lights, camera, world-space bounds of\n"
-            "the objects (boxes of the canonical shapes under their transforms) and the files\n"
-            "it references.\n"
-            "\n"
-            "  --warn-unknown   list attributes the reader does not know (kept, and ignored by\n"
-            "                   renderers) as FILE:LINE:COL: warning: ... on standard error\n"
-            "  -h, --help       show this help\n"
-            "\n"
-            "Exit status: 0 valid scene, 1 invalid scene or unreadable file, 2 usage error.\n");
-}
-
 /* What the summary counts. */
 typedef struct tb__check {
     const char *file;
@@ -259,32 +239,36 @@ static void tb__print_summary(const tb__check *c, const tb_mid_reader *r)
 
 int tb_cmd_check(int argc, char **argv)
 {
-    if (tb_wants_help(argc, argv)) {
-        tb__check_usage(stdout);
-        return TB_EXIT_OK;
-    }
     const char *path = NULL;
     bool warn = false;
-    for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "--warn-unknown") == 0)
-            warn = true;
-        else if (strcmp(argv[i], "--") == 0 && i + 1 < argc && !path && i + 2 == argc)
-            path = argv[++i];
-        else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            fprintf(stderr, "testbed check: error: unknown option '%s'\n", argv[i]);
-            tb__check_usage(stderr);
-            return TB_EXIT_USAGE;
-        } else if (!path)
-            path = argv[i];
-        else {
-            fprintf(stderr, "testbed check: error: one scene at a time ('%s' and '%s')\n", path, argv[i]);
-            return TB_EXIT_USAGE;
-        }
-    }
-    if (!path) {
-        tb__check_usage(stderr);
-        return TB_EXIT_USAGE;
-    }
+    const tb_opt opts[] = {
+        {"warn-unknown", .type = TB_OPT_FLAG, .dest = &warn,
+         .help = "list attributes the reader does not know (kept, and ignored by\n"
+                 "renderers) as FILE:LINE:COL: warning: ... on standard error"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed check",
+        .err = "testbed check: error: ",
+        .usage = "SCENE.mid [--warn-unknown]",
+        .intro = "\n"
+                 "Reads the MID scene SCENE.mid (- reads standard input) and checks it against the\n"
+                 "MID specification (docs/mid.md): syntax, every known attribute's shape and range,\n"
+                 "transforms, materials defined before use, and that every referenced data file\n"
+                 "exists. The first error is printed as FILE:LINE:COL: error: MESSAGE. A valid scene\n"
+                 "gets a summary: objects by kind, materials, lights, camera, world-space bounds of\n"
+                 "the objects (boxes of the canonical shapes under their transforms) and the files\n"
+                 "it references.\n",
+        .opts = opts,
+        .outro = "\nExit status: 0 valid scene, 1 invalid scene or unreadable file, 2 usage error.",
+        .pos = &path,
+        .max_pos = 1,
+    };
+    int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (prc != TB_CLI_OK)
+        return prc;
+    if (!path)
+        return tb_cli_usage_error(&cli, "no SCENE.mid given");
     tb_mid_reader *r;
     if (tb_mid_reader_open(&r, path)) {
         fprintf(stderr, "testbed check: error: %s\n", tb_last_error());

@@ -9,37 +9,6 @@
 #include "commands.h"
 #include "util/image/compare.h"
 
-static void tb__compare_usage(FILE *out)
-{
-    fprintf(out,
-            "usage: testbed compare A B [options]\n"
-            "\n"
-            "Compares test image A with reference image B (same size, any format testbed\n"
-            "reads) and prints MSE, RMSE, relMSE, PSNR, SSIM and the largest absolute error,\n"
-            "per channel and over all compared channels.\n"
-            "\n"
-            "  --json               print JSON instead of a table (non-finite numbers are null:\n"
-            "                       PSNR is null when MSE is 0, i.e. +inf)\n"
-            "  --error-image OUT    write a false-colour error image (viridis; format by\n"
-            "                       extension; pixels with NaN/Inf are magenta)\n"
-            "  --error-scale S      error shown at the top of the colour map (default: the\n"
-            "                       largest per-pixel error)\n"
-            "  --peak P             signal peak for PSNR and SSIM (default 1)\n"
-            "  --channels LIST      comma-separated channel names to compare (default: R,G,B\n"
-            "                       if both have them, else Y, else the names both share)\n"
-            "  --alpha              also compare the A channel when both images have one\n"
-            "  --linear             read 8-bit formats (PNG, RLE) as code/255, not sRGB\n"
-            "  -h, --help           show this help\n"
-            "\n"
-            "Definitions: relMSE = mean (a-b)^2 / (b^2 + 0.01) with B the reference; SSIM is\n"
-            "Wang et al. 2004 (11x11 Gaussian, sigma 1.5, K1 0.01, K2 0.03, L = peak), per\n"
-            "channel, averaged. Pixels with NaN/Inf in a compared channel are left out of\n"
-            "every metric and counted. See util/image/compare.h.\n"
-            "\n"
-            "Exit status: 0 compared, 1 an image could not be read/written or compared\n"
-            "(size or channel mismatch), 2 usage error.\n");
-}
-
 /* A JSON number; NaN and +-Inf are not JSON, so they become null. */
 static void tb__json_num(FILE *out, double v)
 {
@@ -167,74 +136,63 @@ static void tb__print_table(FILE *out, const char *pa, const char *pb, const tb_
         fprintf(out, "error image: %s (scale %g)\n", err_path, err_scale);
 }
 
-/* Parses a finite double; `positive` also requires > 0, else >= 0. */
-static int tb__parse_num(const char *s, int positive, double *out)
-{
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    if (end == s || *end || errno || !isfinite(v) || (positive ? !(v > 0) : !(v >= 0)))
-        return -1;
-    *out = v;
-    return 0;
-}
-
 int tb_cmd_compare(int argc, char **argv)
 {
-    if (tb_wants_help(argc, argv)) {
-        tb__compare_usage(stdout);
-        return TB_EXIT_OK;
-    }
     const char *paths[2] = {NULL, NULL};
-    int npaths = 0, json = 0, opts_done = 0;
+    bool json = false, alpha = false, linear = false;
     const char *err_path = NULL;
     double err_scale = 0.0;
     tb_compare_options co = {0};
     tb_image_read_options ro = {0};
-    for (int i = 1; i < argc; i++) {
-        const char *arg = argv[i];
-        int has_value = i + 1 < argc;
-        if (!opts_done && strcmp(arg, "--") == 0) {
-            opts_done = 1;
-        } else if (!opts_done && strcmp(arg, "--json") == 0) {
-            json = 1;
-        } else if (!opts_done && strcmp(arg, "--alpha") == 0) {
-            co.include_alpha = 1;
-        } else if (!opts_done && strcmp(arg, "--linear") == 0) {
-            ro.encoding = TB_ENCODING_LINEAR;
-        } else if (!opts_done && strcmp(arg, "--error-image") == 0 && has_value) {
-            err_path = argv[++i];
-        } else if (!opts_done && strcmp(arg, "--channels") == 0 && has_value) {
-            co.channels = argv[++i];
-        } else if (!opts_done && strcmp(arg, "--peak") == 0 && has_value) {
-            if (tb__parse_num(argv[++i], 1, &co.peak)) {
-                fprintf(stderr, "testbed compare: error: --peak needs a positive number, not '%s'\n",
-                        argv[i]);
-                return TB_EXIT_USAGE;
-            }
-        } else if (!opts_done && strcmp(arg, "--error-scale") == 0 && has_value) {
-            if (tb__parse_num(argv[++i], 1, &err_scale)) {
-                fprintf(stderr,
-                        "testbed compare: error: --error-scale needs a positive number, not '%s'\n",
-                        argv[i]);
-                return TB_EXIT_USAGE;
-            }
-        } else if (!opts_done && arg[0] == '-' && arg[1] != '\0') {
-            fprintf(stderr, "testbed compare: error: unknown option or missing value: '%s' "
-                            "(see `testbed compare --help`)\n", arg);
-            return TB_EXIT_USAGE;
-        } else if (npaths < 2) {
-            paths[npaths++] = arg;
-        } else {
-            fprintf(stderr, "testbed compare: error: more than two images given\n");
-            return TB_EXIT_USAGE;
-        }
-    }
-    if (npaths != 2) {
-        fprintf(stderr, "testbed compare: error: need two images, A and B\n");
-        tb__compare_usage(stderr);
-        return TB_EXIT_USAGE;
-    }
+    const tb_opt opts[] = {
+        {"json", .type = TB_OPT_FLAG, .dest = &json,
+         .help = "print JSON instead of a table (non-finite numbers are null:\n"
+                 "PSNR is null when MSE is 0, i.e. +inf)"},
+        {"error-image", .type = TB_OPT_STRING, .dest = &err_path, .metavar = "OUT",
+         .help = "write a false-colour error image (viridis; format by\n"
+                 "extension; pixels with NaN/Inf are magenta)"},
+        {"error-scale", .type = TB_OPT_DOUBLE, .dest = &err_scale, .min = 0, .max = INFINITY, .metavar = "S",
+         .flags = TB_OPTF_OPEN_MIN,
+         .help = "error shown at the top of the colour map (default: the\n"
+                 "largest per-pixel error)"},
+        {"peak", .type = TB_OPT_DOUBLE, .dest = &co.peak, .min = 0, .max = INFINITY, .metavar = "P",
+         .flags = TB_OPTF_OPEN_MIN, .help = "signal peak for PSNR and SSIM (default 1)"},
+        {"channels", .type = TB_OPT_STRING, .dest = &co.channels, .metavar = "LIST",
+         .help = "comma-separated channel names to compare (default: R,G,B\n"
+                 "if both have them, else Y, else the names both share)"},
+        {"alpha", .type = TB_OPT_FLAG, .dest = &alpha, .help = "also compare the A channel when both images have one"},
+        {"linear", .type = TB_OPT_FLAG, .dest = &linear,
+         .help = "read 8-bit formats (PNG, RLE) as code/255, not sRGB"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed compare",
+        .err = "testbed compare: error: ",
+        .usage = "A B [options]",
+        .intro = "\n"
+                 "Compares test image A with reference image B (same size, any format testbed\n"
+                 "reads) and prints MSE, RMSE, relMSE, PSNR, SSIM and the largest absolute error,\n"
+                 "per channel and over all compared channels.\n",
+        .opts = opts,
+        .outro = "\n"
+                 "Definitions: relMSE = mean (a-b)^2 / (b^2 + 0.01) with B the reference; SSIM is\n"
+                 "Wang et al. 2004 (11x11 Gaussian, sigma 1.5, K1 0.01, K2 0.03, L = peak), per\n"
+                 "channel, averaged. Pixels with NaN/Inf in a compared channel are left out of\n"
+                 "every metric and counted. See util/image/compare.h.\n"
+                 "\n"
+                 "Exit status: 0 compared, 1 an image could not be read/written or compared\n"
+                 "(size or channel mismatch), 2 usage error.",
+        .pos = paths,
+        .max_pos = 2,
+    };
+    int npaths, prc = tb_cli_parse(&cli, argc, argv, &npaths);
+    if (prc != TB_CLI_OK)
+        return prc;
+    if (npaths != 2)
+        return tb_cli_usage_error(&cli, "need two images, A and B");
+    co.include_alpha = alpha;
+    if (linear)
+        ro.encoding = TB_ENCODING_LINEAR;
 
     tb_image *img[2] = {NULL, NULL};
     tb_image *err = NULL;

@@ -11,32 +11,6 @@
 /* Words per device for --check (256 KiB: quick even under validation). */
 #define TB__SELF_TEST_WORDS 65536u
 
-static void tb__devices_usage(FILE *out)
-{
-    fprintf(out,
-            "usage: testbed devices [options]\n"
-            "\n"
-            "Lists the Vulkan devices the loader sees: index, name, type, driver, Vulkan\n"
-            "version, subgroup size, workgroup limits, memory heaps, timestamp support and\n"
-            "float controls. Marks the device that --backend vulkan uses and says what\n"
-            "--backend auto chooses (Vulkan only on a discrete, integrated or virtual GPU;\n"
-            "otherwise the CPU path, which is faster than a CPU Vulkan driver such as lavapipe).\n"
-            "\n"
-            "  --json          print JSON instead of text\n"
-            "  --check         run a self-test kernel on every usable device and report\n"
-            "                  whether its results are right (and its time)\n"
-            "  --validation    run with the Khronos validation layer (also: TB_VK_VALIDATION=1);\n"
-            "                  any validation message makes the exit status 1\n"
-            "  -h, --help      show this help\n"
-            "\n"
-            "Environment: TB_VULKAN_LOADER (loader library, default libvulkan.so.1),\n"
-            "VK_DRIVER_FILES / VK_ICD_FILENAMES (which drivers the loader loads).\n"
-            "\n"
-            "Exit status: 0 listed (also when there is no Vulkan loader, driver or device:\n"
-            "that is reported, and the CPU path is used), 1 a --check self-test failed or\n"
-            "--validation reported a message, 2 usage error.\n");
-}
-
 static const char *tb__type_key(tb_gpu_device_type t)
 {
     switch (t) {
@@ -247,24 +221,39 @@ static void tb__print_text(FILE *out, tb_gpu_instance *inst, int vk_index, const
 
 int tb_cmd_devices(int argc, char **argv)
 {
-    if (tb_wants_help(argc, argv)) {
-        tb__devices_usage(stdout);
-        return TB_EXIT_OK;
-    }
     bool json = false, check = false, validation = false;
-    for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "--json") == 0)
-            json = true;
-        else if (strcmp(argv[i], "--check") == 0)
-            check = true;
-        else if (strcmp(argv[i], "--validation") == 0)
-            validation = true;
-        else {
-            fprintf(stderr, "testbed devices: error: unknown option '%s'\n", argv[i]);
-            tb__devices_usage(stderr);
-            return TB_EXIT_USAGE;
-        }
-    }
+    const tb_opt opts[] = {
+        {"json", .type = TB_OPT_FLAG, .dest = &json, .help = "print JSON instead of text"},
+        {"check", .type = TB_OPT_FLAG, .dest = &check,
+         .help = "run a self-test kernel on every usable device and report\n"
+                 "whether its results are right (and its time)"},
+        {"validation", .type = TB_OPT_FLAG, .dest = &validation,
+         .help = "run with the Khronos validation layer (also: TB_VK_VALIDATION=1);\n"
+                 "any validation message makes the exit status 1"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed devices",
+        .err = "testbed devices: error: ",
+        .usage = "[options]",
+        .intro = "\n"
+                 "Lists the Vulkan devices the loader sees: index, name, type, driver, Vulkan\n"
+                 "version, subgroup size, workgroup limits, memory heaps, timestamp support and\n"
+                 "float controls. Marks the device that --backend vulkan uses and says what\n"
+                 "--backend auto chooses (Vulkan only on a discrete, integrated or virtual GPU;\n"
+                 "otherwise the CPU path, which is faster than a CPU Vulkan driver such as lavapipe).\n",
+        .opts = opts,
+        .outro = "\n"
+                 "Environment: TB_VULKAN_LOADER (loader library, default libvulkan.so.1),\n"
+                 "VK_DRIVER_FILES / VK_ICD_FILENAMES (which drivers the loader loads).\n"
+                 "\n"
+                 "Exit status: 0 listed (also when there is no Vulkan loader, driver or device:\n"
+                 "that is reported, and the CPU path is used), 1 a --check self-test failed or\n"
+                 "--validation reported a message, 2 usage error.",
+    };
+    int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (prc != TB_CLI_OK)
+        return prc;
     /* Messages go to stderr as they come (quiet = false) and are counted. */
     tb_gpu_instance *inst = tb_gpu_instance_create(&(tb_gpu_instance_desc){.validation = validation});
     if (!inst) {

@@ -9,34 +9,6 @@
 #include "commands.h"
 #include "host/mid/import.h"
 
-static void tb__import_usage(FILE *out)
-{
-    fprintf(out,
-            "usage: testbed import MODEL -o OUT.mid [--binary-fed] [--triangulate] [--join|--no-join] [--quiet]\n"
-            "\n"
-            "Reads MODEL through Assimp (tested: OBJ + MTL, PLY, STL, glTF 2.0; any other format\n"
-            "Assimp reads is tried) and writes OUT.mid with one polygons object per mesh and\n"
-            "node, in the model's node order, plus the folder OUT.data/ beside it (replaced if\n"
-            "it exists) with one FED file per mesh and copies of the textures. Vertex positions\n"
-            "are written bit for bit as Assimp read them (for OBJ, ASCII PLY and ASCII STL, where\n"
-            "Assimp's parser rounds a number one ulp off, as the file's text reads correctly\n"
-            "rounded); node transforms become MID transforms;\n"
-            "MTL and glTF materials, glTF cameras and KHR_lights_punctual lights are mapped as\n"
-            "docs/import.md describes. Output appears whole or not at all.\n"
-            "\n"
-            "  -o OUT.mid      the MID file to write (required)\n"
-            "  --binary-fed    write binary FED files (.fedb) instead of text (.fed)\n"
-            "  --triangulate   split polygons into triangles (default: kept as polygons)\n"
-            "  --join          join vertices equal in position, normal and (u,v) for every format\n"
-            "                  (default: only for OBJ, whose reader unfolds the file's shared vertices)\n"
-            "  --no-join       one FED vertex per Assimp vertex, also for OBJ\n"
-            "  -q, --quiet     no warnings and no summary\n"
-            "  -h, --help      show this help\n"
-            "\n"
-            "Exit status: 0 imported, 1 the model cannot be imported or the output written,\n"
-            "2 usage error.\n");
-}
-
 static void tb__import_warning(void *user, const char *message)
 {
     (void)user;
@@ -45,49 +17,51 @@ static void tb__import_warning(void *user, const char *message)
 
 int tb_cmd_import(int argc, char **argv)
 {
-    if (tb_wants_help(argc, argv)) {
-        tb__import_usage(stdout);
-        return TB_EXIT_OK;
-    }
     const char *model = NULL, *out = NULL;
-    bool quiet = false, dashdash = false;
+    bool quiet = false;
     tb_import_opts opts = {.warn = tb__import_warning};
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!dashdash && strcmp(a, "--") == 0)
-            dashdash = true;
-        else if (!dashdash && strcmp(a, "-o") == 0) {
-            if (i + 1 >= argc) {
-                fprintf(stderr, "testbed import: error: -o needs a file name\n");
-                return TB_EXIT_USAGE;
-            }
-            out = argv[++i];
-        } else if (!dashdash && strcmp(a, "--binary-fed") == 0)
-            opts.binary_fed = true;
-        else if (!dashdash && strcmp(a, "--triangulate") == 0)
-            opts.triangulate = true;
-        else if (!dashdash && strcmp(a, "--join") == 0)
-            opts.join = TB_IMPORT_JOIN_ALWAYS;
-        else if (!dashdash && strcmp(a, "--no-join") == 0)
-            opts.join = TB_IMPORT_JOIN_NEVER;
-        else if (!dashdash && (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0))
-            quiet = true;
-        else if (!dashdash && a[0] == '-' && a[1] != '\0') {
-            fprintf(stderr, "testbed import: error: unknown option '%s'\n", a);
-            tb__import_usage(stderr);
-            return TB_EXIT_USAGE;
-        } else if (!model)
-            model = a;
-        else {
-            fprintf(stderr, "testbed import: error: one model at a time ('%s' and '%s')\n", model, a);
-            return TB_EXIT_USAGE;
-        }
-    }
-    if (!model || !out) {
-        fprintf(stderr, "testbed import: error: %s\n", !model ? "no MODEL given" : "no output given (-o OUT.mid)");
-        tb__import_usage(stderr);
-        return TB_EXIT_USAGE;
-    }
+    int join = (int)opts.join;
+    const tb_opt table[] = {
+        {.short_name = 'o', .type = TB_OPT_STRING, .dest = &out, .metavar = "OUT.mid",
+         .help = "the MID file to write (required)"},
+        {"binary-fed", .type = TB_OPT_FLAG, .dest = &opts.binary_fed,
+         .help = "write binary FED files (.fedb) instead of text (.fed)"},
+        {"triangulate", .type = TB_OPT_FLAG, .dest = &opts.triangulate,
+         .help = "split polygons into triangles (default: kept as polygons)"},
+        {"join", .type = TB_OPT_CONST, .dest = &join, .min = TB_IMPORT_JOIN_ALWAYS,
+         .help = "join vertices equal in position, normal and (u,v) for every format\n"
+                 "(default: only for OBJ, whose reader unfolds the file's shared vertices)"},
+        {"no-join", .type = TB_OPT_CONST, .dest = &join, .min = TB_IMPORT_JOIN_NEVER,
+         .help = "one FED vertex per Assimp vertex, also for OBJ"},
+        {"quiet", 'q', TB_OPT_FLAG, &quiet, .help = "no warnings and no summary"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed import",
+        .err = "testbed import: error: ",
+        .usage = "MODEL -o OUT.mid [--binary-fed] [--triangulate] [--join|--no-join] [--quiet]",
+        .intro = "\n"
+                 "Reads MODEL through Assimp (tested: OBJ + MTL, PLY, STL, glTF 2.0; any other format\n"
+                 "Assimp reads is tried) and writes OUT.mid with one polygons object per mesh and\n"
+                 "node, in the model's node order, plus the folder OUT.data/ beside it (replaced if\n"
+                 "it exists) with one FED file per mesh and copies of the textures. Vertex positions\n"
+                 "are written bit for bit as Assimp read them (for OBJ, ASCII PLY and ASCII STL, where\n"
+                 "Assimp's parser rounds a number one ulp off, as the file's text reads correctly\n"
+                 "rounded); node transforms become MID transforms;\n"
+                 "MTL and glTF materials, glTF cameras and KHR_lights_punctual lights are mapped as\n"
+                 "docs/import.md describes. Output appears whole or not at all.\n",
+        .opts = table,
+        .outro = "\nExit status: 0 imported, 1 the model cannot be imported or the output written,\n"
+                 "2 usage error.",
+        .pos = &model,
+        .max_pos = 1,
+    };
+    int npos, rc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (rc != TB_CLI_OK)
+        return rc;
+    opts.join = (tb_import_join)join;
+    if (!model || !out)
+        return tb_cli_usage_error(&cli, "%s", !model ? "no MODEL given" : "no output given (-o OUT.mid)");
     if (strcmp(out, "-") == 0) {
         fprintf(stderr, "testbed import: error: -o -: the MID file needs a folder beside it for its FED files, "
                         "so it cannot go to standard output\n");

@@ -10,6 +10,7 @@
 
 #include <omp.h>
 
+#include "cli_util.h"
 #include "commands.h"
 #include "host/gpu/gpu.h"
 #include "host/gpu/render.h"
@@ -29,56 +30,13 @@ static void tb__render_on_sigint(int sig)
     atomic_store(&tb__render_interrupt, 1);
 }
 
-static void tb__render_usage(FILE *out)
+/* --filter KIND[:RADIUS[:SIGMA]] (a TB_OPT_CUSTOM parser). */
+static int tb__render_filter(const char *val, void *dest, char *why, size_t len)
 {
-    fprintf(out,
-            "usage: testbed render SCENE.mid -o OUT.{png,exr,pfm,rle} [options]\n"
-            "  --method M           raytrace (default: the Whitted ray tracer) or radiosity (options:\n"
-            "                       testbed render --method radiosity --help)\n"
-            "  --spp N              samples per pixel (per pass; default 1)\n"
-            "  --adaptive [T]       adaptive antialiasing (--max-spp N, --aa-criterion stderr|contrast)\n"
-            "  --aa-pattern P       stratified (default) | sobol\n"
-            "  --filter K[:R[:S]]   box (default) | tent | gaussian | mitchell\n"
-            "  --threads N          OpenMP threads (the image does not depend on it)\n"
-            "  --seed N             sample seed (default 0)\n"
-            "  --backend B          cpu (the reference), vulkan or auto (default auto): vulkan runs the\n"
-            "                       wavefront tracer (intersect + shade kernels) on any Vulkan device,\n"
-            "                       lavapipe included, and fails if there is none; auto uses it only on a\n"
-            "                       real GPU and otherwise, or if the device fails, the CPU path (says why).\n"
-            "                       Same image as cpu within docs/accuracy.md's tolerance; hits the kernel\n"
-            "                       cannot shade (textures, patterns, bump, GGX) run on the CPU: reported\n"
-            "  --device N           Vulkan device N (testbed devices lists them; implies Vulkan in auto)\n"
-            "  --accel bvh|grid|list  acceleration structure (default bvh)\n"
-            "  --max-depth N        deepest reflected/refracted ray (default %d)\n"
-            "  --light-samples N    area-light samples per shading point (default %d)\n"
-            "  --glossy-samples N   rays sampled from a GGX lobe at a camera ray's hit (default %d; one deeper)\n"
-            "  --texture-filter bilinear|trilinear|ewa  image texture filter over the pixel footprint (default ewa)\n"
-            "  --passes N           progressive passes of --spp samples each (default 1)\n"
-            "  --time-budget S      stop starting new tiles after S seconds\n"
-            "  --exposure STOPS     PNG/RLE only: scale by 2^STOPS (default: mean luminance to 0.18)\n"
-            "  --stats FILE.json    counters, times and provenance\n"
-            "  --sample-map F.pfm   each pixel's camera sample count (grey PFM; adaptive: where samples went)\n"
-            "  --report FILE.csv    a row per pass: seconds, spp, relMSE against --reference IMG\n"
-            "Ctrl-C writes the image rendered so far and exits with status 130.\n",
-            TB_RT_DEFAULT_MAX_DEPTH, TB_RT_DEFAULT_LIGHT_SAMPLES, TB_RT_DEFAULT_GLOSSY_SAMPLES);
-}
-
-static int tb__render_fail(const char *fmt, const char *arg)
-{
-    fprintf(stderr, "testbed render: ");
-    fprintf(stderr, fmt, arg);
-    fprintf(stderr, "\n");
-    return TB_EXIT_FAIL;
-}
-
-static bool tb__parse_long(const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    long v = strtol(s, &end, 10);
-    if (end == s || *end || v < lo || v > hi)
-        return false;
-    *out = v;
-    return true;
+    if (tb_filter_parse(val, dest) == TB_OK)
+        return 0;
+    snprintf(why, len, "%s", tb_last_error());
+    return 1;
 }
 
 /* The --report state. */
@@ -113,114 +71,118 @@ int tb_cmd_render(int argc, char **argv)
     for (int i = 1; i + 1 < argc && strcmp(argv[i], "--"); i++)
         if (!strcmp(argv[i], "--method") && !strcmp(argv[i + 1], "radiosity"))
             return tb_cmd_render_radiosity(argc, argv);
-    if (tb_wants_help(argc, argv)) {
-        tb__render_usage(stdout);
-        return TB_EXIT_OK;
-    }
     const char *scene_path = NULL, *out_path = NULL, *stats_path = NULL, *report_path = NULL, *ref_path = NULL;
     const char *map_path = NULL;
     tb_render_options ro = tb_render_defaults();
-    tb_accel_kind accel = TB_ACCEL_BVH;
+    int accel = TB_ACCEL_BVH, method = 0, backend = TB_GPU_MODE_AUTO, gdevice = -1;
+    int criterion = (int)ro.aa.criterion, pattern = (int)ro.aa.pattern, texture_filter = 3;
+    int max_depth = TB_RT_DEFAULT_MAX_DEPTH, light_samples = TB_RT_DEFAULT_LIGHT_SAMPLES;
+    int glossy_samples = TB_RT_DEFAULT_GLOSSY_SAMPLES;
+    bool depth_seen = false, light_seen = false, glossy_seen = false, tf_seen = false, adaptive = false;
     double exposure = NAN;
-    long v;
-    const char *backend = "auto";
-    int gdevice = -1;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        int r = tb_aa_parse_arg(argc, argv, &i, &ro.aa, &ro.filter);
-        if (r < 0) {
-            fprintf(stderr, "testbed render: %s\n", tb_last_error());
-            return TB_EXIT_USAGE;
-        }
-        if (r > 0)
-            continue;
-        bool has = i + 1 < argc;
-        if (!strcmp(a, "-o") && has)
-            out_path = argv[++i];
-        else if (!strcmp(a, "--threads") && has && tb__parse_long(argv[i + 1], 0, 4096, &v))
-            ro.threads = (int)v, i++;
-        else if (!strcmp(a, "--seed") && has) {
-            char *end;
-            unsigned long long s = strtoull(argv[++i], &end, 10);
-            if (*end || end == argv[i])
-                return tb__render_fail("bad --seed '%s'", argv[i]), TB_EXIT_USAGE;
-            ro.aa.seed = s;
-        } else if (!strcmp(a, "--accel") && has) {
-            if (tb_accel_kind_from_name(argv[++i], &accel))
-                return tb__render_fail("%s", tb_last_error()), TB_EXIT_USAGE;
-        } else if (!strcmp(a, "--method") && has) {
-            if (strcmp(argv[++i], "raytrace") != 0)
-                return tb__render_fail("unknown --method '%s' (raytrace, radiosity)", argv[i]), TB_EXIT_USAGE;
-        } else if (!strcmp(a, "--max-depth") && has && tb__parse_long(argv[i + 1], 0, 64, &v))
-            ro.rt.max_depth = v == 0 ? -1 : (int)v, i++;
-        else if (!strcmp(a, "--light-samples") && has && tb__parse_long(argv[i + 1], 1, 1024, &v))
-            ro.rt.light_samples = (int)v, i++;
-        else if (!strcmp(a, "--glossy-samples") && has && tb__parse_long(argv[i + 1], 1, 1024, &v))
-            ro.rt.glossy_samples = (int)v, i++;
-        else if (!strcmp(a, "--texture-filter") && has) {
-            const char *f = argv[++i];
-            if (!strcmp(f, "bilinear"))
-                ro.rt.texture_filter = 1;
-            else if (!strcmp(f, "trilinear"))
-                ro.rt.texture_filter = 2;
-            else if (!strcmp(f, "ewa"))
-                ro.rt.texture_filter = 3;
-            else
-                return tb__render_fail("unknown --texture-filter '%s' (bilinear, trilinear, ewa)", f), TB_EXIT_USAGE;
-        }
-        else if (!strcmp(a, "--passes") && has && tb__parse_long(argv[i + 1], 1, 1 << 20, &v))
-            ro.passes = (int)v, i++;
-        else if (!strcmp(a, "--time-budget") && has) {
-            char *end;
-            ro.time_budget = strtod(argv[++i], &end);
-            if (*end || !(ro.time_budget > 0.0))
-                return tb__render_fail("bad --time-budget '%s'", argv[i]), TB_EXIT_USAGE;
-        } else if (!strcmp(a, "--exposure") && has) {
-            char *end;
-            exposure = strtod(argv[++i], &end);
-            if (*end || !isfinite(exposure))
-                return tb__render_fail("bad --exposure '%s'", argv[i]), TB_EXIT_USAGE;
-        } else if (!strcmp(a, "--stats") && has)
-            stats_path = argv[++i];
-        else if (!strcmp(a, "--sample-map") && has)
-            map_path = argv[++i];
-        else if (!strcmp(a, "--backend") && has)
-            backend = argv[++i];
-        else if (!strcmp(a, "--device") && has && tb__parse_long(argv[i + 1], 0, 1024, &v))
-            gdevice = (int)v, i++;
-        else if (!strcmp(a, "--report") && has)
-            report_path = argv[++i];
-        else if (!strcmp(a, "--reference") && has)
-            ref_path = argv[++i];
-        else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "testbed render: bad or incomplete option '%s'\n", a);
-            tb__render_usage(stderr);
-            return TB_EXIT_USAGE;
-        } else if (!scene_path)
-            scene_path = a;
-        else
-            return tb__render_fail("unexpected argument '%s'", a), TB_EXIT_USAGE;
-    }
-    if (!scene_path || !out_path) {
-        tb__render_usage(stderr);
-        return TB_EXIT_USAGE;
-    }
+    static const tb_opt_choice methods[] = {{"raytrace", 0}, {"radiosity", 1}, {NULL, 0}};
+    static const tb_opt_choice criteria[] = {{"stderr", TB_AA_STDERR}, {"contrast", TB_AA_CONTRAST}, {NULL, 0}};
+    static const tb_opt_choice patterns[] = {{"stratified", TB_AA_STRATIFIED}, {"sobol", TB_AA_SOBOL}, {NULL, 0}};
+    static const tb_opt_choice tex_filters[] = {{"bilinear", 1}, {"trilinear", 2}, {"ewa", 3}, {NULL, 0}};
+    const tb_opt opts[] = {
+        {.short_name = 'o', .type = TB_OPT_STRING, .dest = &out_path, .metavar = "OUT",
+         .help = "the image: .png, .exr, .pfm or .rle"},
+        {"method", .type = TB_OPT_CHOICE, .dest = &method, .choices = methods, .metavar = "M",
+         .help = "raytrace (default: the Whitted ray tracer) or radiosity (options:\n"
+                 "testbed render --method radiosity --help)"},
+        {"spp", .type = TB_OPT_INT, .dest = &ro.aa.spp, .min = 1, .max = TB_AA_MAX_SPP, .metavar = "N",
+         .help = "samples per pixel (per pass; default %D)"},
+        {"adaptive", .type = TB_OPT_DOUBLE, .dest = &ro.aa.threshold, .min = 0, .max = INFINITY, .metavar = "T",
+         .flags = TB_OPTF_OPEN_MIN | TB_OPTF_OPTIONAL, .seen = &adaptive,
+         .help = "adaptive antialiasing (--max-spp N, --aa-criterion stderr|contrast)"},
+        {"max-spp", .type = TB_OPT_INT, .dest = &ro.aa.max_spp, .min = 1, .max = TB_AA_MAX_SPP, .metavar = "N",
+         .help = "adaptive: most samples per pixel (default 16)"},
+        {"aa-criterion", .type = TB_OPT_CHOICE, .dest = &criterion, .choices = criteria,
+         .help = "adaptive: refine where the standard error or the contrast is high (default %D)"},
+        {"aa-pattern", .type = TB_OPT_CHOICE, .dest = &pattern, .choices = patterns,
+         .help = "sample pattern (default %D)"},
+        {"filter", .type = TB_OPT_CUSTOM, .dest = &ro.filter, .metavar = "K[:R[:S]]", .parse = tb__render_filter,
+         .help = "box (default) | tent | gaussian | mitchell"},
+        {"threads", .type = TB_OPT_INT, .dest = &ro.threads, .min = 0, .max = 4096, .metavar = "N",
+         .help = "OpenMP threads (the image does not depend on it)"},
+        {"seed", .type = TB_OPT_UINT64, .dest = &ro.aa.seed, .metavar = "N", .help = "sample seed (default %D)"},
+        {"backend", .type = TB_OPT_CHOICE, .dest = &backend, .choices = tb_cli_backends, .metavar = "B",
+         .help = "cpu (the reference), vulkan or auto (default %D): vulkan runs the\n"
+                 "wavefront tracer (intersect + shade kernels) on any Vulkan device,\n"
+                 "lavapipe included, and fails if there is none; auto uses it only on a\n"
+                 "real GPU and otherwise, or if the device fails, the CPU path (says why).\n"
+                 "Same image as cpu within docs/accuracy.md's tolerance; hits the kernel\n"
+                 "cannot shade (textures, patterns, bump, GGX) run on the CPU: reported"},
+        {"device", .type = TB_OPT_INT, .dest = &gdevice, .min = 0, .max = 1024, .metavar = "N",
+         .help = "Vulkan device N (testbed devices lists them; implies Vulkan in auto)"},
+        {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels,
+         .help = "acceleration structure (default %D)"},
+        {"max-depth", .type = TB_OPT_INT, .dest = &max_depth, .min = 0, .max = 64, .metavar = "N", .seen = &depth_seen,
+         .help = "deepest reflected/refracted ray (default %D)"},
+        {"light-samples", .type = TB_OPT_INT, .dest = &light_samples, .min = 1, .max = 1024, .metavar = "N",
+         .seen = &light_seen, .help = "area-light samples per shading point (default %D)"},
+        {"glossy-samples", .type = TB_OPT_INT, .dest = &glossy_samples, .min = 1, .max = 1024, .metavar = "N",
+         .seen = &glossy_seen, .help = "rays sampled from a GGX lobe at a camera ray's hit (default %D; one deeper)"},
+        {"texture-filter", .type = TB_OPT_CHOICE, .dest = &texture_filter, .choices = tex_filters, .seen = &tf_seen,
+         .help = "image texture filter over the pixel footprint (default %D)"},
+        {"passes", .type = TB_OPT_INT, .dest = &ro.passes, .min = 1, .max = 1 << 20, .metavar = "N",
+         .help = "progressive passes of --spp samples each (default %D)"},
+        {"time-budget", .type = TB_OPT_DOUBLE, .dest = &ro.time_budget, .min = 0, .max = INFINITY, .metavar = "S",
+         .flags = TB_OPTF_OPEN_MIN, .help = "stop starting new tiles after S seconds"},
+        {"exposure", .type = TB_OPT_DOUBLE, .dest = &exposure, .min = -INFINITY, .max = INFINITY, .metavar = "STOPS",
+         .help = "PNG/RLE only: scale by 2^STOPS (default: mean luminance to 0.18)"},
+        {"stats", .type = TB_OPT_STRING, .dest = &stats_path, .metavar = "FILE.json",
+         .help = "counters, times and provenance"},
+        {"sample-map", .type = TB_OPT_STRING, .dest = &map_path, .metavar = "F.pfm",
+         .help = "each pixel's camera sample count (grey PFM; adaptive: where samples went)"},
+        {"report", .type = TB_OPT_STRING, .dest = &report_path, .metavar = "FILE.csv",
+         .help = "a row per pass: seconds, spp, relMSE against --reference IMG"},
+        {"reference", .type = TB_OPT_STRING, .dest = &ref_path, .metavar = "IMG",
+         .help = "the reference image of --report"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed render",
+        .err = "testbed render: ",
+        .usage = "SCENE.mid -o OUT.{png,exr,pfm,rle} [options]",
+        .opts = opts,
+        .outro = "Ctrl-C writes the image rendered so far and exits with status 130.",
+        .pos = &scene_path,
+        .max_pos = 1,
+    };
+    int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (prc != TB_CLI_OK)
+        return prc;
+    if (!scene_path)
+        return tb_cli_usage_error(&cli, "no SCENE.mid given");
+    if (!out_path)
+        return tb_cli_usage_error(&cli, "no output given (-o OUT)");
+    ro.aa.adaptive = ro.aa.adaptive || adaptive;
+    ro.aa.criterion = (tb_aa_criterion)criterion;
+    ro.aa.pattern = (tb_aa_pattern)pattern;
+    if (depth_seen)
+        ro.rt.max_depth = max_depth == 0 ? -1 : max_depth;
+    if (light_seen)
+        ro.rt.light_samples = light_samples;
+    if (glossy_seen)
+        ro.rt.glossy_samples = glossy_samples;
+    if (tf_seen)
+        ro.rt.texture_filter = texture_filter;
     tb_image_format fmt = tb_image_format_from_path(out_path);
     if (fmt == TB_IMAGE_UNKNOWN)
-        return tb__render_fail("unknown image format of '%s' (.png, .exr, .pfm, .rle)", out_path), TB_EXIT_USAGE;
+        return tb_cli_usage_error(&cli, "unknown image format of '%s' (.png, .exr, .pfm, .rle)", out_path);
     if (map_path && tb_image_format_from_path(map_path) != TB_IMAGE_PFM)
-        return tb__render_fail("--sample-map writes a .pfm file, not '%s'", map_path), TB_EXIT_USAGE;
+        return tb_cli_usage_error(&cli, "--sample-map writes a .pfm file, not '%s'", map_path);
     if (!report_path != !ref_path)
-        return tb__render_fail("%s", "--report and --reference go together"), TB_EXIT_USAGE;
-    tb_gpu_mode gmode;
-    if (tb_gpu_mode_parse(backend, &gmode))
-        return tb__render_fail("--backend must be cpu, vulkan or auto, not '%s'", backend), TB_EXIT_USAGE;
+        return tb_cli_usage_error(&cli, "--report and --reference go together");
+    tb_gpu_mode gmode = (tb_gpu_mode)backend;
+    tb_accel_kind accel_kind = (tb_accel_kind)accel;
 
     int rc = TB_EXIT_FAIL;
     tb_scene *scene = NULL;
     tb_image *img = NULL, *ref = NULL, *map = NULL;
     tb__report rep = {0};
-    tb_scene_options so = {.accel = accel, .threads = ro.threads};
+    tb_scene_options so = {.accel = accel_kind, .threads = ro.threads};
     if (tb_scene_load(scene_path, &so, &scene)) {
         fprintf(stderr, "testbed render: %s\n", tb_last_error());
         goto done;
@@ -232,7 +194,7 @@ int tb_cmd_render(int argc, char **argv)
         }
         rep.fp = fopen(report_path, "w");
         if (!rep.fp) {
-            tb__render_fail("cannot write '%s'", report_path);
+            fprintf(stderr, "testbed render: cannot write '%s'\n", report_path);
             goto done;
         }
         fprintf(rep.fp, "seconds,spp,relmse\n");
@@ -313,11 +275,11 @@ int tb_cmd_render(int argc, char **argv)
         goto done;
     }
     int nthreads = ro.threads > 0 ? ro.threads : omp_get_max_threads();
-    char opts[512];
-    snprintf(opts, sizeof opts, "method=raytrace spp=%d passes=%d adaptive=%d filter=%s:%g accel=%s max_depth=%d "
+    char popts[512];
+    snprintf(popts, sizeof popts, "method=raytrace spp=%d passes=%d adaptive=%d filter=%s:%g accel=%s max_depth=%d "
              "light_samples=%d glossy_samples=%d threads=%d colour=%s backend=%s",
              ro.aa.spp, ro.passes, (int)ro.aa.adaptive, tb_filter_kind_name(ro.filter.kind), ro.filter.radius,
-             tb_accel_kind_name(accel), ro.rt.max_depth == 0 ? TB_RT_DEFAULT_MAX_DEPTH : (ro.rt.max_depth < 0 ? 0 : ro.rt.max_depth),
+             tb_accel_kind_name(accel_kind), ro.rt.max_depth == 0 ? TB_RT_DEFAULT_MAX_DEPTH : (ro.rt.max_depth < 0 ? 0 : ro.rt.max_depth),
              ro.rt.light_samples ? ro.rt.light_samples : TB_RT_DEFAULT_LIGHT_SAMPLES,
              ro.rt.glossy_samples ? ro.rt.glossy_samples : TB_RT_DEFAULT_GLOSSY_SAMPLES, nthreads,
              scene->spectral ? "spectral" : "rgb", on_gpu ? "vulkan" : "cpu");
@@ -325,7 +287,7 @@ int tb_cmd_render(int argc, char **argv)
     if (strcmp(scene_path, "-") != 0)
         st = tb_provenance_hash_file(&prov, scene_path);
     if (!st)
-        st = tb_provenance_set_options(&prov, opts);
+        st = tb_provenance_set_options(&prov, popts);
     if (!st)
         st = tb_provenance_to_attrs(&prov, img);
     if (!st && stats_path) {

@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "cli_util.h"
 #include "commands.h"
 #include "host/gpu/intersect.h"
 #include "host/render/scene.h"
@@ -39,49 +40,6 @@ TB_STAT_COUNTER(tb__n_trace_invalid, "Trace/invalid rays");
 /* The object and face of a miss. */
 #define TB__MISS UINT32_MAX
 
-static void tb__usage(FILE *out)
-{
-    fprintf(out,
-            "usage: testbed trace SCENE.mid --rays RAYS --hits HITS [--backend cpu|vulkan|auto]\n"
-            "                     [--accel bvh|grid|list] [--threads N] [--stats FILE.json] [--verbose]\n"
-            "\n"
-            "Traces every ray of the file RAYS through the scene and writes its closest hit to HITS\n"
-            "(docs/trace.md). All numbers are little-endian.\n"
-            "\n"
-            "  RAYS  N records of 32 bytes: float32 ox oy oz tmin dx dy dz tmax. The ray is o + t d\n"
-            "        for tmin <= t <= tmax; d need not be unit length (t is in units of |d|);\n"
-            "        tmax may be +inf. The file size must be a multiple of 32.\n"
-            "  HITS  N records of 32 bytes, in ray order: float32 t, uint32 object (0-based index of\n"
-            "        the top-level object in MID file order), uint32 face ID, float32 u, float32 v,\n"
-            "        float32 nx ny nz (unit geometric normal, world space, pointing out of the solid or\n"
-            "        to the front side of a polygon; never flipped toward the ray).\n"
-            "        A miss is t = +inf, object = face = 0xFFFFFFFF, u = v = 0, normal (0, 0, 0).\n"
-            "        Invalid rays (a NaN or infinite origin or direction, a zero direction, a NaN or\n"
-            "        infinite tmin, a NaN tmax, tmin > tmax) are written as misses and counted.\n"
-            "        HITS is written whole or not at all.\n"
-            "\n"
-            "options:\n"
-            "  --rays RAYS        input rays (required)\n"
-            "  --hits HITS        output hits (required)\n"
-            "  --backend B        cpu (the reference path), vulkan or auto (default: auto).\n"
-            "                     vulkan runs the Vulkan intersect kernel (host/gpu/intersect.h) on any\n"
-            "                     device, lavapipe included (fails if there is none); auto uses it only on\n"
-            "                     a real GPU. Triangles run on the GPU, every other kind on the CPU path\n"
-            "                     (routed per object: -v and --stats say which). Hits agree with cpu within\n"
-            "                     docs/accuracy.md's float tolerances, not byte for byte.\n"
-            "  --accel A          bvh (default), grid, or list (every reference tested: slow, for checks);\n"
-            "                     every structure gives byte-identical hits\n"
-            "  --threads N        OpenMP threads for the build and the traversal (default: OpenMP's)\n"
-            "  --stats FILE.json  write the run's statistics: \"rays\", \"seconds\" (wall clock) and\n"
-            "                     \"rays_per_second\" of the traversal alone (not reading, loading or\n"
-            "                     building), \"cpu_seconds\" (process CPU time of the traversal), \"hits\",\n"
-            "                     \"invalid_rays\", the provenance and the counters (util/stats)\n"
-            "  --verbose          print a summary of the scene on stderr\n"
-            "\n"
-            "Exit status: 0 on success, 1 for bad input (scene, ray file) or a failed write, 2 for a bad\n"
-            "command line.\n");
-}
-
 /* Little-endian 32-bit words to native and back (a no-op on little-endian hosts). */
 static void tb__le32_words(void *p, size_t nwords)
 {
@@ -101,20 +59,6 @@ static int tb__fail(const char *fmt, const char *arg)
     fprintf(stderr, fmt, arg);
     fprintf(stderr, "\n");
     return TB_EXIT_FAIL;
-}
-
-/* Parses a whole number in [lo, hi]; false if `s` is not one. */
-static bool tb__parse_int(const char *s, long lo, long hi, long *out)
-{
-    if (!s || !*s)
-        return false;
-    errno = 0;
-    char *end;
-    long v = strtol(s, &end, 10);
-    if (errno || *end || v < lo || v > hi)
-        return false;
-    *out = v;
-    return true;
 }
 
 /* Process CPU time in seconds (all threads). */
@@ -157,68 +101,70 @@ static double tb__trace_chunk(const tb_scene *s, const tb_ray *rays, tb_hit *hit
 
 int tb_cmd_trace(int argc, char **argv)
 {
-    if (tb_wants_help(argc, argv)) {
-        tb__usage(stdout);
-        return TB_EXIT_OK;
-    }
     const char *scene_path = NULL, *rays_path = NULL, *hits_path = NULL, *stats_path = NULL;
-    const char *backend = "auto", *accel_name = "bvh";
-    long threads = 0;
+    int backend = TB_GPU_MODE_AUTO, accel = TB_ACCEL_BVH, threads = 0;
     bool verbose = false;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        bool takes = strcmp(a, "--rays") == 0 || strcmp(a, "--hits") == 0 || strcmp(a, "--backend") == 0 ||
-                     strcmp(a, "--accel") == 0 || strcmp(a, "--threads") == 0 || strcmp(a, "--stats") == 0;
-        if (takes && !v) {
-            fprintf(stderr, "testbed trace: error: %s needs a value (see testbed trace --help)\n", a);
-            return TB_EXIT_USAGE;
-        }
-        if (strcmp(a, "--rays") == 0) {
-            rays_path = v;
-        } else if (strcmp(a, "--hits") == 0) {
-            hits_path = v;
-        } else if (strcmp(a, "--stats") == 0) {
-            stats_path = v;
-        } else if (strcmp(a, "--backend") == 0) {
-            backend = v;
-        } else if (strcmp(a, "--accel") == 0) {
-            accel_name = v;
-        } else if (strcmp(a, "--threads") == 0) {
-            if (!tb__parse_int(v, 1, 1024, &threads)) {
-                fprintf(stderr, "testbed trace: error: --threads needs a number 1 .. 1024, not '%s'\n", v);
-                return TB_EXIT_USAGE;
-            }
-        } else if (strcmp(a, "--verbose") == 0 || strcmp(a, "-v") == 0) {
-            verbose = true;
-            continue;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            fprintf(stderr, "testbed trace: error: unknown option '%s' (see testbed trace --help)\n", a);
-            return TB_EXIT_USAGE;
-        } else if (scene_path) {
-            fprintf(stderr, "testbed trace: error: one scene at a time ('%s' and '%s')\n", scene_path, a);
-            return TB_EXIT_USAGE;
-        } else {
-            scene_path = a;
-            continue;
-        }
-        i++;
-    }
-    if (!scene_path || !rays_path || !hits_path) {
-        fprintf(stderr, "testbed trace: error: needs SCENE.mid, --rays RAYS and --hits HITS (see testbed trace --help)\n");
-        return TB_EXIT_USAGE;
-    }
-    tb_accel_kind kind;
-    if (tb_accel_kind_from_name(accel_name, &kind)) {
-        fprintf(stderr, "testbed trace: error: --accel: %s\n", tb_last_error());
-        return TB_EXIT_USAGE;
-    }
-    tb_gpu_mode gmode;
-    if (tb_gpu_mode_parse(backend, &gmode)) {
-        fprintf(stderr, "testbed trace: error: --backend must be cpu, vulkan or auto, not '%s'\n", backend);
-        return TB_EXIT_USAGE;
-    }
+    const tb_opt opts[] = {
+        {"rays", .type = TB_OPT_STRING, .dest = &rays_path, .metavar = "RAYS", .help = "input rays (required)"},
+        {"hits", .type = TB_OPT_STRING, .dest = &hits_path, .metavar = "HITS", .help = "output hits (required)"},
+        {"backend", .type = TB_OPT_CHOICE, .dest = &backend, .choices = tb_cli_backends, .metavar = "B",
+         .help = "cpu (the reference path), vulkan or auto (default: %D).\n"
+                 "vulkan runs the Vulkan intersect kernel (host/gpu/intersect.h) on any\n"
+                 "device, lavapipe included (fails if there is none); auto uses it only on\n"
+                 "a real GPU. Triangles run on the GPU, every other kind on the CPU path\n"
+                 "(routed per object: -v and --stats say which). Hits agree with cpu within\n"
+                 "docs/accuracy.md's float tolerances, not byte for byte."},
+        {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels, .metavar = "A",
+         .help = "bvh (default), grid, or list (every reference tested: slow, for checks);\n"
+                 "every structure gives byte-identical hits"},
+        {"threads", .type = TB_OPT_INT, .dest = &threads, .min = 1, .max = 1024, .metavar = "N",
+         .help = "OpenMP threads for the build and the traversal (default: OpenMP's)"},
+        {"stats", .type = TB_OPT_STRING, .dest = &stats_path, .metavar = "FILE.json",
+         .help = "write the run's statistics: \"rays\", \"seconds\" (wall clock) and\n"
+                 "\"rays_per_second\" of the traversal alone (not reading, loading or\n"
+                 "building), \"cpu_seconds\" (process CPU time of the traversal), \"hits\",\n"
+                 "\"invalid_rays\", the provenance and the counters (util/stats)"},
+        {"verbose", 'v', TB_OPT_FLAG, &verbose, .help = "print a summary of the scene on stderr"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed trace",
+        .err = "testbed trace: error: ",
+        .usage = "SCENE.mid --rays RAYS --hits HITS [--backend cpu|vulkan|auto]\n"
+                 "                     [--accel bvh|grid|list] [--threads N] [--stats FILE.json] [--verbose]",
+        .intro = "\n"
+                 "Traces every ray of the file RAYS through the scene and writes its closest hit to HITS\n"
+                 "(docs/trace.md). All numbers are little-endian.\n"
+                 "\n"
+                 "  RAYS  N records of 32 bytes: float32 ox oy oz tmin dx dy dz tmax. The ray is o + t d\n"
+                 "        for tmin <= t <= tmax; d need not be unit length (t is in units of |d|);\n"
+                 "        tmax may be +inf. The file size must be a multiple of 32.\n"
+                 "  HITS  N records of 32 bytes, in ray order: float32 t, uint32 object (0-based index of\n"
+                 "        the top-level object in MID file order), uint32 face ID, float32 u, float32 v,\n"
+                 "        float32 nx ny nz (unit geometric normal, world space, pointing out of the solid or\n"
+                 "        to the front side of a polygon; never flipped toward the ray).\n"
+                 "        A miss is t = +inf, object = face = 0xFFFFFFFF, u = v = 0, normal (0, 0, 0).\n"
+                 "        Invalid rays (a NaN or infinite origin or direction, a zero direction, a NaN or\n"
+                 "        infinite tmin, a NaN tmax, tmin > tmax) are written as misses and counted.\n"
+                 "        HITS is written whole or not at all.\n"
+                 "\n"
+                 "options:",
+        .opts = opts,
+        .outro = "\n"
+                 "Exit status: 0 on success, 1 for bad input (scene, ray file) or a failed write, 2 for a bad\n"
+                 "command line.",
+        .pos = &scene_path,
+        .max_pos = 1,
+    };
+    int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (prc != TB_CLI_OK)
+        return prc;
+    if (!scene_path || !rays_path || !hits_path)
+        return tb_cli_usage_error(&cli, "needs SCENE.mid, --rays RAYS and --hits HITS");
+    tb_accel_kind kind = (tb_accel_kind)accel;
+    tb_gpu_mode gmode = (tb_gpu_mode)backend;
     if (threads > 0)
-        omp_set_num_threads((int)threads);
+        omp_set_num_threads(threads);
 
     /* The ray file first: a malformed one fails before any work. */
     FILE *rf = fopen(rays_path, "rb");

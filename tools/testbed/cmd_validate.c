@@ -27,38 +27,6 @@
 #define TB__TOL_ANGLE 1e-3    /* max normal angle (radians) where object and face agree */
 #define TB__TOL_OCCLUDED 1e-4 /* fraction of shadow rays whose answer may differ */
 
-static void tb__usage(FILE *out)
-{
-    fprintf(out,
-            "usage: testbed validate SCENE.mid [--kernel intersect|shade|formfactor|all] [--rays N] [--seed S]\n"
-            "                        [--shooters N] [--samples N] [--receivers N] [--device N] [--bench]\n"
-            "\n"
-            "Runs the same rays through the CPU path and the Vulkan kernels and prints, per kernel,\n"
-            "the agreement against the tolerances of docs/accuracy.md; exit status 1 beyond them.\n"
-            "Rays: half camera primary rays through random film points, half random rays aimed\n"
-            "through the scene bounds; shadow rays are the same rays cut at a random tmax.\n"
-            "Objects of kinds the kernel does not implement are tested on the CPU (routed); the\n"
-            "report lists which objects ran where. TB_VK_VALIDATION=1 enables the validation layer.\n"
-            "\n"
-            "  --kernel K   intersect, shade, formfactor or all (every one)\n"
-            "               shade: the image rendered by the CPU ray tracer and by the Vulkan wavefront\n"
-            "               renderer (testbed render --backend vulkan) at 4 spp, seed S, at most 96 pixels\n"
-            "               wide and --rays camera samples;\n"
-            "               image NMSE against its tolerance, hits shaded by the kernel and routed\n"
-            "               formfactor: the scene meshed into elements as for radiosity (edge: bounds\n"
-            "               diagonal / 24); receivers at element centroids and corners; shooters: emitting\n"
-            "               elements and random ones; every element occludes. Form factors of the CPU\n"
-            "               batch and the kernel per (receiver, shooter) and visibility per segment\n"
-            "  --shooters N formfactor: shooters (default 8)\n"
-            "  --samples N  formfactor: sample points per shooter (default 16)\n"
-            "  --receivers N formfactor: at most N receivers, a random subset (default 2048)\n"
-            "  --rays N     rays (default 100000)\n"
-            "  --seed S     random seed (default 1)\n"
-            "  --device N   Vulkan device (default: the best, lavapipe included)\n"
-            "  --bench      intersect: also time both paths on the same rays (Mrays/s, excluding pipeline\n"
-            "               creation); form factors: testbed bench formfactor\n");
-}
-
 /* Random rays: camera rays and rays through the bounds. */
 static void tb__make_rays(const tb_scene *s, uint64_t seed, tb_ray *rays, size_t n)
 {
@@ -112,70 +80,64 @@ static const char *tb__verdict(bool ok) { return ok ? "ok" : "BEYOND TOLERANCE";
 
 int tb_cmd_validate(int argc, char **argv)
 {
-    const char *scene_path = NULL, *kernel = "intersect";
-    long nrays = 100000, seed = 1, device = -1, shooters = 8, samples = 16, receivers = 2048;
+    const char *scene_path = NULL;
+    int kernel_k = 0, nrays_i = 100000, device_i = -1, shooters_i = 8, samples_i = 16, receivers_i = 2048;
+    uint64_t seed_u = 1;
     bool bench = false;
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
-            tb__usage(stdout);
-            return TB_EXIT_OK;
-        }
-        bool takes = !strcmp(a, "--kernel") || !strcmp(a, "--rays") || !strcmp(a, "--seed") || !strcmp(a, "--device") ||
-                     !strcmp(a, "--shooters") || !strcmp(a, "--samples") || !strcmp(a, "--receivers");
-        if (takes && i + 1 >= argc) {
-            fprintf(stderr, "testbed validate: error: %s needs a value\n", a);
-            return TB_EXIT_USAGE;
-        }
-        if (!strcmp(a, "--kernel")) {
-            kernel = argv[++i];
-            if (strcmp(kernel, "intersect") && strcmp(kernel, "shade") && strcmp(kernel, "formfactor") &&
-                strcmp(kernel, "all")) {
-                fprintf(stderr, "testbed validate: error: --kernel must be intersect, shade, formfactor or all, not '%s'\n", kernel);
-                return TB_EXIT_USAGE;
-            }
-        } else if (!strcmp(a, "--rays")) {
-            if (!tb_cli_long(argv[++i], 1, 1L << 30, &nrays)) {
-                fprintf(stderr, "testbed validate: error: --rays must be a whole number in 1..2^30\n");
-                return TB_EXIT_USAGE;
-            }
-        } else if (!strcmp(a, "--seed")) {
-            if (!tb_cli_long(argv[++i], 0, LONG_MAX, &seed)) {
-                fprintf(stderr, "testbed validate: error: --seed must be a whole number >= 0\n");
-                return TB_EXIT_USAGE;
-            }
-        } else if (!strcmp(a, "--device")) {
-            if (!tb_cli_long(argv[++i], 0, 1000, &device)) {
-                fprintf(stderr, "testbed validate: error: --device must be a device index\n");
-                return TB_EXIT_USAGE;
-            }
-        } else if (!strcmp(a, "--receivers")) {
-            if (!tb_cli_long(argv[++i], 1, 1L << 26, &receivers)) {
-                fprintf(stderr, "testbed validate: error: --receivers must be a whole number in 1..2^26\n");
-                return TB_EXIT_USAGE;
-            }
-        } else if (!strcmp(a, "--shooters") || !strcmp(a, "--samples")) {
-            if (!tb_cli_long(argv[++i], 1, 4096, a[3] == 'h' ? &shooters : &samples)) {
-                fprintf(stderr, "testbed validate: error: %s must be a whole number in 1..4096\n", a);
-                return TB_EXIT_USAGE;
-            }
-        } else if (!strcmp(a, "--bench")) {
-            bench = true;
-        } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "testbed validate: error: unknown option '%s'\n", a);
-            tb__usage(stderr);
-            return TB_EXIT_USAGE;
-        } else if (!scene_path) {
-            scene_path = a;
-        } else {
-            fprintf(stderr, "testbed validate: error: more than one scene\n");
-            return TB_EXIT_USAGE;
-        }
-    }
-    if (!scene_path) {
-        tb__usage(stderr);
-        return TB_EXIT_USAGE;
-    }
+    static const tb_opt_choice kernels[] = {
+        {"intersect", 0}, {"shade", 1}, {"formfactor", 2}, {"all", 3}, {NULL, 0}};
+    const tb_opt opts[] = {
+        {"kernel", .type = TB_OPT_CHOICE, .dest = &kernel_k, .choices = kernels, .metavar = "K",
+         .help = "intersect (default), shade, formfactor or all (every one)\n"
+                 "shade: the image rendered by the CPU ray tracer and by the Vulkan wavefront\n"
+                 "renderer (testbed render --backend vulkan) at 4 spp, seed S, at most 96 pixels\n"
+                 "wide and --rays camera samples;\n"
+                 "image NMSE against its tolerance, hits shaded by the kernel and routed\n"
+                 "formfactor: the scene meshed into elements as for radiosity (edge: bounds\n"
+                 "diagonal / 24); receivers at element centroids and corners; shooters: emitting\n"
+                 "elements and random ones; every element occludes. Form factors of the CPU\n"
+                 "batch and the kernel per (receiver, shooter) and visibility per segment"},
+        {"shooters", .type = TB_OPT_INT, .dest = &shooters_i, .min = 1, .max = 4096, .metavar = "N",
+         .help = "formfactor: shooters (default %D)"},
+        {"samples", .type = TB_OPT_INT, .dest = &samples_i, .min = 1, .max = 4096, .metavar = "N",
+         .help = "formfactor: sample points per shooter (default %D)"},
+        {"receivers", .type = TB_OPT_INT, .dest = &receivers_i, .min = 1, .max = 1 << 26, .metavar = "N",
+         .help = "formfactor: at most N receivers, a random subset (default %D)"},
+        {"rays", .type = TB_OPT_INT, .dest = &nrays_i, .min = 1, .max = 1 << 30, .metavar = "N",
+         .help = "rays (default %D)"},
+        {"seed", .type = TB_OPT_UINT64, .dest = &seed_u, .max = 9223372036854774784.0, .metavar = "S",
+         .help = "random seed (default %D)"},
+        {"device", .type = TB_OPT_INT, .dest = &device_i, .min = 0, .max = 1000, .metavar = "N",
+         .help = "Vulkan device (default: the best, lavapipe included)"},
+        {"bench", .type = TB_OPT_FLAG, .dest = &bench,
+         .help = "intersect: also time both paths on the same rays (Mrays/s, excluding pipeline\n"
+                 "creation); form factors: testbed bench formfactor"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed validate",
+        .err = "testbed validate: error: ",
+        .usage = "SCENE.mid [--kernel intersect|shade|formfactor|all] [--rays N] [--seed S]\n"
+                 "                        [--shooters N] [--samples N] [--receivers N] [--device N] [--bench]",
+        .intro = "\n"
+                 "Runs the same rays through the CPU path and the Vulkan kernels and prints, per kernel,\n"
+                 "the agreement against the tolerances of docs/accuracy.md; exit status 1 beyond them.\n"
+                 "Rays: half camera primary rays through random film points, half random rays aimed\n"
+                 "through the scene bounds; shadow rays are the same rays cut at a random tmax.\n"
+                 "Objects of kinds the kernel does not implement are tested on the CPU (routed); the\n"
+                 "report lists which objects ran where. TB_VK_VALIDATION=1 enables the validation layer.\n",
+        .opts = opts,
+        .pos = &scene_path,
+        .max_pos = 1,
+    };
+    int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (prc != TB_CLI_OK)
+        return prc;
+    if (!scene_path)
+        return tb_cli_usage_error(&cli, "no SCENE.mid given");
+    const char *kernel = kernels[kernel_k].name;
+    long nrays = nrays_i, seed = (long)seed_u, device = device_i, shooters = shooters_i, samples = samples_i;
+    long receivers = receivers_i;
     tb_scene *s;
     tb_gpu_session sess;
     if (!tb_cli_open_vulkan("testbed validate: error: ", scene_path, device, &s, &sess))

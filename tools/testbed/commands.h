@@ -54,7 +54,7 @@ enum {
     TB_EXIT_USAGE = 2,  /* bad command line */
 };
 
-/* True if argv holds -h or --help before any "--". */
-int tb_wants_help(int argc, char **argv);
+/* tb_wants_help(): options.h. */
+#include "options.h"
 
 #endif

@@ -31,17 +31,6 @@ static const tb_command *tb__find(const char *name)
     return NULL;
 }
 
-int tb_wants_help(int argc, char **argv)
-{
-    for (int i = 1; i < argc; i++) {
-        if (strcmp(argv[i], "--") == 0)
-            return 0;
-        if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0)
-            return 1;
-    }
-    return 0;
-}
-
 static void tb__usage(FILE *out)
 {
     fprintf(out, "usage: testbed <command> [options]\n\n"
