@@ -96,7 +96,7 @@ typedef struct tb_rt_mis {
 /* tb_rt_radiance for a ray at recursion depth `depth` (camera ray: 0), with
  * `mis` set for a glossy ray (NULL otherwise): what the tracer computes for
  * that ray inside its recursion (the wavefront renderer hands such rays
- * over, host/gpu/render.c). */
+ * over, host/gpu/render_wavefront.c). */
 tb_channels tb_rt_radiance_at(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng, int depth,
                               const tb_rt_mis *mis);
 
