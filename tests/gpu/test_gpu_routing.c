@@ -118,7 +118,8 @@ static void test_renderer_routes(void **state)
     if (tb_gpu_renderer_create(e.dev, s, NULL, &r))
         fail_msg("renderer: %s", tb_last_error());
     for (int i = 0; i < TB__NMAT; i++) {
-        const char *want = tb_gpu_route_reason(f[i], TB_GPU_SHADE_FEATURES), *got = tb_gpu_renderer_material_route(r, i);
+        const char *want = tb_gpu_route_reason(f[i], TB_GPU_SHADE_FEATURES);
+        const char *got = tb_gpu_renderer_material_route(r, i);
         assert_int_equal(want != NULL, got != NULL);
         if (want)
             assert_non_null(strstr(got, want));
