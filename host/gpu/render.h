@@ -16,10 +16,12 @@
  * whose hit differs between the float and the double intersection.
  *
  * Hits the kernel cannot shade are ROUTED to the CPU path with their whole
- * subtree (tb_rt_radiance with the same stream): materials with image
- * textures, procedural patterns, bump maps or the GGX model, and diffuse
- * materials in a scene with emitters the kernel does not sample (custom,
- * two-sided spheres). They are counted in tb_gpu_render_stats and reported by
+ * subtree (tb_rt_radiance with the same stream): those on a material whose
+ * shading features (host/render/features.h) include one outside
+ * TB_GPU_SHADE_FEATURES, e.g. image bump maps, colours black in some places
+ * only, image textures in spectral scenes, or diffuse and GGX materials lit
+ * by emitters the kernel does not sample (custom, two-sided spheres). They
+ * are counted in tb_gpu_render_stats and reported by
  * `testbed render --backend vulkan`.
  *
  *     tb_gpu_renderer *r;
@@ -37,9 +39,25 @@
 
 #include "host/gpu/gpu.h"
 #include "host/gpu/intersect.h"
+#include "host/render/features.h"
 #include "host/render/render.h"
 #include "host/render/scene.h"
 #include "util/math/rng.h"
+
+/* The shading features the shade kernel implements (host/render/features.h);
+ * a material with any other is routed to the CPU path. Image textures are
+ * dropped from it for a scene whose images exceed the device's
+ * storage-buffer limit. */
+#define TB_GPU_SHADE_FEATURES                                                                                  \
+    ((uint32_t)(TB_FEAT_TEXTURE | TB_FEAT_DIFFUSE | TB_FEAT_SPECULAR | TB_FEAT_TRANSMISSION | TB_FEAT_EMISSION |  \
+                TB_FEAT_BLINN | TB_FEAT_GGX | TB_FEAT_PATTERN_CHECKER | TB_FEAT_PATTERN_NOISE |                  \
+                TB_FEAT_BUMP_NOISE | TB_FEAT_LIT_TRIANGLE | TB_FEAT_LIT_PARALLELOGRAM | TB_FEAT_LIT_DISC |       \
+                TB_FEAT_LIT_SPHERE))
+
+/* Why a material with shading features `features` is not shaded by a kernel
+ * supporting `supported` (a short phrase for the first unsupported feature
+ * in TB_FEATURES order), or NULL when it is shaded there. */
+const char *tb_gpu_route_reason(uint32_t features, uint32_t supported);
 
 /* What the wavefront did (summed over calls on one renderer). */
 typedef struct tb_gpu_render_stats {

@@ -1,5 +1,6 @@
 /* The Whitted ray tracer (raytrace.h, docs/raytrace.md). */
 #include "host/render/raytrace.h"
+#include "host/render/raytrace_internal.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "host/render/raytrace.h"
+#include "host/render/raytrace_internal.h"
 #include "host/render/texture.h"
 #include "util/base/error.h"
 

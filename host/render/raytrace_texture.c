@@ -1,22 +1,10 @@
-/* The ray tracer's image textures and their footprints (raytrace.h). A file of its own from
- * when host/render/texture.h and camera.h (through scene.h) both defined
- * tb_ray_differential and could not be included together. */
+/* The ray tracer's image textures and their footprints (raytrace_internal.h). */
 #include <stdbool.h>
 #include <stdlib.h>
 
+#include "host/render/raytrace_internal.h"
 #include "host/render/texture.h"
 #include "util/base/error.h"
-
-/* The private declarations of raytrace.h, repeated here (see above); keep
- * them identical. */
-typedef struct tb__rt_textures tb__rt_textures;
-tb_status tb__rt_textures_load(int n, const char *const *paths, tb__rt_textures **out);
-void tb__rt_textures_free(tb__rt_textures *t);
-bool tb__rt_texture_rgb(const tb__rt_textures *t, int i, int filter, float u, float v, const float fp[4],
-                        double rgb[3]);
-bool tb__rt_footprint(tb_vec3 p, tb_vec3 n, tb_vec3 dpdu, tb_vec3 dpdv, const tb_vec3 rd[4], float scale,
-                      float fp[4], tb_vec3 dpdxy[2]);
-const tb_mipmap *tb__rt_texture_mip(const tb__rt_textures *t, int i);
 
 struct tb__rt_textures {
     tb_texture_cache *cache;

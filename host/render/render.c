@@ -1,5 +1,7 @@
-/* The render driver (render.h). */
+/* The render driver (render.h, render_internal.h) and the CPU ray tracer
+ * on it. */
 #include "host/render/render.h"
+#include "host/render/render_internal.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -60,58 +62,49 @@ void tb_render_sample_counts(const tb_film *film, uint32_t *counts)
             counts[(size_t)y * (size_t)w + (size_t)x] = tb_film_sample_count(film, x, y);
 }
 
-/* The per-sample context: the tracer plus the time budget. */
-typedef struct tb__render_ctx {
-    const tb_raytracer *rt;
-    int64_t deadline_ns;       /* 0: none */
-    const atomic_int *external; /* the caller's cancel flag, or NULL */
-    atomic_int stop;            /* what the tile loop checks: set on a cancel or when the deadline passes */
-} tb__render_ctx;
-
-static void tb__render_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
+bool tb__render_should_stop(tb__render_run *run)
 {
-    tb__render_ctx *c = ctx;
-    if ((c->deadline_ns > 0 && tb__now_ns() > c->deadline_ns) || (c->external && atomic_load(c->external)))
-        atomic_store(&c->stop, 1);
-    tb_rt_sample((void *)c->rt, x, y, rng, out);
+    const atomic_int *cancel = run->o->cancel;
+    if ((run->deadline_ns > 0 && tb__now_ns() > run->deadline_ns) || (cancel && atomic_load(cancel)))
+        atomic_store(&run->stop, 1);
+    return atomic_load(&run->stop) != 0;
 }
 
-tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_image **out, tb_render_stats *stats)
+double tb__render_seconds(const tb__render_run *run) { return (double)(tb__now_ns() - run->t0_ns) * 1e-9; }
+
+tb_status tb__render_check(const tb_render_options *o)
+{
+    if (o->passes < 1)
+        return tb_error(TB_ERR_ARG, "render: passes must be at least 1");
+    return tb_aa_check(&o->aa);
+}
+
+tb_status tb__render_drive(const tb_scene *s, const tb_render_options *o, const tb__render_engine *e,
+                           tb_image **out, tb_render_stats *stats)
 {
     *out = NULL;
     tb_render_stats st;
     memset(&st, 0, sizeof st);
-    if (o->passes < 1)
-        return tb_error(TB_ERR_ARG, "render: passes must be at least 1");
-    tb_status err = tb_aa_check(&o->aa);
-    if (err)
-        return err;
-    tb_raytracer rt;
-    err = tb_rt_init(&rt, s, &o->rt);
-    if (err)
-        return err;
     tb_film_desc fd = {.width = s->camera.width, .height = s->camera.height, .channels = s->nchannels,
                        .filter = &o->filter};
     tb_film *film = tb_film_create(&fd);
-    if (!film) {
-        tb_rt_release(&rt);
+    if (!film)
         return TB_ERR_NOMEM;
-    }
-    tb__render_ctx ctx = {.rt = &rt, .external = o->cancel};
-    atomic_init(&ctx.stop, o->cancel ? atomic_load(o->cancel) : 0);
-    int64_t t0 = tb__now_ns();
+    tb_status err = e->start ? e->start(e->ctx, film) : TB_OK;
+    tb__render_run run = {.o = o};
+    atomic_init(&run.stop, o->cancel ? atomic_load(o->cancel) : 0);
+    run.t0_ns = tb__now_ns();
     if (o->time_budget > 0.0)
-        ctx.deadline_ns = t0 + (int64_t)(o->time_budget * 1e9);
+        run.deadline_ns = run.t0_ns + (int64_t)(o->time_budget * 1e9);
     tb_progress prog;
-    bool use_prog = o->progress &&
-                    tb_progress_start(&prog, "render", (int64_t)fd.width * fd.height * o->passes, NULL, 0) == TB_OK;
-    tb_aa_render_desc desc = {.sample = tb__render_sample, .ctx = &ctx, .threads = o->threads,
-                              .progress = use_prog ? &prog : NULL, .cancel = &ctx.stop};
+    if (o->progress && tb_progress_start(&prog, "render", (int64_t)fd.width * fd.height * o->passes, NULL, 0) == TB_OK)
+        run.progress = &prog;
     tb_aa_options aa = o->aa;
     for (int pass = 0; pass < o->passes && !err; pass++) {
         aa.pass = o->aa.pass + (uint32_t)pass;
         tb_aa_stats as;
-        err = tb_aa_render(film, &aa, &desc, &as);
+        memset(&as, 0, sizeof as);
+        err = e->pass(e->ctx, &run, film, &aa, &as);
         if (err)
             break;
         st.aa.samples += as.samples;
@@ -121,20 +114,19 @@ tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_i
         st.aa.tiles_skipped += as.tiles_skipped;
         if (as.max_spp_used > st.aa.max_spp_used)
             st.aa.max_spp_used = as.max_spp_used;
-        if (as.tiles_skipped > 0 || atomic_load(&ctx.stop)) {
+        if (as.tiles_skipped > 0 || atomic_load(&run.stop)) {
             st.interrupted = as.tiles_skipped > 0 || pass + 1 < o->passes;
             if (as.tiles_skipped == 0)
                 st.passes_done++;
             break;
         }
         st.passes_done++;
-        if (o->on_pass &&
-            o->on_pass(o->on_pass_ctx, pass, aa.spp * (pass + 1), (double)(tb__now_ns() - t0) * 1e-9, film))
+        if (o->on_pass && o->on_pass(o->on_pass_ctx, pass, aa.spp * (pass + 1), tb__render_seconds(&run), film))
             break;
     }
-    st.seconds = (double)(tb__now_ns() - t0) * 1e-9;
-    if (use_prog)
-        tb_progress_finish(&prog);
+    st.seconds = tb__render_seconds(&run);
+    if (run.progress)
+        tb_progress_finish(run.progress);
     if (!err) {
         *out = tb_render_resolve(s, film);
         if (!*out)
@@ -143,8 +135,46 @@ tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_i
     if (!err && o->sample_counts)
         tb_render_sample_counts(film, o->sample_counts);
     tb_film_free(film);
-    tb_rt_release(&rt);
     if (stats)
         *stats = st;
+    return err;
+}
+
+/* The CPU ray tracer's per-sample function: the tracer, and the run whose
+ * stop flag it raises (tb_aa_render checks it at tile boundaries). */
+typedef struct tb__render_ctx {
+    const tb_raytracer *rt;
+    tb__render_run *run;
+} tb__render_ctx;
+
+static void tb__render_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
+{
+    tb__render_ctx *c = ctx;
+    tb__render_should_stop(c->run);
+    tb_rt_sample((void *)c->rt, x, y, rng, out);
+}
+
+/* One pass of the CPU ray tracer: tb_aa_render's tiles (OpenMP). */
+static tb_status tb__render_rt_pass(void *ctx, tb__render_run *run, tb_film *film, const tb_aa_options *aa,
+                                    tb_aa_stats *as)
+{
+    tb__render_ctx c = {.rt = ctx, .run = run};
+    tb_aa_render_desc desc = {.sample = tb__render_sample, .ctx = &c, .threads = run->o->threads,
+                              .progress = run->progress, .cancel = &run->stop};
+    return tb_aa_render(film, aa, &desc, as);
+}
+
+tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_image **out, tb_render_stats *stats)
+{
+    *out = NULL;
+    tb_status err = tb__render_check(o);
+    if (err)
+        return err;
+    tb_raytracer rt;
+    if ((err = tb_rt_init(&rt, s, &o->rt)))
+        return err;
+    tb__render_engine e = {.ctx = &rt, .pass = tb__render_rt_pass};
+    err = tb__render_drive(s, o, &e, out, stats);
+    tb_rt_release(&rt);
     return err;
 }
