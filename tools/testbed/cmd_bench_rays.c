@@ -19,7 +19,6 @@
  * triangle of obj->mesh) and every other object (analytic or CSG) a
  * one-primitive user geometry whose callbacks call tb_object_intersect /
  * tb_object_occluded, exactly the test our structure's leaves make. */
-#include <errno.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
