@@ -317,6 +317,29 @@ static void test_help_from_table(void **state)
     assert_string_equal(V.err, "");
 }
 
+/* A command without arguments or options (`testbed version`): the usage line
+ * is the name alone, --help still works and any option is unknown. */
+static void test_no_options(void **state)
+{
+    (void)state;
+    static const tb_opt none[] = {{0}};
+    tb_cli cli = {.prog = "testbed bare", .err = "testbed bare: ", .opts = none, .errout = V.errout};
+    char buf[512] = "";
+    FILE *f = fmemopen(buf, sizeof buf - 1, "w");
+    assert_non_null(f);
+    tb_cli_help(&cli, f);
+    fclose(f);
+    assert_true(strncmp(buf, "usage: testbed bare\n", 20) == 0);
+    int npos;
+    char *ok[] = {"bare", NULL}, *bad[] = {"bare", "--x", NULL}, *arg[] = {"bare", "y", NULL};
+    assert_int_equal(tb_cli_parse(&cli, 1, ok, &npos), TB_CLI_OK);
+    assert_int_equal(tb_cli_parse(&cli, 2, bad, &npos), TB_EXIT_USAGE);
+    assert_int_equal(tb_cli_parse(&cli, 2, arg, &npos), TB_EXIT_USAGE);
+    fflush(V.errout);
+    assert_string_equal(V.err, "testbed bare: unknown option '--x' (see `testbed bare --help`)\n"
+                               "testbed bare: unexpected argument 'y' (see `testbed bare --help`)\n");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -336,6 +359,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_optional_value, tb__setup, tb__teardown),
         cmocka_unit_test_setup_teardown(test_repeat_limit, tb__setup, tb__teardown),
         cmocka_unit_test_setup_teardown(test_help_from_table, tb__setup, tb__teardown),
+        cmocka_unit_test_setup_teardown(test_no_options, tb__setup, tb__teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -19,7 +19,6 @@
  * triangle of obj->mesh) and every other object (analytic or CSG) a
  * one-primitive user geometry whose callbacks call tb_object_intersect /
  * tb_object_occluded, exactly the test our structure's leaves make. */
-#include <errno.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
@@ -336,317 +335,378 @@ static int64_t tb__counter(const char *name)
     return tb_stats_get(name, TB_STAT_KIND_COUNTER, &t) == TB_OK ? t.v[0] : 0;
 }
 
-/* ------------------------------------------------------------ command */
+/* ------------------------------------------------------------ options */
 
-static void tb__rays_usage(FILE *out)
-{
-    fprintf(out,
-            "usage: testbed bench rays SCENE.mid [--embree | --embree-robust] [--embree-config CFG]\n"
-            "                                    [--rays N] [--threads T,...] [--seed S] [--repeat R]\n"
-            "                                    [--min-time S] [--no-stats]\n"
-            "\n"
-            "Primary (the scene camera), shadow (primary hit to a point on a light, any hit) and\n"
-            "diffuse (cosine bounce from primary hits, closest hit) rays through the scene's BVH\n"
-            "and, with --embree, through Embree 3's single-ray API on the same rays (triangles as\n"
-            "triangle geometries, other objects as user geometries calling tb_object_intersect).\n"
-            "Prints Mrays/s (wall clock) and Mrays per CPU second of the tracing threads (best of\n"
-            "R runs each) per set and thread count, the ratios ours / Embree, the scaling from\n"
-            "the first to the last thread count, and the fraction of rays on which the two\n"
-            "disagree (hit/miss, object or face).\n"
-            "\n"
-            "  --embree     also trace with Embree (needs a build configured with Embree 3)\n"
-            "  --embree-robust  the same with Embree's robust mode (RTC_SCENE_FLAG_ROBUST: watertight\n"
-            "               traversal and triangle test, as ours always is)\n"
-            "  --embree-config CFG  Embree's device configuration string (rtcNewDevice), e.g.\n"
-            "               'max_isa=sse2' to compare at the instruction set ours is built for\n"
-            "               (by default Embree picks the widest the CPU has: AVX2 or AVX-512);\n"
-            "               'threads=1' is added unless CFG sets threads (the build's worker\n"
-            "               threads would otherwise disturb the timed runs; tracing never uses them)\n"
-            "  --rays N     N random camera rays (default: one per pixel at the file's resolution)\n"
-            "  --threads T  comma-separated thread counts (default 1,2)\n"
-            "  --seed S     random seed (default 1)\n"
-            "  --min-time S each timed run traces the set as many times as makes our single-thread\n"
-            "               run last S seconds (default 0.1; 0: once): thread start-up and the last\n"
-            "               chunk's imbalance then weigh little in the scaling\n"
-            "  --repeat R   timed rounds, best kept per measurement (default 3); each round runs\n"
-            "               every thread count, ours and Embree (who goes first alternates by\n"
-            "               round), so a short disturbance spoils one round of each, not every\n"
-            "               repeat of one\n"
-            "  --no-stats   turn the statistics counters (util/stats) off while tracing\n"
-            "\n"
-            "Exit status: 0 done, 1 the scene could not be loaded or Embree failed, 2 usage error.\n");
-}
+/* Most thread counts --threads takes. */
+#define TB__MAX_THREAD_COUNTS 8
 
-static int tb__count(const char *s, uint64_t max, uint64_t *out)
-{
-    if (!s || !*s || *s == '-' || *s == '+' || *s == ' ')
-        return 0;
-    errno = 0;
-    char *end;
-    unsigned long long v = strtoull(s, &end, 10);
-    if (errno || *end || v > max)
-        return 0;
-    *out = v;
-    return 1;
-}
+/* --threads T,...: the thread counts of the timed runs (TB_OPT_CUSTOM dest). */
+typedef struct tb__thread_counts {
+    int v[TB__MAX_THREAD_COUNTS];
+    int n;
+} tb__thread_counts;
 
-int tb_cmd_bench_rays(int argc, char **argv)
+/* "1,2": up to 8 counts in 1 .. 256. Empty items are skipped ("1,,2" is 1,2),
+ * as the strtok-based parser this one replaced did. */
+static int tb__parse_threads(const char *val, void *dest, char *why, size_t why_len)
 {
-    if (tb_wants_help(argc, argv)) {
-        tb__rays_usage(stdout);
-        return TB_EXIT_OK;
-    }
-    const char *path = NULL;
-    bool embree = false, robust = false;
-    const char *embree_config = NULL;
-    uint64_t nrays = 0, seed = 1, repeat = 3;
-    double min_time = 0.1;
-    int threads[8] = {1, 2}, nthreads = 2;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strcmp(a, "--embree") == 0)
-            embree = true;
-        else if (strcmp(a, "--embree-robust") == 0)
-            embree = robust = true;
-        else if (strcmp(a, "--embree-config") == 0 && i + 1 < argc)
-            embree_config = argv[++i];
-        else if (strcmp(a, "--no-stats") == 0)
-            tb_stats_set_enabled(0); /* the BVH's per-ray counters (util/stats) cost time */
-        else if (strcmp(a, "--rays") == 0 && i + 1 < argc) {
-            if (!tb__count(argv[++i], UINT64_C(1) << 28, &nrays) || nrays == 0) {
-                fprintf(stderr, "testbed bench rays: --rays needs a whole number in 1 .. 2^28, not '%s'\n", argv[i]);
-                return TB_EXIT_USAGE;
-            }
-        } else if (strcmp(a, "--seed") == 0 && i + 1 < argc) {
-            if (!tb__count(argv[++i], UINT64_MAX, &seed)) {
-                fprintf(stderr, "testbed bench rays: --seed needs an unsigned integer, not '%s'\n", argv[i]);
-                return TB_EXIT_USAGE;
-            }
-        } else if (strcmp(a, "--repeat") == 0 && i + 1 < argc) {
-            if (!tb__count(argv[++i], 100, &repeat) || repeat == 0) {
-                fprintf(stderr, "testbed bench rays: --repeat needs a whole number in 1 .. 100, not '%s'\n", argv[i]);
-                return TB_EXIT_USAGE;
-            }
-        } else if (strcmp(a, "--min-time") == 0 && i + 1 < argc) {
-            char *end;
-            min_time = strtod(argv[++i], &end);
-            if (*end || !(min_time >= 0.0 && min_time <= 60.0)) {
-                fprintf(stderr, "testbed bench rays: --min-time needs seconds in 0 .. 60, not '%s'\n", argv[i]);
-                return TB_EXIT_USAGE;
-            }
-        } else if (strcmp(a, "--threads") == 0 && i + 1 < argc) {
-            char buf[128];
-            snprintf(buf, sizeof buf, "%s", argv[++i]);
-            nthreads = 0;
-            for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-                uint64_t t;
-                if (nthreads == 8 || !tb__count(tok, 256, &t) || t == 0) {
-                    fprintf(stderr, "testbed bench rays: --threads needs up to 8 counts in 1 .. 256, not '%s'\n",
-                            argv[i]);
-                    return TB_EXIT_USAGE;
-                }
-                threads[nthreads++] = (int)t;
-            }
-            if (nthreads == 0) {
-                fprintf(stderr, "testbed bench rays: --threads needs at least one count\n");
-                return TB_EXIT_USAGE;
-            }
-        } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "testbed bench rays: unknown option '%s' (see testbed bench rays --help)\n", a);
-            return TB_EXIT_USAGE;
-        } else if (!path)
-            path = a;
-        else {
-            fprintf(stderr, "testbed bench rays: more than one scene ('%s')\n", a);
-            return TB_EXIT_USAGE;
+    tb__thread_counts tc = {.n = 0};
+    bool bad = false;
+    for (const char *p = val; *p && !bad;) {
+        size_t len = strcspn(p, ","), i = 0;
+        if (len > 0) {
+            long v = 0;
+            while (i < len && p[i] >= '0' && p[i] <= '9' && v <= 256) /* the bound keeps v from overflowing */
+                v = 10 * v + (p[i++] - '0');
+            bad = i < len || v < 1 || v > 256 || tc.n == TB__MAX_THREAD_COUNTS;
+            if (!bad)
+                tc.v[tc.n++] = (int)v;
         }
+        p += len;
+        p += *p == ',';
     }
-    if (!path) {
-        tb__rays_usage(stderr);
-        return TB_EXIT_USAGE;
+    if (bad || tc.n == 0) {
+        snprintf(why, why_len, "expected up to %d comma-separated thread counts in [1, 256], got '%s'",
+                 TB__MAX_THREAD_COUNTS, val);
+        return 1;
     }
-    if (embree_config && !embree) {
-        fprintf(stderr, "testbed bench rays: --embree-config needs --embree or --embree-robust\n");
-        return TB_EXIT_USAGE;
-    }
+    *(tb__thread_counts *)dest = tc;
+    return 0;
+}
+
+/* What the command line asked for. */
+typedef struct tb__rays_args {
+    const char *path;
+    bool embree, robust, no_stats;
+    const char *embree_config; /* NULL: not given */
+    int nrays;                 /* random primary rays; 0: one per pixel */
+    uint64_t seed;
+    int repeat;                /* timed rounds */
+    double min_time;           /* seconds our single-thread run should last at least */
+    tb__thread_counts threads;
+} tb__rays_args;
+
+/* Fills *a from argv; TB_CLI_OK, or the exit status to return now. */
+static int tb__rays_parse(int argc, char **argv, tb__rays_args *a)
+{
+    *a = (tb__rays_args){.seed = 1, .repeat = 3, .min_time = 0.1, .threads = {{1, 2}, 2}};
+    const tb_opt opts[] = {
+        {"embree", .type = TB_OPT_FLAG, .dest = &a->embree,
+         .help = "also trace with Embree (needs a build configured with Embree 3)"},
+        {"embree-robust", .type = TB_OPT_FLAG, .dest = &a->robust,
+         .help = "the same with Embree's robust mode (RTC_SCENE_FLAG_ROBUST: watertight\n"
+                 "traversal and triangle test, as ours always is)"},
+        {"embree-config", .type = TB_OPT_STRING, .dest = &a->embree_config, .metavar = "CFG",
+         .help = "Embree's device configuration string (rtcNewDevice), e.g.\n"
+                 "'max_isa=sse2' to compare at the instruction set ours is built for\n"
+                 "(by default Embree picks the widest the CPU has: AVX2 or AVX-512);\n"
+                 "'threads=1' is added unless CFG sets threads (the build's worker\n"
+                 "threads would otherwise disturb the timed runs; tracing never uses them)"},
+        {"rays", .type = TB_OPT_INT, .dest = &a->nrays, .min = 1, .max = 1 << 28, .metavar = "N",
+         .flags = TB_OPTF_NO_SIGN,
+         .help = "N random camera rays, 1 .. 2^28 (default: one per pixel at the file's\n"
+                 "resolution)"},
+        {"threads", .type = TB_OPT_CUSTOM, .dest = &a->threads, .metavar = "T,...", .parse = tb__parse_threads,
+         .help = "comma-separated thread counts, up to 8 of 1 .. 256 (default 1,2)"},
+        {"seed", .type = TB_OPT_UINT64, .dest = &a->seed, .metavar = "S", .help = "random seed (default %D)"},
+        {"min-time", .type = TB_OPT_DOUBLE, .dest = &a->min_time, .min = 0.0, .max = 60.0, .metavar = "S",
+         .help = "each timed run traces the set as many times as makes our single-thread\n"
+                 "run last S seconds, 0 .. 60 (default %D; 0: once): thread start-up and\n"
+                 "the last chunk's imbalance then weigh little in the scaling"},
+        {"repeat", .type = TB_OPT_INT, .dest = &a->repeat, .min = 1, .max = 100, .metavar = "R",
+         .flags = TB_OPTF_NO_SIGN,
+         .help = "timed rounds, 1 .. 100, best kept per measurement (default %D); each\n"
+                 "round runs every thread count, ours and Embree (who goes first\n"
+                 "alternates by round), so a short disturbance spoils one round of each,\n"
+                 "not every repeat of one"},
+        {"no-stats", .type = TB_OPT_FLAG, .dest = &a->no_stats,
+         .help = "turn the statistics counters (util/stats) off while tracing"},
+        {0},
+    };
+    const tb_cli cli = {
+        .prog = "testbed bench rays",
+        .err = "testbed bench rays: ",
+        .usage = "SCENE.mid [--embree | --embree-robust] [--embree-config CFG]\n"
+                 "                                    [--rays N] [--threads T,...] [--seed S] [--repeat R]\n"
+                 "                                    [--min-time S] [--no-stats]",
+        .intro = "\n"
+                 "Primary (the scene camera), shadow (primary hit to a point on a light, any hit) and\n"
+                 "diffuse (cosine bounce from primary hits, closest hit) rays through the scene's BVH\n"
+                 "and, with --embree, through Embree 3's single-ray API on the same rays (triangles as\n"
+                 "triangle geometries, other objects as user geometries calling tb_object_intersect).\n"
+                 "Prints Mrays/s (wall clock) and Mrays per CPU second of the tracing threads (best of\n"
+                 "R runs each) per set and thread count, the ratios ours / Embree, the scaling from\n"
+                 "the first to the last thread count, and the fraction of rays on which the two\n"
+                 "disagree (hit/miss, object or face).\n",
+        .opts = opts,
+        .outro = "\nExit status: 0 done, 1 the scene could not be loaded or Embree failed, 2 usage error.",
+        .pos = &a->path,
+        .max_pos = 1,
+    };
+    int npos, rc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (rc != TB_CLI_OK)
+        return rc;
+    a->embree |= a->robust;
+    if (!a->path)
+        return tb_cli_usage_error(&cli, "no SCENE.mid given");
+    if (a->embree_config && !a->embree)
+        return tb_cli_usage_error(&cli, "--embree-config needs --embree or --embree-robust");
 #ifndef TB_HAVE_EMBREE
-    if (embree) {
-        fprintf(stderr, "testbed bench rays: this testbed was built without Embree 3 (install libembree-dev and "
-                        "reconfigure); %s is not available\n",
-                robust ? "--embree-robust" : "--embree");
-        return TB_EXIT_USAGE;
-    }
+    if (a->embree)
+        return tb_cli_usage_error(&cli, "this testbed was built without Embree 3 (install libembree-dev and "
+                                        "reconfigure); %s is not available",
+                                  a->robust ? "--embree-robust" : "--embree");
 #endif
+    return TB_CLI_OK;
+}
+
+/* ------------------------------------------------------------ the run */
+
+/* Everything a run makes, freed by tb__rays_run_free. */
+typedef struct tb__rays_run {
     tb_scene *s;
-    if (tb_scene_load(path, NULL, &s)) {
+    tb__rayset sets[TB__NSETS];
+    tb__answer *ours, *theirs; /* answers of the first timed run of a set (round 0, first thread count) */
+    bool embree;               /* Embree traces too */
+#ifdef TB_HAVE_EMBREE
+    tb__embree e;
+#endif
+} tb__rays_run;
+
+static void tb__rays_run_free(tb__rays_run *run)
+{
+#ifdef TB_HAVE_EMBREE
+    tb__embree_free(&run->e);
+#endif
+    free(run->ours);
+    free(run->theirs);
+    for (int k = 0; k < TB__NSETS; k++)
+        free(run->sets[k].rays);
+    if (run->s)
+        tb_scene_free(run->s);
+}
+
+/* Loads the scene and prints its summary; false on failure (message printed). */
+static bool tb__rays_load(const tb__rays_args *a, tb__rays_run *run)
+{
+    if (tb_scene_load(a->path, NULL, &run->s)) {
+        run->s = NULL;
         fprintf(stderr, "testbed bench rays: %s\n", tb_last_error());
-        return TB_EXIT_FAIL;
+        return false;
     }
+    const tb_scene *s = run->s;
     size_t user_objects = 0;
     for (uint32_t o = 0; o < s->nobjects; o++)
         user_objects += !s->objects[o]->mesh;
     printf("scene %s: %u objects (%zu non-mesh), %" PRIu64 " triangles, %d emitters, %d lights; BVH built in %.3f s\n",
-           path, s->nobjects, user_objects, s->stats.triangles, s->nemitters, s->nlights, s->stats.accel_seconds);
-    if (embree && user_objects)
+           a->path, s->nobjects, user_objects, s->stats.triangles, s->nemitters, s->nlights, s->stats.accel_seconds);
+    if (a->embree && user_objects)
         printf("  non-mesh objects go to Embree as user geometry calling tb_object_intersect (not Embree's own code)\n");
-    tb__rayset sets[TB__NSETS] = {{0}};
-    int status = TB_EXIT_OK;
-    tb__answer *ours = NULL, *theirs = NULL;
+    return true;
+}
+
 #ifdef TB_HAVE_EMBREE
-    tb__embree e = {0};
+/* Builds Embree's scene and prints how; false on failure (message printed). */
+static bool tb__rays_build_embree(const tb__rays_args *a, tb__rays_run *run)
+{
+    /* One build thread unless the configuration says otherwise: Embree's
+     * tasking worker threads outlive the build (sleeping, waking now and
+     * then) and cost the two-thread runs of both tracers 3-10 % on a 2-core
+     * machine; rtcIntersect1 / rtcOccluded1 run on the caller's thread and
+     * never use them (docs/performance.md, "Rays: BVH vs Embree"). */
+    const char *user = a->embree_config;
+    char cfg[512];
+    if (user && strstr(user, "threads="))
+        snprintf(cfg, sizeof cfg, "%s", user);
+    else
+        snprintf(cfg, sizeof cfg, "%s%sthreads=1", user ? user : "", user && *user ? "," : "");
+    size_t nu;
+    double bs;
+    if (!tb__embree_build(run->s, &run->e, a->robust, cfg, &nu, &bs))
+        return false;
+    printf("Embree %d.%d.%d scene built in %.3f s (%zu user geometries%s, device config %s)\n", RTC_VERSION_MAJOR,
+           RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu, a->robust ? ", RTC_SCENE_FLAG_ROBUST" : "", cfg);
+    return true;
+}
 #endif
-    if (!tb__make_sets(s, nrays, seed, sets)) {
-        status = TB_EXIT_FAIL;
-        goto done;
-    }
-    size_t maxn = sets[TB__SET_PRIMARY].n;
-    ours = malloc(sizeof *ours * (maxn ? maxn : 1));
-    theirs = malloc(sizeof *theirs * (maxn ? maxn : 1));
-    if (!ours || !theirs) {
+
+/* Makes the ray sets, room for the answers and (with --embree) Embree's
+ * scene; false on failure (message printed). */
+static bool tb__rays_build(const tb__rays_args *a, tb__rays_run *run)
+{
+    if (!tb__make_sets(run->s, (uint64_t)a->nrays, a->seed, run->sets))
+        return false;
+    size_t maxn = run->sets[TB__SET_PRIMARY].n; /* shadow and diffuse sets are never larger */
+    run->ours = malloc(sizeof *run->ours * (maxn ? maxn : 1));
+    run->theirs = malloc(sizeof *run->theirs * (maxn ? maxn : 1));
+    if (!run->ours || !run->theirs) {
         fprintf(stderr, "testbed bench rays: out of memory\n");
-        status = TB_EXIT_FAIL;
-        goto done;
+        return false;
     }
 #ifdef TB_HAVE_EMBREE
-    if (embree) {
-        size_t nu;
-        double bs;
-        /* One build thread unless the configuration says otherwise: Embree's
-         * tasking worker threads outlive the build (sleeping, waking now and
-         * then) and cost the two-thread runs of both tracers 3-10 % on a 2-core
-         * machine; rtcIntersect1 / rtcOccluded1 run on the caller's thread and
-         * never use them (docs/performance.md, "Seventh pass"). */
-        char cfg[512];
-        if (embree_config && strstr(embree_config, "threads="))
-            snprintf(cfg, sizeof cfg, "%s", embree_config);
-        else
-            snprintf(cfg, sizeof cfg, "%s%sthreads=1", embree_config ? embree_config : "",
-                     embree_config && *embree_config ? "," : "");
-        if (!tb__embree_build(s, &e, robust, cfg, &nu, &bs)) {
-            status = TB_EXIT_FAIL;
-            goto done;
-        }
-        printf("Embree %d.%d.%d scene built in %.3f s (%zu user geometries%s, device config %s)\n",
-               RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, bs, nu,
-               robust ? ", RTC_SCENE_FLAG_ROBUST" : "", cfg);
-    }
+    if (a->embree && !tb__rays_build_embree(a, run))
+        return false;
 #endif
-    double load[1] = {0};
+    return true;
+}
+
+/* The load average (rates mean little on a busy machine) and the table's head. */
+static void tb__print_table_head(void)
+{
+    double load = 0.0;
     FILE *lf = fopen("/proc/loadavg", "r");
     if (lf) {
-        if (fscanf(lf, "%lf", &load[0]) != 1)
-            load[0] = 0;
+        if (fscanf(lf, "%lf", &load) != 1)
+            load = 0.0;
         fclose(lf);
     }
     printf("load average %.2f: wall-clock rates and scaling mean something only on an idle machine; rates per\n"
            "CPU second (Mrays/CPU-s) are the steadier comparison on a shared one\n",
-           load[0]);
+           load);
     printf("%-8s %8s %6s %3s %12s %12s %7s %12s %12s %7s\n", "set", "rays", "hit%", "thr", "ours Mr/s", "Embree Mr/s",
            "ratio", "ours Mr/CPUs", "Emb Mr/CPUs", "ratio");
-    for (int k = 0; k < TB__NSETS; k++) {
-        const tb__rayset *rs = &sets[k];
-        if (rs->n == 0) {
-            printf("%-8s %8d  (no rays)\n", tb__set_names[k], 0);
-            continue;
-        }
-        double rate_ours[8] = {0}, rate_em[8] = {0}, cpu_ours[8] = {0}, cpu_em[8] = {0};
-        size_t hits = 0, differ = 0;
-        double nodes = 0.0, tests = 0.0; /* our BVH per ray (0 with --no-stats) */
-        /* Passes per timed run: a set of ~200 000 rays takes 15-40 ms, of which
-         * waking the threads and the last chunk's imbalance are a few %, enough
-         * to move the scaling figure; every timed run traces the set `passes`
-         * times (the same number for both tracers and every thread count), so
-         * that our single-thread run lasts at least --min-time. */
-        int passes = 1;
-        {
-            double c;
-            double t = tb__trace_ours(s, rs, k, 1, 1, NULL, &c);
-            if (t > 0.0 && t < min_time)
-                passes = (int)fmin(1000.0, ceil(min_time / t));
-        }
-        /* Repeats interleaved: each round runs every thread count, both
-         * tracers, so a disturbance of a few milliseconds (a short set takes
-         * ~10 ms) costs one round of each measurement, not all the repeats of
-         * one of them; the best of the rounds is kept per measurement. Who
-         * goes first alternates by round: the first run at a thread count
-         * finds the extra cores idle (a vCPU the host has descheduled, a
-         * clock that has dropped), the second finds them warm, and a fixed
-         * order gave the second tracer a few % more scaling. */
-        double best_ours[8], bestc_ours[8], best_em[8], bestc_em[8];
-        for (int ti = 0; ti < nthreads; ti++)
-            best_ours[ti] = bestc_ours[ti] = best_em[ti] = bestc_em[ti] = INFINITY;
-        for (uint64_t r = 0; r < repeat; r++)
-            for (int ti = 0; ti < nthreads; ti++)
-                for (int pass = 0; pass < 2; pass++) {
-                    double c, t;
-                    bool theirs_now = (pass == 0) == (r % 2 == 1);
-                    if (!theirs_now) {
-                        int64_t nodes0 = tb__counter("BVH/nodes visited");
-                        int64_t tests0 = tb__counter("BVH/primitives tested");
-                        t = tb__trace_ours(s, rs, k, threads[ti], passes, ti == 0 && r == 0 ? ours : NULL, &c);
-                        if (r == 0 && ti == 0) {
-                            nodes = (double)(tb__counter("BVH/nodes visited") - nodes0) / ((double)rs->n * passes);
-                            tests = (double)(tb__counter("BVH/primitives tested") - tests0) / ((double)rs->n * passes);
-                        }
-                        best_ours[ti] = t < best_ours[ti] ? t : best_ours[ti];
-                        bestc_ours[ti] = c < bestc_ours[ti] ? c : bestc_ours[ti];
+}
+
+/* ------------------------------------------------------------ one ray set */
+
+/* The timings of one set: the best of the rounds per thread count and tracer. */
+typedef struct tb__set_times {
+    int passes; /* traces of the set per timed run */
+    double wall_ours[TB__MAX_THREAD_COUNTS], cpu_ours[TB__MAX_THREAD_COUNTS];
+    double wall_em[TB__MAX_THREAD_COUNTS], cpu_em[TB__MAX_THREAD_COUNTS];
+    double nodes, tests; /* our BVH per ray (0 with --no-stats) */
+} tb__set_times;
+
+/* Passes per timed run: a set of ~200 000 rays takes 15-40 ms, of which
+ * waking the threads and the last chunk's imbalance are a few %, enough to
+ * move the scaling figure; every timed run traces the set `passes` times
+ * (the same number for both tracers and every thread count), so that our
+ * single-thread run lasts at least --min-time. */
+static int tb__passes(const tb_scene *s, const tb__rayset *rs, int k, double min_time)
+{
+    double c, t = tb__trace_ours(s, rs, k, 1, 1, NULL, &c);
+    return t > 0.0 && t < min_time ? (int)fmin(1000.0, ceil(min_time / t)) : 1;
+}
+
+/* Times set k. Repeats interleaved: each round runs every thread count, both
+ * tracers, so a disturbance of a few milliseconds (a short set takes ~10 ms)
+ * costs one round of each measurement, not all the repeats of one of them;
+ * the best of the rounds is kept per measurement. Who goes first alternates
+ * by round: the first run at a thread count finds the extra cores idle (a
+ * vCPU the host has descheduled, a clock that has dropped), the second finds
+ * them warm, and a fixed order gave the second tracer a few % more scaling.
+ * The first run of each tracer keeps its answers in run->ours / ->theirs. */
+static void tb__time_set(const tb__rays_args *a, const tb__rays_run *run, int k, tb__set_times *tm)
+{
+    const tb__rayset *rs = &run->sets[k];
+    const tb__thread_counts *th = &a->threads;
+    tm->passes = tb__passes(run->s, rs, k, a->min_time);
+    tm->nodes = tm->tests = 0.0;
+    for (int ti = 0; ti < th->n; ti++)
+        tm->wall_ours[ti] = tm->cpu_ours[ti] = tm->wall_em[ti] = tm->cpu_em[ti] = INFINITY;
+    double traced = (double)rs->n * tm->passes;
+    for (int r = 0; r < a->repeat; r++)
+        for (int ti = 0; ti < th->n; ti++)
+            for (int turn = 0; turn < 2; turn++) {
+                double c, t;
+                bool first = ti == 0 && r == 0;
+                bool theirs_now = (turn == 0) == (r % 2 == 1);
+                if (!theirs_now) {
+                    int64_t nodes0 = tb__counter("BVH/nodes visited");
+                    int64_t tests0 = tb__counter("BVH/primitives tested");
+                    t = tb__trace_ours(run->s, rs, k, th->v[ti], tm->passes, first ? run->ours : NULL, &c);
+                    if (first) {
+                        tm->nodes = (double)(tb__counter("BVH/nodes visited") - nodes0) / traced;
+                        tm->tests = (double)(tb__counter("BVH/primitives tested") - tests0) / traced;
                     }
-#ifdef TB_HAVE_EMBREE
-                    else if (embree) {
-                        t = tb__trace_embree(&e, rs, k, threads[ti], passes, ti == 0 && r == 0 ? theirs : NULL,
-                                             &c);
-                        best_em[ti] = t < best_em[ti] ? t : best_em[ti];
-                        bestc_em[ti] = c < bestc_em[ti] ? c : bestc_em[ti];
-                    }
-#endif
+                    tm->wall_ours[ti] = fmin(t, tm->wall_ours[ti]);
+                    tm->cpu_ours[ti] = fmin(c, tm->cpu_ours[ti]);
                 }
-        for (int ti = 0; ti < nthreads; ti++) {
-            rate_ours[ti] = (double)rs->n * passes / best_ours[ti] * 1e-6;
-            cpu_ours[ti] = (double)rs->n * passes / bestc_ours[ti] * 1e-6;
-            if (embree) {
-                rate_em[ti] = (double)rs->n * passes / best_em[ti] * 1e-6;
-                cpu_em[ti] = (double)rs->n * passes / bestc_em[ti] * 1e-6;
+#ifdef TB_HAVE_EMBREE
+                else if (run->embree) {
+                    t = tb__trace_embree(&run->e, rs, k, th->v[ti], tm->passes, first ? run->theirs : NULL, &c);
+                    tm->wall_em[ti] = fmin(t, tm->wall_em[ti]);
+                    tm->cpu_em[ti] = fmin(c, tm->cpu_em[ti]);
+                }
+#endif
             }
-            if (ti == 0)
-                for (size_t i = 0; i < rs->n; i++) {
-                    hits += ours[i].object != UINT32_MAX;
-                    differ += embree && (ours[i].object != theirs[i].object || ours[i].face != theirs[i].face);
-                }
-            if (embree)
-                printf("%-8s %8zu %6.1f %3d %12.3f %12.3f %7.2f %12.3f %12.3f %7.2f\n", tb__set_names[k], rs->n,
-                       100.0 * (double)hits / (double)rs->n, threads[ti], rate_ours[ti], rate_em[ti],
-                       rate_ours[ti] / rate_em[ti], cpu_ours[ti], cpu_em[ti], cpu_ours[ti] / cpu_em[ti]);
-            else
-                printf("%-8s %8zu %6.1f %3d %12.3f %12s %7s %12.3f %12s %7s\n", tb__set_names[k], rs->n,
-                       100.0 * (double)hits / (double)rs->n, threads[ti], rate_ours[ti], "-", "-", cpu_ours[ti], "-",
-                       "-");
-            fflush(stdout);
-        }
-        if (nodes > 0.0)
-            printf("%-8s our BVH per ray: %.1f nodes visited, %.1f references tested\n", tb__set_names[k], nodes,
-                   tests);
-        if (passes > 1)
-            printf("%-8s each timed run traced the set %d times (--min-time %.2g s)\n", tb__set_names[k], passes,
-                   min_time);
-        if (nthreads > 1) {
-            printf("%-8s scaling %d -> %d threads: ours %.2fx", tb__set_names[k], threads[0], threads[nthreads - 1],
-                   rate_ours[nthreads - 1] / rate_ours[0]);
-            if (embree)
-                printf(", Embree %.2fx", rate_em[nthreads - 1] / rate_em[0]);
-            printf("\n");
-        }
-        if (embree)
-            printf("%-8s agreement: %zu of %zu rays differ (%.4f%%) in hit/miss%s\n", tb__set_names[k], differ,
-                   rs->n, 100.0 * (double)differ / (double)rs->n, k == TB__SET_SHADOW ? "" : ", object or face");
+}
+
+/* Prints set k's rows (one per thread count) and its notes: BVH work per
+ * ray, passes, scaling and, with Embree, the agreement of the two tracers. */
+static void tb__report_set(const tb__rays_args *a, const tb__rays_run *run, int k, const tb__set_times *tm)
+{
+    const tb__rayset *rs = &run->sets[k];
+    const tb__thread_counts *th = &a->threads;
+    const char *name = tb__set_names[k];
+    size_t hits = 0, differ = 0;
+    for (size_t i = 0; i < rs->n; i++) {
+        hits += run->ours[i].object != UINT32_MAX;
+        differ += run->embree &&
+                  (run->ours[i].object != run->theirs[i].object || run->ours[i].face != run->theirs[i].face);
     }
-done:
-#ifdef TB_HAVE_EMBREE
-    tb__embree_free(&e);
-#endif
-    free(ours);
-    free(theirs);
-    for (int k = 0; k < TB__NSETS; k++)
-        free(sets[k].rays);
-    tb_scene_free(s);
+    double traced = (double)rs->n * tm->passes, hit_pct = 100.0 * (double)hits / (double)rs->n;
+    double rate_ours[TB__MAX_THREAD_COUNTS] = {0}, rate_em[TB__MAX_THREAD_COUNTS] = {0};
+    for (int ti = 0; ti < th->n; ti++) {
+        rate_ours[ti] = traced / tm->wall_ours[ti] * 1e-6;
+        double cpu_ours = traced / tm->cpu_ours[ti] * 1e-6;
+        if (run->embree) {
+            rate_em[ti] = traced / tm->wall_em[ti] * 1e-6;
+            double cpu_em = traced / tm->cpu_em[ti] * 1e-6;
+            printf("%-8s %8zu %6.1f %3d %12.3f %12.3f %7.2f %12.3f %12.3f %7.2f\n", name, rs->n, hit_pct, th->v[ti],
+                   rate_ours[ti], rate_em[ti], rate_ours[ti] / rate_em[ti], cpu_ours, cpu_em, cpu_ours / cpu_em);
+        } else {
+            printf("%-8s %8zu %6.1f %3d %12.3f %12s %7s %12.3f %12s %7s\n", name, rs->n, hit_pct, th->v[ti],
+                   rate_ours[ti], "-", "-", cpu_ours, "-", "-");
+        }
+        fflush(stdout);
+    }
+    if (tm->nodes > 0.0)
+        printf("%-8s our BVH per ray: %.1f nodes visited, %.1f references tested\n", name, tm->nodes, tm->tests);
+    if (tm->passes > 1)
+        printf("%-8s each timed run traced the set %d times (--min-time %.2g s)\n", name, tm->passes, a->min_time);
+    if (th->n > 1) {
+        int last = th->n - 1;
+        printf("%-8s scaling %d -> %d threads: ours %.2fx", name, th->v[0], th->v[last], rate_ours[last] / rate_ours[0]);
+        if (run->embree)
+            printf(", Embree %.2fx", rate_em[last] / rate_em[0]);
+        printf("\n");
+    }
+    if (run->embree)
+        printf("%-8s agreement: %zu of %zu rays differ (%.4f%%) in hit/miss%s\n", name, differ, rs->n,
+               100.0 * (double)differ / (double)rs->n, k == TB__SET_SHADOW ? "" : ", object or face");
+}
+
+/* Times and reports set k. */
+static void tb__bench_set(const tb__rays_args *a, const tb__rays_run *run, int k)
+{
+    if (run->sets[k].n == 0) {
+        printf("%-8s %8d  (no rays)\n", tb__set_names[k], 0);
+        return;
+    }
+    tb__set_times tm;
+    tb__time_set(a, run, k, &tm);
+    tb__report_set(a, run, k, &tm);
+}
+
+/* ------------------------------------------------------------ command */
+
+int tb_cmd_bench_rays(int argc, char **argv)
+{
+    tb__rays_args a;
+    int rc = tb__rays_parse(argc, argv, &a);
+    if (rc != TB_CLI_OK)
+        return rc;
+    if (a.no_stats)
+        tb_stats_set_enabled(0); /* the BVH's per-ray counters (util/stats) cost time */
+    tb__rays_run run = {.embree = a.embree};
+    int status = TB_EXIT_FAIL;
+    if (tb__rays_load(&a, &run) && tb__rays_build(&a, &run)) {
+        tb__print_table_head();
+        for (int k = 0; k < TB__NSETS; k++)
+            tb__bench_set(&a, &run, k);
+        status = TB_EXIT_OK;
+    }
+    tb__rays_run_free(&run);
     return status;
 }

@@ -1,5 +1,5 @@
 /* `testbed bench tessellate`: tessellation rate of host/object/polygonize.h
- * for every primitive kind (docs/performance.md, "Object level"). */
+ * for every primitive kind (docs/performance.md, "Tessellation"). */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>

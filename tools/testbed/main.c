@@ -42,13 +42,27 @@ static void tb__usage(FILE *out)
 
 int tb_cmd_help(int argc, char **argv)
 {
-    if (argc < 2 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0) {
+    const char *name = NULL;
+    static const tb_opt no_opts[] = {{0}};
+    const tb_cli cli = {
+        .prog = "testbed help",
+        .err = "testbed help: error: ",
+        .usage = "[COMMAND]",
+        .intro = "\nLists the subcommands, or shows COMMAND's help (the same as `testbed COMMAND --help`).",
+        .opts = no_opts,
+        .pos = &name,
+        .max_pos = 1,
+    };
+    int npos, rc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (rc != TB_CLI_OK)
+        return rc;
+    if (!name) {
         tb__usage(stdout);
         return TB_EXIT_OK;
     }
-    const tb_command *c = tb__find(argv[1]);
+    const tb_command *c = tb__find(name);
     if (!c) {
-        fprintf(stderr, "testbed: error: no command '%s' (see `testbed help`)\n", argv[1]);
+        fprintf(stderr, "testbed: error: no command '%s' (see `testbed help`)\n", name);
         return TB_EXIT_USAGE;
     }
     char *sub[] = {(char *)c->name, "--help", NULL};
@@ -57,10 +71,17 @@ int tb_cmd_help(int argc, char **argv)
 
 int tb_cmd_version(int argc, char **argv)
 {
-    if (tb_wants_help(argc, argv)) {
-        printf("usage: testbed version\n\nPrints the library version and the git revision it was built from.\n");
-        return TB_EXIT_OK;
-    }
+    static const tb_opt no_opts[] = {{0}};
+    const tb_cli cli = {
+        .prog = "testbed version",
+        .err = "testbed version: error: ",
+        .usage = "",
+        .intro = "\nPrints the library version and the git revision it was built from.",
+        .opts = no_opts,
+    };
+    int npos, rc = tb_cli_parse(&cli, argc, argv, &npos);
+    if (rc != TB_CLI_OK)
+        return rc;
     printf("testbed %s (%s)\n", TB_VERSION_STRING, TB_GIT_REVISION);
     return TB_EXIT_OK;
 }

@@ -371,7 +371,9 @@ static void tb__print_default(const tb_opt *o, FILE *out)
 
 void tb_cli_help(const tb_cli *cli, FILE *out)
 {
-    fprintf(out, "usage: %s %s\n", cli->prog, cli->usage);
+    /* a command without arguments (`testbed version`) has no usage text: no trailing blank */
+    const char *usage = cli->usage ? cli->usage : "";
+    fprintf(out, "usage: %s%s%s\n", cli->prog, *usage ? " " : "", usage);
     if (cli->intro)
         fprintf(out, "%s\n", cli->intro);
     int col = 12; /* "  -h, --help" */

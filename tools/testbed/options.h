@@ -72,7 +72,7 @@ typedef struct tb_opt {
 typedef struct tb_cli {
     const char *prog;     /* "testbed render": starts the usage line and names the --help hint */
     const char *err;      /* prefix of every error message ("testbed render: ") */
-    const char *usage;    /* text after "usage: PROG " (may hold more lines) */
+    const char *usage;    /* text after "usage: PROG " (may hold more lines; NULL or "": none) */
     const char *intro;    /* paragraph after the usage line, or NULL */
     const tb_opt *opts;   /* the option table */
     const char *outro;    /* text after the options (exit statuses, notes), or NULL */
