@@ -27,7 +27,9 @@ TB_STAT_COUNTER(tb__n_gpu_routed_tests, "GPU intersect/rays tested on the CPU fo
 struct tb_gpu_scene {
     tb_gpu_device *dev;
     const tb_scene *scene;
-    bool *on_gpu;            /* per object */
+    uint32_t *features;      /* per object: its object features (tb_object_features) */
+    uint32_t supported;      /* the object features intersected by the kernel (tb_gpu_intersect_supported) */
+    bool *on_gpu;            /* per object: features within `supported` */
     tb_gpu_scene_info info;
     tb_accel *cpu_accel;     /* BVH over the routed objects' references (NULL if none) */
     tb_gpu_buffer *nodes, *tris, *placed, *refs, *rays, *hits; /* placed: spheres and cubes */
@@ -79,6 +81,12 @@ static tb_vec3 tb__world(const tb_object *o, tb_vec3 v)
     tb_dvec3 p = tb_mat4_mul_point(&o->to_world.m, (tb_dvec3){v.x, v.y, v.z});
     return (tb_vec3){(float)p.x, (float)p.y, (float)p.z};
 }
+
+/* The references tb__build_gpu encodes: triangles, and whole spheres, cubes
+ * and revolved objects; a bit joins the kernel's mask with its encoding here. */
+_Static_assert(TB_GPU_INTERSECT_FEATURES == (uint32_t)(TB_OBJ_FEAT_TRIANGLES | TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE |
+                                                       TB_OBJ_FEAT_CYLINDER | TB_OBJ_FEAT_CONE | TB_OBJ_FEAT_CONIC),
+               "tb__build_gpu encodes exactly the kinds of TB_GPU_INTERSECT_FEATURES");
 
 /* Builds the GPU arrays: a BVH over the triangle references and the triangles in leaf order. */
 static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const uint32_t *scene_ref, size_t n)
@@ -237,6 +245,36 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
     return tb_gpu_scene_create_ex(dev, scene, NULL);
 }
 
+uint32_t tb_gpu_intersect_supported(const tb_gpu_device *dev, tb_gpu_quadrics quadrics)
+{
+    /* On lavapipe the kernel runs 8 lanes in lockstep and executes both sides
+     * of every branch, and the revolved test (a scaled quadratic, two
+     * intervals, a slab clip) costs more there than the C path's double code
+     * does on the same core: measured slower on the showcase
+     * (docs/performance.md, "Vulkan"), so quadrics stay on the CPU there. */
+    bool on_gpu = quadrics == TB_GPU_QUADRICS_GPU ||
+                  (quadrics == TB_GPU_QUADRICS_AUTO && tb_gpu_device_info_of(dev)->type != TB_GPU_DEVICE_CPU);
+    return on_gpu ? TB_GPU_INTERSECT_FEATURES : TB_GPU_INTERSECT_FEATURES & ~TB_GPU_QUADRIC_FEATURES;
+}
+
+const char *tb_gpu_object_route_reason(uint32_t features, uint32_t supported)
+{
+    uint32_t f = tb_feature_first(features & ~supported);
+    /* the kernel's own words where a feature's name alone does not say why */
+    switch (f) {
+    case 0:
+        return NULL;
+    case TB_OBJ_FEAT_CYLINDER:
+        return "cylinder (quadrics on the CPU path: a CPU device, or TB_GPU_QUADRICS_CPU)";
+    case TB_OBJ_FEAT_CONE:
+        return "cone (quadrics on the CPU path: a CPU device, or TB_GPU_QUADRICS_CPU)";
+    case TB_OBJ_FEAT_CONIC:
+        return "conic (quadrics on the CPU path: a CPU device, or TB_GPU_QUADRICS_CPU)";
+    default:
+        return tb_object_feature_name(f);
+    }
+}
+
 tb_gpu_scene *tb_gpu_scene_create_ex(tb_gpu_device *dev, const tb_scene *scene, const tb_gpu_scene_desc *desc)
 {
     if (!dev || !scene) {
@@ -244,48 +282,41 @@ tb_gpu_scene *tb_gpu_scene_create_ex(tb_gpu_device *dev, const tb_scene *scene, 
         return NULL;
     }
     tb_gpu_scene *g = calloc(1, sizeof *g);
-    bool *has_tri = calloc(scene->nobjects ? scene->nobjects : 1, sizeof *has_tri);
+    uint32_t *features = calloc(scene->nobjects ? scene->nobjects : 1, sizeof *features);
+    bool *on_gpu = calloc(scene->nobjects ? scene->nobjects : 1, sizeof *on_gpu);
     tb_accel_prim *gref = calloc(scene->nprims ? scene->nprims : 1, sizeof *gref);
     tb_accel_prim *cref = calloc(scene->nprims ? scene->nprims : 1, sizeof *cref);
     uint32_t *gidx = calloc(scene->nprims ? scene->nprims : 1, sizeof *gidx);
-    if (!g || !has_tri || !gref || !cref || !gidx) {
-        free(g), free(has_tri), free(gref), free(cref), free(gidx);
+    if (!g || !features || !on_gpu || !gref || !cref || !gidx) {
+        free(g), free(features), free(on_gpu), free(gref), free(cref), free(gidx);
         tb_error(TB_ERR_NOMEM, "out of memory for the GPU scene");
         return NULL;
     }
     g->dev = dev;
     g->scene = scene;
-    /* On lavapipe the kernel runs 8 lanes in lockstep and executes both sides
-     * of every branch, and the revolved test (a scaled quadratic, two
-     * intervals, a slab clip) costs more there than the C path's double code
-     * does on the same core: measured slower on the showcase
-     * (docs/performance.md, "Vulkan"), so quadrics stay on the CPU there. */
-    tb_gpu_quadrics qmode = desc ? desc->quadrics : TB_GPU_QUADRICS_AUTO;
-    bool quadrics_on_gpu = qmode == TB_GPU_QUADRICS_GPU ||
-                           (qmode == TB_GPU_QUADRICS_AUTO && tb_gpu_device_info_of(dev)->type != TB_GPU_DEVICE_CPU);
-    g->on_gpu = has_tri;
-    size_t ng = 0, nc = 0;
-    for (size_t i = 0; i < scene->nprims; ++i) {
-        const tb_accel_prim *p = &scene->prims[i];
-        const tb_object *o = scene->objects[p->object];
-        bool tri = p->sub != TB_SCENE_WHOLE_OBJECT && o->kind == TB_PRIM_POLYGONS && o->mesh;
-        bool sphere = p->sub == TB_SCENE_WHOLE_OBJECT &&
-                      (o->kind == TB_PRIM_SPHERE || o->kind == TB_PRIM_CUBE ||
-                       (quadrics_on_gpu && (o->kind == TB_PRIM_CYLINDER || o->kind == TB_PRIM_CONE ||
-                                            o->kind == TB_PRIM_CONIC)));
-        if (tri || sphere) {
-            gidx[ng] = (uint32_t)i;
-            gref[ng++] = *p;
-            has_tri[p->object] = true;
-        } else {
-            cref[nc++] = *p;
-        }
-    }
+    g->features = features;
+    g->on_gpu = on_gpu;
+    /* Routing by data: an object goes to the kernel iff every feature of it is
+     * one the kernel implements here; its references follow it (triangles of a
+     * mesh, or the whole object: tb__build_gpu encodes those the mask admits). */
+    g->supported = tb_gpu_intersect_supported(dev, desc ? desc->quadrics : TB_GPU_QUADRICS_AUTO);
+    tb_object_features(scene, features);
     for (uint32_t i = 0; i < scene->nobjects; ++i) {
-        if (has_tri[i])
+        on_gpu[i] = !(features[i] & ~g->supported);
+        if (on_gpu[i])
             g->info.gpu_objects++;
         else
             g->info.cpu_objects++;
+    }
+    size_t ng = 0, nc = 0;
+    for (size_t i = 0; i < scene->nprims; ++i) {
+        const tb_accel_prim *p = &scene->prims[i];
+        if (on_gpu[p->object]) {
+            gidx[ng] = (uint32_t)i;
+            gref[ng++] = *p;
+        } else {
+            cref[nc++] = *p;
+        }
     }
     tb_status st = tb__build_gpu(g, gref, gidx, ng);
     g->info.gpu_triangles = g->ntris;
@@ -322,6 +353,7 @@ void tb_gpu_scene_destroy(tb_gpu_scene *g)
     tb_gpu_buffer_destroy(g->hits);
     tb_accel_free(g->cpu_accel);
     free(g->on_gpu);
+    free(g->features);
     free(g);
 }
 
@@ -336,6 +368,11 @@ void tb_gpu_scene_get_bindings(const tb_gpu_scene *g, tb_gpu_scene_bindings *out
 bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object)
 {
     return object < g->scene->nobjects && g->on_gpu[object];
+}
+
+const char *tb_gpu_scene_object_route(const tb_gpu_scene *g, uint32_t object)
+{
+    return object < g->scene->nobjects ? tb_gpu_object_route_reason(g->features[object], g->supported) : NULL;
 }
 
 /* Runs the kernel over rays[0..n) (any_hit 0 or 1) into hits. */

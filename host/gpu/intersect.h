@@ -4,11 +4,14 @@
  * arrays of rays, giving the records the CPU path gives (tb_scene_intersect).
  *
  * Kinds on the GPU: triangles of polygons objects, (top-level) spheres, cubes,
- * cylinders, cones and conics.
- * Every other object (other analytic primitives, CSG) is **routed to the CPU path per object**: after
+ * cylinders, cones and conics: the kernel declares them as the object
+ * features (host/render/features.h) it implements, TB_GPU_INTERSECT_FEATURES.
+ * Every object with another feature (other analytic primitives, CSG) is
+ * **routed to the CPU path per object**: after
  * the kernel, the host tests those objects (through a CPU BVH over them
  * alone) with tmax = the GPU hit's t and keeps the better hit by the tie rule
- * (docs/accel.md). tb_gpu_scene_object_on_gpu says where each object runs.
+ * (docs/accel.md). tb_gpu_scene_object_on_gpu says where each object runs,
+ * tb_gpu_scene_object_route why one is routed.
  *
  *     tb_gpu_scene *g = tb_gpu_scene_create(dev, scene);
  *     tb_gpu_intersect(g, rays, n, hits, NULL);
@@ -24,6 +27,7 @@
 
 #include "host/gpu/gpu.h"
 #include "host/object/hit.h"
+#include "host/render/features.h"
 #include "host/render/scene.h"
 #include "util/math/ray.h"
 
@@ -55,6 +59,27 @@ typedef enum tb_gpu_quadrics {
     TB_GPU_QUADRICS_GPU,      /* in the kernel (lib/revolved.glsl) */
     TB_GPU_QUADRICS_CPU,      /* routed to the CPU path per object */
 } tb_gpu_quadrics;
+
+/* The object features (host/render/features.h) of cylinders, cones and
+ * conics: in the kernel's mask only where tb_gpu_quadrics puts them on the GPU. */
+#define TB_GPU_QUADRIC_FEATURES ((uint32_t)(TB_OBJ_FEAT_CYLINDER | TB_OBJ_FEAT_CONE | TB_OBJ_FEAT_CONIC))
+
+/* The object features the intersect kernel implements: an object with any
+ * other is routed to the CPU path (a new primitive kind's bit is outside it
+ * until the kernel intersects the kind). */
+#define TB_GPU_INTERSECT_FEATURES                                                                              \
+    ((uint32_t)(TB_OBJ_FEAT_TRIANGLES | TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE | TB_GPU_QUADRIC_FEATURES))
+
+/* The object features a scene on `dev` with quadrics mode `quadrics` has
+ * intersected by the kernel: TB_GPU_INTERSECT_FEATURES, without
+ * TB_GPU_QUADRIC_FEATURES for TB_GPU_QUADRICS_CPU, and for
+ * TB_GPU_QUADRICS_AUTO on a CPU device. */
+uint32_t tb_gpu_intersect_supported(const tb_gpu_device *dev, tb_gpu_quadrics quadrics);
+
+/* Why an object with features `features` is not intersected by a kernel
+ * supporting `supported` (a short phrase for the first unsupported feature
+ * in TB_OBJECT_FEATURES order), or NULL when it is intersected there. */
+const char *tb_gpu_object_route_reason(uint32_t features, uint32_t supported);
 
 /* Options of tb_gpu_scene_create_ex; zero-initialised = the defaults. */
 typedef struct tb_gpu_scene_desc {
@@ -94,6 +119,10 @@ void tb_gpu_scene_get_bindings(const tb_gpu_scene *g, tb_gpu_scene_bindings *out
 
 /* True if object `object` is intersected on the GPU, false if on the CPU. */
 bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object);
+
+/* Why object `object` is routed to the CPU path (tb_gpu_object_route_reason
+ * of its features), or NULL when it is intersected on the GPU or out of range. */
+const char *tb_gpu_scene_object_route(const tb_gpu_scene *g, uint32_t object);
 
 /* Closest hit of each of rays[0..n): hits[i] is the record tb_scene_intersect
  * gives (within the float tolerance of docs/accuracy.md), or a miss:

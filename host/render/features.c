@@ -1,4 +1,4 @@
-/* Shading features of materials (features.h). */
+/* Shading features of materials and geometry features of objects (features.h). */
 #include "host/render/features.h"
 
 #include <stdbool.h>
@@ -144,4 +144,51 @@ void tb_material_features(const tb_raytracer *rt, uint32_t *out)
             f |= lit;
         out[i] = f;
     }
+}
+
+const char *tb_object_feature_name(uint32_t f)
+{
+    switch (f) {
+#define TB__OBJECT_FEATURE_CASE(name, phrase)                                                                  \
+    case (uint32_t)TB_OBJ_FEAT_##name:                                                                         \
+        return phrase;
+        TB_OBJECT_FEATURES(TB__OBJECT_FEATURE_CASE)
+#undef TB__OBJECT_FEATURE_CASE
+    default:
+        return NULL;
+    }
+}
+
+/* The features of object node `o`: its kind's bit, and a CSG node's
+ * children's. A switch over the closed set with no default, so a new
+ * primitive kind fails to compile here (-Wswitch) until it has a bit. */
+static uint32_t tb__node_features(const tb_object *o)
+{
+    uint32_t f = 0;
+    switch (o->kind) {
+    case TB_PRIM_SPHERE: f = TB_OBJ_FEAT_SPHERE; break;
+    case TB_PRIM_CUBE: f = TB_OBJ_FEAT_CUBE; break;
+    case TB_PRIM_CYLINDER: f = TB_OBJ_FEAT_CYLINDER; break;
+    case TB_PRIM_CONE: f = TB_OBJ_FEAT_CONE; break;
+    case TB_PRIM_PYRAMID: f = TB_OBJ_FEAT_PYRAMID; break;
+    case TB_PRIM_PRISM: f = TB_OBJ_FEAT_PRISM; break;
+    case TB_PRIM_TORUS: f = TB_OBJ_FEAT_TORUS; break;
+    /* the scene references a meshed polygons object per triangle, another whole (scene.c) */
+    case TB_PRIM_POLYGONS: f = o->mesh ? TB_OBJ_FEAT_TRIANGLES : TB_OBJ_FEAT_POLYGONS_UNMESHED; break;
+    case TB_PRIM_CONIC: f = TB_OBJ_FEAT_CONIC; break;
+    case TB_PRIM_SQUARE_ARCH: f = TB_OBJ_FEAT_SQUARE_ARCH; break;
+    case TB_PRIM_ROUND_ARCH: f = TB_OBJ_FEAT_ROUND_ARCH; break;
+    case TB_PRIM_UNION: f = TB_OBJ_FEAT_CSG_UNION; break;
+    case TB_PRIM_INTERSECTION: f = TB_OBJ_FEAT_CSG_INTERSECTION; break;
+    case TB_PRIM_DIFFERENCE: f = TB_OBJ_FEAT_CSG_DIFFERENCE; break;
+    }
+    for (int i = 0; i < o->nchildren; i++)
+        f |= tb__node_features(&o->children[i]);
+    return f;
+}
+
+void tb_object_features(const tb_scene *s, uint32_t *out)
+{
+    for (uint32_t i = 0; i < s->nobjects; i++)
+        out[i] = tb__node_features(s->objects[i]);
 }

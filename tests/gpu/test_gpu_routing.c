@@ -1,15 +1,21 @@
-/* Routing by feature mask (host/render/features.h, host/gpu/render.h): the
- * shading features of the materials of a small MID scene, which of them the
- * shade kernel's mask TB_GPU_SHADE_FEATURES routes to the CPU path (a colour
- * black in some places only) and which it keeps (a checker pattern), that a
- * feature taken off the mask routes its materials, and that the Vulkan
- * renderer routes exactly the materials the mask says. */
+/* Routing by feature mask (host/render/features.h, host/gpu/render.h,
+ * host/gpu/intersect.h). Materials: the shading features of the materials of
+ * a small MID scene, which of them the shade kernel's mask
+ * TB_GPU_SHADE_FEATURES routes to the CPU path (a colour black in some places
+ * only) and which it keeps (a checker pattern), that a feature taken off the
+ * mask routes its materials, and that the Vulkan renderer routes exactly the
+ * materials the mask says. Objects: the object features of one object of
+ * every primitive kind and of CSG trees, and that the intersect kernel's
+ * scene routes exactly the objects with a feature outside its mask (quadrics
+ * under each tb_gpu_quadrics mode), with hits equal to the CPU path's. */
 #include "tb_test.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "gpu_test.h"
+#include "host/gpu/intersect.h"
 #include "host/gpu/render.h"
 #include "host/render/features.h"
 #include "host/render/raytrace.h"
@@ -133,12 +139,165 @@ static void test_renderer_routes(void **state)
     gpu_test_close(&e);
 }
 
+/* Objects 0 .. 13 in this order along x (3 apart), each under a downward
+ * ray at (x + dx, 0): every primitive kind, then CSG trees (the difference's
+ * hollow and the torus's hole are off the rays). */
+static const char *const tb__objects =
+    "mid 1.1\n"
+    "polygons \"quad\" { geometry = { vertices = [[-1 -1 0] [1 -1 0] [1 1 0] [-1 1 0]] faces = [[0 1 2 3]] } }\n"
+    "sphere \"ball\" { transform = [translate([3 0 0])] }\n"
+    "cube \"box\" { transform = [translate([6 0 0])] }\n"
+    "cylinder \"can\" { transform = [translate([9 0 0])] }\n"
+    "cone \"cone\" { transform = [translate([12 0 0])] geometry = { top_radius = 0.5 } }\n"
+    "conic \"egg\" { transform = [translate([15 0 0])] geometry = { coefficients = [1 0 -1] z_range = [-1 1] } }\n"
+    "pyramid \"pyramid\" { transform = [translate([18 0 0])] geometry = { top = 0.5 } }\n"
+    "prism \"hex\" { transform = [translate([21 0 0])] geometry = { sides = 6 } }\n"
+    "torus \"ring\" { transform = [translate([24 0 0])] geometry = { major = 1 minor = 0.25 } }\n"
+    "square_arch \"gate\" { transform = [translate([27 0 0])] geometry = { width = 1.2 height = 1.5 } }\n"
+    "round_arch \"arch\" { transform = [translate([30 0 0])] geometry = { width = 1 height = 1.5 } }\n"
+    "union \"snowman\" { transform = [translate([33 0 0])] sphere { } sphere { transform = [translate([0 0 1])] } }\n"
+    "difference \"cup\" { transform = [translate([36 0 0])] cube { } sphere { transform = [scale(0.5)] } }\n"
+    "intersection \"die\" { transform = [translate([39 0 0])] cube { }"
+    " union { cylinder { transform = [scale([1 1 2])] } torus { geometry = { major = 1 minor = 0.5 } } } }\n";
+
+enum { TB__NOBJ = 14 };
+
+/* Each object's features, in MID order. */
+static const uint32_t tb__object_want[TB__NOBJ] = {
+    TB_OBJ_FEAT_TRIANGLES,
+    TB_OBJ_FEAT_SPHERE,
+    TB_OBJ_FEAT_CUBE,
+    TB_OBJ_FEAT_CYLINDER,
+    TB_OBJ_FEAT_CONE,
+    TB_OBJ_FEAT_CONIC,
+    TB_OBJ_FEAT_PYRAMID,
+    TB_OBJ_FEAT_PRISM,
+    TB_OBJ_FEAT_TORUS,
+    TB_OBJ_FEAT_SQUARE_ARCH,
+    TB_OBJ_FEAT_ROUND_ARCH,
+    TB_OBJ_FEAT_CSG_UNION | TB_OBJ_FEAT_SPHERE,
+    TB_OBJ_FEAT_CSG_DIFFERENCE | TB_OBJ_FEAT_CUBE | TB_OBJ_FEAT_SPHERE,
+    TB_OBJ_FEAT_CSG_INTERSECTION | TB_OBJ_FEAT_CSG_UNION | TB_OBJ_FEAT_CUBE | TB_OBJ_FEAT_CYLINDER |
+        TB_OBJ_FEAT_TORUS,
+};
+
+/* The masks: one kind's bit per primitive, a CSG tree's operations and
+ * leaves; every bit named; the reasons name the first unsupported feature. */
+static void test_object_features(void **state)
+{
+    (void)state;
+    tb_scene *s = gpu_test_load(tb__objects, "objects.mid", NULL);
+    assert_int_equal(s->nobjects, TB__NOBJ);
+    uint32_t f[TB__NOBJ];
+    tb_object_features(s, f);
+    uint32_t seen = 0;
+    for (int i = 0; i < TB__NOBJ; i++) {
+        if (f[i] != tb__object_want[i])
+            fail_msg("object %d: features 0x%x, want 0x%x", i, (unsigned)f[i], (unsigned)tb__object_want[i]);
+        seen |= f[i];
+        for (uint32_t b = f[i]; b; b &= b - 1)
+            assert_non_null(tb_object_feature_name(tb_feature_first(b)));
+    }
+    /* every kind of the scene, i.e. every bit but the unmeshed polygons' */
+    assert_int_equal(seen, TB_OBJ_FEAT_ALL & ~(uint32_t)TB_OBJ_FEAT_POLYGONS_UNMESHED);
+    assert_null(tb_object_feature_name(0));
+    assert_null(tb_object_feature_name(TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE));
+    /* the kernel's mask: triangles, spheres, cubes and quadrics, nothing else */
+    const uint32_t gpu = TB_GPU_INTERSECT_FEATURES, cpu_quadrics = gpu & ~TB_GPU_QUADRIC_FEATURES;
+    for (int i = 0; i < TB__NOBJ; i++)
+        assert_int_equal(tb_gpu_object_route_reason(f[i], gpu) == NULL, i <= 5);
+    assert_string_equal(tb_gpu_object_route_reason(f[8], gpu), "torus");
+    /* a CSG tree is named by an operation, whatever its leaves (the first
+     * in list order: the intersection holding a union says "CSG union") */
+    assert_string_equal(tb_gpu_object_route_reason(f[11], gpu), "CSG union");
+    assert_string_equal(tb_gpu_object_route_reason(f[12], gpu), "CSG difference");
+    assert_string_equal(tb_gpu_object_route_reason(f[13], gpu), "CSG union");
+    /* quadrics off the mask: routed, saying why */
+    assert_non_null(strstr(tb_gpu_object_route_reason(f[3], cpu_quadrics), "quadrics on the CPU path"));
+    assert_non_null(strstr(tb_gpu_object_route_reason(f[5], cpu_quadrics), "conic"));
+    assert_null(tb_gpu_object_route_reason(f[2], cpu_quadrics));
+    tb_scene_free(s);
+}
+
+/* The GPU scene under one quadrics mode: routed exactly where the mask says,
+ * the counts, and each object's ray hitting what the CPU path hits. */
+static void tb__check_scene(gpu_test_env *e, const tb_scene *s, tb_gpu_quadrics mode, uint32_t want_supported)
+{
+    static const float dx[TB__NOBJ] = {0.25f, 0.25f, 0.25f, 0.25f, 0.25f, 0.25f, 0.25f,
+                                       0.25f, 1.0f,  0.25f, 0.25f, 0.25f, 0.75f, 0.25f};
+    uint32_t supported = tb_gpu_intersect_supported(e->dev, mode);
+    assert_int_equal(supported, want_supported);
+    tb_gpu_scene *g = tb_gpu_scene_create_ex(e->dev, s, &(tb_gpu_scene_desc){mode});
+    if (!g)
+        fail_msg("GPU scene: %s", tb_last_error());
+    uint32_t f[TB__NOBJ], ngpu = 0;
+    tb_object_features(s, f);
+    for (uint32_t i = 0; i < TB__NOBJ; i++) {
+        bool on_gpu = !(f[i] & ~supported);
+        ngpu += on_gpu;
+        if (tb_gpu_scene_object_on_gpu(g, i) != on_gpu)
+            fail_msg("mode %d: object %u (features 0x%x) on the %s", (int)mode, i, (unsigned)f[i],
+                     on_gpu ? "CPU" : "GPU");
+        const char *why = tb_gpu_scene_object_route(g, i);
+        assert_int_equal(why == NULL, on_gpu);
+        if (why)
+            assert_string_equal(why, tb_gpu_object_route_reason(f[i], supported));
+    }
+    assert_false(tb_gpu_scene_object_on_gpu(g, TB__NOBJ));
+    assert_null(tb_gpu_scene_object_route(g, TB__NOBJ));
+    bool quadrics = (supported & TB_GPU_QUADRIC_FEATURES) != 0;
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    assert_int_equal(info.gpu_objects, ngpu);
+    assert_int_equal(info.gpu_objects, quadrics ? 6 : 3);
+    assert_int_equal(info.cpu_objects, TB__NOBJ - ngpu);
+    assert_int_equal(info.gpu_triangles, 2);
+    assert_int_equal(info.gpu_spheres, 1);
+    assert_int_equal(info.gpu_cubes, 1);
+    assert_int_equal(info.gpu_quadrics, quadrics ? 3 : 0);
+    tb_ray rays[TB__NOBJ];
+    tb_hit hits[TB__NOBJ];
+    for (int i = 0; i < TB__NOBJ; i++)
+        rays[i] = (tb_ray){{3.0f * (float)i + dx[i], 0.0f, 5.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY};
+    if (tb_gpu_intersect(g, rays, TB__NOBJ, hits, NULL))
+        fail_msg("intersect: %s", tb_last_error());
+    for (uint32_t i = 0; i < TB__NOBJ; i++) {
+        tb_hit want;
+        assert_true(tb_scene_intersect(s, &rays[i], &want));
+        assert_int_equal(want.object, i);
+        if (hits[i].object != i || hits[i].face != want.face || fabsf(hits[i].t - want.t) > 1e-5f * want.t)
+            fail_msg("mode %d: ray %u hit object %u face %u t %g, the CPU object %u face %u t %g", (int)mode, i,
+                     hits[i].object, hits[i].face, (double)hits[i].t, want.object, want.face, (double)want.t);
+    }
+    tb_gpu_scene_destroy(g);
+}
+
+/* tb_gpu_scene_create_ex routes what the mask routes: quadrics to the CPU
+ * under AUTO on a CPU device (lavapipe) and under CPU, into the kernel when
+ * forced (and under AUTO on a GPU). */
+static void test_objects_route(void **state)
+{
+    (void)state;
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
+    tb_scene *s = gpu_test_load(tb__objects, "objects.mid", NULL);
+    const uint32_t all = TB_GPU_INTERSECT_FEATURES, no_quadrics = all & ~TB_GPU_QUADRIC_FEATURES;
+    const bool cpu_device = tb_gpu_device_info_of(e.dev)->type == TB_GPU_DEVICE_CPU;
+    tb__check_scene(&e, s, TB_GPU_QUADRICS_AUTO, cpu_device ? no_quadrics : all);
+    tb__check_scene(&e, s, TB_GPU_QUADRICS_GPU, all);
+    tb__check_scene(&e, s, TB_GPU_QUADRICS_CPU, no_quadrics);
+    tb_scene_free(s);
+    gpu_test_close(&e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_material_features),
         cmocka_unit_test(test_route_by_mask),
         cmocka_unit_test(test_renderer_routes),
+        cmocka_unit_test(test_object_features),
+        cmocka_unit_test(test_objects_route),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
