@@ -251,7 +251,7 @@ uint32_t tb_gpu_intersect_supported(const tb_gpu_device *dev, tb_gpu_quadrics qu
      * of every branch, and the revolved test (a scaled quadratic, two
      * intervals, a slab clip) costs more there than the C path's double code
      * does on the same core: measured slower on the showcase
-     * (docs/performance.md, "Vulkan"), so quadrics stay on the CPU there. */
+     * (docs/performance.md, "Vulkan intersect kernel"), so quadrics stay on the CPU there. */
     bool on_gpu = quadrics == TB_GPU_QUADRICS_GPU ||
                   (quadrics == TB_GPU_QUADRICS_AUTO && tb_gpu_device_info_of(dev)->type != TB_GPU_DEVICE_CPU);
     return on_gpu ? TB_GPU_INTERSECT_FEATURES : TB_GPU_INTERSECT_FEATURES & ~TB_GPU_QUADRIC_FEATURES;
