@@ -226,6 +226,18 @@ int tb_cmd_trace(int argc, char **argv)
         if (verbose)
             fprintf(stderr, "vulkan: %u objects on the GPU (%llu triangles), %u routed to the CPU path: [%s]\n",
                     gi.gpu_objects, (unsigned long long)gi.gpu_triangles, gi.cpu_objects, routed);
+        /* Why, per routed object (the first feature the kernel lacks); a
+         * few are enough to see what a scene needs. */
+        for (uint32_t i = 0, shown = 0; verbose && i < scene->nobjects; ++i) {
+            const char *why = tb_gpu_scene_object_route(gscene, i);
+            if (!why)
+                continue;
+            if (shown < 20)
+                fprintf(stderr, "vulkan: object %u on the CPU path: %s\n", i, why);
+            else if (shown == 20)
+                fprintf(stderr, "vulkan: (more routed objects not listed)\n");
+            ++shown;
+        }
     }
 
     size_t cap = nrays < TB__CHUNK ? (size_t)nrays : TB__CHUNK;
