@@ -2,7 +2,8 @@
  * pseudocode: read the MID scene (objects, materials, lights, camera), build
  * the acceleration structure, make the image and the antialiasing sampler,
  * and trace every sample of every pixel. The same library calls as
- * `testbed render`, without its options, tiles and threads.
+ * `testbed render`, without its options, tiles and threads; render_file.c
+ * is the whole command as one call (tb_render_file).
  *
  *     raytrace SCENE.mid OUT.exr [SPP]
  */
