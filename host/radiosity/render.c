@@ -109,32 +109,6 @@ static tb_status tb__rad_check(const tb_rad_render_options *o)
     return TB_OK;
 }
 
-/* The image's exposure attribute and write options, then the file. */
-static tb_status tb__rad_write_image(const char *path, tb_image *img, double exposure)
-{
-    tb_image_format fmt = tb_image_format_from_path(path);
-    tb_image_write_options wo = {0};
-    if (fmt == TB_IMAGE_PNG || fmt == TB_IMAGE_RLE) {
-        if (isnan(exposure)) {
-            double sum = 0.0;
-            size_t npix = (size_t)img->width * (size_t)img->height;
-            for (size_t k = 0; k < npix; k++) {
-                const float *px = img->pixels + k * 3;
-                sum += 0.2126 * px[0] + 0.7152 * px[1] + 0.0722 * px[2];
-            }
-            double mean = sum / (double)npix;
-            exposure = mean > 0.0 ? log2(0.18 / mean) : 0.0;
-        }
-        wo.exposure = (float)exposure;
-        char ex[64];
-        snprintf(ex, sizeof ex, "%.6g", exposure);
-        tb_status st = tb_image_set_attr(img, "exposure", ex);
-        if (st)
-            return st;
-    }
-    return tb_image_write(path, img, &wo);
-}
-
 /* The solved mesh with vertex colours: mean non-emitting radiance (luminance) to 0.18. */
 static tb_status tb__rad_write_mesh(const tb_rad_solver *solver, const char *path, const tb_provenance *prov)
 {
@@ -362,7 +336,7 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
         (st = tb__write_text(opt->report_path, "seconds,shots,shots_per_n,unshot_fraction,nrmse,nrmse_ambient\n",
                              r.rep.buf, r.rep.len)))
         goto done;
-    if (opt->image_path && (st = tb__rad_write_image(opt->image_path, r.img, opt->exposure)))
+    if (opt->image_path && (st = tb_image_write_exposed(opt->image_path, r.img, opt->exposure)))
         goto done;
     if (out) {
         *out = (tb_rad_render_result){

@@ -174,33 +174,6 @@ static tb_status tb__rf_stats(const tb__rf_run *r, const tb_render_file_options 
     return st ? st : tb_stats_write_json_file(o->stats_path, &r->prov);
 }
 
-/* The image's exposure attribute and write options, then the file. */
-static tb_status tb__rf_write_image(const char *path, tb_image *img, double exposure)
-{
-    tb_image_format fmt = tb_image_format_from_path(path);
-    tb_image_write_options wo = {0};
-    if (fmt == TB_IMAGE_PNG || fmt == TB_IMAGE_RLE) {
-        if (isnan(exposure)) {
-            /* Automatic: the mean Rec. 709 luminance to 0.18. */
-            double sum = 0.0;
-            size_t npix = (size_t)img->width * (size_t)img->height;
-            for (size_t k = 0; k < npix; k++) {
-                const float *px = img->pixels + k * 3;
-                sum += 0.2126 * px[0] + 0.7152 * px[1] + 0.0722 * px[2];
-            }
-            double mean = sum / (double)npix;
-            exposure = mean > 0.0 ? log2(0.18 / mean) : 0.0;
-        }
-        wo.exposure = (float)exposure;
-        char ex[64];
-        snprintf(ex, sizeof ex, "%.6g", exposure);
-        tb_status st = tb_image_set_attr(img, "exposure", ex);
-        if (st)
-            return st;
-    }
-    return tb_image_write(path, img, &wo);
-}
-
 /* The sample map: the counts as a grey PFM. */
 static tb_status tb__rf_write_map(const tb__rf_run *r, const char *path)
 {
@@ -261,7 +234,7 @@ tb_status tb_render_file(const char *scene_path, const tb_render_file_options *o
         goto done;
     if (opt->stats_path && (st = tb__rf_stats(&r, opt, &ro, &rs, on_backend)))
         goto done;
-    if ((st = tb__rf_write_image(opt->image_path, r.img, opt->exposure)))
+    if ((st = tb_image_write_exposed(opt->image_path, r.img, opt->exposure)))
         goto done;
     if (r.map && (st = tb__rf_write_map(&r, opt->sample_map_path))) {
         remove(opt->image_path);

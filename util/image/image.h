@@ -102,6 +102,12 @@ tb_status tb_image_read(const char *path, const tb_image_read_options *opts, tb_
  * file renamed on success (a failed write leaves no file behind); `opts` may be NULL. */
 tb_status tb_image_write(const char *path, const tb_image *img, const tb_image_write_options *opts);
 
+/* Writes a rendered image as tb_image_write does; for the display formats
+ * (PNG, RLE) it first scales by 2^exposure stops, NAN meaning automatic (the
+ * mean Rec. 709 luminance to 0.18), and records the stops used as the
+ * attribute "exposure". HDR formats (PFM, EXR) are written as they are. */
+tb_status tb_image_write_exposed(const char *path, tb_image *img, double exposure);
+
 /* Per-format readers from an open stream; `name` is used in error messages.
  * Every malformed or truncated input returns TB_ERR_FORMAT with a message. */
 tb_status tb_rle_read(FILE *f, const char *name, const tb_image_read_options *opts, tb_image **out);

@@ -130,3 +130,28 @@ tb_status tb_image_write(const char *path, const tb_image *img, const tb_image_w
     }
     return tb_outfile_commit(&of);
 }
+
+tb_status tb_image_write_exposed(const char *path, tb_image *img, double exposure)
+{
+    tb_image_format fmt = tb_image_format_from_path(path);
+    tb_image_write_options wo = {0};
+    if (img && img->pixels && img->channels >= 3 && (fmt == TB_IMAGE_PNG || fmt == TB_IMAGE_RLE)) {
+        if (isnan(exposure)) {
+            double sum = 0.0;
+            size_t npix = (size_t)img->width * (size_t)img->height;
+            for (size_t k = 0; k < npix; k++) {
+                const float *px = img->pixels + k * (size_t)img->channels;
+                sum += 0.2126 * px[0] + 0.7152 * px[1] + 0.0722 * px[2];
+            }
+            double mean = npix ? sum / (double)npix : 0.0;
+            exposure = mean > 0.0 ? log2(0.18 / mean) : 0.0;
+        }
+        wo.exposure = (float)exposure;
+        char ex[64];
+        snprintf(ex, sizeof ex, "%.6g", exposure);
+        tb_status st = tb_image_set_attr(img, "exposure", ex);
+        if (st)
+            return st;
+    }
+    return tb_image_write(path, img, &wo);
+}
