@@ -5,6 +5,7 @@
 #include "tb_test.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <signal.h>
 #include <string.h>
 #include <sys/resource.h>
@@ -104,6 +105,33 @@ static void test_dispatch_round_trip(void **state)
     assert_int_equal(tb_image_read(path_of("fake.pfm"), NULL, &back), TB_ERR_FORMAT);
     assert_null(back);
     assert_non_null(strstr(tb_last_error(), "fake.pfm"));
+    tb_image_free(img);
+}
+
+/* tb_image_write_exposed: automatic exposure takes the mean luminance to
+ * 0.18 (a uniform 0.72 grey is 2 stops over, so -2), is recorded, and
+ * scales the display formats only; an explicit exposure is kept as given. */
+static void test_write_exposed(void **state)
+{
+    (void)state;
+    tb_image *img = tb_image_create(4, 3, 3, NULL);
+    for (int i = 0; i < 4 * 3 * 3; i++)
+        img->pixels[i] = 0.72f;
+    assert_int_equal(tb_image_write_exposed(path_of("auto.pfm"), img, NAN), TB_OK);
+    assert_null(tb_image_get_attr(img, "exposure")); /* HDR: written as it is */
+    assert_int_equal(tb_image_write_exposed(path_of("auto.png"), img, NAN), TB_OK);
+    assert_string_equal(tb_image_get_attr(img, "exposure"), "-2");
+    tb_image *back = NULL;
+    assert_int_equal(tb_image_read(path_of("auto.png"), NULL, &back), TB_OK);
+    for (int i = 0; i < 4 * 3 * 3; i++) /* 0.72 * 2^-2 = 0.18, one sRGB code apart at most */
+        assert_true(fabsf(back->pixels[i] - 0.18f) < 0.002f);
+    tb_image_free(back);
+    assert_int_equal(tb_image_write_exposed(path_of("one.png"), img, 1.0), TB_OK);
+    assert_string_equal(tb_image_get_attr(img, "exposure"), "1");
+    back = NULL;
+    assert_int_equal(tb_image_read(path_of("one.png"), NULL, &back), TB_OK);
+    assert_true(fabsf(back->pixels[0] - 1.0f) < 1e-6f); /* 1.44 clipped to white */
+    tb_image_free(back);
     tb_image_free(img);
 }
 
@@ -230,6 +258,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_dispatch_round_trip),
+        cmocka_unit_test(test_write_exposed),
         cmocka_unit_test(test_bad_names),
         cmocka_unit_test(test_unwritable_folder),
         cmocka_unit_test(test_refused_image_keeps_old_file),
