@@ -15,6 +15,7 @@ printf '%s\n' "$out" | awk '
 /^  testbed: +testbed [0-9]/ { ver = 1 }
 /^load average before: [0-9.]+ / { before++ }
 /^load average after: +[0-9.]+ / { after++ }
+/^CPU used by other processes before: [0-9.]+ %$/ { busy++ }
 /^status: (intersect|tessellate|trace) ok / { ok++ }
 /^\| sphere \| [0-9.]+ \| [0-9.]+ \| [0-9.]+ \|$/ { isect = 1 }
 /^\| cube - sphere \| / { csg = 1 }
@@ -24,6 +25,7 @@ printf '%s\n' "$out" | awk '
 END {
     if (!cpu || !ver) { print "FAIL: machine header (CPU, testbed version) missing"; bad = 1 }
     if (before != 3 || after != 3) { print "FAIL: expected 3 load-average lines before and after"; bad = 1 }
+    if (busy != 3) { print "FAIL: expected 3 lines of the CPU others used"; bad = 1 }
     if (ok != 3) { print "FAIL: expected 3 ok statuses, got " ok; bad = 1 }
     if (!isect || !csg) { print "FAIL: bench intersect rows missing"; bad = 1 }
     if (!tess) { print "FAIL: bench tessellate torus row missing"; bad = 1 }
@@ -38,10 +40,18 @@ done
 grep -q '^| CPU | ' "$dir/out.md" || { echo "FAIL: --out lacks the CPU row"; exit 1; }
 grep -q '^| sphere | ' "$dir/out.md" || { echo "FAIL: --out lacks the sphere row"; exit 1; }
 # A loaded machine must be reported as such (the load is what it is here, so
-# only check that the warning and the note agree).
+# only check that the warning and the note agree) ...
 if grep -q 'machine not idle: figures not valid' "$dir/err"; then
     grep -q '| \*\*no: figures not valid\*\* |' "$dir/out.md" || { echo "FAIL: not-idle note missing in --out"; exit 1; }
 fi
+# ... and a threshold no machine meets (-1 %) must give the warning on both
+# streams and the note in --out, with the log not truncated by the warning.
+TESTBED="$TESTBED" RUN_ALL_IDLE_BUSY=-1 bash "$script" --quick --only intersect --out "$dir/busy.md" >"$dir/busy.log" 2>&1 || true
+grep -c 'WARNING: machine not idle' "$dir/busy.log" | grep -qx 2 || { echo "FAIL: the not-idle warning is not on stdout and stderr once each"; exit 1; }
+grep -q '^run-all: 1 of 1 benchmarks ran' "$dir/busy.log" || { echo "FAIL: the log lost its summary"; exit 1; }
+[ "$(tr -d '\000' <"$dir/busy.log" | wc -c)" -eq "$(wc -c <"$dir/busy.log")" ] ||
+    { echo "FAIL: NUL bytes in the log (truncated while written)"; exit 1; }
+grep -q '| intersect | .* | \*\*no: figures not valid\*\* |' "$dir/busy.md" || { echo "FAIL: not-idle note missing in --out"; exit 1; }
 # Usage errors.
 set +e
 bash "$script" --only nosuch >/dev/null 2>&1; rc=$?
