@@ -1,15 +1,13 @@
 #!/bin/sh
 # `render --method radiosity --backend vulkan` (the form-factor kernel,
 # host/gpu/formfactor.h) against the CPU backend on the furnace: the same
-# shots, radiosities equal to float rounding. Skipped (77) without a device.
+# shots, radiosities equal to float rounding. No device is a failure: the
+# test machine has lavapipe (tools/setup.sh installs mesa-vulkan-drivers).
 set -u
 NAME=radiosity_vulkan; . "$TB_SOURCE_DIR/tests/radiosity/rad_cli.sh"
 run() { "$TESTBED" render --method radiosity "$FURNACE" --max-edge 0.25 --samples 8 --threshold 1e-2 "$@"; }
 if ! run --backend vulkan --patches "$T/v.csv" > "$T/v.log" 2>&1; then
-    if grep -qi "no vulkan\|vulkan loader\|no device\|cannot load" "$T/v.log"; then
-        echo "SKIP: no Vulkan device"; rm -rf "$T"; exit 77
-    fi
-    cat "$T/v.log"; echo "FAIL: vulkan run"; exit 1
+    cat "$T/v.log"; echo "FAIL: vulkan run (no Vulkan device? tools/setup.sh installs lavapipe)"; exit 1
 fi
 run --backend cpu --patches "$T/c.csv" > /dev/null 2>&1 || { echo "FAIL: cpu run"; exit 1; }
 [ "$(wc -l < "$T/v.csv")" -eq "$(wc -l < "$T/c.csv")" ] || { echo "FAIL: row counts"; exit 1; }
