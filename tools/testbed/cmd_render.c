@@ -150,8 +150,9 @@ int tb_cmd_render(int argc, char **argv)
                  "wavefront tracer (intersect + shade kernels) on any Vulkan device,\n"
                  "lavapipe included, and fails if there is none; auto uses it only on a\n"
                  "real GPU and otherwise, or if the device fails, the CPU path (says why).\n"
-                 "Same image as cpu within docs/accuracy.md's tolerance; hits the kernel\n"
-                 "cannot shade (textures, patterns, bump, GGX) run on the CPU: reported"},
+                 "Same image as cpu within docs/accuracy.md's tolerance; materials with a\n"
+                 "feature the kernel lacks (docs/gpu.md, \"Routing by feature mask\") are\n"
+                 "shaded on the CPU (the summary line counts those hits and says why)"},
         {"device", .type = TB_OPT_INT, .dest = &gdevice, .min = 0, .max = 1024, .metavar = "N",
          .help = "Vulkan device N (testbed devices lists them; implies Vulkan in auto)"},
         {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels,
