@@ -317,6 +317,23 @@ static void test_help_from_table(void **state)
     assert_string_equal(V.err, "");
 }
 
+/* Required positional arguments: fewer than min_pos is the command's
+ * `missing` message and a usage error; min_pos of them is fine. (--help
+ * without arguments: cli_all_commands_help, on every command.) */
+static void test_too_few_positional(void **state)
+{
+    (void)state;
+    tb_cli cli = tb__cli;
+    cli.min_pos = 1, cli.missing = "no IN given", cli.errout = V.errout;
+    char *none[] = {"demo", "--count", "3", NULL}, *one[] = {"demo", "a", NULL};
+    int npos;
+    assert_int_equal(tb_cli_parse(&cli, 3, none, &npos), TB_EXIT_USAGE);
+    assert_int_equal(tb_cli_parse(&cli, 2, one, &npos), TB_CLI_OK);
+    assert_int_equal(npos, 1);
+    fflush(V.errout);
+    assert_string_equal(V.err, "testbed demo: no IN given (see `testbed demo --help`)\n");
+}
+
 /* A command without arguments or options (`testbed version`): the usage line
  * is the name alone, --help still works and any option is unknown. */
 static void test_no_options(void **state)
@@ -359,6 +376,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_optional_value, tb__setup, tb__teardown),
         cmocka_unit_test_setup_teardown(test_repeat_limit, tb__setup, tb__teardown),
         cmocka_unit_test_setup_teardown(test_help_from_table, tb__setup, tb__teardown),
+        cmocka_unit_test_setup_teardown(test_too_few_positional, tb__setup, tb__teardown),
         cmocka_unit_test_setup_teardown(test_no_options, tb__setup, tb__teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

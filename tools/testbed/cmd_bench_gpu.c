@@ -155,12 +155,12 @@ int tb_cmd_bench_gpu(int argc, char **argv)
         .opts = opts,
         .pos = &path,
         .max_pos = 1,
+        .min_pos = 1,
+        .missing = "no SCENE.mid given",
     };
     int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
     if (prc != TB_CLI_OK)
         return prc;
-    if (!path)
-        return tb_cli_usage_error(&cli, "no SCENE.mid given");
     long nrays = nrays_i, repeat = repeat_i, seed = (long)seed_u, device = device_i;
     tb_gpu_scene_desc gdesc = {(tb_gpu_quadrics)quadrics};
     tb_scene *s;

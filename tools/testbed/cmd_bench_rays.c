@@ -442,13 +442,13 @@ static int tb__rays_parse(int argc, char **argv, tb__rays_args *a)
         .outro = "\nExit status: 0 done, 1 the scene could not be loaded or Embree failed, 2 usage error.",
         .pos = &a->path,
         .max_pos = 1,
+        .min_pos = 1,
+        .missing = "no SCENE.mid given",
     };
     int npos, rc = tb_cli_parse(&cli, argc, argv, &npos);
     if (rc != TB_CLI_OK)
         return rc;
     a->embree |= a->robust;
-    if (!a->path)
-        return tb_cli_usage_error(&cli, "no SCENE.mid given");
     if (a->embree_config && !a->embree)
         return tb_cli_usage_error(&cli, "--embree-config needs --embree or --embree-robust");
 #ifndef TB_HAVE_EMBREE

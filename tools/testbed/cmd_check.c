@@ -263,12 +263,12 @@ int tb_cmd_check(int argc, char **argv)
         .outro = "\nExit status: 0 valid scene, 1 invalid scene or unreadable file, 2 usage error.",
         .pos = &path,
         .max_pos = 1,
+        .min_pos = 1,
+        .missing = "no SCENE.mid given",
     };
     int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
     if (prc != TB_CLI_OK)
         return prc;
-    if (!path)
-        return tb_cli_usage_error(&cli, "no SCENE.mid given");
     tb_mid_reader *r;
     if (tb_mid_reader_open(&r, path)) {
         fprintf(stderr, "testbed check: error: %s\n", tb_last_error());

@@ -184,12 +184,12 @@ int tb_cmd_compare(int argc, char **argv)
                  "(size or channel mismatch), 2 usage error.",
         .pos = paths,
         .max_pos = 2,
+        .min_pos = 2,
+        .missing = "need two images, A and B",
     };
     int npaths, prc = tb_cli_parse(&cli, argc, argv, &npaths);
     if (prc != TB_CLI_OK)
         return prc;
-    if (npaths != 2)
-        return tb_cli_usage_error(&cli, "need two images, A and B");
     co.include_alpha = alpha;
     if (linear)
         ro.encoding = TB_ENCODING_LINEAR;

@@ -51,12 +51,12 @@ int tb_cmd_convert(int argc, char **argv)
                  "Exit status: 0 converted, 1 IN could not be read or OUT written, 2 usage error.",
         .pos = paths,
         .max_pos = 2,
+        .min_pos = 2,
+        .missing = "need an input and an output file",
     };
     int npaths, prc = tb_cli_parse(&cli, argc, argv, &npaths);
     if (prc != TB_CLI_OK)
         return prc;
-    if (npaths != 2)
-        return tb_cli_usage_error(&cli, "need an input and an output file");
     tb_image_format in_fmt = tb_image_format_from_path(paths[0]);
     tb_image_format out_fmt = tb_image_format_from_path(paths[1]);
     for (int k = 0; k < 2; k++)

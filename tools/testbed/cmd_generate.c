@@ -46,12 +46,12 @@ int tb_cmd_generate(int argc, char **argv)
         .outro = "\nExit status: 0 written, 1 write error, 2 usage error.",
         .pos = &kind,
         .max_pos = 1,
+        .min_pos = 1,
+        .missing = "no KIND given (grid, csg, mesh)",
     };
     int npos, rc = tb_cli_parse(&cli, argc, argv, &npos);
     if (rc != TB_CLI_OK)
         return rc;
-    if (!kind)
-        return tb_cli_usage_error(&cli, "no KIND given (grid, csg, mesh)");
     opt.count = (int64_t)count;
     if (tb_gen_kind_parse(kind, &opt.kind)) {
         fprintf(stderr, "testbed generate: error: %s\n", tb_last_error());

@@ -189,12 +189,12 @@ int tb_cmd_render(int argc, char **argv)
         .outro = "Ctrl-C writes the image rendered so far and exits with status 130.",
         .pos = &scene_path,
         .max_pos = 1,
+        .min_pos = 1,
+        .missing = "no SCENE.mid given",
     };
     int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
     if (prc != TB_CLI_OK)
         return prc;
-    if (!scene_path)
-        return tb_cli_usage_error(&cli, "no SCENE.mid given");
     ro->aa.adaptive = ro->aa.adaptive || adaptive;
     ro->aa.criterion = (tb_aa_criterion)criterion;
     ro->aa.pattern = (tb_aa_pattern)pattern;

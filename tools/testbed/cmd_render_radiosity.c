@@ -160,12 +160,12 @@ int tb_cmd_render_radiosity(int argc, char **argv)
         .opts = opts,
         .pos = &scene_path,
         .max_pos = 1,
+        .min_pos = 1,
+        .missing = "no SCENE.mid given",
     };
     int npos, rc = tb_cli_parse(&cli, argc, argv, &npos);
     if (rc != TB_CLI_OK)
         return rc;
-    if (!scene_path)
-        return tb_cli_usage_error(&cli, "no SCENE.mid given");
     o.solver.ff = (tb_rad_ff_method)ff;
     o.solver.seed = seed;
     o.stop.max_shots = (uint64_t)max_shots;

@@ -129,12 +129,12 @@ int tb_cmd_validate(int argc, char **argv)
         .opts = opts,
         .pos = &scene_path,
         .max_pos = 1,
+        .min_pos = 1,
+        .missing = "no SCENE.mid given",
     };
     int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
     if (prc != TB_CLI_OK)
         return prc;
-    if (!scene_path)
-        return tb_cli_usage_error(&cli, "no SCENE.mid given");
     const char *kernel = kernels[kernel_k].name;
     long nrays = nrays_i, seed = (long)seed_u, device = device_i, shooters = shooters_i, samples = samples_i;
     long receivers = receivers_i;

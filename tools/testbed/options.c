@@ -320,6 +320,8 @@ int tb_cli_parse(const tb_cli *cli, int argc, char **argv, int *npos)
         if (rc != TB_CLI_OK)
             return rc;
     }
+    if (*npos < cli->min_pos)
+        return tb_cli_usage_error(cli, "%s", cli->missing ? cli->missing : "too few arguments");
     return TB_CLI_OK;
 }
 

@@ -78,6 +78,8 @@ typedef struct tb_cli {
     const char *outro;    /* text after the options (exit statuses, notes), or NULL */
     const char **pos;     /* where positional arguments go */
     int max_pos;          /* how many fit (more is a usage error) */
+    int min_pos;          /* how many must be given (fewer is a usage error) */
+    const char *missing;  /* the usage error when fewer than min_pos are given ("no SCENE.mid given") */
     FILE *errout;         /* where errors go; NULL: stderr (tests set a memory stream) */
 } tb_cli;
 
