@@ -140,10 +140,11 @@ tb_status tb__render_drive(const tb_scene *s, const tb_render_options *o, const 
     return err;
 }
 
-/* The CPU ray tracer's per-sample function: the tracer, and the run whose
- * stop flag it raises (tb_aa_render checks it at tile boundaries). */
+/* A renderer's per-sample function with the run whose stop flag it
+ * raises (tb_aa_render checks it at tile boundaries). */
 typedef struct tb__render_ctx {
-    const tb_raytracer *rt;
+    tb_aa_sample_fn sample;
+    void *ctx;
     tb__render_run *run;
 } tb__render_ctx;
 
@@ -151,17 +152,33 @@ static void tb__render_sample(void *ctx, double x, double y, tb_rng *rng, float 
 {
     tb__render_ctx *c = ctx;
     tb__render_should_stop(c->run);
-    tb_rt_sample((void *)c->rt, x, y, rng, out);
+    c->sample(c->ctx, x, y, rng, out);
 }
 
-/* One pass of the CPU ray tracer: tb_aa_render's tiles (OpenMP). */
-static tb_status tb__render_rt_pass(void *ctx, tb__render_run *run, tb_film *film, const tb_aa_options *aa,
-                                    tb_aa_stats *as)
+/* One pass of a CPU renderer: tb_aa_render's tiles (OpenMP). ctx is the
+ * renderer's tb__render_ctx with `run` still unset. */
+static tb_status tb__render_cpu_pass(void *ctx, tb__render_run *run, tb_film *film, const tb_aa_options *aa,
+                                     tb_aa_stats *as)
 {
-    tb__render_ctx c = {.rt = ctx, .run = run};
+    tb__render_ctx c = *(const tb__render_ctx *)ctx;
+    c.run = run;
     tb_aa_render_desc desc = {.sample = tb__render_sample, .ctx = &c, .threads = run->o->threads,
                               .progress = run->progress, .cancel = &run->stop};
     return tb_aa_render(film, aa, &desc, as);
+}
+
+tb_status tb_render(const tb_scene *s, tb_aa_sample_fn sample, void *ctx, const tb_render_options *o,
+                    tb_image **out, tb_render_stats *stats)
+{
+    *out = NULL;
+    if (!s || !sample)
+        return tb_error(TB_ERR_ARG, "render: no scene or no sample function");
+    tb_status err = tb__render_check(o);
+    if (err)
+        return err;
+    tb__render_ctx c = {.sample = sample, .ctx = ctx};
+    tb__render_engine e = {.ctx = &c, .pass = tb__render_cpu_pass};
+    return tb__render_drive(s, o, &e, out, stats);
 }
 
 tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_image **out, tb_render_stats *stats)
@@ -173,8 +190,7 @@ tb_status tb_render_raytrace(const tb_scene *s, const tb_render_options *o, tb_i
     tb_raytracer rt;
     if ((err = tb_rt_init(&rt, s, &o->rt)))
         return err;
-    tb__render_engine e = {.ctx = &rt, .pass = tb__render_rt_pass};
-    err = tb__render_drive(s, o, &e, out, stats);
+    err = tb_render(s, tb_rt_sample, &rt, o, out, stats);
     tb_rt_release(&rt);
     return err;
 }

@@ -63,6 +63,17 @@ tb_image *tb_render_resolve(const tb_scene *s, const tb_film *film);
 /* Copies the film's per-pixel camera sample counts into counts[y * width + x]. */
 void tb_render_sample_counts(const tb_film *film, uint32_t *counts);
 
+/* Renders `s` with any renderer given as a per-sample function (a
+ * tb_aa_sample_fn of antialias.h: the radiance of one camera sample at film
+ * point (x, y), numbers from its own deterministic stream) into *out (linear
+ * sRGB, see tb_render_resolve): tiles, OpenMP threads, passes, time budget,
+ * cancel flag and progress bar as `o` says. The ray tracer, the path tracer
+ * and the hybrid renderer are thin users. `sample` is called from several
+ * threads at once with the same ctx. An interrupted render returns TB_OK
+ * with what was rendered; `stats` (may be NULL) says so. */
+tb_status tb_render(const tb_scene *s, tb_aa_sample_fn sample, void *ctx, const tb_render_options *o,
+                    tb_image **out, tb_render_stats *stats);
+
 /* Renders `s` with the Whitted ray tracer (raytrace.h) into *out (linear
  * sRGB, see tb_render_resolve). An interrupted render still returns TB_OK
  * and the image of what was rendered (skipped tiles black); `stats` (may be

@@ -63,6 +63,10 @@ static tb_status tb__rf_check(const tb_render_file_options *o)
         return tb_error(TB_ERR_ARG, "--sample-map writes a .pfm file, not '%s'", o->sample_map_path);
     if (!o->report_path != !o->reference_path)
         return tb_error(TB_ERR_ARG, "--report and --reference go together");
+    if (o->method && (!o->method->init || !o->method->name))
+        return tb_error(TB_ERR_ARG, "render method without a name or an init function");
+    if (o->method && o->backend)
+        return tb_error(TB_ERR_ARG, "method %s: a backend renders only the ray tracer", o->method->name);
     return TB_OK;
 }
 
@@ -74,10 +78,17 @@ typedef struct tb__rf_run {
     tb__rf_report rep;
     bool has_prov;
     tb_provenance prov;
+    const tb_render_method *method; /* NULL: the ray tracer */
+    bool method_ready;              /* method->init succeeded: release owed */
+    void *method_ctx;
+    tb_aa_sample_fn method_sample;
+    char method_desc[384];          /* the method's options for the provenance */
 } tb__rf_run;
 
 static void tb__rf_run_free(tb__rf_run *r)
 {
+    if (r->method_ready && r->method->release)
+        r->method->release(r->method->user, r->method_ctx);
     if (r->has_prov)
         tb_provenance_free(&r->prov);
     if (r->rep.fp)
@@ -104,11 +115,20 @@ static tb_status tb__rf_report_open(tb__rf_run *r, const tb_render_file_options 
     return TB_OK;
 }
 
-/* The backend if there is one and it renders, else the CPU path. */
+/* The method if there is one; else the backend if there is one and it
+ * renders, else the CPU ray tracer. */
 static tb_status tb__rf_render(tb__rf_run *r, const tb_render_file_options *o, const tb_render_options *ro,
                                tb_render_stats *rs, bool *on_backend)
 {
     *on_backend = false;
+    if (r->method) {
+        tb_status st = r->method->init(r->method->user, r->scene, ro, &r->method_sample, &r->method_ctx,
+                                       r->method_desc, sizeof r->method_desc);
+        if (st)
+            return st;
+        r->method_ready = true;
+        return tb_render(r->scene, r->method_sample, r->method_ctx, ro, &r->img, rs);
+    }
     if (o->backend) {
         tb_status st = o->backend(o->backend_user, r->scene, ro, &r->img, rs);
         if (st) {
@@ -130,8 +150,14 @@ static tb_status tb__rf_provenance(tb__rf_run *r, const char *scene_path, const 
     if (st)
         return st;
     r->has_prov = true;
-    char popts[512];
-    snprintf(popts, sizeof popts,
+    char popts[1024];
+    if (r->method)
+        snprintf(popts, sizeof popts, "method=%s spp=%d passes=%d adaptive=%d filter=%s:%g accel=%s %s threads=%d colour=%s backend=cpu",
+                 r->method->name, ro->aa.spp, ro->passes, (int)ro->aa.adaptive, tb_filter_kind_name(ro->filter.kind),
+                 ro->filter.radius, tb_accel_kind_name(o->scene.accel), r->method_desc, nthreads,
+                 r->scene->spectral ? "spectral" : "rgb");
+    else
+        snprintf(popts, sizeof popts,
              "method=raytrace spp=%d passes=%d adaptive=%d filter=%s:%g accel=%s max_depth=%d "
              "light_samples=%d glossy_samples=%d threads=%d colour=%s backend=%s",
              ro->aa.spp, ro->passes, (int)ro->aa.adaptive, tb_filter_kind_name(ro->filter.kind), ro->filter.radius,
@@ -171,6 +197,8 @@ static tb_status tb__rf_stats(const tb__rf_run *r, const tb_render_file_options 
             st = tb_stats_set_value(kv[k].k, kv[k].v);
     if (!st && on_backend && o->backend_stats)
         st = o->backend_stats(o->backend_user);
+    if (!st && r->method_ready && r->method->stats)
+        st = r->method->stats(r->method->user, r->method_ctx);
     return st ? st : tb_stats_write_json_file(o->stats_path, &r->prov);
 }
 
@@ -189,7 +217,7 @@ tb_status tb_render_file(const char *scene_path, const tb_render_file_options *o
     tb_status st = tb__rf_check(opt);
     if (st)
         return st;
-    tb__rf_run r = {0};
+    tb__rf_run r = {.method = opt->method};
     tb_render_options ro = opt->render;
     tb_scene_options so = opt->scene;
     if (so.threads == 0)

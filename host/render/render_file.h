@@ -16,8 +16,10 @@
 #define TB_HOST_RENDER_RENDER_FILE_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
+#include "host/render/antialias.h"
 #include "host/render/render.h"
 #include "host/render/scene.h"
 #include "util/base/error.h"
@@ -29,6 +31,24 @@
  * or a fallback); an error fails the call. */
 typedef tb_status (*tb_render_backend_fn)(void *user, const tb_scene *s, const tb_render_options *o, tb_image **out,
                                           tb_render_stats *stats);
+
+/* A CPU renderer that tb_render_file runs in place of the Whitted ray
+ * tracer (the path tracer of pathtrace.h, the hybrid renderer of
+ * host/hybrid): it prepares a per-sample function for the loaded scene,
+ * which tb_render then drives. */
+typedef struct tb_render_method {
+    const char *name; /* the provenance's method= ("path", "hybrid") */
+    /* Prepares the renderer for scene s and options o: sets *sample and *ctx
+     * for tb_render and writes its own options ("key=value ...", for the
+     * provenance) into desc[0 .. ndesc). */
+    tb_status (*init)(void *user, const tb_scene *s, const tb_render_options *o, tb_aa_sample_fn *sample,
+                      void **ctx, char *desc, size_t ndesc);
+    /* Frees what init made (called once init succeeded, on every path). */
+    void (*release)(void *user, void *ctx);
+    /* Adds its own values to the stats JSON after the render's (NULL: none). */
+    tb_status (*stats)(void *user, void *ctx);
+    void *user; /* passed to the three functions */
+} tb_render_method;
 
 /* Adds the backend's own values to the stats JSON (tb_stats_set_value),
  * after the render's; called only when the backend made the image. */
@@ -53,7 +73,8 @@ typedef struct tb_render_file_options {
     const char *reference_path; /* the reference image of report_path */
     int argc;                   /* the command line recorded in the provenance (argv[0]: the program) */
     char **argv;                /* NULL: an empty command line */
-    tb_render_backend_fn backend; /* NULL: the CPU path (tb_render_raytrace) */
+    const tb_render_method *method; /* NULL: the Whitted ray tracer (tb_render_raytrace) */
+    tb_render_backend_fn backend; /* NULL: the CPU path; only with the ray tracer (method NULL) */
     tb_render_backend_stats_fn backend_stats; /* NULL: none */
     void *backend_user;
     const char *backend_name;   /* the provenance's backend= when the backend made the image ("vulkan") */
@@ -79,7 +100,8 @@ tb_render_file_options tb_render_file_defaults(void);
  * the stats; the report rows are written as the passes finish. An
  * interrupted render (cancel, time budget) still writes what it has and
  * returns TB_OK (out->stats.interrupted). TB_ERR_ARG for options that do not
- * fit (no image, unknown formats, a report without its reference); the
+ * fit (no image, unknown formats, a report without its reference, a
+ * backend with a method); the
  * loader's, renderer's, backend's and writers' errors. `out` (may be NULL)
  * is filled on success. */
 tb_status tb_render_file(const char *scene_path, const tb_render_file_options *opt, tb_render_file_result *out);
