@@ -61,6 +61,7 @@ typedef struct tb__mat_src {
     float roughness;
     tb_mid_pattern pat[3]; /* diffuse pattern, specular pattern, bump: colours and image path owned */
     tb_mid_loc loc;        /* where the block or definition is */
+    tb_mid_attrs extra;    /* effective unknown attributes (copies in the attribute store; part of the key) */
     bool emits;
     unsigned char *key;    /* the bytes that decide equality (owned) */
     size_t keylen;
@@ -85,7 +86,21 @@ struct tb__scene_priv {
     size_t capobjects;
     int capemissive;
     const char *errname;   /* file name for messages */
+    tb__scene_attrs *attrs;/* unknown attributes (scene_attrs.c); NULL until the first one */
 };
+
+tb__scene_attrs *tb__attrs_store(tb_scene *s)
+{
+    tb__scene_priv *p = s->priv;
+    if (!p->attrs && (p->attrs = calloc(1, sizeof *p->attrs)) != NULL) {
+        tb_arena_init(&p->attrs->arena, 0);
+        tb_htab_init(&p->attrs->nodes, TB_HTAB_U64);
+        tb_htab_init(&p->attrs->named, TB_HTAB_STR);
+    }
+    return p->attrs;
+}
+
+const tb__scene_attrs *tb__attrs_peek(const tb_scene *s) { return s->priv ? s->priv->attrs : NULL; }
 
 /* Grows *p (elements of `size` bytes) to hold at least `need`. */
 static bool tb__grow(void **p, int *cap, int need, size_t size)
@@ -139,6 +154,9 @@ static void tb__put(tb__bytes *b, const void *v, size_t n)
     b->n += n;
 }
 
+/* tb__put for tb__attrs_key. */
+static void tb__put_cb(void *ctx, const void *v, size_t n) { tb__put(ctx, v, n); }
+
 static void tb__put_str(tb__bytes *b, const char *s)
 {
     uint32_t n = s ? (uint32_t)strlen(s) + 1 : 0; /* 0: none; else the length with the terminator */
@@ -163,10 +181,13 @@ static void tb__put_color(tb__bytes *b, const tb_mid_color *c)
     }
 }
 
-/* The material's meaning as bytes: colours, exponent, ior, texture paths
- * (not its name or where it was written). */
-static void tb__material_key(tb__bytes *b, const tb_mid_material *m)
+/* The material's meaning as bytes: colours, exponent, ior, texture paths,
+ * unknown attributes `extra` (not its name or where it was written). Two
+ * blocks that differ only in unknown attributes stay two materials: a
+ * renderer that reads them may shade them differently. */
+static void tb__material_key(tb__bytes *b, const tb_mid_material *m, tb_mid_attrs extra)
 {
+    tb__attrs_key(extra, tb__put_cb, b);
     tb__put_color(b, &m->diffuse);
     tb__put_color(b, &m->specular);
     tb__put_color(b, &m->transmission);
@@ -240,7 +261,8 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     tb_scene *s = user;
     tb__scene_priv *p = s->priv;
     tb__bytes key = {0};
-    tb__material_key(&key, m);
+    tb_mid_attrs extra = tb__attrs_of_material(s, m);
+    tb__material_key(&key, m, extra);
     if (key.oom) {
         free(key.p);
         return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
@@ -295,6 +317,14 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     p->nmats++; /* counted even on failure, so tb_scene_free releases what was copied */
     if (!ok)
         return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
+    if (extra.count) {
+        tb__scene_attrs *a = tb__attrs_store(s);
+        if (!a)
+            return tb_error(TB_ERR_NOMEM, "scene: out of memory for unknown attributes");
+        tb_status st = tb__attrs_copy(a, extra, &e->extra);
+        if (st)
+            return st;
+    }
     if (tb_htab_get(&p->mat_hash, h, &first)) {
         e->next = (int)first; /* new entries go first in their chain */
     }
@@ -352,7 +382,14 @@ static tb_status tb__add_object(tb_scene *s, const tb_mid_object *m)
     char what[256];
     snprintf(what, sizeof what, "%s%s%s%s", tb_prim_kind_name(m->kind), m->name ? " '" : "",
              m->name ? m->name : "", m->name ? "'" : "");
-    tb_status st = tb_object_from_mid(m, s->nobjects, tb__material_cb, s, &o);
+    tb_status st = tb__attrs_begin_object(s, m);
+    if (!st)
+        st = tb_object_from_mid(m, s->nobjects, tb__material_cb, s, &o);
+    tb_status st2 = tb__attrs_end_object(s, m, st ? NULL : o);
+    if (!st && st2) {
+        tb_object_free(o);
+        return st2;
+    }
     if (st)
         return tb__located(st, s, m->loc, what);
     s->objects[s->nobjects++] = o;
@@ -402,6 +439,19 @@ static tb_status tb__add_light(tb_scene *s, const tb_mid_light *m)
     s->nlights++; /* counted even on failure, so tb_scene_free releases the copies */
     if (!ok)
         return tb_error(TB_ERR_NOMEM, "scene: out of memory for lights");
+    if (m->extra.count) {
+        tb__scene_attrs *a = tb__attrs_store(s);
+        tb_mid_attrs *q = a ? realloc(a->lights, sizeof *q * (size_t)s->nlights) : NULL;
+        if (!q)
+            return tb_error(TB_ERR_NOMEM, "scene: out of memory for unknown attributes");
+        for (int i = a->caplights; i < s->nlights; i++)
+            q[i] = (tb_mid_attrs){NULL, 0};
+        a->lights = q;
+        a->caplights = s->nlights;
+        tb_status st = tb__attrs_copy(a, m->extra, &a->lights[s->nlights - 1]);
+        if (st)
+            return st;
+    }
     if (m->ies.path) {
         int k = 0;
         while (k < p->nies && strcmp(p->ies_paths[k], m->ies.path) != 0)
@@ -554,6 +604,16 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
             }
         }
     }
+    /* Unknown attributes move to the final numbering (only when some exist). */
+    tb__scene_attrs *a = p->attrs;
+    bool any = false;
+    for (int i = 0; i < p->nmats && a; i++)
+        any = any || (used[i] && p->mats[i].extra.count);
+    if (!st && any && !(a->materials = calloc((size_t)n, sizeof *a->materials)))
+        st = tb_error(TB_ERR_NOMEM, "scene: out of memory for unknown attributes");
+    for (int i = 0; i < p->nmats && !st && any; i++)
+        if (used[i])
+            a->materials[remap[i]] = p->mats[i].extra;
     s->nmaterials = n;
     tb_stat_add(&tb__n_materials, n);
     free(used);
@@ -740,8 +800,11 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
             st = tb__add_object(s, it.object);
         else if (it.type == TB_MID_ITEM_LIGHT)
             st = tb__add_light(s, it.light);
-        /* Named materials matter only through the objects that use them;
-         * the camera is read at the end. */
+        else if (it.type == TB_MID_ITEM_MATERIAL)
+            st = tb__attrs_named_material(s, it.material);
+        /* Named materials matter only through the objects that use them
+         * (their unknown attributes are remembered for those); the camera
+         * is read at the end. */
     }
     if (!st) {
         const tb_mid_camera *cam = tb_mid_reader_camera(r);
@@ -754,6 +817,11 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
         st = tb_camera_from_mid(&s->mid_camera, 0, 0, &s->camera);
         if (st && cam)
             st = tb__located(st, s, cam->loc, "camera");
+        if (!st && cam && cam->extra.count) {
+            tb__scene_attrs *a = tb__attrs_store(s);
+            st = a ? tb__attrs_copy(a, cam->extra, &a->camera)
+                   : tb_error(TB_ERR_NOMEM, "scene: out of memory for unknown attributes");
+        }
     }
     if (!st)
         st = tb__finish_materials(s, opt);
@@ -846,6 +914,7 @@ void tb_scene_free(tb_scene *s)
         }
         free(p->ies);
         free(p->ies_paths);
+        tb__attrs_free(p->attrs);
         free(p);
     }
     free(s->name);

@@ -8,6 +8,8 @@
  *     material or light of the scene is spectral, linear RGB otherwise;
  *   - the point, spot and directional lights, and the emissive objects (area
  *     lights) with their areas and, where the shape allows, ready emitters;
+ *   - the unknown MID attributes, for renderers that read their own
+ *     extensions (tb_scene_object_attr and friends, below);
  *   - the camera, the world bounds, and an acceleration structure
  *     (host/render/accel.h) in which every triangle of a polygons object is a
  *     reference of its own and every other object (analytic or CSG) one.
@@ -139,7 +141,8 @@ typedef struct tb_scene {
     int nemitters;
     tb_emitter *emitters;       /* area-light emitters of the emissive objects (host/render/lights.h) */
     bool has_camera;            /* the file has a camera (else `camera` is MID's default camera) */
-    tb_mid_camera mid_camera;   /* the camera as the file gave it (no names, attributes or references) */
+    tb_mid_camera mid_camera;   /* the camera as the file gave it (no names, attributes or references:
+                                   its unknown attributes are tb_scene_camera_attrs) */
     tb_camera camera;           /* ready to make rays, at the file's resolution */
     tb_aabb bounds;             /* world box of every object */
     tb_accel *accel;            /* NULL with no_accel. Query it through tb_scene_intersect, which
@@ -191,6 +194,65 @@ const tb_object *tb_scene_hit_leaf(const tb_scene *s, const tb_hit *hit, uint32_
 
 /* The material of the surface a hit is on; NULL for a hit not from this scene. */
 const tb_material *tb_scene_hit_material(const tb_scene *s, const tb_hit *hit);
+
+/* ------------------------------------------------------------------ unknown attributes */
+
+/* Attributes for renderers (docs/rendering.md): the MID attributes this
+ * library does not know, kept with their values so that a renderer can read
+ * its own extensions, e.g. `my_renderer_weight = 2.5` in an object body.
+ * They are deep copies owned by the scene (valid until tb_scene_free), in
+ * file order, and stored in side tables: an object without any costs no
+ * memory. Material attributes are the effective ones of the block that made
+ * the material: those of the named material it starts from (or, in a CSG
+ * tree, of its parent's material), then its own, its own replacing
+ * same-named ones; two blocks whose unknown attributes differ give two
+ * entries of the material table. The lookups return NULL (the runs {NULL, 0})
+ * for a name, index or node that has none. */
+
+/* The unknown attributes of object node `node` (a top-level object or any
+ * node of its CSG tree, e.g. from tb_scene_hit_leaf): of its body, or with
+ * `geometry` of its geometry block. */
+tb_mid_attrs tb_scene_node_attrs(const tb_scene *s, const tb_object *node, bool geometry);
+
+/* The unknown attributes of material-table entry `material`. */
+tb_mid_attrs tb_scene_material_attrs(const tb_scene *s, int material);
+
+/* The unknown attributes of light `light` (index into s->lights). */
+tb_mid_attrs tb_scene_light_attrs(const tb_scene *s, int light);
+
+/* The unknown attributes of the camera. */
+tb_mid_attrs tb_scene_camera_attrs(const tb_scene *s);
+
+/* The value of attribute `name` in `attrs`, or NULL. */
+const tb_mid_value *tb_scene_attr_find(tb_mid_attrs attrs, const char *name);
+
+/* Unknown attribute `name` of a node: its body first, then its geometry block. */
+const tb_mid_value *tb_scene_node_attr(const tb_scene *s, const tb_object *node, const char *name);
+
+/* Unknown attribute `name` of top-level object `object` (body, then geometry block). */
+const tb_mid_value *tb_scene_object_attr(const tb_scene *s, uint32_t object, const char *name);
+
+/* Unknown attribute `name` of material-table entry `material`. */
+const tb_mid_value *tb_scene_material_attr(const tb_scene *s, int material, const char *name);
+
+/* Unknown attribute `name` of light `light`. */
+const tb_mid_value *tb_scene_light_attr(const tb_scene *s, int light, const char *name);
+
+/* Unknown attribute `name` of the camera. */
+const tb_mid_value *tb_scene_camera_attr(const tb_scene *s, const char *name);
+
+/* Attribute `name` inside a block value `{ name = ... }`; NULL if `block`
+ * is NULL, not a block, or has no such attribute. */
+const tb_mid_value *tb_scene_attr_field(const tb_mid_value *block, const char *name);
+
+/* v's number, or `def` when v is NULL or not a number. */
+double tb_scene_attr_number(const tb_mid_value *v, double def);
+
+/* v's text when it is a string or a symbol (`true`, `fast`), else `def`. */
+const char *tb_scene_attr_string(const tb_mid_value *v, const char *def);
+
+/* v's n numbers when it is a vector of exactly n > 0 numbers, else `def`. */
+const double *tb_scene_attr_vector(const tb_mid_value *v, int n, const double *def);
 
 /* Prints a short summary (objects by kind, triangles, materials, colours,
  * lights, emitters, camera, bounds, acceleration structure, times). */

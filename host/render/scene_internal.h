@@ -12,6 +12,8 @@
 #include "host/render/lights.h"
 #include "host/render/scene.h"
 #include "util/base/error.h"
+#include "util/container/arena.h"
+#include "util/container/hash_table.h"
 #include "util/math/aabb.h"
 #include "util/math/ray.h"
 
@@ -46,5 +48,63 @@ tb_status tb__scene_leaf_area(const tb_object *leaf, double *area);
  * tessellation (scene_emit.c). Writes them to out (when not NULL) and their
  * count to *n (none if the tessellation fails). TB_ERR_NOMEM only. */
 tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out, int *n);
+
+/* ------------------------------------------------------------------ unknown attributes (scene_attrs.c) */
+
+/* A CSG-tree node's effective material attributes while its object is built. */
+typedef struct tb__attrs_pending {
+    const tb_mid_material *mat; /* &node->material of the MID node (what the build callback is given) */
+    tb_mid_attrs attrs;         /* effective unknown material attributes (reader's or temporary memory) */
+    tb_mid_attr *owned;         /* the merged array when it had to be made, else NULL */
+} tb__attrs_pending;
+
+/* The unknown MID attributes a scene keeps (docs/rendering.md, "Attributes
+ * for renderers"). Allocated on the first unknown attribute, so a scene
+ * without any pays one NULL pointer; an object without any pays nothing. */
+typedef struct tb__scene_attrs {
+    tb_arena arena;           /* deep copies of every kept name, value and array */
+    tb_htab nodes;            /* object node address -> its tb__node_attrs in the arena (nodes with some only) */
+    tb_htab named;            /* named material -> its effective attributes (tb_mid_attrs in the arena) */
+    tb_mid_attrs *materials;  /* per entry of the final material table; NULL when none has any */
+    tb_mid_attrs *lights;     /* per light, file order (nlights entries once any light has some) */
+    int caplights;
+    tb_mid_attrs camera;      /* the camera's */
+    tb__attrs_pending *pending; /* the object being built: one entry per node whose material has some */
+    int npending, cappending, cursor;
+} tb__scene_attrs;
+
+/* The scene's attribute store, created on first use (scene.c); NULL when out of memory. */
+tb__scene_attrs *tb__attrs_store(tb_scene *s);
+
+/* The store, or NULL if the scene has kept no attribute (scene.c). */
+const tb__scene_attrs *tb__attrs_peek(const tb_scene *s);
+
+/* Frees the store; NULL is allowed. */
+void tb__attrs_free(tb__scene_attrs *a);
+
+/* Deep copy of `src` into the store's arena (an empty run stays {NULL, 0}). TB_ERR_NOMEM only. */
+tb_status tb__attrs_copy(tb__scene_attrs *a, tb_mid_attrs src, tb_mid_attrs *dst);
+
+/* Records a named material definition's effective attributes: those of the
+ * material it names (if any), then its own, its own replacing same-named ones. */
+tb_status tb__attrs_named_material(tb_scene *s, const tb_mid_material *def);
+
+/* Before building object `m`: works out, per node, the effective unknown
+ * attributes of its material (the named base's or the CSG parent's, then
+ * the block's own), as the reader resolves the known ones. */
+tb_status tb__attrs_begin_object(tb_scene *s, const tb_mid_object *m);
+
+/* In the build callback: the effective attributes of node material `m`
+ * (valid until tb__attrs_end_object). */
+tb_mid_attrs tb__attrs_of_material(tb_scene *s, const tb_mid_material *m);
+
+/* After building: keeps the body and geometry attributes of every node of
+ * `m` with some, keyed by the matching node of `o` (NULL: the build failed,
+ * only the temporary memory is released). */
+tb_status tb__attrs_end_object(tb_scene *s, const tb_mid_object *m, const tb_object *o);
+
+/* Feeds the bytes that decide whether two attribute runs are equal (names,
+ * types and values; not locations) to put(ctx, bytes, n). */
+void tb__attrs_key(tb_mid_attrs a, void (*put)(void *ctx, const void *p, size_t n), void *ctx);
 
 #endif

@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """Writes the bundled Cornell Box scenes from the published data.
 
-    python3 scenes/tools/cornell_box.py          # (re)write the three files
+    python3 scenes/tools/cornell_box.py          # (re)write the four files
     python3 scenes/tools/cornell_box.py --check  # exit 1 if a committed file differs
 
 Files written (paths relative to the repository root):
 
     scenes/cornell-box.mid                        spectral materials and light
     scenes/cornell-box-rgb.mid                    the same scene in linear sRGB
+    scenes/cornell-box-spheres.mid                spectral, a mirror and a glass sphere instead of the blocks
     scenes/tests/cornell-box-coplanar-light.mid   the light left coplanar with the ceiling
 
 Sources: the Cornell University Program of Computer Graphics "Cornell Box
@@ -67,6 +68,20 @@ LIGHT_L = [0.0, 8.0, 15.6, 18.4]
 LIGHT_Y_LOWERED = "548.7"
 # Interior point used to check that every wall faces into the box.
 BOX_CENTRE = (278.0, 274.4, 279.6)
+
+# cornell-box-spheres.mid: the two blocks replaced by a mirror sphere (left,
+# back: large x and z) and a glass sphere (right, front), as in Jensen's
+# photon-mapping box. Name, material, centre x and z, radius (mm); each rests
+# SPHERE_GAP above the floor (y = 0), so no ray meets sphere and floor at
+# one distance.
+SPHERES = [
+    ("mirror sphere", "mirror", 380.0, 370.0, 95.0),
+    ("glass sphere", "glass", 185.0, 165.0, 95.0),
+]
+SPHERE_GAP = 0.1
+# The smallest gap (mm) the spheres keep from the walls and from each other
+# (checked when writing).
+SPHERE_CLEARANCE = 20.0
 
 
 def quad(text):
@@ -371,7 +386,7 @@ def materials_rgb(refl):
     return "\n".join(out) + "\n"
 
 
-def geometry(light_y):
+def geometry(light_y, blocks=True):
     out = [""]
     notes = []
     for name, mat, text in SURFACES:
@@ -404,7 +419,7 @@ def geometry(light_y):
     out.append("    }")
     out.append('    rendering = { material = "light" }')
     out.append("}")
-    for name, faces in BLOCKS:
+    for name, faces in BLOCKS if blocks else []:
         verts, idx = [], []
         all_pts = [tuple(map(fnum, v)) for f in faces for v in quad(f)]
         c = centroid(all_pts)
@@ -434,6 +449,49 @@ def geometry(light_y):
     return "\n".join(out) + "\n"
 
 
+SPHERE_MATERIALS = """
+# The spheres' materials (MID 1 attributes, docs/mid.md section 7; as
+# scenes/showcase.mid). The mirror: black diffuse, specular 0.95 with a
+# narrow lobe, so the ray tracer follows a mirror ray. The glass: a smooth
+# dielectric of index 1.5 (the tracer weights reflection by the exact
+# Fresnel term and refraction by transmission (1 - R)), with a little
+# specular for the highlight. Grey values: flat spectra in this spectral scene.
+material "mirror" {
+    diffuse = 0
+    specular = 0.95
+    exponent = 10000
+}
+material "glass" {
+    diffuse = 0
+    specular = 0.05
+    exponent = 10000
+    transmission = 1
+    ior = 1.5
+}
+"""
+
+
+def spheres():
+    """The two spheres, checked to rest on the floor inside the box, apart."""
+    out = ["# The spheres: radius %s mm, resting %s mm above the floor (centre y = r + %s)."
+           % (g7(SPHERES[0][4]), g7(SPHERE_GAP), g7(SPHERE_GAP))]
+    lo_x = max(fnum(v[0]) for name, _, t in SURFACES if name == "right wall" for v in quad(t))
+    hi_x = min(fnum(v[0]) for name, _, t in SURFACES if name == "left wall" for v in quad(t))
+    hi_z = min(fnum(v[2]) for name, _, t in SURFACES if name == "back wall" for v in quad(t))
+    for i, (name, mat, x, z, r) in enumerate(SPHERES):
+        if not (x - r >= lo_x + SPHERE_CLEARANCE and x + r <= hi_x - SPHERE_CLEARANCE and
+                z - r >= SPHERE_CLEARANCE and z + r <= hi_z - SPHERE_CLEARANCE):
+            sys.exit("cornell_box.py: %s does not fit in the box" % name)
+        for other in SPHERES[:i]:
+            if math.hypot(x - other[2], z - other[3]) < r + other[4] + SPHERE_CLEARANCE:
+                sys.exit("cornell_box.py: %s is too close to %s" % (name, other[0]))
+        out.append('sphere "%s" {' % name)
+        out.append("    transform = [scale(%s) translate([%s %s %s])]" % (g7(r), g7(x), g7(r + SPHERE_GAP), g7(z)))
+        out.append('    rendering = { material = "%s" }' % mat)
+        out.append("}")
+    return "\n".join(out) + "\n"
+
+
 def scenes():
     refl = table(os.path.join(ROOT, "scenes/data/cornell-box-reflectance.csv"))
     spectral = header("spectral materials and light") + camera() + materials_spectral(refl)
@@ -448,9 +506,22 @@ def scenes():
         "#   at the same distance. A test case for tie-breaking; the bundled\n"
         "#   scenes/cornell-box.mid lowers the light by 0.1 mm instead.\n")
     coplanar += camera() + materials_spectral(refl)
+    sph = header("spectral; a mirror sphere and a glass sphere instead of the two blocks")
+    sph = sph.replace(
+        "#   every wall, the floor, the ceiling and the light face into the box and\n"
+        "#   every block face point out of its block (checked by the script and by\n"
+        "#   tests/scenes), so no order was reversed.\n",
+        "#   every wall, the floor, the ceiling and the light face into the box\n"
+        "#   (checked by the script and by tests/scenes), so no order was reversed.\n"
+        "# - The blocks are replaced by a mirror sphere (left, back) and a glass\n"
+        "#   sphere (right, front), as in Jensen's photon-mapping box: mirror and\n"
+        "#   glass for the ray tracer, caustics for a path tracer, colour bleeding\n"
+        "#   on the walls for radiosity (docs/scenes.md).\n")
+    sph += camera() + materials_spectral(refl) + SPHERE_MATERIALS + geometry(LIGHT_Y_LOWERED, blocks=False) + spheres()
     return {
         "scenes/cornell-box.mid": spectral + geometry(LIGHT_Y_LOWERED),
         "scenes/cornell-box-rgb.mid": rgb + geometry(LIGHT_Y_LOWERED),
+        "scenes/cornell-box-spheres.mid": sph,
         "scenes/tests/cornell-box-coplanar-light.mid": coplanar + geometry("548.8"),
     }
 

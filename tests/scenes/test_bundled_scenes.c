@@ -12,6 +12,9 @@
  *   computation, scenes/tools/cornell_box.py);
  * - tests/cornell-box-coplanar-light.mid: the same scene with the light
  *   exactly in the ceiling's plane;
+ * - cornell-box-spheres.mid: the same walls, light, camera and materials,
+ *   a mirror sphere (left, back) and a glass sphere (right, front) instead of
+ *   the blocks, resting 0.1 mm above the floor inside the box;
  * - showcase.mid: every primitive kind, CSG node and light kind occurs; every
  *   object stands on the ground and lies inside the camera's view;
  * - radiosity-room.mid: diffuse only, walls face in, furniture inside the room
@@ -282,8 +285,9 @@ static tb_dvec3 sub3(tb_dvec3 a, tb_dvec3 b) { return (tb_dvec3){a.x - b.x, a.y 
 
 /* -------------------------------------------------------------- Cornell */
 
-/* Checks the geometry of a Cornell scene; the light is at height light_y. */
-static void check_cornell_geometry(const scene *s, double light_y)
+/* Checks the geometry of a Cornell scene; the light is at height light_y;
+ * the published blocks unless `blocks` is false (the spheres variant). */
+static void check_cornell_geometry(const scene *s, double light_y, bool blocks)
 {
     assert_int_equal(s->n, 8);
     for (size_t q = 0; q < sizeof tb__surfaces / sizeof tb__surfaces[0]; q++) {
@@ -299,7 +303,7 @@ static void check_cornell_geometry(const scene *s, double light_y)
             assert_true(p.x == (float)pq->v[j][0] && p.y == (float)y && p.z == (float)pq->v[j][2]);
         }
     }
-    for (int b = 0; b < 2; b++) {
+    for (int b = 0; b < 2 && blocks; b++) {
         const kept *k = find(s, tb__blocks[b].name);
         assert_int_equal(k->kind, TB_PRIM_POLYGONS);
         assert_string_equal(k->material, "white");
@@ -320,7 +324,7 @@ static void test_cornell_geometry_as_published(void **state)
 {
     (void)state;
     scene *s = scene_read(SCENES "/cornell-box.mid");
-    check_cornell_geometry(s, 548.7);
+    check_cornell_geometry(s, 548.7, true);
     /* The lowering is 0.1 mm (as floats: the nearest float to each). */
     tb_assert_near(find(s, "ceiling")->v[0].y - find(s, "light")->v[0].y, 0.1, 1e-4);
     scene_close(s);
@@ -462,7 +466,7 @@ static void test_cornell_rgb_matches_util_color(void **state)
     scene *spec = scene_read(SCENES "/cornell-box.mid");
     scene *rgb = scene_read(SCENES "/cornell-box-rgb.mid");
     /* Same geometry and camera. */
-    check_cornell_geometry(rgb, 548.7);
+    check_cornell_geometry(rgb, 548.7, true);
     assert_true(rgb->has_cam);
     assert_true(rgb->cam.fov == spec->cam.fov);
     for (int w = 0; w < 4; w++) {
@@ -500,8 +504,70 @@ static void test_cornell_coplanar_variant(void **state)
 {
     (void)state;
     scene *s = scene_read(SCENES "/tests/cornell-box-coplanar-light.mid");
-    check_cornell_geometry(s, 548.8);
+    check_cornell_geometry(s, 548.8, true);
     assert_true(find(s, "light")->v[0].y == find(s, "ceiling")->v[0].y);
+    scene_close(s);
+}
+
+static bool is_grey(const tb_mid_color *c, float v)
+{
+    return c->type == TB_MID_COLOR_RGB && c->rgb[0] == v && c->rgb[1] == v && c->rgb[2] == v;
+}
+
+static void test_cornell_spheres_variant(void **state)
+{
+    (void)state;
+    scene *s = scene_read(SCENES "/cornell-box-spheres.mid");
+    scene *box = scene_read(SCENES "/cornell-box.mid");
+    check_cornell_geometry(s, 548.7, false);
+    /* The published camera and the measured materials, exactly as cornell-box.mid has them. */
+    assert_true(s->has_cam && box->has_cam);
+    tb_mid_item ca = {.type = TB_MID_ITEM_CAMERA, .camera = &s->cam};
+    tb_mid_item cb = {.type = TB_MID_ITEM_CAMERA, .camera = &box->cam};
+    assert_true(tb_mid_item_equal(&ca, &cb));
+    static const char *const mats[] = {"white", "green", "red", "light"};
+    for (int i = 0; i < 4; i++) {
+        tb_mid_item ma = {.type = TB_MID_ITEM_MATERIAL, .material = tb_mid_reader_material(s->r, mats[i])};
+        tb_mid_item mb = {.type = TB_MID_ITEM_MATERIAL, .material = tb_mid_reader_material(box->r, mats[i])};
+        assert_non_null(ma.material);
+        assert_non_null(mb.material);
+        if (!tb_mid_item_equal(&ma, &mb))
+            fail_msg("material '%s' differs from cornell-box.mid's", mats[i]);
+    }
+    /* Two spheres of radius 95 mm (similarity transforms: the world box is the sphere's).
+     * The mirror at the left back (the image's left is world +x), the glass at the right front. */
+    const kept *m = find(s, "mirror sphere"), *g = find(s, "glass sphere");
+    const kept *sp[2] = {m, g};
+    tb_dvec3 c[2];
+    for (int i = 0; i < 2; i++) {
+        assert_int_equal(sp[i]->kind, TB_PRIM_SPHERE);
+        c[i] = (tb_dvec3){(sp[i]->lo.x + sp[i]->hi.x) / 2, (sp[i]->lo.y + sp[i]->hi.y) / 2,
+                          (sp[i]->lo.z + sp[i]->hi.z) / 2};
+        tb_assert_near(sp[i]->hi.x - sp[i]->lo.x, 190.0, 1e-9);
+        tb_assert_near(sp[i]->hi.y - sp[i]->lo.y, 190.0, 1e-9);
+        tb_assert_near(sp[i]->hi.z - sp[i]->lo.z, 190.0, 1e-9);
+        /* resting 0.1 mm above the floor (y = 0), inside the walls (x in [0, 549.6], z <= 559.2) */
+        tb_assert_near(sp[i]->lo.y, 0.1, 1e-9);
+        assert_true(sp[i]->lo.x > 0.0 && sp[i]->hi.x < 549.6 && sp[i]->lo.z > 0.0 && sp[i]->hi.z < 559.2);
+    }
+    assert_true(c[0].x > 278.0 && c[0].z > 279.6);
+    assert_true(c[1].x < 278.0 && c[1].z < 279.6);
+    tb_dvec3 d = sub3(c[0], c[1]);
+    assert_true(sqrt(dot3(d, d)) > 190.0);
+    assert_string_equal(m->material, "mirror");
+    assert_string_equal(g->material, "glass");
+    const tb_mid_material *mm = tb_mid_reader_material(s->r, "mirror");
+    const tb_mid_material *gm = tb_mid_reader_material(s->r, "glass");
+    assert_non_null(mm);
+    assert_non_null(gm);
+    /* the mirror reflects, nothing diffuse or transmitted */
+    assert_true(is_black(&mm->diffuse) && is_black(&mm->transmission) && is_black(&mm->emission));
+    assert_true(is_grey(&mm->specular, 0.95f) && mm->exponent == 10000.0f);
+    /* the glass: a dielectric of index 1.5, transmission 1, a little specular */
+    assert_true(is_black(&gm->diffuse) && is_black(&gm->emission));
+    assert_true(is_grey(&gm->transmission, 1.0f) && gm->ior == 1.5f);
+    assert_true(is_grey(&gm->specular, 0.05f));
+    scene_close(box);
     scene_close(s);
 }
 
@@ -611,6 +677,7 @@ int main(void)
         cmocka_unit_test(test_cornell_spectra_as_measured),
         cmocka_unit_test(test_cornell_rgb_matches_util_color),
         cmocka_unit_test(test_cornell_coplanar_variant),
+        cmocka_unit_test(test_cornell_spheres_variant),
         cmocka_unit_test(test_showcase_has_everything_in_view),
         cmocka_unit_test(test_radiosity_room),
     };

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Every bundled scene (scenes/**/*.mid) passes `testbed check`; the Cornell
 # Box files are what scenes/tools/cornell_box.py writes. Guards that make the
-# test able to fail: at least the five known scenes are found, and a damaged
+# test able to fail: at least the six known scenes are found, and a damaged
 # copy of one of them is rejected by the same loop.
 set -u
 : "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
@@ -29,8 +29,8 @@ check_all() {
 read -r ok bad < <(check_all "$TB_SOURCE_DIR/scenes")
 echo "scenes: $ok valid, $bad invalid"
 [[ $bad == 0 ]] || fail "$bad bundled scene(s) failed testbed check"
-[[ $ok -ge 5 ]] || fail "expected at least 5 bundled scenes, found $ok"
-for s in cornell-box.mid cornell-box-rgb.mid showcase.mid radiosity-room.mid tests/cornell-box-coplanar-light.mid; do
+[[ $ok -ge 6 ]] || fail "expected at least 6 bundled scenes, found $ok"
+for s in cornell-box.mid cornell-box-rgb.mid cornell-box-spheres.mid showcase.mid radiosity-room.mid tests/cornell-box-coplanar-light.mid; do
     [[ -f "$TB_SOURCE_DIR/scenes/$s" ]] || fail "missing scenes/$s"
 done
 
@@ -53,6 +53,10 @@ fi
 "$TESTBED" check "$TB_SOURCE_DIR/scenes/cornell-box.mid" >"$tmp/out" 2>&1
 grep -qxF "objects: 8 top-level, 8 in all: polygons 8" "$tmp/out" || fail "cornell-box.mid summary"
 grep -qxF "bounds: [0 0 0] to [556 548.8 559.2]" "$tmp/out" || fail "cornell-box.mid bounds"
+"$TESTBED" check "$TB_SOURCE_DIR/scenes/cornell-box-spheres.mid" >"$tmp/out" 2>&1
+grep -qxF "objects: 8 top-level, 8 in all: sphere 2, polygons 6" "$tmp/out" || fail "cornell-box-spheres.mid summary"
+grep -qxF "materials: 6: white, green, red, light, mirror, glass" "$tmp/out" || fail "cornell-box-spheres.mid materials"
+grep -qxF "bounds: [0 0 0] to [556 548.8 559.2]" "$tmp/out" || fail "cornell-box-spheres.mid bounds"
 "$TESTBED" check "$TB_SOURCE_DIR/scenes/showcase.mid" >"$tmp/out" 2>&1
 grep -qxF "lights: 3: point_light 1, spot_light 1, directional_light 1" "$tmp/out" || fail "showcase lights"
 
