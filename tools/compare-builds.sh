@@ -44,7 +44,8 @@ run() {
 }
 
 scenes=(scenes/cornell-box.mid scenes/cornell-box-rgb.mid scenes/materials.mid
-        scenes/showcase.mid scenes/radiosity-room.mid scenes/tests/cornell-box-coplanar-light.mid)
+        scenes/showcase.mid scenes/radiosity-room.mid scenes/tests/cornell-box-coplanar-light.mid
+        scenes/cornell-box-spheres.mid)
 for s in "${scenes[@]}"; do
   n=$(basename "$s" .mid)
   run "rt-$n" render "$s" -o @img.pfm --spp 2 --backend cpu --threads 2
