@@ -188,32 +188,86 @@ tb_status tb_hybrid_create(const tb_scene *scene, const tb_hybrid_options *opt, 
     return TB_OK;
 }
 
-/* The reflected radiosity B - E of the element under a gather ray's first
- * hit (its front side; 0 elsewhere), out[0..nc). */
-static void tb__gather_one(const tb_hybrid *h, const tb_ray *ray, double *out)
+/* Specular bounces a gather ray follows before it must land on a diffuse
+ * surface (glass splits in two at each: at most 2^4 rays per gather ray). */
+#define TB__HYB_GATHER_DEPTH 4
+
+static bool tb__black(const tb_channels *c)
+{
+    for (int k = 0; k < c->n; k++)
+        if (c->v[k] != 0.0f)
+            return false;
+    return true;
+}
+
+/* What a gather ray brings back, in radiosity units (pi times radiance),
+ * out[0..nc): where it lands, the solution's reflected radiosity B - E of
+ * the element there (front sides; the emission is left out, as the direct
+ * light comes by shadow rays), plus what the surface's perfect mirror
+ * (Phong or Blinn specular colour) or smooth dielectric (Fresnel split)
+ * sends along, followed up to TB__HYB_GATHER_DEPTH bounces with the
+ * materials' untextured colours. GGX lobes add nothing more than their
+ * element's diffuse part. */
+static void tb__gather_one(const tb_hybrid *h, const tb_ray *ray, int depth, double *out)
 {
     const tb_scene *s = h->scene;
-    for (int c = 0; c < h->nc; c++)
+    const int nc = h->nc;
+    for (int c = 0; c < nc; c++)
         out[c] = 0.0;
     tb_hit hit;
     if (!tb_scene_intersect(s, ray, &hit))
         return;
-    if (tb_vec3_dot(ray->d, hit.ng) >= 0.0f)
-        return; /* the back of a surface: elements receive and reflect on their front only */
-    tb_vec3 p, perr;
-    if (!tb_object_hit_point(s->objects[hit.object], ray, &hit, &p, &perr))
-        p = tb_vec3_add(ray->o, tb_vec3_scale(ray->d, hit.t));
-    tb_rad_location at;
-    if (!tb_rad_locate(h->loc, hit.object, p, hit.ng, &at)) {
-        TB_STAT_INC(tb__hyb_misses);
+    const tb_material *mat = tb_scene_hit_material(s, &hit);
+    if (!mat)
         return;
+    tb_vec3 p, perr;
+    if (!tb_object_hit_point(s->objects[hit.object], ray, &hit, &p, &perr)) {
+        p = tb_vec3_add(ray->o, tb_vec3_scale(ray->d, hit.t));
+        perr = tb_vec3_scale(tb_vec3_add(tb_vec3_abs(p), tb_vec3_splat(1.0f)), 1e-5f);
     }
-    double hv[TB_CHANNELS_MAX];
-    tb_rad_location_interpolate(&at, h->hv, h->nc, hv);
-    const tb_rad_mesh *m = tb_rad_solver_mesh(h->full);
-    const float *rho = m->rho + (size_t)at.element * (size_t)h->nc;
-    for (int c = 0; c < h->nc; c++)
-        out[c] = rho[c] * hv[c];
+    const tb_vec3 d = tb_vec3_normalize(ray->d), wo = tb_vec3_neg(d), ng = hit.ng;
+    const bool front = tb_vec3_dot(d, ng) < 0.0f;
+    if (front) { /* elements receive and reflect on their front only */
+        tb_rad_location at;
+        if (tb_rad_locate(h->loc, hit.object, p, ng, &at)) {
+            double hv[TB_CHANNELS_MAX];
+            tb_rad_location_interpolate(&at, h->hv, nc, hv);
+            const float *rho = tb_rad_solver_mesh(h->full)->rho + (size_t)at.element * (size_t)nc;
+            for (int c = 0; c < nc; c++)
+                out[c] = rho[c] * hv[c];
+        } else {
+            TB_STAT_INC(tb__hyb_misses);
+        }
+    }
+    if (depth >= TB__HYB_GATHER_DEPTH)
+        return;
+    double sub[TB_CHANNELS_MAX];
+    if (!tb__black(&mat->transmission)) {
+        tb_frame fr = tb_frame_from_normal(ng);
+        tb_specular_split sp;
+        tb_specular_dielectric(tb_frame_to_local(&fr, wo), mat->ior, &sp);
+        if (sp.R > 0.0) {
+            tb_vec3 w = tb_frame_to_world(&fr, sp.wr);
+            tb_ray r = tb_ray_make(tb_spawn_ray_origin(p, perr, ng, w), w, 0.0f, INFINITY);
+            tb__gather_one(h, &r, depth + 1, sub);
+            for (int c = 0; c < nc; c++)
+                out[c] += sp.R * sub[c];
+        }
+        if (sp.refracts && sp.T > 0.0) {
+            tb_vec3 w = tb_vec3_normalize(tb_frame_to_world(&fr, sp.wt));
+            tb_ray r = tb_ray_make(tb_spawn_ray_origin(p, perr, ng, w), w, 0.0f, INFINITY);
+            tb__gather_one(h, &r, depth + 1, sub);
+            for (int c = 0; c < nc; c++)
+                out[c] += sp.T * mat->transmission.v[c] * sub[c];
+        }
+    } else if (mat->model != TB_MID_MODEL_LAMBERT && mat->model != TB_MID_MODEL_GGX && !tb__black(&mat->specular)) {
+        const tb_vec3 n = front ? ng : tb_vec3_neg(ng);
+        tb_vec3 w = tb_vec3_normalize(tb_reflect(wo, n));
+        tb_ray r = tb_ray_make(tb_spawn_ray_origin(p, perr, ng, w), w, 0.0f, INFINITY);
+        tb__gather_one(h, &r, depth + 1, sub);
+        for (int c = 0; c < nc; c++)
+            out[c] += mat->specular.v[c] * sub[c];
+    }
 }
 
 tb_channels tb_hybrid_indirect(void *ctx, const tb_rt_indirect_query *q, tb_rng *rng)
@@ -241,7 +295,7 @@ tb_channels tb_hybrid_indirect(void *ctx, const tb_rt_indirect_query *q, tb_rng 
             tb_vec3 w = tb_vec3_normalize(tb_frame_to_world(&fr, tb_sample_cosine_hemisphere(u[2 * k], u[2 * k + 1])));
             tb_ray r = tb_ray_make(q->origin, w, 0.0f, INFINITY);
             TB_STAT_INC(tb__hyb_gather_rays);
-            tb__gather_one(h, &r, b);
+            tb__gather_one(h, &r, 0, b);
             for (int c = 0; c < nc; c++)
                 acc[c] += b[c];
         }
