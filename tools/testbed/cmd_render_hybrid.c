@@ -160,6 +160,7 @@ int tb_cmd_render_hybrid(int argc, char **argv)
         return tb_cli_usage_error(&cli, "--report and --reference go together");
     ho->mode = (tb_hybrid_mode)mode;
     ho->mesh_given = edge_given || area_given;
+    ho->stop.progress = true; /* the radiosity pass's bar, on a terminal */
     ho->log = stderr;
     ho->log_prefix = "testbed render: ";
     if (depth_seen)
