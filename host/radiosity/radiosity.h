@@ -277,6 +277,11 @@ void tb_rad_element_unshot(const tb_rad_solver *s, size_t i, double *out);
 /* Radiosity at corner k of element i (Gouraud display), out[0..nchannels). */
 void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambient, double *out);
 
+/* Gathered irradiance H_v at vertex v (the display's value, without the
+ * ambient term), out[0..nchannels): corner k of element i shows
+ * E_i + rho_i (H_v + ambient) with v = its k-th vertex. */
+void tb_rad_vertex_irradiance(const tb_rad_solver *s, size_t v, double *out);
+
 /* The current state (pointers into the solver, valid until the next step
  * or free): what tb_rad_solver_create takes to continue elsewhere. */
 tb_rad_state tb_rad_solver_state(const tb_rad_solver *s);

@@ -1256,6 +1256,12 @@ void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambie
     }
 }
 
+void tb_rad_vertex_irradiance(const tb_rad_solver *s, size_t v, double *out)
+{
+    for (int c = 0; c < s->nc; c++)
+        out[c] = tb__Hv(s, (uint32_t)v, c);
+}
+
 tb_rad_state tb_rad_solver_state(const tb_rad_solver *s)
 {
     bool hemi = s->opt.ff == TB_RAD_FF_HEMICUBE;

@@ -54,6 +54,8 @@ tb_status tb_rt_init(tb_raytracer *rt, const tb_scene *scene, const tb_rt_option
         return tb_error(TB_ERR_ARG, "raytrace: glossy samples must be in 0..%d", TB__RT_MAX_LIGHT_SAMPLES);
     rt->glossy_samples = o.glossy_samples == 0 ? TB_RT_DEFAULT_GLOSSY_SAMPLES : o.glossy_samples;
     tb_stratified_dims(rt->glossy_samples, &rt->gsx, &rt->gsy);
+    rt->indirect = o.indirect;
+    rt->indirect_ctx = o.indirect_ctx;
     tb_status pst = tb__rt_patterns_init(scene, rt->texture_filter, &rt->patterns);
     if (pst) {
         tb_rt_release(rt);
@@ -490,6 +492,17 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             L.v[c] += c < nd ? diffuse->v[c] * (E[c] * es) : 0.0f;
         if (ggx)
             L = tb_channels_add_scaled(L, G, (float)(1.0 / rt->light_samples));
+    }
+
+    /* Indirect diffuse light from outside the tracer (the hybrid renderer):
+     * L + diffuse (E / pi). */
+    if (has_diffuse && rt->indirect) {
+        const tb_rt_indirect_query q = {hit.object, hit.face, p, front ? ng : tb_vec3_neg(ng), org[front ? 0 : 1],
+                                        depth};
+        const tb_channels E = rt->indirect(rt->indirect_ctx, &q, rng);
+        const int nd = diffuse->n;
+        for (int c = 0; c < nch; c++)
+            L.v[c] += c < nd ? diffuse->v[c] * (E.v[c] * (float)(1.0 / TB_PI)) : 0.0f;
     }
 
     if (depth >= rt->max_depth)

@@ -15,7 +15,8 @@
  * reflections are glossy rays sampled from it, combined with the area-light
  * samples by multiple importance sampling), checker and noise patterns
  * in (u, v) or object space (footprint-filtered), and bump maps from noise
- * or a height image. No indirect diffuse light.
+ * or a height image. No indirect diffuse light of its own: an optional
+ * callback (tb_rt_options.indirect) supplies it, as the hybrid renderer does.
  *
  *     tb_raytracer rt;
  *     if (tb_rt_init(&rt, scene, NULL)) die(tb_last_error());
@@ -28,6 +29,7 @@
 #define TB_HOST_RENDER_RAYTRACE_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "host/render/channels.h"
 #include "host/render/lights.h"
@@ -43,6 +45,23 @@
 /* Default glossy (GGX) rays at a camera ray's hit (one at deeper hits). */
 #define TB_RT_DEFAULT_GLOSSY_SAMPLES 4
 
+/* Where the tracer asks for indirect diffuse light: a diffuse hit seen by a
+ * ray at recursion depth `depth` (camera ray: 0). */
+typedef struct tb_rt_indirect_query {
+    uint32_t object; /* top-level object index (hit.object) */
+    uint32_t face;   /* hit.face */
+    tb_vec3 p;       /* world hit point */
+    tb_vec3 n;       /* unit geometric normal on the side the ray came from (before any bump) */
+    tb_vec3 origin;  /* a ray origin spawned from p on n's side (for rays leaving the hit) */
+    int depth;       /* recursion depth of the ray that found the hit */
+} tb_rt_indirect_query;
+
+/* Indirect diffuse irradiance (W/m^2 per scene channel) arriving at the hit
+ * `q`, light the tracer does not compute itself (the hybrid renderer's
+ * radiosity solution, host/hybrid): the tracer adds diffuse / pi times it.
+ * Called from several threads at once; `rng` is the sample's stream. */
+typedef tb_channels (*tb_rt_indirect_fn)(void *ctx, const tb_rt_indirect_query *q, tb_rng *rng);
+
 /* Ray tracer options; a zeroed struct (or NULL) means the defaults. */
 typedef struct tb_rt_options {
     int max_depth;     /* deepest reflected/refracted ray (0: TB_RT_DEFAULT_MAX_DEPTH; < 0: camera rays only) */
@@ -50,6 +69,8 @@ typedef struct tb_rt_options {
     int texture_filter; /* image texture filter, a tb_tex_filter value of host/render/texture.h (0: EWA) */
     int spp;           /* camera samples per pixel: differentials are scaled by max(1/8, 1/sqrt(spp)) (0: 1) */
     int glossy_samples; /* rays sampled from a GGX lobe at a camera ray's hit, stratified (0: the default) */
+    tb_rt_indirect_fn indirect; /* NULL: no indirect diffuse light (Whitted); else asked at every diffuse hit */
+    void *indirect_ctx;         /* passed to indirect */
 } tb_rt_options;
 
 /* A ray tracer over a loaded scene (read-only after init, shareable by threads). */
@@ -71,6 +92,8 @@ typedef struct tb_raytracer {
     tb__rt_patterns *patterns; /* owned; NULL when no material has a pattern or bump map */
     int glossy_samples;     /* in effect */
     int gsx, gsy;           /* strata of the glossy samples */
+    tb_rt_indirect_fn indirect; /* from the options (NULL: none) */
+    void *indirect_ctx;
 } tb_raytracer;
 
 /* Prepares a tracer for `scene` (which must stay alive). TB_ERR_ARG for bad

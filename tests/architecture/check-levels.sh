@@ -31,6 +31,8 @@ declare -A may_use=(
   [host/render]="util/* host/mid host/object"
   [host/radiosity]="util/* host/mid host/object host/render"
   [host/gpu]="util/* host/mid host/object host/render host/radiosity shaders/shared"
+  # the hybrid radiosity + ray-tracing renderer: a user of both renderers
+  [host/hybrid]="util/* host/mid host/object host/render host/radiosity"
 )
 
 # check MODULE INCLUDE-PATH: 0 when MODULE may include INCLUDE-PATH.
@@ -57,6 +59,7 @@ check util/base util/math/vec.h && { echo "self-test: util/base -> util/math acc
 check host/render tools/testbed/commands.h && { echo "self-test: host/render -> tools accepted"; selftest_bad=1; }
 check host/gpu host/render/scene.h || { echo "self-test: host/gpu -> host/render refused"; selftest_bad=1; }
 check host/object util/roots/roots.h || { echo "self-test: host/object -> util/roots refused"; selftest_bad=1; }
+check host/radiosity host/hybrid/hybrid.h && { echo "self-test: host/radiosity -> host/hybrid accepted"; selftest_bad=1; }
 check util/roots util/math/vec.h || { echo "self-test: util/roots -> util/math refused"; selftest_bad=1; }
 if ((selftest_bad)); then echo "check-levels: self-test failed"; exit 1; fi
 

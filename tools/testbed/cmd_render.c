@@ -111,6 +111,10 @@ int tb_cmd_render(int argc, char **argv)
     for (int i = 1; i + 1 < argc && strcmp(argv[i], "--"); i++)
         if (!strcmp(argv[i], "--method") && !strcmp(argv[i + 1], "radiosity"))
             return tb_cmd_render_radiosity(argc, argv);
+    /* --method hybrid likewise (cmd_render_hybrid.c) */
+    for (int i = 1; i + 1 < argc && strcmp(argv[i], "--"); i++)
+        if (!strcmp(argv[i], "--method") && !strcmp(argv[i + 1], "hybrid"))
+            return tb_cmd_render_hybrid(argc, argv);
     const char *scene_path = NULL;
     tb_render_file_options o = tb_render_file_defaults();
     tb_render_options *ro = &o.render;
