@@ -319,7 +319,12 @@ void tb_surface_bsdf_init(const tb_surface *sf, tb_surface_mode mode, tb_surface
         b->lobes |= TB_LOBE_DIFFUSE;
         w[TB__SF_DIFFUSE] = tb__weight(&sf->diffuse);
     }
-    if (!tb_channels_is_black(sf->specular)) {
+    const bool transmits = !tb_channels_is_black(sf->transmission);
+    /* A transmitting material is a smooth dielectric: its specular colour
+     * only stands for the dielectric's highlight in the ray tracer (as a
+     * lobe of its own it would make glass return more than it receives, and
+     * light trapped by total internal reflection grow without bound). */
+    if (!transmits && !tb_channels_is_black(sf->specular)) {
         double ks = tb__weight(&sf->specular);
         if (sf->model == TB_MID_MODEL_GGX) {
             b->lobes |= TB_LOBE_GLOSSY;
@@ -337,10 +342,15 @@ void tb_surface_bsdf_init(const tb_surface *sf, tb_surface_mode mode, tb_surface
             w[TB__SF_GLOSSY] = ks;
         }
     }
-    if (!tb_channels_is_black(sf->transmission)) {
-        b->lobes |= TB_LOBE_DIELECTRIC;
-        /* the Fresnel reflection is white: weight at least the mean of R + T kt over R */
-        w[TB__SF_DIELECTRIC] = fmax(tb__weight(&sf->transmission), 0.5);
+    if (transmits) {
+        /* the dielectric takes what the diffuse part leaves, so the albedo stays <= 1 */
+        float dmax = tb_channels_max(sf->diffuse);
+        b->dielectric = dmax > 0.0f ? (dmax < 1.0f ? 1.0f - dmax : 0.0f) : 1.0f;
+        if (b->dielectric > 0.0f) {
+            b->lobes |= TB_LOBE_DIELECTRIC;
+            /* the Fresnel reflection is white: weight at least half */
+            w[TB__SF_DIELECTRIC] = b->dielectric * fmax(tb__weight(&sf->transmission), 0.5);
+        }
     }
     double sum = w[0] + w[1] + w[2] + w[3];
     for (int k = 0; k < 4; k++)
@@ -428,12 +438,12 @@ bool tb_surface_bsdf_sample(const tb_surface_bsdf *b, tb_vec3 wo, float uc, floa
                 return false;
             out->wi = tb_frame_to_world(&fr, sp.wr);
             out->pdf = pk * sp.R;
-            out->weight = tb_channels_splat(b->diffuse.n, 1.0f / pk);
+            out->weight = tb_channels_splat(b->diffuse.n, b->dielectric / pk);
             return true;
         }
         out->wi = tb_vec3_normalize(tb_frame_to_world(&fr, sp.wt));
         out->pdf = pk * sp.T;
-        out->weight = tb_channels_scale(b->transmission, 1.0f / pk);
+        out->weight = tb_channels_scale(b->transmission, b->dielectric / pk);
         out->transmitted = true;
         return true;
     }

@@ -145,10 +145,14 @@ typedef struct tb_surface_bsdf {
     tb_channels mirror;      /* mirror reflectance */
     tb_channels transmission; /* dielectric transmittance (the Fresnel reflection is untinted) */
     double ior;              /* dielectric: n_inside / n_outside */
+    float dielectric;        /* dielectric's share, 1 - max(diffuse): the composite's albedo stays <= 1 */
     float pick[4];           /* selection probability of diffuse, glossy, mirror, dielectric */
 } tb_surface_bsdf;
 
-/* The composite BSDF of sf under `mode`. Lobes whose colour is black are left out. */
+/* The composite BSDF of sf under `mode`. Lobes whose colour is black are
+ * left out. A transmitting material is diffuse + smooth dielectric (its
+ * specular colour is the ray tracer's highlight only), the dielectric
+ * weighted by 1 - max(diffuse). */
 void tb_surface_bsdf_init(const tb_surface *sf, tb_surface_mode mode, tb_surface_bsdf *b);
 
 /* f(wo, wi) of the non-delta lobes (1/sr): zero when wi and wo lie on
