@@ -287,7 +287,7 @@ static int tb__cmd_render(int argc, char **argv)
     free(full);
     tb_dist_tiles_free(ex);
     /* collective: every rank gets here, failed or not */
-    tb_cli_dist_summary("testbed render", "tiles");
+    tb_cli_dist_summary("testbed render", "tiles", st == TB_OK);
     if (st) {
         /* every rank has the same error (the failing rank's); one says it */
         if (root)

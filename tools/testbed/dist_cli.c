@@ -88,7 +88,7 @@ bool tb_cli_dist_render_setup(const char *prog, const char *scene_path, int argc
     return true;
 }
 
-void tb_cli_dist_summary(const char *prog, const char *unit)
+void tb_cli_dist_summary(const char *prog, const char *unit, bool print)
 {
     int n = tb_dist_size();
     if (n < 2)
@@ -98,7 +98,7 @@ void tb_cli_dist_summary(const char *prog, const char *unit)
         free(all);
         return;
     }
-    for (int r = 0; r < n; r++)
+    for (int r = 0; r < n && print; r++)
         printf("%s: rank %d: %llu %s, work %.3f s, wait %.3f s, %llu bytes sent in %llu messages\n", prog, r,
                (unsigned long long)all[r].units, unit, all[r].work_seconds, all[r].wait_seconds,
                (unsigned long long)all[r].bytes_sent, (unsigned long long)all[r].messages);

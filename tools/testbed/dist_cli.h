@@ -34,7 +34,8 @@ bool tb_cli_dist_render_setup(const char *prog, const char *scene_path, int argc
                               tb_tile_exchange **ex, tb_ckpt_render *ck, tb_render_persist *persist);
 
 /* Rank 0 prints a line per rank (work, wait, bytes sent, units) after a
- * distributed job; collective. Nothing in a job of one rank. */
-void tb_cli_dist_summary(const char *prog, const char *unit);
+ * distributed job if `print` (rank 0's say); collective, so every rank calls
+ * it, failed or not. Nothing in a job of one rank. */
+void tb_cli_dist_summary(const char *prog, const char *unit, bool print);
 
 #endif
