@@ -2,7 +2,7 @@
 # `mpirun -np N testbed render` (docs/distributed.md): the ray tracer's
 # image over 2 ranks and over 3 oversubscribed ranks, with 1 and 2 threads
 # each, several progressive passes, plain and adaptive, a spectral and an
-# RGB scene, is byte for byte the one-process image; the stats JSON has
+# RGB scene, and the hybrid renderer's, is byte for byte the one-process image; the stats JSON has
 # per-rank figures; a scene with an error stops every rank with its
 # file:line:col message and no image.
 #   render.sh  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)
@@ -43,6 +43,12 @@ for r in range(1, n):
     assert j['rank%d_bytes_sent' % r] > 0 and j['rank%d_work_seconds' % r] >= 0, r
 PY
 done
+
+# the hybrid renderer: each rank solves the radiosity pass, the tiles travel
+H="$T/cornell-box-rgb.mid --method hybrid --max-edge 100 --spp 2"
+run1 $H -o "$T/h1.pfm" --threads 2
+runN 2 $H -o "$T/h2.pfm" --threads 1
+cmp "$T/h1.pfm" "$T/h2.pfm" || fail "hybrid: 2 ranks differ from one process"
 
 # a scene with an error: every rank stops, the message is the file's
 printf 'mid 1\ncamera {\n  eye = [0 0 oops]\n}\n' > "$T/bad.mid"
