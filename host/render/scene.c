@@ -404,16 +404,29 @@ static tb_status tb__add_object(tb_scene *s, const tb_mid_object *m)
             return tb_error(TB_ERR_NOMEM, "scene: out of memory for emissive objects");
         tb_scene_emissive *e = &s->emissive[s->nemissive];
         *e = (tb_scene_emissive){o->index, leaf->material, NAN, 0, 0};
-        /* An area that cannot be computed is not worth refusing the scene
-         * for: it stays NaN, as for CSG objects (only memory is fatal). */
-        if (!tb_prim_is_csg(o->kind) && (st = tb__scene_leaf_area(o, &e->area))) {
+        /* Only the areas that need no tessellation are computed here
+         * (polygons, a sphere under a similarity); the others on demand,
+         * tb_scene_emissive_area (docs/rendering.md, "Emissive objects"). */
+        if (tb_prim_is_csg(o->kind) || !tb__scene_leaf_area_exact(o, &e->area))
             e->area = NAN;
-            if (st == TB_ERR_NOMEM)
-                return tb__located(st, s, m->loc, what);
-        }
         s->nemissive++;
     }
     return TB_OK;
+}
+
+tb_status tb_scene_emissive_area(const tb_scene *s, int i, double *area)
+{
+    if (!s || !area || i < 0 || i >= s->nemissive)
+        return tb_error(TB_ERR_ARG, "scene: no emissive object %d", i);
+    const tb_scene_emissive *e = &s->emissive[i];
+    if (!isnan(e->area)) {
+        *area = e->area;
+        return TB_OK;
+    }
+    const tb_object *o = s->objects[e->object];
+    if (tb_prim_is_csg(o->kind))
+        return tb_error(TB_ERR_UNSUPPORTED, "scene: no area for CSG object %u", e->object);
+    return tb__scene_leaf_area(o, area);
 }
 
 /* ------------------------------------------------------------------ lights */
@@ -671,7 +684,6 @@ static tb_status tb__finish_emitters(tb_scene *s)
         n += e->nemitters;
     }
     s->nemitters = n;
-    tb_stat_add(&tb__n_emissive, s->nemissive);
     return TB_OK;
 }
 
@@ -827,8 +839,10 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
         st = tb__finish_materials(s, opt);
     if (!st)
         st = tb__finish_lights(s);
-    if (!st)
+    if (!st && !opt->no_emitters)
         st = tb__finish_emitters(s);
+    if (!st)
+        tb_stat_add(&tb__n_emissive, s->nemissive);
     if (!st)
         st = tb__make_prims(s);
     /* The copies were needed only for the conversion. */

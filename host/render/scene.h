@@ -66,6 +66,9 @@ typedef struct tb_scene_options {
     tb_scene_color color;         /* colour representation (default: as the scene needs) */
     const tb_bands *bands;        /* bands of a spectral scene (NULL: util/color's default 400-700 nm at 10 nm) */
     bool no_accel;                /* build no acceleration structure (tb_scene_intersect then misses) */
+    bool no_emitters;             /* make no area-light emitters (nemitters 0, the emissive list is still
+                                     made): for renderers that do not sample emitters (radiosity), so
+                                     curved and CSG emitters are not tessellated */
 } tb_scene_options;
 
 /* A procedural pattern or bump map of a material (MID 1.1, docs/mid.md 7.2),
@@ -107,8 +110,9 @@ typedef struct tb_material {
 typedef struct tb_scene_emissive {
     uint32_t object;     /* top-level object index */
     int material;        /* material of the (first, in pre-order) emitting leaf */
-    double area;         /* world-space area of its emitting surface, scene units^2; NaN when
-                            not computed (CSG objects: docs/rendering.md, "Emissive objects") */
+    double area;         /* world-space area of its emitting surface, scene units^2, when known
+                            without tessellating (polygons, a sphere under a similarity); else NaN:
+                            tb_scene_emissive_area computes it (docs/rendering.md, "Emissive objects") */
     int first_emitter;   /* its emitters are emitters[first_emitter .. first_emitter + nemitters) */
     int nemitters;       /* curved and CSG objects: the triangles of their tessellation (scene_emit.c) */
 } tb_scene_emissive;
@@ -170,6 +174,12 @@ tb_status tb_scene_load_stream(FILE *fp, const char *name, const char *base_dir,
 /* Replaces the acceleration structure by a new one of `kind` (opt NULL:
  * defaults). On failure the scene keeps its old structure. */
 tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel_options *opt);
+
+/* The world-space area of emissive object `i` (index into s->emissive): the
+ * stored one, or else computed now from two tessellations (Richardson
+ * extrapolation, docs/rendering.md). TB_ERR_UNSUPPORTED for a CSG object,
+ * TB_ERR_ARG for a bad index; a failed tessellation's error otherwise. */
+tb_status tb_scene_emissive_area(const tb_scene *s, int i, double *area);
 
 /* Frees the scene; NULL is allowed. */
 void tb_scene_free(tb_scene *s);

@@ -37,6 +37,10 @@ tb_status tb__scene_tri_bounds(const tb_object *o, uint32_t tri, tb_aabb *out);
  * vertices, or the CSG combination of the children's boxes. */
 tb_status tb__scene_object_bounds(const tb_object *o, tb_aabb *out);
 
+/* The world-space area of primitive `leaf` when it needs no tessellation
+ * (polygons, a sphere under a similarity): true and *area set; else false. */
+bool tb__scene_leaf_area_exact(const tb_object *leaf, double *area);
+
 /* World-space surface area of primitive `leaf` (not a CSG node): exact for
  * polygons and for primitives with only flat faces, otherwise from two
  * tessellations and Richardson extrapolation (docs/rendering.md). */
