@@ -87,6 +87,7 @@ struct tb__scene_priv {
     int capemissive;
     const char *errname;   /* file name for messages */
     tb__scene_attrs *attrs;/* unknown attributes (scene_attrs.c); NULL until the first one */
+    tb_object_fed_cache *feds; /* FED files read so far, shared by the objects (while loading) */
 };
 
 tb__scene_attrs *tb__attrs_store(tb_scene *s)
@@ -384,7 +385,7 @@ static tb_status tb__add_object(tb_scene *s, const tb_mid_object *m)
              m->name ? m->name : "", m->name ? "'" : "");
     tb_status st = tb__attrs_begin_object(s, m);
     if (!st)
-        st = tb_object_from_mid(m, s->nobjects, tb__material_cb, s, &o);
+        st = tb_object_from_mid_shared(m, s->nobjects, tb__material_cb, s, p->feds, &o);
     tb_status st2 = tb__attrs_end_object(s, m, st ? NULL : o);
     if (!st && st2) {
         tb_object_free(o);
@@ -803,9 +804,10 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
     }
     s->priv = p;
     tb_htab_init(&p->mat_hash, TB_HTAB_U64);
+    p->feds = tb_object_fed_cache_new();
     s->name = tb_strdup(name);
     p->errname = s->name ? s->name : "";
-    tb_status st = s->name ? TB_OK : tb_error(TB_ERR_NOMEM, "scene: out of memory");
+    tb_status st = s->name && p->feds ? TB_OK : tb_error(TB_ERR_NOMEM, "scene: out of memory");
     tb_mid_item it;
     while (!st && !(st = tb_mid_reader_next(r, &it)) && it.type != TB_MID_ITEM_END) {
         if (it.type == TB_MID_ITEM_OBJECT)
@@ -845,8 +847,13 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
         tb_stat_add(&tb__n_emissive, s->nemissive);
     if (!st)
         st = tb__make_prims(s);
-    /* The copies were needed only for the conversion. */
+    /* The copies were needed only for the conversion; the shared FED files
+     * live on with the objects that hold them. */
     tb_htab_free(&p->mat_hash);
+    s->stats.fed_files = tb_object_fed_cache_files(p->feds);
+    s->stats.fed_bytes = tb_object_fed_cache_bytes(p->feds);
+    tb_object_fed_cache_free(p->feds);
+    p->feds = NULL;
     s->stats.load_seconds = (double)(tb_stats_now_ns() - t0) * 1e-9;
     tb_timer_stop(tt);
     if (!st && !opt->no_accel) {
@@ -929,6 +936,7 @@ void tb_scene_free(tb_scene *s)
         free(p->ies);
         free(p->ies_paths);
         tb__attrs_free(p->attrs);
+        tb_object_fed_cache_free(p->feds);
         free(p);
     }
     free(s->name);

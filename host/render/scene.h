@@ -124,6 +124,8 @@ typedef struct tb_scene_stats {
     size_t nprims;           /* acceleration references */
     double load_seconds;     /* wall time of reading and building the objects, lights and materials */
     double accel_seconds;    /* wall time of the acceleration structure build */
+    size_t fed_files;        /* FED files read: each once, however many objects refer to it */
+    size_t fed_bytes;        /* memory of those files' meshes (held once, shared by their objects) */
 } tb_scene_stats;
 
 typedef struct tb__scene_priv tb__scene_priv;
