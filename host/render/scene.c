@@ -41,6 +41,14 @@ TB_STAT_COUNTER(tb__n_materials, "Scene/materials");
 TB_STAT_COUNTER(tb__n_lights, "Scene/lights");
 TB_STAT_COUNTER(tb__n_emissive, "Scene/emissive objects");
 TB_STAT_TIMER(tb__t_load, "Scene/load");
+TB_STAT_MEMORY(tb__m_objects, "Scene/memory of objects");
+TB_STAT_MEMORY(tb__m_meshes, "Scene/memory of meshes");
+TB_STAT_MEMORY(tb__m_fed, "Scene/memory of FED files");
+TB_STAT_MEMORY(tb__m_emitters, "Scene/memory of emitters");
+TB_STAT_MEMORY(tb__m_accel, "Scene/memory of acceleration");
+TB_STAT_MEMORY(tb__m_total, "Scene/memory");
+TB_STAT_RATIO(tb__r_per_object, "Scene/memory per object");
+TB_STAT_RATIO(tb__r_per_tri, "Scene/memory per triangle");
 TB_STAT_TIMER(tb__t_accel, "Scene/accel build");
 
 static tb_stat *const tb__kind_counters[TB_PRIM_COUNT] = {
@@ -866,6 +874,19 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
         tb_scene_free(s);
         return st;
     }
+    tb_scene_memory_use mu;
+    tb_scene_memory(s, &mu);
+    tb_stat_add(&tb__m_objects, (int64_t)mu.objects);
+    tb_stat_add(&tb__m_meshes, (int64_t)mu.meshes);
+    tb_stat_add(&tb__m_fed, (int64_t)mu.fed);
+    tb_stat_add(&tb__m_emitters, (int64_t)mu.emitters);
+    tb_stat_add(&tb__m_accel, (int64_t)(mu.prims + mu.accel));
+    tb_stat_add(&tb__m_total, (int64_t)mu.total);
+    if (mu.nobjects)
+        tb_stat_ratio_add(&tb__r_per_object, (int64_t)(mu.per_object * (double)mu.nobjects + 0.5), (int64_t)mu.nobjects);
+    if (mu.triangles)
+        tb_stat_ratio_add(&tb__r_per_tri, (int64_t)(mu.per_triangle * (double)mu.triangles + 0.5),
+                          (int64_t)mu.triangles);
     *out = s;
     return TB_OK;
 }
@@ -1027,4 +1048,11 @@ void tb_scene_print_summary(const tb_scene *s, FILE *out)
         fprintf(out, "\n");
     }
     fprintf(out, "load: %.3f ms\n", s->stats.load_seconds * 1e3);
+    tb_scene_memory_use mu;
+    tb_scene_memory(s, &mu);
+    fprintf(out, "memory: %.1f MiB (objects %.1f, meshes %.1f, FED files %.1f, materials %.1f, emitters %.1f, "
+                 "acceleration %.1f); %.0f bytes per object, %.0f per triangle\n",
+            (double)mu.total / 1048576.0, (double)mu.objects / 1048576.0, (double)mu.meshes / 1048576.0,
+            (double)mu.fed / 1048576.0, (double)mu.materials / 1048576.0, (double)mu.emitters / 1048576.0,
+            (double)(mu.prims + mu.accel) / 1048576.0, mu.per_object, mu.per_triangle);
 }

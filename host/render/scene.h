@@ -183,6 +183,30 @@ tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel
  * TB_ERR_ARG for a bad index; a failed tessellation's error otherwise. */
 tb_status tb_scene_emissive_area(const tb_scene *s, int i, double *area);
 
+/* Heap bytes counted per allocation on top of the size asked for (glibc's
+ * chunk header and rounding): part of every figure of tb_scene_memory. */
+#define TB_SCENE_MALLOC_OVERHEAD 16
+
+/* Where a loaded scene's memory is (bytes; docs/rendering.md, "Memory"). */
+typedef struct tb_scene_memory_use {
+    size_t objects;      /* objects other than polygons meshes: structs, parameters, CSG trees, names */
+    size_t meshes;       /* polygons objects: their structs and triangulated meshes (corners, BVH) */
+    size_t fed;          /* FED files, held once however many objects share them */
+    size_t materials;    /* the material table */
+    size_t emitters;     /* area-light emitters and the emissive-object list */
+    size_t lights;       /* point, spot and directional lights */
+    size_t prims;        /* acceleration references */
+    size_t accel;        /* the acceleration structure */
+    size_t total;        /* the sum */
+    size_t nobjects;     /* objects counted in `objects` */
+    uint64_t triangles;  /* triangles of the polygons objects */
+    double per_object;   /* (objects + their references' share of prims and accel) / nobjects */
+    double per_triangle; /* (meshes + the triangle references' share of prims and accel) / triangles */
+} tb_scene_memory_use;
+
+/* Fills *m with where the scene's memory is (all zero for NULL). */
+void tb_scene_memory(const tb_scene *s, tb_scene_memory_use *m);
+
 /* Frees the scene; NULL is allowed. */
 void tb_scene_free(tb_scene *s);
 
