@@ -47,6 +47,7 @@ TB_STAT_MEMORY(tb__m_fed, "Scene/memory of FED files");
 TB_STAT_MEMORY(tb__m_emitters, "Scene/memory of emitters");
 TB_STAT_MEMORY(tb__m_accel, "Scene/memory of acceleration");
 TB_STAT_MEMORY(tb__m_total, "Scene/memory");
+TB_STAT_MEMORY(tb__m_predicted, "Scene/memory predicted");
 TB_STAT_RATIO(tb__r_per_object, "Scene/memory per object");
 TB_STAT_RATIO(tb__r_per_tri, "Scene/memory per triangle");
 TB_STAT_TIMER(tb__t_accel, "Scene/accel build");
@@ -96,7 +97,23 @@ struct tb__scene_priv {
     const char *errname;   /* file name for messages */
     tb__scene_attrs *attrs;/* unknown attributes (scene_attrs.c); NULL until the first one */
     tb_object_fed_cache *feds; /* FED files read so far, shared by the objects (while loading) */
+    size_t used;           /* bytes taken so far (objects, references at their build cost) */
+    size_t limit;          /* stop past this many (0: no check) */
+    bool budget;           /* limit is the caller's memory budget (else 90% of the available memory) */
 };
+
+/* Fails cleanly when the load has taken more than its limit (`what`: where). */
+static tb_status tb__check_memory(const tb_scene *s, const char *what)
+{
+    const tb__scene_priv *p = s->priv;
+    if (!p->limit || p->used <= p->limit)
+        return TB_OK;
+    return tb_error(TB_ERR_NOMEM,
+                    "%s: out of memory: the scene would take more than %s of %.1f MiB (%.1f MiB taken %s, "
+                    "%u objects read); nothing was rendered",
+                    p->errname, p->budget ? "the memory budget" : "90% of the available memory",
+                    (double)p->limit / 1048576.0, (double)p->used / 1048576.0, what, s->nobjects);
+}
 
 tb__scene_attrs *tb__attrs_store(tb_scene *s)
 {
@@ -343,6 +360,26 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     return TB_OK;
 }
 
+tb_status tb__scene_predict_materials(const tb_mid_object *m, tb_htab *set)
+{
+    tb__bytes key = {0};
+    tb__material_key(&key, &m->material, (tb_mid_attrs){NULL, 0});
+    if (key.oom) {
+        free(key.p);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
+    }
+    uint64_t h = tb_hash_bytes(key.p, key.n);
+    free(key.p);
+    if (tb_htab_put(set, h, 1))
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
+    for (int i = 0; i < m->nchildren; i++) {
+        tb_status st = tb__scene_predict_materials(&m->children[i], set);
+        if (st)
+            return st;
+    }
+    return TB_OK;
+}
+
 static void tb__free_mat_src(tb__mat_src *e)
 {
     for (int k = 0; k < 4; k++) {
@@ -402,6 +439,10 @@ static tb_status tb__add_object(tb_scene *s, const tb_mid_object *m)
     if (st)
         return tb__located(st, s, m->loc, what);
     s->objects[s->nobjects++] = o;
+    size_t refs = o->kind == TB_PRIM_POLYGONS && o->mesh ? o->mesh->ntris : 1;
+    p->used += tb__scene_object_bytes(o) + 2 * sizeof o + refs * TB__SCENE_BUILD_PER_REF;
+    if ((st = tb__check_memory(s, "by this object")))
+        return tb__located(st, s, m->loc, what);
     s->stats.objects_by_kind[o->kind]++;
     tb_stat_add(tb__kind_counters[o->kind], 1);
     if (o->kind == TB_PRIM_POLYGONS && o->mesh)
@@ -675,6 +716,11 @@ static tb_status tb__finish_emitters(tb_scene *s)
     }
     if (total > (size_t)INT32_MAX)
         return tb_error(TB_ERR_UNSUPPORTED, "scene: more than 2^31 - 1 emitters");
+    /* The emitters and a renderer's area-light copy of them. */
+    s->priv->used += 2 * total * sizeof *s->emitters;
+    tb_status cst = tb__check_memory(s, "with the emitters");
+    if (cst)
+        return cst;
     if (total) {
         s->emitters = malloc(sizeof *s->emitters * total);
         if (!s->emitters)
@@ -813,6 +859,8 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
     s->priv = p;
     tb_htab_init(&p->mat_hash, TB_HTAB_U64);
     p->feds = tb_object_fed_cache_new();
+    p->budget = opt->memory_budget > 0;
+    p->limit = p->budget ? opt->memory_budget : tb_scene_available_memory() / 10 * 9;
     s->name = tb_strdup(name);
     p->errname = s->name ? s->name : "";
     tb_status st = s->name && p->feds ? TB_OK : tb_error(TB_ERR_NOMEM, "scene: out of memory");
@@ -898,6 +946,22 @@ tb_status tb_scene_load(const char *path, const tb_scene_options *opt, tb_scene 
     *out = NULL;
     if (!path)
         return tb_error(TB_ERR_ARG, "scene: NULL path");
+    if (opt && opt->memory_budget && strcmp(path, "-") != 0) {
+        /* Refuse before building anything: a streaming pass predicts the need. */
+        tb_scene_memory_use u;
+        tb_status pst = tb_scene_predict_memory(path, &u);
+        if (pst)
+            return pst;
+        tb_stat_add(&tb__m_predicted, (int64_t)u.total);
+        if (u.total > opt->memory_budget) {
+            char parts[1024];
+            tb__scene_memory_describe(&u, parts, sizeof parts);
+            return tb_error(TB_ERR_NOMEM,
+                            "%s: the scene needs about %.1f MiB, more than the memory budget of %.1f MiB: %s; "
+                            "nothing was loaded",
+                            path, (double)u.total / 1048576.0, (double)opt->memory_budget / 1048576.0, parts);
+        }
+    }
     tb_mid_reader *r;
     tb_status st = tb_mid_reader_open(&r, path);
     if (st)

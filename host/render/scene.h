@@ -66,6 +66,11 @@ typedef struct tb_scene_options {
     tb_scene_color color;         /* colour representation (default: as the scene needs) */
     const tb_bands *bands;        /* bands of a spectral scene (NULL: util/color's default 400-700 nm at 10 nm) */
     bool no_accel;                /* build no acceleration structure (tb_scene_intersect then misses) */
+    size_t memory_budget;         /* bytes the scene may take (0: no budget). tb_scene_load predicts the
+                                     need first (tb_scene_predict_memory) and refuses a scene over it before
+                                     building anything, saying what takes the memory; every load also stops
+                                     cleanly once it has taken more than the budget, or without one, 90% of
+                                     the memory available when it started */
     bool no_emitters;             /* make no area-light emitters (nemitters 0, the emissive list is still
                                      made): for renderers that do not sample emitters (radiosity), so
                                      curved and CSG emitters are not tessellated */
@@ -206,6 +211,17 @@ typedef struct tb_scene_memory_use {
 
 /* Fills *m with where the scene's memory is (all zero for NULL). */
 void tb_scene_memory(const tb_scene *s, tb_scene_memory_use *m);
+
+/* Predicts what loading and rendering the scene at `path` will take (the
+ * same parts as tb_scene_memory, the acceleration structure at its build
+ * peak, emitters twice: the scene's and a renderer's area light) from one
+ * streaming pass over the file, which holds one object at a time. FED
+ * meshes are estimated from their file sizes. The reader's errors. */
+tb_status tb_scene_predict_memory(const char *path, tb_scene_memory_use *u);
+
+/* The memory the system can give without swapping (Linux MemAvailable), in
+ * bytes; 0 when unknown. */
+size_t tb_scene_available_memory(void);
 
 /* Frees the scene; NULL is allowed. */
 void tb_scene_free(tb_scene *s);

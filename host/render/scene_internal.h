@@ -53,6 +53,22 @@ tb_status tb__scene_leaf_area(const tb_object *leaf, double *area);
  * count to *n (none if the tessellation fails). TB_ERR_NOMEM only. */
 tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out, int *n);
 
+/* ------------------------------------------------------------------ memory (scene_memory.c) */
+
+/* Bytes of object o (struct, parameters, children, mesh), as tb_scene_memory counts them. */
+size_t tb__scene_object_bytes(const tb_object *o);
+
+/* Bytes per acceleration reference while the structure is built (the
+ * prediction and the load's running check use it). */
+#define TB__SCENE_BUILD_PER_REF 400
+
+/* Puts the hash of every node material of m (as the material table keys
+ * them, unknown attributes aside) into `set` (scene.c). TB_ERR_NOMEM only. */
+tb_status tb__scene_predict_materials(const tb_mid_object *m, tb_htab *set);
+
+/* Writes the parts of u, largest first, as "objects 12.0 MiB (... each), ...". */
+void tb__scene_memory_describe(const tb_scene_memory_use *u, char *buf, size_t len);
+
 /* ------------------------------------------------------------------ unknown attributes (scene_attrs.c) */
 
 /* A CSG-tree node's effective material attributes while its object is built. */
