@@ -168,6 +168,29 @@ typedef enum tb_rad_ff_method {
 } tb_rad_ff_method;
 
 /* Solver options; zeroed means defaults. */
+/* A shot's receivers shared over the processes of a job (host/dist over
+ * MPI; host/radiosity does not know MPI). Every process runs the same
+ * solver on the same mesh: each computes the ray-cast form factors of its
+ * share of the receiver clusters (cluster c belongs to process c mod
+ * ranks), the shares are gathered, and every process then makes the same
+ * update, so the shooting order and every value are those of one process. */
+typedef struct tb_rad_exchange {
+    void *ctx;  /* passed to every function */
+    int rank;   /* this process */
+    int ranks;  /* processes in the job */
+    /* Collective: every process's `mine` (n_mine values) concatenated in rank
+     * order into all[] (counts[r] values from rank r). */
+    tb_status (*allgather)(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts);
+    /* Rank 0's `flag` on every process (a stop decision that reads a clock). */
+    int (*agree)(void *ctx, int flag);
+    /* The lowest-ranked failure among every process's `st` (its message as
+     * this process's last error), or TB_OK on all. */
+    tb_status (*agree_status)(void *ctx, tb_status st);
+    /* After the solve, on every process: each process's share of the work
+     * into the stats values. NULL: nothing. */
+    tb_status (*report)(void *ctx);
+} tb_rad_exchange;
+
 typedef struct tb_rad_options {
     tb_rad_ff_method ff;  /* form-factor method */
     int samples;          /* ray cast: sample points per shooter; 0: TB_RAD_DEFAULT_SAMPLES */
@@ -181,6 +204,8 @@ typedef struct tb_rad_options {
     const tb_light *lights; /* point, spot and directional lights shot as sources (host/radiosity/lights.h),
                                copied at create; an IES table they point to must outlive the solver */
     int nlights;            /* how many */
+    const tb_rad_exchange *exchange; /* NULL: one process; else ray-cast form factors (CPU backend) shared
+                                      * over processes, the same answer */
 } tb_rad_options;
 
 /* Initial state (e.g. carried over a refinement); NULL arrays mean zero H

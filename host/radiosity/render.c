@@ -274,13 +274,18 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
     tb_rad_options ro = opt->solver;
     tb_rad_adapt_stats as = {0};
     tb_scene_options so = {.no_accel = true, .threads = opt->threads};
-    if ((st = tb_scene_load(scene_path, &so, &r.scene)))
-        goto done;
-    if (opt->image_path && !r.scene->has_camera) {
+    const tb_rad_exchange *ex = ro.exchange && ro.exchange->ranks > 1 ? ro.exchange : NULL;
+    bool root = !ex || ex->rank == 0;
+    st = tb_scene_load(scene_path, &so, &r.scene);
+    if (!st && opt->image_path && !r.scene->has_camera)
         st = tb_error(TB_ERR_ARG, "%s: the scene has no camera: use --patches or --mesh-out instead of -o",
                       scene_path);
+    /* every process reads the scene itself; one that cannot stops them all
+     * with its own file:line:col message */
+    if (ex)
+        st = ex->agree_status(ex->ctx, st);
+    if (st)
         goto done;
-    }
     tb_rad_mesh_options mo = opt->mesh;
     if (!opt->mesh_given) {
         mo = tb_rad_default_mesh_options(r.scene);
@@ -290,11 +295,15 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
     if ((st = tb_rad_mesh_from_scene(r.scene, &mo, &r.mesh)))
         goto done;
     t_mesh = 1e-9 * (double)tb_stats_now_ns() - t_mesh;
-    if (opt->reference_path && (st = tb__rad_reference(&r, opt->reference_path)))
+    if (opt->reference_path)
+        st = tb__rad_reference(&r, opt->reference_path);
+    if (ex)
+        st = ex->agree_status(ex->ctx, st);
+    if (st)
         goto done;
     if (opt->backend && (st = opt->backend(opt->backend_user, &r.mesh, &ro)))
         goto done;
-    if (opt->log)
+    if (opt->log && root)
         tb__rad_log_mesh(opt, scene_path, &r, &mo, &ro);
     ro.lights = r.scene->lights; /* the scene outlives the solver (IES tables) */
     ro.nlights = r.scene->nlights;
@@ -303,7 +312,7 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
         /* host/radiosity/adaptive.h: the mesh becomes the refined mesh */
         if ((st = tb_rad_adapt_solve(&r.mesh, &ro, &opt->stop, &opt->adapt, &r.solver, &as)))
             goto done;
-        if (opt->log)
+        if (opt->log && root)
             fprintf(opt->log, "%sadaptive subdivision: %d rounds, %zu -> %zu elements, %llu shots in all\n",
                     opt->log_prefix ? opt->log_prefix : "", as.rounds, as.elems_in, as.elems_out,
                     (unsigned long long)as.shots);
@@ -317,6 +326,12 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
             goto done;
     }
     int nthreads = opt->threads > 0 ? opt->threads : omp_get_max_threads();
+    /* every process's share of the work in the stats (collective); then
+     * rank 0 alone writes */
+    if (ex && ex->report && (st = ex->report(ex->ctx)))
+        goto done;
+    if (!root)
+        goto result;
     if ((st = tb__rad_provenance(&r, scene_path, &ro, &mo, opt, nthreads)))
         goto done;
     if (opt->image_path) {
@@ -338,6 +353,7 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
         goto done;
     if (opt->image_path && (st = tb_image_write_exposed(opt->image_path, r.img, opt->exposure)))
         goto done;
+result:
     if (out) {
         *out = (tb_rad_render_result){
             .elements = r.mesh.nelems,

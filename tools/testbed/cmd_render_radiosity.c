@@ -9,6 +9,8 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "dist_cli.h"
+#include "host/dist/radiosity.h"
 #include "host/gpu/formfactor.h"
 #include "host/gpu/gpu.h"
 #include "host/radiosity/render.h"
@@ -198,13 +200,31 @@ int tb_cmd_render_radiosity(int argc, char **argv)
         o.backend_user = &gpu;
         o.backend_name = "vulkan";
     }
-    o.log = stderr;
+    /* under mpirun: every rank solves, each shot's receivers are shared */
+    bool root = tb_dist_rank() == 0;
+    tb_rad_exchange *ex = NULL;
+    if (tb_dist_size() > 1) {
+        if (gpu.mode != TB_GPU_MODE_CPU)
+            return tb_cli_usage_error(&cli, "--backend vulkan solves in one process, not over %d ranks",
+                                      tb_dist_size());
+        if (ff == TB_RAD_FF_HEMICUBE && root)
+            fprintf(stderr, "testbed render: note: hemicube form factors are not shared over ranks: every rank "
+                            "computes all of them (use --formfactor raycast to divide the work)\n");
+        if (!(ex = tb_dist_rad_exchange_create())) {
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
+            return TB_EXIT_FAIL;
+        }
+        o.solver.exchange = ex;
+    }
+    o.log = root ? stderr : NULL;
     o.log_prefix = "testbed render: ";
+    o.stop.progress = o.stop.progress && root;
 
     /* the provenance records the whole command line */
     char **full = malloc(sizeof *full * ((size_t)argc + 2));
     if (!full) {
         fprintf(stderr, "testbed render: out of memory\n");
+        tb_dist_rad_exchange_free(ex);
         return TB_EXIT_FAIL;
     }
     full[0] = "testbed";
@@ -215,10 +235,15 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     tb_status st = tb_rad_render(scene_path, &o, &res);
     free(full);
     tb__rad_gpu_close(&gpu);
+    tb_dist_rad_exchange_free(ex);
+    tb_cli_dist_summary("testbed render", "receivers", st == TB_OK);
     if (st) {
-        fprintf(stderr, "testbed render: %s\n", tb_last_error());
+        if (root)
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
         return TB_EXIT_FAIL;
     }
+    if (!root)
+        return TB_EXIT_OK;
     printf("testbed render: %s: radiosity, %zu elements, %llu shots (%.2f N), unshot %.3g, %.3f s (%d threads, %s, "
            "%s)\n",
            scene_path, res.elements, (unsigned long long)res.shots, (double)res.shots / (double)res.elements,
