@@ -1,5 +1,6 @@
 /* `testbed render SCENE.mid -o OUT`: the Whitted ray tracer over a MID scene
- * (docs/raytrace.md). The workflow is one library call, tb_render_file
+ * (docs/raytrace.md), or with --method path the path tracer
+ * (docs/pathtrace.md). The workflow is one library call, tb_render_file
  * (host/render/render_file.h); this file holds the options, the Ctrl-C
  * handler, the Vulkan backend (host/render may not use host/gpu) and the
  * summary lines. */
@@ -16,9 +17,13 @@
 #include "dist_cli.h"
 #include "host/gpu/gpu.h"
 #include "host/gpu/render.h"
+#include "host/render/pathtrace.h"
 #include "host/render/render_file.h"
 #include "util/image/image.h"
 #include "util/stats/stats.h"
+
+#define TB__RENDER_STR2(x) #x
+#define TB__RENDER_STR(x) TB__RENDER_STR2(x)
 
 /* Set by SIGINT; the render stops at the next tile and writes what it has. */
 static atomic_int tb__render_interrupt;
@@ -137,10 +142,14 @@ static int tb__cmd_render(int argc, char **argv)
     int criterion = (int)ro->aa.criterion, pattern = (int)ro->aa.pattern, texture_filter = 3;
     int max_depth = TB_RT_DEFAULT_MAX_DEPTH, light_samples = TB_RT_DEFAULT_LIGHT_SAMPLES;
     int glossy_samples = TB_RT_DEFAULT_GLOSSY_SAMPLES;
+    int rr_depth = TB_PT_DEFAULT_RR_DEPTH;
     bool depth_seen = false, light_seen = false, glossy_seen = false, tf_seen = false, adaptive = false;
     const char *ckpt_path = NULL, *resume_path = NULL;
     double ckpt_every = 0.0;
-    static const tb_opt_choice methods[] = {{"raytrace", 0}, {"radiosity", 1}, {NULL, 0}};
+    bool rr_seen = false;
+    enum { TB__RAYTRACE, TB__RADIOSITY, TB__PATH, TB__HYBRID };
+    static const tb_opt_choice methods[] = {
+        {"raytrace", TB__RAYTRACE}, {"path", TB__PATH}, {"hybrid", TB__HYBRID}, {"radiosity", TB__RADIOSITY}, {NULL, 0}};
     static const tb_opt_choice criteria[] = {{"stderr", TB_AA_STDERR}, {"contrast", TB_AA_CONTRAST}, {NULL, 0}};
     static const tb_opt_choice patterns[] = {{"stratified", TB_AA_STRATIFIED}, {"sobol", TB_AA_SOBOL}, {NULL, 0}};
     static const tb_opt_choice tex_filters[] = {{"bilinear", 1}, {"trilinear", 2}, {"ewa", 3}, {NULL, 0}};
@@ -148,8 +157,10 @@ static int tb__cmd_render(int argc, char **argv)
         {.short_name = 'o', .type = TB_OPT_STRING, .dest = &o.image_path, .metavar = "OUT",
          .help = "the image: .png, .exr, .pfm or .rle"},
         {"method", .type = TB_OPT_CHOICE, .dest = &method, .choices = methods, .metavar = "M",
-         .help = "raytrace (default: the Whitted ray tracer) or radiosity (options:\n"
-                 "testbed render --method radiosity --help)"},
+         .help = "raytrace|path|hybrid|radiosity: raytrace (default: the Whitted ray\n"
+                 "tracer), path (the path tracer, docs/pathtrace.md: the options here but\n"
+                 "--light-samples, --glossy-samples and --backend vulkan), hybrid or radiosity\n"
+                 "(their options: testbed render --method hybrid|radiosity --help)"},
         {"spp", .type = TB_OPT_INT, .dest = &ro->aa.spp, .min = 1, .max = TB_AA_MAX_SPP, .metavar = "N",
          .help = "samples per pixel (per pass; default %D)"},
         {"adaptive", .type = TB_OPT_DOUBLE, .dest = &ro->aa.threshold, .min = 0, .max = INFINITY, .metavar = "T",
@@ -178,8 +189,12 @@ static int tb__cmd_render(int argc, char **argv)
          .help = "Vulkan device N (testbed devices lists them; implies Vulkan in auto)"},
         {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels,
          .help = "acceleration structure (default %D)"},
-        {"max-depth", .type = TB_OPT_INT, .dest = &max_depth, .min = 0, .max = 64, .metavar = "N", .seen = &depth_seen,
-         .help = "deepest reflected/refracted ray (default %D)"},
+        {"max-depth", .type = TB_OPT_INT, .dest = &max_depth, .min = 0, .max = TB_PT_MAX_BOUNCES, .metavar = "N",
+         .seen = &depth_seen,
+         .help = "raytrace: deepest reflected/refracted ray (default %D, at most 64);\n"
+                 "path: most bounces, a cap (default: none, Russian roulette; at most " TB__RENDER_STR(TB_PT_MAX_BOUNCES) ")"},
+        {"rr-depth", .type = TB_OPT_INT, .dest = &rr_depth, .min = 1, .max = TB_PT_MAX_BOUNCES, .metavar = "N",
+         .seen = &rr_seen, .help = "path: bounces before Russian roulette (default %D)"},
         {"light-samples", .type = TB_OPT_INT, .dest = &light_samples, .min = 1, .max = 1024, .metavar = "N",
          .seen = &light_seen, .help = "area-light samples per shading point (default %D)"},
         {"glossy-samples", .type = TB_OPT_INT, .dest = &glossy_samples, .min = 1, .max = 1024, .metavar = "N",
@@ -229,7 +244,27 @@ static int tb__cmd_render(int argc, char **argv)
     ro->aa.adaptive = ro->aa.adaptive || adaptive;
     ro->aa.criterion = (tb_aa_criterion)criterion;
     ro->aa.pattern = (tb_aa_pattern)pattern;
-    if (depth_seen)
+    tb_pt_options po = {0};
+    tb_render_method path_method = tb_pt_method(&po);
+    if (method == TB__PATH) {
+        if (backend == TB_GPU_MODE_VULKAN || gdevice >= 0)
+            return tb_cli_usage_error(&cli, "--backend vulkan: the path tracer runs on the CPU only; use --backend cpu "
+                                            "(or --method raytrace for the Vulkan ray tracer)");
+        if (light_seen || glossy_seen)
+            return tb_cli_usage_error(&cli, "--%s goes with --method raytrace (the path tracer takes one light "
+                                            "sample per vertex and samples its BSDFs)",
+                                      light_seen ? "light-samples" : "glossy-samples");
+        po.max_depth = depth_seen ? max_depth : 0;
+        po.rr_depth = rr_depth;
+        o.method = &path_method;
+    } else {
+        if (rr_seen)
+            return tb_cli_usage_error(&cli, "--rr-depth goes with --method path");
+        if (depth_seen && max_depth > 64)
+            return tb_cli_usage_error(&cli, "--max-depth: the ray tracer's deepest ray is at most 64, not %d",
+                                      max_depth);
+    }
+    if (depth_seen && method != TB__PATH)
         ro->rt.max_depth = max_depth == 0 ? -1 : max_depth;
     if (light_seen)
         ro->rt.light_samples = light_samples;
@@ -261,11 +296,13 @@ static int tb__cmd_render(int argc, char **argv)
                                   resume_path, &ex, &ck, &persist))
         return TB_EXIT_FAIL;
     ro->progress = root;
-    if (tb_dist_size() == 1)
+    /* the Vulkan backend renders only the ray tracer, in one process */
+    if (method != TB__PATH && tb_dist_size() == 1) {
         o.backend = tb__render_gpu;
-    o.backend_stats = tb__render_gpu_stats;
-    o.backend_user = &cmd;
-    o.backend_name = "vulkan";
+        o.backend_stats = tb__render_gpu_stats;
+        o.backend_user = &cmd;
+        o.backend_name = "vulkan";
+    }
     if (root) {
         o.on_render = tb__render_hook;
         o.on_render_user = &cmd;
@@ -296,7 +333,8 @@ static int tb__cmd_render(int argc, char **argv)
     }
     if (!root)
         return TB_EXIT_OK;
-    printf("testbed render: %s: %dx%d, %llu samples, %.3f s (%d threads, %s)%s; wrote %s\n", scene_path, res.width,
+    printf("testbed render: %s: %s%dx%d, %llu samples, %.3f s (%d threads, %s)%s; wrote %s\n", scene_path,
+           method == TB__PATH ? "path tracer, " : "", res.width,
            res.height, (unsigned long long)res.stats.aa.samples, res.stats.seconds, res.threads,
            res.spectral ? "spectral" : "rgb", res.stats.interrupted ? ", INTERRUPTED (partial image)" : "",
            o.image_path);
