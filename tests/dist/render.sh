@@ -1,9 +1,11 @@
 #!/bin/sh
 # `mpirun -np N testbed render` (docs/distributed.md): the ray tracer's
-# image over 2 ranks (1 and 2 threads each) and over 3 oversubscribed ranks, several progressive passes, plain and adaptive, a spectral and an
-# RGB scene, the path tracer's and the hybrid renderer's, is byte for byte the one-process image; the stats JSON has
-# per-rank figures; a scene with an error stops every rank with its
-# file:line:col message and no image.
+# image over 2 ranks (1 and 2 threads each) and over 3 oversubscribed
+# ranks, several progressive passes, plain and adaptive, a spectral and an
+# RGB scene, and the path tracer's and the hybrid renderer's images, are
+# byte for byte the one-process image; the stats JSON has per-rank
+# figures; a scene with an error stops every rank with its file:line:col
+# message and no image.
 #   render.sh  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)
 set -u
 . "$(dirname "$0")/mpirun.sh"
