@@ -311,6 +311,24 @@ void tb_rad_vertex_irradiance(const tb_rad_solver *s, size_t v, double *out);
  * or free): what tb_rad_solver_create takes to continue elsewhere. */
 tb_rad_state tb_rad_solver_state(const tb_rad_solver *s);
 
+/* The whole progressive state of a solver as bytes, for checkpoints
+ * (host/dist/checkpoint.h): shots, energy sums, gathered irradiance at
+ * vertices and elements, unshot radiosity and power, lights shot. A solver
+ * made again for the same mesh and options and given these bytes
+ * (tb_rad_solver_unpack) shoots on exactly as the original would have:
+ * shooter order and every value, bit for bit. (The shooters' sample points
+ * come from a seed per shooter, so there is no random stream to save.) */
+size_t tb_rad_solver_packed_size(const tb_rad_solver *s);
+
+/* Writes the state into buf[0 .. tb_rad_solver_packed_size). */
+void tb_rad_solver_pack(const tb_rad_solver *s, void *buf);
+
+/* Replaces the state of `s` (a solver of the same mesh and options) by
+ * packed bytes. TB_ERR_FORMAT if they are short or were packed from a mesh
+ * of another size, channel count or light count; `s` is unchanged then. */
+tb_status tb_rad_solver_unpack(tb_rad_solver *s, const void *buf, size_t len);
+
+
 /* The form factor F_ij from shooter i (a patch; an element on one level) to
  * element j (fraction of the power leaving i that reaches j; 0 for j in i) exactly as a shot from i moves energy: ray cast, A_j / A_i times F_ji, F_ji the mean over j's
  * corners of F(v -> i) or, next to i, the near-field estimate

@@ -104,6 +104,9 @@ static tb_status tb__rad_check(const tb_rad_render_options *o)
         return tb_error(TB_ERR_ARG, "--mesh-out '%s': unknown mesh format (.ply, .gltf, .glb)", o->mesh_path);
     if (!o->report_path != !o->reference_path)
         return tb_error(TB_ERR_ARG, "--report and --reference go together");
+    if (o->adapt.threshold > 0 && o->persist)
+        return tb_error(TB_ERR_ARG, "--checkpoint and --resume are for solves without --adapt (the adaptive "
+                                    "mesh changes between rounds; its checkpoints are not written yet)");
     if (o->adapt.threshold > 0 && o->report_path)
         return tb_error(TB_ERR_ARG, "--report compares with a reference of the same mesh: not with --adapt");
     return TB_OK;
@@ -138,6 +141,27 @@ static void tb__rad_size_text(const tb_rad_mesh_options *mo, bool given, char *s
                  given ? "" : " (default: bounding-box diagonal / " TB__RAD_STR(TB_RAD_DEFAULT_EDGE_DIVISIONS) ")");
     else
         snprintf(size, len, "faces whole");
+}
+
+/* The solver's per-shot callback when a checkpoint is kept: the report
+ * rows every `every` shots, as tb_rad_solver_run would write them, and the
+ * persist's save after every shot (it keeps its own schedule). */
+typedef struct tb__rad_shot_hook {
+    tb__rad_report *rep; /* NULL: no report */
+    uint64_t every, n;   /* rows every `every` shots; shots so far */
+    const tb_rad_persist *persist;
+} tb__rad_shot_hook;
+
+static tb_status tb__rad_on_shot(void *user, const tb_rad_solver *s)
+{
+    tb__rad_shot_hook *h = user;
+    tb_status st = TB_OK;
+    h->n++;
+    if (h->rep && h->n % h->every == 0)
+        st = tb__rad_report_row(h->rep, s);
+    if (!st && h->persist->save)
+        st = h->persist->save(h->persist->ctx, s, false);
+    return st;
 }
 
 /* Everything tb_rad_render holds, freed in one place. */
@@ -319,10 +343,23 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
     } else {
         if ((st = tb_rad_solver_create(&r.mesh, NULL, &ro, &r.solver)))
             goto done;
+        const tb_rad_persist *pe = opt->persist;
+        if (pe && pe->restore && (st = pe->restore(pe->ctx, r.solver)))
+            goto done;
         uint64_t every = r.mesh.nelems / 20 ? r.mesh.nelems / 20 : 1;
         if (r.rep.ref && (st = tb__rad_report_row(&r.rep, r.solver)))
             goto done;
-        if ((st = tb_rad_solver_run(r.solver, &opt->stop, r.rep.ref ? tb__rad_report_row : NULL, &r.rep, every)))
+        if (pe) {
+            /* after every shot: the persist decides when to save */
+            tb__rad_shot_hook hook = {.rep = r.rep.ref ? &r.rep : NULL, .every = every, .persist = pe};
+            if ((st = tb_rad_solver_run(r.solver, &opt->stop, tb__rad_on_shot, &hook, 1)))
+                goto done;
+            if (hook.rep && hook.n % every != 0 && (st = tb__rad_report_row(&r.rep, r.solver)))
+                goto done;
+            if (pe->save && (st = pe->save(pe->ctx, r.solver, true)))
+                goto done;
+        } else if ((st = tb_rad_solver_run(r.solver, &opt->stop, r.rep.ref ? tb__rad_report_row : NULL, &r.rep,
+                                           every)))
             goto done;
     }
     int nthreads = opt->threads > 0 ? opt->threads : omp_get_max_threads();

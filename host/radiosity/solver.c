@@ -1446,3 +1446,71 @@ static tb_status tb__lights_step(tb_rad_solver *s, bool *shot)
     *shot = true;
     return TB_OK;
 }
+
+/* ---------------------------------------------------------------- packing */
+
+/* Header: u64 nelems, nverts, nchannels, nlights, shooters, shots; f64
+ * absorbed, escaped, lpending, seconds. Then He, Hv, dB, up (doubles),
+ * lshot (bytes). */
+#define TB__RAD_PACK_HEAD (6 * sizeof(uint64_t) + 4 * sizeof(double))
+
+size_t tb_rad_solver_packed_size(const tb_rad_solver *s)
+{
+    size_t ne = s->m.nelems, nv = s->m.nverts, nc = (size_t)s->nc;
+    return TB__RAD_PACK_HEAD + (ne * nc + nv * nc + ne * nc + ne) * sizeof(double) + (size_t)s->opt.nlights;
+}
+
+void tb_rad_solver_pack(const tb_rad_solver *s, void *buf)
+{
+    size_t ne = s->m.nelems, nv = s->m.nverts, nc = (size_t)s->nc;
+    unsigned char *p = buf;
+    uint64_t h[6] = {ne, nv, nc, (uint64_t)s->opt.nlights, s->nsh, s->shots};
+    double d[4] = {s->absorbed, s->escaped, s->lpending, s->seconds};
+    memcpy(p, h, sizeof h), p += sizeof h;
+    memcpy(p, d, sizeof d), p += sizeof d;
+    memcpy(p, s->He, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
+    memcpy(p, s->Hv, nv * nc * sizeof(double)), p += nv * nc * sizeof(double);
+    memcpy(p, s->dB, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
+    memcpy(p, s->up, ne * sizeof(double)), p += ne * sizeof(double);
+    if (s->opt.nlights > 0)
+        memcpy(p, s->lshot, (size_t)s->opt.nlights);
+}
+
+tb_status tb_rad_solver_unpack(tb_rad_solver *s, const void *buf, size_t len)
+{
+    size_t ne = s->m.nelems, nv = s->m.nverts, nc = (size_t)s->nc;
+    uint64_t h[6];
+    double d[4];
+    if (len < TB__RAD_PACK_HEAD)
+        return tb_error(TB_ERR_FORMAT, "radiosity: packed state of %zu bytes is shorter than its header", len);
+    const unsigned char *p = buf;
+    memcpy(h, p, sizeof h), p += sizeof h;
+    memcpy(d, p, sizeof d), p += sizeof d;
+    if (h[0] != ne || h[1] != nv || h[2] != nc || h[3] != (uint64_t)s->opt.nlights || h[4] != s->nsh)
+        return tb_error(TB_ERR_FORMAT,
+                        "radiosity: packed state of %llu elements, %llu vertices, %llu channels, %llu lights, "
+                        "%llu shooters; this solver has %zu, %zu, %zu, %d, %zu (another scene or meshing)",
+                        (unsigned long long)h[0], (unsigned long long)h[1], (unsigned long long)h[2],
+                        (unsigned long long)h[3], (unsigned long long)h[4], ne, nv, nc, s->opt.nlights, s->nsh);
+    if (len != tb_rad_solver_packed_size(s))
+        return tb_error(TB_ERR_FORMAT, "radiosity: packed state has %zu bytes, expected %zu", len,
+                        tb_rad_solver_packed_size(s));
+    s->shots = h[5];
+    s->absorbed = d[0], s->escaped = d[1], s->lpending = d[2], s->seconds = d[3];
+    memcpy(s->He, p, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
+    memcpy(s->Hv, p, nv * nc * sizeof(double)), p += nv * nc * sizeof(double);
+    memcpy(s->dB, p, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
+    memcpy(s->up, p, ne * sizeof(double)), p += ne * sizeof(double);
+    if (s->opt.nlights > 0)
+        memcpy(s->lshot, p, (size_t)s->opt.nlights);
+    /* the queue is a function of the unshot powers (ties go to the lower
+     * key), so rebuilding it gives the original's order */
+    for (size_t k = 0; k < s->nsh; k++) {
+        double pw = tb__shooter_power(s, k);
+        if (pw > 0.0)
+            tb_pqueue_set(&s->q, (uint32_t)k, pw);
+        else
+            tb_pqueue_remove(&s->q, (uint32_t)k);
+    }
+    return TB_OK;
+}

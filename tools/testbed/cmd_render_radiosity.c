@@ -71,6 +71,8 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     bool edge_given = false, area_given = false, samples_given = false, res_given = false, levels_given = false;
     bool device_given = false;
     uint64_t seed = 0;
+    const char *ckpt_path = NULL, *resume_path = NULL;
+    double ckpt_every = 5.0;
     static const tb_opt_choice methods[] = {{"radiosity", 0}, {NULL, 0}};
     static const tb_opt_choice ffs[] = {{"raycast", TB_RAD_FF_RAYCAST}, {"hemicube", TB_RAD_FF_HEMICUBE}, {NULL, 0}};
     const tb_opt opts[] = {
@@ -146,6 +148,15 @@ int tb_cmd_render_radiosity(int argc, char **argv)
                  "error over the reference's RMS reflected radiosity B - E)"},
         {"reference", .type = TB_OPT_STRING, .dest = &o.reference_path, .metavar = "REF.csv",
          .help = "the reference of --report"},
+        {"checkpoint", .type = TB_OPT_STRING, .dest = &ckpt_path, .metavar = "FILE",
+         .help = "save the solver's state (gathered and unshot radiosity, shots) to FILE,\n"
+                 "atomically, every --checkpoint-every seconds and after the last shot\n"
+                 "(not with --adapt)"},
+        {"checkpoint-every", .type = TB_OPT_DOUBLE, .dest = &ckpt_every, .min = 0, .max = INFINITY,
+         .metavar = "S", .help = "seconds between checkpoints (default %D; 0: after every shot)"},
+        {"resume", .type = TB_OPT_STRING, .dest = &resume_path, .metavar = "FILE",
+         .help = "continue the solve saved in FILE (same scene and options; --threshold\n"
+                 "may drop): the outputs equal an uninterrupted run's bit for bit"},
         {"stats", .type = TB_OPT_STRING, .dest = &o.stats_path, .metavar = "FILE.json",
          .help = "counters, times and provenance"},
         {0},
@@ -216,6 +227,23 @@ int tb_cmd_render_radiosity(int argc, char **argv)
         }
         o.solver.exchange = ex;
     }
+    tb_ckpt_rad ck = {.path = ckpt_path, .every = ckpt_every, .resume_path = resume_path};
+    tb_rad_persist persist;
+    if (ckpt_path || resume_path) {
+        if (o.adapt.threshold > 0) {
+            tb_dist_rad_exchange_free(ex);
+            return tb_cli_usage_error(&cli, "--checkpoint and --resume are for solves without --adapt");
+        }
+        if (!(ck.key = tb_cli_job_key(scene_path, argc, argv, tb_cli_free_opts))) {
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
+            tb_dist_rad_exchange_free(ex);
+            return TB_EXIT_FAIL;
+        }
+        persist = tb_ckpt_rad_persist(&ck);
+        o.persist = &persist;
+    }
+    if (root && tb_dist_size() > 1)
+        tb_ckpt_on_term("testbed render");
     o.log = root ? stderr : NULL;
     o.log_prefix = "testbed render: ";
     o.stop.progress = o.stop.progress && root;
