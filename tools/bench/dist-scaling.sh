@@ -31,7 +31,6 @@ done
 TB=${TESTBED:-$root/build/ci/testbed}
 [[ -x $TB ]] || { echo "dist-scaling: no testbed at $TB (set TESTBED)" >&2; exit 2; }
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_WAIT_POLICY=passive
-export OMPI_MCA_btl_vader_single_copy_mechanism=none
 MPIRUN=${MPIRUN:-mpirun --oversubscribe --bind-to none --mca btl self,vader}
 work=$(mktemp -d "${TMPDIR:-/tmp}/dist-scaling.XXXXXX")
 trap 'rm -rf "$work"' EXIT
