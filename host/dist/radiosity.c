@@ -6,6 +6,7 @@
 
 #include <limits.h>
 #include <stdlib.h>
+#include <time.h>
 
 #ifdef TB_HAVE_MPI
 #include <mpi.h>
@@ -31,9 +32,21 @@ static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine
         x->displs[r] = off;
         off += (int)counts[r];
     }
-    if (MPI_Allgatherv(mine, (int)n_mine, MPI_DOUBLE, all, x->counts, x->displs, MPI_DOUBLE, MPI_COMM_WORLD) !=
-        MPI_SUCCESS)
-        return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Allgatherv failed");
+    /* non-blocking, polled with short sleeps: a rank that is done early
+     * leaves the core to one still casting rays (Open MPI's blocking
+     * collectives spin, which on shared or oversubscribed cores slows the
+     * very rank everyone waits for) */
+    MPI_Request req;
+    if (MPI_Iallgatherv(mine, (int)n_mine, MPI_DOUBLE, all, x->counts, x->displs, MPI_DOUBLE, MPI_COMM_WORLD,
+                        &req) != MPI_SUCCESS)
+        return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallgatherv failed");
+    for (int done = 0;;) {
+        MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+        if (done)
+            break;
+        struct timespec ts = {0, 20000L};
+        nanosleep(&ts, NULL);
+    }
 #else
     (void)mine, (void)all, (void)counts;
     return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
