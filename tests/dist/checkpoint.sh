@@ -32,13 +32,13 @@ grep -q "box.mid: not a testbed checkpoint" "$T/out" || { cat "$T/out"; fail "no
 
 # two ranks, rank 1 killed once the first checkpoint is there
 rm -f "$T/c.ckpt"
-$MPIRUN -np 2 "$TESTBED" render $R --passes 400 --threads 1 -o "$T/k.pfm" --checkpoint "$T/c.ckpt" \
+TB_DIST_JOB=$$ $MPIRUN -np 2 "$TESTBED" render $R --passes 400 --threads 1 -o "$T/k.pfm" --checkpoint "$T/c.ckpt" \
     > "$T/kout" 2>&1 &
 job=$!
 i=0
 while [ ! -s "$T/c.ckpt" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
 [ -s "$T/c.ckpt" ] || { kill $job; cat "$T/kout"; fail "no checkpoint within a minute"; }
-victim=$(rank_pid $job 1) || { kill $job; fail "rank 1 not found"; }
+victim=$(rank_pid $$ 1) || { kill $job; fail "rank 1 not found"; }
 kill -9 "$victim"
 wait $job && { cat "$T/kout"; fail "the job went on after rank 1 died"; }
 grep -q "rank 1 .*exited on signal 9" "$T/kout" || { cat "$T/kout"; fail "the dead rank is not named"; }
