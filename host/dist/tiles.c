@@ -5,8 +5,9 @@
  * and receives packed tiles (merging them into the film, which orders
  * them), a worker's thread asks ahead, keeps its queue filled and sends its
  * finished tiles. The render threads only touch the queue and the outbox,
- * under the exchange's lock. The threads poll with short sleeps rather than
- * block in MPI (Open MPI's blocking calls spin a core the renderer needs). */
+ * under the exchange's lock. The threads poll with short, growing sleeps
+ * rather than block in MPI (Open MPI's blocking calls spin a core the
+ * renderer needs). */
 #include "host/dist/tiles.h"
 #include "host/dist/dist.h"
 #include "host/dist/dist_internal.h"
@@ -23,9 +24,12 @@
 #include <mpi.h>
 #endif
 
-/* Microseconds a communication thread sleeps when nothing moved: a small
- * fraction of a tile's time, and a small fraction of a core. */
-#define TB__TILES_POLL_US 50
+/* Microseconds a communication thread sleeps when nothing moved: from the
+ * first, doubling while nothing moves up to the last (a small fraction of
+ * a tile's time), back to the first once something does, so a burst of
+ * messages is answered at once and an idle wait costs little CPU. */
+#define TB__TILES_POLL_MIN_US 20
+#define TB__TILES_POLL_MAX_US 400
 
 /* A finished tile on its way out of a worker (buf NULL: a skip). */
 typedef struct tb__outgoing {
@@ -62,10 +66,17 @@ typedef struct tb__tiles {
     int nout, out_cap;
 } tb__tiles;
 
-static void tb__tiles_sleep(void)
+/* Sleeps *us microseconds after a poll that moved nothing (and doubles it
+ * for the next), or resets *us after one that moved something. */
+static void tb__tiles_pause(int *us, int moved)
 {
-    struct timespec ts = {0, TB__TILES_POLL_US * 1000L};
+    if (moved) {
+        *us = TB__TILES_POLL_MIN_US;
+        return;
+    }
+    struct timespec ts = {0, *us * 1000L};
     nanosleep(&ts, NULL);
+    *us = *us * 2 < TB__TILES_POLL_MAX_US ? *us * 2 : TB__TILES_POLL_MAX_US;
 }
 
 /* Records the communication thread's first failure. Lock held. */
@@ -160,6 +171,7 @@ static int tb__tiles_root_one(tb__tiles *t)
 static void *tb__tiles_root_comm(void *arg)
 {
     tb__tiles *t = arg;
+    int pause = TB__TILES_POLL_MIN_US;
     for (;;) {
         int moved = 0;
         while (tb__tiles_root_one(t))
@@ -169,8 +181,7 @@ static void *tb__tiles_root_comm(void *arg)
         pthread_mutex_unlock(&t->lock);
         if (over)
             return NULL;
-        if (!moved)
-            tb__tiles_sleep();
+        tb__tiles_pause(&pause, moved);
     }
 }
 
@@ -187,6 +198,7 @@ static void *tb__tiles_worker_comm(void *arg)
     int nsend = 0, send_cap = 0;
     MPI_Request *sreq = NULL;
     void **sbuf = NULL;
+    int pause = TB__TILES_POLL_MIN_US;
     for (;;) {
         int moved = 0;
         /* the grant in flight */
@@ -268,8 +280,7 @@ static void *tb__tiles_worker_comm(void *arg)
             nsend = 0;
             break;
         }
-        if (!moved)
-            tb__tiles_sleep();
+        tb__tiles_pause(&pause, moved);
     }
     free(sreq);
     free(sbuf);

@@ -49,6 +49,7 @@ benchmarks=(
     "radiosity|radiosity solver: form-factor methods, patches, default element size"
     "ff-cpu|CPU form factors: ray casting, exact point form factor, hemicube (ff_table timing)"
     "adaptive|mesh refinement and radiosity --adapt"
+    "dist|mpirun: 2 ranks x 1 thread vs 1 rank (tools/bench/dist-scaling.sh)"
 )
 
 usage() {
@@ -603,6 +604,16 @@ print(f"{label}\t{d['elements']}\t{d['counters']['Radiosity/shots']}\t{d['adapt_
       f"{float(open(tm).read().split()[0]):.2f}")
 EOF
     done
+}
+
+bench_dist() {
+    need mpirun "Open MPI: tools/setup.sh"
+    local q=()
+    is_quick && q=(--quick)
+    table scaling "Distributed: 1 rank x 1 thread vs 2 ranks x 1 thread (best of 3; CPU = every process of the job)" \
+        case "1 rank: wall / CPU s" "2 ranks: wall / CPU s" "speedup (wall)" "CPU cost of 2 ranks" "load before/after"
+    cmd env TESTBED="$TB" "$root/tools/bench/dist-scaling.sh" "${q[@]}"
+    last_output | awk -F' *[|] *' '/^[|] [a-z]+-[a-z]+ [|] [0-9.]+ \// { printf "%s\t%s\t%s\t%s\t%s\t%s\n", $2, $3, $4, $5, $6, $7 }' | rows
 }
 
 # ------------------------------------------------------------------ header
