@@ -739,8 +739,8 @@ static tb_status tb__finish_emitters(tb_scene *s, int threads)
     if (!st && total > (size_t)INT32_MAX)
         st = tb_error(TB_ERR_UNSUPPORTED, "scene: more than 2^31 - 1 emitters");
     if (!st) {
-        /* The emitters and a renderer's area-light copy of them. */
-        s->priv->used += 2 * total * sizeof *s->emitters;
+        /* The emitters and a renderer's area-light tables over them. */
+        s->priv->used += total * (sizeof *s->emitters + 3 * sizeof(double));
         st = tb__check_memory(s, "with the emitters");
     }
     if (!st && total && !(s->emitters = malloc(sizeof *s->emitters * total)))
