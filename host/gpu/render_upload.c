@@ -81,7 +81,7 @@ static bool tb__alloc_materials(tb_gpu_renderer *r)
 static void tb__plan_kernel(tb_gpu_renderer *r)
 {
     const tb__gr_uses *u = &r->uses;
-    r->nsamples = r->rt.has_area ? r->rt.light_samples : 0;
+    r->nsamples = r->rt.lights.has_area ? r->rt.light_samples : 0;
     r->S = r->nlights + r->nsamples;
     /* GGX: a fourth word per shadow ray (Schlick's white part) and up to
      * glossy_samples glossy rays per item (at a camera ray's hit) */
@@ -263,7 +263,7 @@ static void tb__fill_emitters(tb_gpu_renderer *r, tb__tables *t)
             tb_dvec3 e2 = tb_dvec3_sub(tb_vec3_to_d(e->v[2]), tb_vec3_to_d(e->v[0]));
             g.normal = tb_dvec3_to_f(tb_dvec3_normalize(tb_dvec3_cross(e1, e2)));
         }
-        double area = r->rt.has_area ? r->rt.area.areas[i] : tb_emitter_area(e);
+        double area = r->rt.lights.has_area ? r->rt.lights.area.areas[i] : tb_emitter_area(e);
         g.inv_area = (float)(1.0 / area);
         t->ems[i] = g;
         for (int c = 0; c < r->nch; c++)

@@ -398,7 +398,7 @@ tb_status tb__gr_wavefront(tb_gpu_renderer *r, tb__paths *P)
                     tb_stratified_2d(&P->rng[p], r->rt.lsx, r->rt.lsy, u);
                     for (int k = 0; k < r->nsamples; k++) {
                         double pmf, ur;
-                        int e = tb_distrib1d_sample_discrete(&r->rt.area.select, u[2 * k], &pmf, &ur);
+                        int e = tb_distrib1d_sample_discrete(&r->rt.lights.area.select, u[2 * k], &pmf, &ur);
                         float u1r = (float)ur;
                         if (u1r >= 1.0f)
                             u1r = 0x1.fffffep-1f;

@@ -34,6 +34,7 @@
 #include "host/render/channels.h"
 #include "host/render/lights.h"
 #include "host/render/scene.h"
+#include "host/render/surface.h"
 #include "util/base/error.h"
 #include "util/math/ray.h"
 #include "util/math/rng.h"
@@ -84,12 +85,12 @@ typedef struct tb_raytracer {
     int max_depth;          /* in effect */
     int light_samples;      /* in effect */
     int lsx, lsy;           /* strata of the light samples (lsx * lsy = light_samples) */
-    bool has_area;          /* area light below is set up */
-    tb_area_light area;     /* every exact emitter of the scene as one light */
-    tb__rt_textures *textures; /* owned; NULL when no material has a texture */
+    tb_light_set lights;    /* the scene's lights; lights.area: every exact emitter as one light */
+    tb_surfaces *surfaces;  /* owned: the materials' textures, patterns and bump maps (surface.h) */
+    const tb__rt_textures *textures; /* surfaces' images (not owned); NULL when no material has a texture */
     int texture_filter;     /* tb_tex_filter value in effect */
     float diff_scale;       /* scale of the camera ray differentials, max(1/8, 1/sqrt(spp)) */
-    tb__rt_patterns *patterns; /* owned; NULL when no material has a pattern or bump map */
+    const tb__rt_patterns *patterns; /* surfaces' patterns (not owned); NULL when no material has one */
     int glossy_samples;     /* in effect */
     int gsx, gsy;           /* strata of the glossy samples */
     tb_rt_indirect_fn indirect; /* from the options (NULL: none) */

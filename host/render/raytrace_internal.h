@@ -9,6 +9,7 @@
 
 #include "host/render/raytrace.h"
 #include "host/render/scene.h"
+#include "host/render/surface.h"
 #include "util/base/error.h"
 #include "util/math/vec.h"
 
@@ -61,5 +62,22 @@ bool tb__rt_pattern_factor(const tb__rt_patterns *p, int material, int slot, con
  * degenerate tangents. */
 bool tb__rt_bump(const tb__rt_patterns *p, const tb_material *m, int material, const tb__rt_surface *g,
                  tb_vec3 *n);
+
+
+/* Private (surface.c): the image textures of a tb_surfaces (NULL: none), for
+ * the ray tracer's Vulkan renderer and its feature tables. */
+const tb__rt_textures *tb__surfaces_textures(const tb_surfaces *ss);
+/* Private: its patterns and bump maps (NULL: none). */
+const tb__rt_patterns *tb__surfaces_patterns(const tb_surfaces *ss);
+/* Private: its scale of the camera ray differentials. */
+float tb__surfaces_diff_scale(const tb_surfaces *ss);
+/* Private: world tangents dp/du, dp/dv at a hit from the CSG leaf holding
+ * the hit's face (*leaf, may be NULL); false if there is none. */
+bool tb__surface_tangents(const tb_scene *s, const tb_hit *hit, tb_vec3 *dpdu, tb_vec3 *dpdv,
+                          const tb_object **leaf);
+/* Private: the pattern/bump record of a hit on `leaf` (fp, dpdxy: the
+ * footprint and the point's change per pixel, or NULL). */
+void tb__surface_fill(const tb_object *leaf, const tb_hit *hit, tb_vec3 p, tb_vec3 n, tb_vec3 dpdu, tb_vec3 dpdv,
+                      const float *fp, const tb_vec3 dpdxy[2], tb__rt_surface *g);
 
 #endif

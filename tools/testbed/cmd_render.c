@@ -1,5 +1,6 @@
 /* `testbed render SCENE.mid -o OUT`: the Whitted ray tracer over a MID scene
- * (docs/raytrace.md). The workflow is one library call, tb_render_file
+ * (docs/raytrace.md), or with --method path the path tracer
+ * (docs/pathtrace.md). The workflow is one library call, tb_render_file
  * (host/render/render_file.h); this file holds the options, the Ctrl-C
  * handler, the Vulkan backend (host/render may not use host/gpu) and the
  * summary lines. */
@@ -13,11 +14,16 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "dist_cli.h"
 #include "host/gpu/gpu.h"
 #include "host/gpu/render.h"
+#include "host/render/pathtrace.h"
 #include "host/render/render_file.h"
 #include "util/image/image.h"
 #include "util/stats/stats.h"
+
+#define TB__RENDER_STR2(x) #x
+#define TB__RENDER_STR(x) TB__RENDER_STR2(x)
 
 /* Set by SIGINT; the render stops at the next tile and writes what it has. */
 static atomic_int tb__render_interrupt;
@@ -105,7 +111,21 @@ static tb_status tb__render_gpu_stats(void *user)
     return st;
 }
 
+static int tb__cmd_render(int argc, char **argv);
+
 int tb_cmd_render(int argc, char **argv)
+{
+    /* every method runs as one rank, or as a rank of an mpirun job */
+    if (tb_dist_init(&argc, &argv)) {
+        fprintf(stderr, "testbed render: %s\n", tb_last_error());
+        return TB_EXIT_FAIL;
+    }
+    int rc = tb__cmd_render(argc, argv);
+    tb_dist_finalize();
+    return rc;
+}
+
+static int tb__cmd_render(int argc, char **argv)
 {
     /* --method radiosity is another renderer with options of its own */
     for (int i = 1; i + 1 < argc && strcmp(argv[i], "--"); i++)
@@ -122,8 +142,14 @@ int tb_cmd_render(int argc, char **argv)
     int criterion = (int)ro->aa.criterion, pattern = (int)ro->aa.pattern, texture_filter = 3;
     int max_depth = TB_RT_DEFAULT_MAX_DEPTH, light_samples = TB_RT_DEFAULT_LIGHT_SAMPLES;
     int glossy_samples = TB_RT_DEFAULT_GLOSSY_SAMPLES;
+    int rr_depth = TB_PT_DEFAULT_RR_DEPTH;
     bool depth_seen = false, light_seen = false, glossy_seen = false, tf_seen = false, adaptive = false;
-    static const tb_opt_choice methods[] = {{"raytrace", 0}, {"radiosity", 1}, {NULL, 0}};
+    bool rr_seen = false;
+    enum { TB__RAYTRACE, TB__RADIOSITY, TB__PATH, TB__HYBRID };
+    static const tb_opt_choice methods[] = {
+        {"raytrace", TB__RAYTRACE}, {"path", TB__PATH}, {"hybrid", TB__HYBRID}, {"radiosity", TB__RADIOSITY}, {NULL, 0}};
+    const char *ckpt_path = NULL, *resume_path = NULL;
+    double ckpt_every = 0.0;
     static const tb_opt_choice criteria[] = {{"stderr", TB_AA_STDERR}, {"contrast", TB_AA_CONTRAST}, {NULL, 0}};
     static const tb_opt_choice patterns[] = {{"stratified", TB_AA_STRATIFIED}, {"sobol", TB_AA_SOBOL}, {NULL, 0}};
     static const tb_opt_choice tex_filters[] = {{"bilinear", 1}, {"trilinear", 2}, {"ewa", 3}, {NULL, 0}};
@@ -131,8 +157,10 @@ int tb_cmd_render(int argc, char **argv)
         {.short_name = 'o', .type = TB_OPT_STRING, .dest = &o.image_path, .metavar = "OUT",
          .help = "the image: .png, .exr, .pfm or .rle"},
         {"method", .type = TB_OPT_CHOICE, .dest = &method, .choices = methods, .metavar = "M",
-         .help = "raytrace (default: the Whitted ray tracer) or radiosity (options:\n"
-                 "testbed render --method radiosity --help)"},
+         .help = "raytrace|path|hybrid|radiosity: raytrace (default: the Whitted ray\n"
+                 "tracer), path (the path tracer, docs/pathtrace.md: the options here but\n"
+                 "--light-samples, --glossy-samples and --backend vulkan), hybrid or radiosity\n"
+                 "(their options: testbed render --method hybrid|radiosity --help)"},
         {"spp", .type = TB_OPT_INT, .dest = &ro->aa.spp, .min = 1, .max = TB_AA_MAX_SPP, .metavar = "N",
          .help = "samples per pixel (per pass; default %D)"},
         {"adaptive", .type = TB_OPT_DOUBLE, .dest = &ro->aa.threshold, .min = 0, .max = INFINITY, .metavar = "T",
@@ -161,8 +189,12 @@ int tb_cmd_render(int argc, char **argv)
          .help = "Vulkan device N (testbed devices lists them; implies Vulkan in auto)"},
         {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels,
          .help = "acceleration structure (default %D)"},
-        {"max-depth", .type = TB_OPT_INT, .dest = &max_depth, .min = 0, .max = 64, .metavar = "N", .seen = &depth_seen,
-         .help = "deepest reflected/refracted ray (default %D)"},
+        {"max-depth", .type = TB_OPT_INT, .dest = &max_depth, .min = 0, .max = TB_PT_MAX_BOUNCES, .metavar = "N",
+         .seen = &depth_seen,
+         .help = "raytrace: deepest reflected/refracted ray (default %D, at most 64);\n"
+                 "path: most bounces, a cap (default: none, Russian roulette; at most " TB__RENDER_STR(TB_PT_MAX_BOUNCES) ")"},
+        {"rr-depth", .type = TB_OPT_INT, .dest = &rr_depth, .min = 1, .max = TB_PT_MAX_BOUNCES, .metavar = "N",
+         .seen = &rr_seen, .help = "path: bounces before Russian roulette (default %D)"},
         {"light-samples", .type = TB_OPT_INT, .dest = &light_samples, .min = 1, .max = 1024, .metavar = "N",
          .seen = &light_seen, .help = "area-light samples per shading point (default %D)"},
         {"glossy-samples", .type = TB_OPT_INT, .dest = &glossy_samples, .min = 1, .max = 1024, .metavar = "N",
@@ -173,6 +205,14 @@ int tb_cmd_render(int argc, char **argv)
          .help = "progressive passes of --spp samples each (default %D)"},
         {"time-budget", .type = TB_OPT_DOUBLE, .dest = &ro->time_budget, .min = 0, .max = INFINITY, .metavar = "S",
          .flags = TB_OPTF_OPEN_MIN, .help = "stop starting new tiles after S seconds"},
+        {"checkpoint", .type = TB_OPT_STRING, .dest = &ckpt_path, .metavar = "FILE",
+         .help = "save the film and the passes done to FILE (atomically) after\n"
+                 "passes, at most every --checkpoint-every seconds, and after the last"},
+        {"checkpoint-every", .type = TB_OPT_DOUBLE, .dest = &ckpt_every, .min = 0, .max = INFINITY, .metavar = "S",
+         .help = "seconds between checkpoints (default 0: after every pass)"},
+        {"resume", .type = TB_OPT_STRING, .dest = &resume_path, .metavar = "FILE",
+         .help = "continue the render saved in FILE (same scene and options; --passes\n"
+                 "may grow): the image equals an uninterrupted run's bit for bit"},
         {"exposure", .type = TB_OPT_DOUBLE, .dest = &o.exposure, .min = -INFINITY, .max = INFINITY, .metavar = "STOPS",
          .help = "PNG/RLE only: scale by 2^STOPS (default: mean luminance to 0.18)"},
         {"stats", .type = TB_OPT_STRING, .dest = &o.stats_path, .metavar = "FILE.json",
@@ -190,7 +230,9 @@ int tb_cmd_render(int argc, char **argv)
         .err = "testbed render: ",
         .usage = "SCENE.mid -o OUT.{png,exr,pfm,rle} [options]",
         .opts = opts,
-        .outro = "Ctrl-C writes the image rendered so far and exits with status 130.",
+        .outro = "Ctrl-C writes the image rendered so far and exits with status 130.\n"
+                 "Under mpirun every rank renders tiles and rank 0 writes the image, the same\n"
+                 "bits as one process (docs/distributed.md).",
         .pos = &scene_path,
         .max_pos = 1,
         .min_pos = 1,
@@ -202,7 +244,27 @@ int tb_cmd_render(int argc, char **argv)
     ro->aa.adaptive = ro->aa.adaptive || adaptive;
     ro->aa.criterion = (tb_aa_criterion)criterion;
     ro->aa.pattern = (tb_aa_pattern)pattern;
-    if (depth_seen)
+    tb_pt_options po = {0};
+    tb_render_method path_method = tb_pt_method(&po);
+    if (method == TB__PATH) {
+        if (backend == TB_GPU_MODE_VULKAN || gdevice >= 0)
+            return tb_cli_usage_error(&cli, "--backend vulkan: the path tracer runs on the CPU only; use --backend cpu "
+                                            "(or --method raytrace for the Vulkan ray tracer)");
+        if (light_seen || glossy_seen)
+            return tb_cli_usage_error(&cli, "--%s goes with --method raytrace (the path tracer takes one light "
+                                            "sample per vertex and samples its BSDFs)",
+                                      light_seen ? "light-samples" : "glossy-samples");
+        po.max_depth = depth_seen ? max_depth : 0;
+        po.rr_depth = rr_depth;
+        o.method = &path_method;
+    } else {
+        if (rr_seen)
+            return tb_cli_usage_error(&cli, "--rr-depth goes with --method path");
+        if (depth_seen && max_depth > 64)
+            return tb_cli_usage_error(&cli, "--max-depth: the ray tracer's deepest ray is at most 64, not %d",
+                                      max_depth);
+    }
+    if (depth_seen && method != TB__PATH)
         ro->rt.max_depth = max_depth == 0 ? -1 : max_depth;
     if (light_seen)
         ro->rt.light_samples = light_samples;
@@ -223,17 +285,34 @@ int tb_cmd_render(int argc, char **argv)
     if (!o.report_path != !o.reference_path)
         return tb_cli_usage_error(&cli, "--report and --reference go together");
     tb__render_cmd cmd = {.scene_path = scene_path, .mode = (tb_gpu_mode)backend, .device = gdevice};
-    o.backend = tb__render_gpu;
-    o.backend_stats = tb__render_gpu_stats;
-    o.backend_user = &cmd;
-    o.backend_name = "vulkan";
-    o.on_render = tb__render_hook;
-    o.on_render_user = &cmd;
+    bool root = tb_dist_rank() == 0;
+    if (tb_dist_size() > 1 && (backend == TB_GPU_MODE_VULKAN || gdevice >= 0))
+        return tb_cli_usage_error(&cli, "--backend vulkan renders in one process, not over %d ranks",
+                                  tb_dist_size());
+    tb_tile_exchange *ex = NULL;
+    tb_ckpt_render ck;
+    tb_render_persist persist;
+    if (!tb_cli_dist_render_setup("testbed render", scene_path, argc, argv, ro, ckpt_path, ckpt_every,
+                                  resume_path, &ex, &ck, &persist))
+        return TB_EXIT_FAIL;
+    ro->progress = root;
+    if (method != TB__PATH) { /* the Vulkan backend renders only the ray tracer, in one process */
+        if (tb_dist_size() == 1)
+            o.backend = tb__render_gpu;
+        o.backend_stats = tb__render_gpu_stats;
+        o.backend_user = &cmd;
+        o.backend_name = "vulkan";
+    }
+    if (root) {
+        o.on_render = tb__render_hook;
+        o.on_render_user = &cmd;
+    }
 
     /* the provenance records the whole command line */
     char **full = malloc(sizeof *full * ((size_t)argc + 2));
     if (!full) {
         fprintf(stderr, "testbed render: out of memory\n");
+        tb_dist_tiles_free(ex);
         return TB_EXIT_FAIL;
     }
     full[0] = "testbed";
@@ -243,11 +322,19 @@ int tb_cmd_render(int argc, char **argv)
     tb_render_file_result res;
     tb_status st = tb_render_file(scene_path, &o, &res);
     free(full);
+    tb_dist_tiles_free(ex);
+    /* collective: every rank gets here, failed or not */
+    tb_cli_dist_summary("testbed render", "tiles", st == TB_OK);
     if (st) {
-        fprintf(stderr, "testbed render: %s\n", tb_last_error());
+        /* every rank has the same error (the failing rank's); one says it */
+        if (root)
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
         return TB_EXIT_FAIL;
     }
-    printf("testbed render: %s: %dx%d, %llu samples, %.3f s (%d threads, %s)%s; wrote %s\n", scene_path, res.width,
+    if (!root)
+        return TB_EXIT_OK;
+    printf("testbed render: %s: %s%dx%d, %llu samples, %.3f s (%d threads, %s)%s; wrote %s\n", scene_path,
+           method == TB__PATH ? "path tracer, " : "", res.width,
            res.height, (unsigned long long)res.stats.aa.samples, res.stats.seconds, res.threads,
            res.spectral ? "spectral" : "rgb", res.stats.interrupted ? ", INTERRUPTED (partial image)" : "",
            o.image_path);
