@@ -174,10 +174,14 @@ static bool tb__cell_args(const tb_study *st, const tb_study_scene *sc, tb_study
     tb__budget_str(budget, b, sizeof b);
     bool ok = tb__arg(a, "--method") && tb__arg(a, "%s", tb_study_method_names[m]);
     if (m == TB_STUDY_RADIOSITY) {
-        if (st->kind == TB_STUDY_SPP) /* budget B: elements of 1/B the default area (B times as many) */
-            ok = ok && tb__arg(a, "--max-edge") && tb__arg(a, "%.9g", sc->diagonal / TB_RAD_DEFAULT_EDGE_DIVISIONS / sqrt(budget));
+        /* budget B: sqrt(B) times the base mesh's elements, so the solution's cost
+         * (shots x elements, both proportional to the elements) grows about as B */
+        double edge = st->radiosity_edge > 0 ? st->radiosity_edge : sc->diagonal / TB_RAD_DEFAULT_EDGE_DIVISIONS;
+        if (st->kind == TB_STUDY_SPP)
+            ok = ok && tb__arg(a, "--max-edge") && tb__arg(a, "%.9g", edge / pow(budget, 0.25));
         else
-            ok = ok && tb__arg(a, "--time-budget") && tb__arg(a, "%s", b);
+            ok = ok && tb__arg(a, "--max-edge") && tb__arg(a, "%.9g", edge) && tb__arg(a, "--time-budget") &&
+                 tb__arg(a, "%s", b);
         ok = ok && tb__arg(a, "--seed") && tb__arg(a, "%d", seed);
     } else {
         if (st->kind == TB_STUDY_SPP)
@@ -467,6 +471,11 @@ int tb_cmd_study(int argc, char **argv)
         {"args", .type = TB_OPT_REPEAT, .dest = &margs, .metavar = "M=OPTS",
          .help = "more `testbed render --method M` options for method M's renders, as words\n"
                  "(\"hybrid=--hybrid-mode gather\"); part of the cells' keys"},
+        {"radiosity-edge", .type = TB_OPT_DOUBLE, .dest = &st.radiosity_edge, .min = 0, .max = 1e30, .metavar = "L",
+         .flags = TB_OPTF_OPEN_MIN,
+         .help = "radiosity: the longest element edge at budget 1, scene units (default: the\n"
+                 "scene's bounding-box diagonal / 24, the radiosity renderer's default); budget B\n"
+                 "uses L / B^(1/4), so about sqrt(B) times the elements"},
         {"threads", .type = TB_OPT_INT, .dest = &threads, .min = 0, .max = 4096, .metavar = "N",
          .help = "OpenMP threads per render (default: OpenMP's; not part of the keys)"},
         {0},
@@ -518,9 +527,12 @@ int tb_cmd_study(int argc, char **argv)
         if (st.method_args[m])
             return tb_cli_usage_error(&cli, "--args for %s given twice", tb_study_method_names[m]);
         static const char *const owned[] = {"-o", "--stats", "--method", "--spp", "--seed", "--rad-seed", "--passes",
-                                            "--time-budget", "--max-edge", "--max-area", "--threads", "--report",
-                                            "--reference", "--sample-map", NULL};
+                                            "--time-budget", "--threads", "--report", "--reference", "--sample-map",
+                                            "--checkpoint", "--resume",
+                                            "--max-edge", "--max-area", NULL};
         for (int k = 0; owned[k]; k++) {
+            if (m != TB_STUDY_RADIOSITY && (!strcmp(owned[k], "--max-edge") || !strcmp(owned[k], "--max-area")))
+                continue; /* the hybrid's radiosity pass: its own mesh, the same for every budget */
             const char *w = eq + 1;
             size_t n = strlen(owned[k]);
             while ((w = strstr(w, owned[k]))) {
@@ -536,47 +548,58 @@ int tb_cmd_study(int argc, char **argv)
     }
 
     /* the scenes: readable, loadable (their errors before any render), hashed */
+    for (int i = 0; i < npos; i++)
+        if (!strcmp(scene_paths[i], "-"))
+            return tb_cli_usage_error(&cli, "a study renders each scene many times: give files, not '-'");
     st.nscenes = npos;
     for (int i = 0; i < npos; i++) {
         tb_study_scene *sc = &st.scenes[i];
         sc->path = scene_paths[i];
-        if (!strcmp(sc->path, "-"))
-            return tb_cli_usage_error(&cli, "a study renders each scene many times: give files, not '-'");
         if (tb_sha256_file(sc->path, sc->sha256)) {
             fprintf(stderr, "testbed study: %s\n", tb_last_error());
-            return TB_EXIT_FAIL;
+            goto fail_scenes;
         }
         tb_scene *s;
         if (tb_scene_load(sc->path, NULL, &s)) {
             fprintf(stderr, "testbed study: %s\n", tb_last_error());
-            return TB_EXIT_FAIL;
+            goto fail_scenes;
         }
         tb_vec3 ext = tb_vec3_sub(s->bounds.hi, s->bounds.lo);
         sc->diagonal = tb_vec3_length(ext);
+        int w = s->camera.width, h = s->camera.height;
         tb_scene_free(s);
         if (!(sc->diagonal > 0) || !isfinite(sc->diagonal)) {
             fprintf(stderr, "testbed study: %s: the scene has no extent\n", sc->path);
-            return TB_EXIT_FAIL;
+            goto fail_scenes;
         }
         tb__scene_name(&st, i);
         if (refs.n) {
             sc->reference_given = true;
             snprintf(sc->reference, sizeof sc->reference, "%s", refs.v[i]);
-            if (access(sc->reference, R_OK)) {
-                fprintf(stderr, "testbed study: --reference %s: %s\n", sc->reference, strerror(errno));
-                return TB_EXIT_FAIL;
+            /* read now: a bad reference fails before hours of rendering */
+            if (tb_image_read(sc->reference, NULL, &sc->ref)) {
+                fprintf(stderr, "testbed study: --reference %s: %s\n", sc->reference, tb_last_error());
+                goto fail_scenes;
+            }
+            if (sc->ref->width != w || sc->ref->height != h) {
+                fprintf(stderr, "testbed study: --reference %s is %dx%d, the renders of %s are %dx%d\n",
+                        sc->reference, sc->ref->width, sc->ref->height, sc->path, w, h);
+                goto fail_scenes;
             }
         }
     }
     if (tb__mkdirs(st.out)) {
         fprintf(stderr, "testbed study: %s\n", tb_last_error());
+    fail_scenes:
+        for (int i = 0; i < st.nscenes; i++)
+            tb_image_free(st.scenes[i].ref);
         return TB_EXIT_FAIL;
     }
     char exe[PATH_MAX];
     ssize_t exe_len = readlink("/proc/self/exe", exe, sizeof exe - 1);
     if (exe_len <= 0) {
         fprintf(stderr, "testbed study: cannot find this program (/proc/self/exe): %s\n", strerror(errno));
-        return TB_EXIT_FAIL;
+        goto fail_scenes;
     }
     exe[exe_len] = 0;
 
@@ -719,7 +742,7 @@ int tb_cmd_study(int argc, char **argv)
 
     /* errors against the references */
     for (int s = 0; s < st.nscenes; s++)
-        if (tb_image_read(st.scenes[s].reference, NULL, &st.scenes[s].ref)) {
+        if (!st.scenes[s].ref && tb_image_read(st.scenes[s].reference, NULL, &st.scenes[s].ref)) {
             fprintf(stderr, "testbed study: reference of %s: %s\n", st.scenes[s].path, tb_last_error());
             goto done;
         }

@@ -455,7 +455,7 @@ static tb_status tb__plots(const tb_study *st, int s, tb__scene_report *r)
     FILE *f = of.fp;
     fprintf(f, "# testbed study: the plots of %s (run: gnuplot %s.gp, from the folder of the study's -o)\n", name,
             name);
-    fprintf(f, "set logscale xy\nset grid\nset key top right\nset ylabel 'relMSE (mean over seeds, 95%% CI band)'\n");
+    fprintf(f, "set logscale xy\nset grid\nset key outside right top\nset ylabel 'relMSE (mean over seeds, 95%% CI band)'\n");
     static const char *const colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd"};
     for (int plot = 0; plot < 2; plot++) {
         const char *what = plot == 0 ? "error-time" : "error-budget";
@@ -688,7 +688,7 @@ static tb_status tb__write_json(const tb_study *st, tb__scene_report *reps)
 /* The tables of one scene, in Markdown (md) or HTML. */
 static void tb__tables(FILE *f, const tb_study *st, tb__scene_report *r, bool md)
 {
-    char a[64], b1[64], c1[64], d1[64], e1[64], g1[64];
+    char a[64], b1[64], c1[64], d1[64], e1[64], g1[64], h1[64];
     const char *m0 = tb__mname(st, 0);
     /* summary */
     if (md)
@@ -707,7 +707,7 @@ static void tb__tables(FILE *f, const tb_study *st, tb__scene_report *r, bool md
                     tb__budget_label(st, b, a, sizeof a), sep, tb__pm(&p->wall, 1, b1, sizeof b1), sep,
                     tb__pm(&p->cpu, 1, c1, sizeof c1), sep, tb__fmt(p->rss.max / 1048576.0, d1, sizeof d1), sep,
                     tb__pm(&p->relmse, 1, e1, sizeof e1), sep, tb__pm(&p->rmse, 1, g1, sizeof g1), sep,
-                    tb__pm(&p->ssim, 1, a, sizeof a), md ? " |\n" : "</td></tr>\n");
+                    tb__pm(&p->ssim, 1, h1, sizeof h1), md ? " |\n" : "</td></tr>\n");
         }
     if (!md)
         fputs("</table>\n", f);
