@@ -16,21 +16,28 @@
    (checked against the CSV), index.html parses with html.parser with every
    tag balanced and links only files that exist, the plots exist (PNG + SVG).
 4. Resume: the same command again renders nothing (study.json and the
-   summary line say 0 rendered) and leaves every cell file untouched.
+   summary line say 0 rendered) and leaves every cell file untouched; one
+   more budget renders only its cells; Ctrl-C (SIGINT to the process group
+   once a cell is finished) exits 130, keeps finished cells, leaves no
+   partial image and no report, and a rerun renders exactly the rest.
+   Seconds budgets reach each render as --time-budget.
 5. Every method: raytrace, radiosity (coarse elements), hybrid and path at
    two budgets, with a reference given by --reference.
 
 Environment: TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR; TB_STUDY_TEST_SEEDS
 (default 4) scales the convergence study."""
 import csv
+import glob
 import html.parser
 import json
 import math
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
+import time
 
 TESTBED = os.environ["TESTBED"]
 SRC = os.environ["TB_SOURCE_DIR"]
@@ -227,6 +234,50 @@ def main():
     p = run(args[:-2] + ["--threads", "1", "--budgets", "4," + ",".join(map(str, budgets))], 0, "one more budget")
     if "%d cells: %d rendered, %d reused" % (total + SEEDS, SEEDS, total) not in p.stdout:
         fail("one more budget should render %d cells: %s" % (SEEDS, p.stdout))
+
+    # Ctrl-C: the study stops after the running render (exit 130), keeps the
+    # finished cells, leaves no image or mark in the interrupted one; a rerun
+    # renders exactly the rest
+    out3 = os.path.join(TMP, "intr")
+    iargs = [box, "-o", out3, "--methods", "path", "--budgets", "64", "--seeds", "8", "--reference", ref["path"],
+             "--threads", "1"]
+    p = subprocess.Popen([TESTBED, "study"] + iargs, start_new_session=True, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    cells = os.path.join(out3, "cells", "box", "path")
+    while p.poll() is None and not glob.glob(os.path.join(cells, "*", "cell.json")):
+        time.sleep(0.02)
+    os.killpg(p.pid, signal.SIGINT)
+    pout, perr = p.communicate()
+    if p.returncode == 0:
+        print("note: the study finished before Ctrl-C arrived; interrupt not exercised")
+    else:
+        if p.returncode != 130 or "interrupted;" not in perr or "run the same command again" not in perr:
+            fail("Ctrl-C: exit %d, stderr: %s" % (p.returncode, perr))
+        done = [d for d in os.listdir(cells) if os.path.isfile(os.path.join(cells, d, "cell.json"))]
+        for d in os.listdir(cells):
+            if d not in done and os.path.exists(os.path.join(cells, d, "image.exr")):
+                fail("the interrupted cell %s kept its partial image" % d)
+        if not 1 <= len(done) < 8:
+            fail("after Ctrl-C %d cells are finished" % len(done))
+        for f in ("index.html", "study.json", "cells.csv", "report.md"):
+            if os.path.exists(os.path.join(out3, f)):
+                fail("an interrupted study wrote %s" % f)
+        p = run(iargs, 0, "resume after Ctrl-C")
+        if "8 cells: %d rendered, %d reused" % (8 - len(done), len(done)) not in p.stdout:
+            fail("resume after Ctrl-C with %d finished: %s" % (len(done), p.stdout))
+
+    # seconds budgets: each renderer's --time-budget
+    out4 = os.path.join(TMP, "sec")
+    run([box, "-o", out4, "--methods", "path,raytrace", "--budget-kind", "seconds", "--budgets", "0.05,0.1",
+         "--seeds", "1", "--reference", ref["path"], "--threads", "2"], 0, "seconds budgets")
+    j4 = json.load(open(os.path.join(out4, "study.json")))
+    for cell in j4["cells"]:
+        cmd = json.load(open(os.path.join(out4, cell["dir"], "stats.json")))["provenance"]["command_line"]
+        if "--time-budget %g" % cell["budget"] not in cmd:
+            fail("seconds cell %s: command line %s" % (cell["dir"], cmd))
+        if cell["relmse"] is None or cell["ssim"] is None or j4["budget_kind"] != "seconds":
+            fail("seconds cell without errors: %s" % cell)
+    check_html(out4)
 
     # 5. every method, with a given reference
     out2 = os.path.join(TMP, "all")

@@ -161,7 +161,7 @@ static bool tb__args_words(tb__argv *a, const char *s)
 /* A budget as the renders see it ("4", "0.5"). */
 static void tb__budget_str(double b, char *buf, size_t n)
 {
-    snprintf(buf, n, "%.17g", b);
+    snprintf(buf, n, "%.15g", b);
 }
 
 /* The options of a cell's render after `render SCENE` (the key is made of
@@ -190,6 +190,8 @@ static bool tb__cell_args(const tb_study *st, const tb_study_scene *sc, tb_study
             ok = ok && tb__arg(a, "--spp") && tb__arg(a, "1") && tb__arg(a, "--passes") &&
                  tb__arg(a, "%d", TB__STUDY_SECONDS_PASSES) && tb__arg(a, "--time-budget") && tb__arg(a, "%s", b);
         ok = ok && tb__arg(a, "--seed") && tb__arg(a, "%d", seed);
+        if (m == TB_STUDY_RAYTRACE) /* the CPU ray tracer, as the other methods (auto would probe Vulkan) */
+            ok = ok && tb__arg(a, "--backend") && tb__arg(a, "cpu");
         if (m == TB_STUDY_HYBRID)
             ok = ok && tb__arg(a, "--rad-seed") && tb__arg(a, "%d", seed);
     }
@@ -387,6 +389,16 @@ static tb_status tb__job_run(const tb_study *st, const char *exe, tb__job *j, ch
         return e;
     j->finished = true;
     return tb__cell_write_record(rec, j->key, &j->rec);
+}
+
+/* Removes an unfinished job's image and stats (its log stays, to read why). */
+static void tb__job_clean(const tb__job *j)
+{
+    char path[PATH_MAX + 16];
+    snprintf(path, sizeof path, "%s/image.exr", j->dir);
+    remove(path);
+    snprintf(path, sizeof path, "%s/stats.json", j->dir);
+    remove(path);
 }
 
 /* The file stem of `path`, made unique among the scenes before index i. */
@@ -696,6 +708,8 @@ int tb_cmd_study(int argc, char **argv)
         tb_status e = tb__job_run(&st, exe, j, env, threads, &status);
         if (bar)
             tb_progress_add(&prog, (int64_t)ceil(j->units));
+        if (!j->finished)
+            tb__job_clean(j); /* an interrupted or failed render's partial image is no result */
         if (atomic_load(&tb__study_interrupt))
             break;
         if (e || status) {
