@@ -460,6 +460,8 @@ int tb_cmd_study(int argc, char **argv)
     static const tb_opt_choice kinds[] = {{"spp", TB_STUDY_SPP}, {"seconds", TB_STUDY_SECONDS}, {NULL, 0}};
     static const tb_opt_choice ref_methods[] = {{"path", 0}, {"raytrace", 1}, {"hybrid", 2}, {NULL, 0}};
     int ref_method = 0;
+    static const tb_opt_choice time_axes[] = {{"wall", 0}, {"cpu", 1}, {NULL, 0}};
+    int time_axis = 0;
     const tb_opt opts[] = {
         {.short_name = 'o', .type = TB_OPT_STRING, .dest = &st.out, .metavar = "DIR",
          .help = "the output folder (made if missing; a rerun with the same DIR resumes)"},
@@ -488,6 +490,10 @@ int tb_cmd_study(int argc, char **argv)
          .help = "radiosity: the longest element edge at budget 1, scene units (default: the\n"
                  "scene's bounding-box diagonal / 24, the radiosity renderer's default); budget B\n"
                  "uses L / B^(1/4), so about sqrt(B) times the elements"},
+        {"time", .type = TB_OPT_CHOICE, .dest = &time_axis, .choices = time_axes,
+         .help = "the time of the plots, time slopes and equal-time/error tables: wall (default:\n"
+                 "each render process start to exit) or cpu (its user + system seconds: steadier\n"
+                 "on a loaded machine, but the sum over threads)"},
         {"threads", .type = TB_OPT_INT, .dest = &threads, .min = 0, .max = 4096, .metavar = "N",
          .help = "OpenMP threads per render (default: OpenMP's; not part of the keys)"},
         {0},
@@ -513,6 +519,7 @@ int tb_cmd_study(int argc, char **argv)
     if (prc != TB_CLI_OK)
         return prc;
     st.kind = (tb_study_budget_kind)kind;
+    st.time_cpu = time_axis == 1;
     st.reference_method = ref_methods[ref_method].name;
     if (!st.out)
         return tb_cli_usage_error(&cli, "no output folder given (-o DIR)");

@@ -71,6 +71,7 @@ typedef struct tb_study {
     int nseeds;                            /* seeds 0 .. nseeds-1 */
     const char *reference_method;          /* renders missing references */
     int reference_spp;
+    bool time_cpu;                         /* equal-time axis, time fits and plots: CPU seconds, not wall */
     double radiosity_edge;                 /* radiosity's longest element edge at budget 1 (0: the scene's default) */
     char *method_args[TB_STUDY_NMETHODS];  /* --args per method (NULL: none), verbatim */
     size_t ncells;

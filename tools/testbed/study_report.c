@@ -139,6 +139,28 @@ static const char *tb__budget_label(const tb_study *st, int b, char *buf, size_t
     return buf;
 }
 
+/* Budget b as method m spends it ("4 spp"; radiosity: "4 (mesh)"). */
+static const char *tb__method_budget(const tb_study *st, int m, int b, char *buf, size_t n)
+{
+    if (st->kind == TB_STUDY_SPP && st->methods[m] == TB_STUDY_RADIOSITY)
+        snprintf(buf, n, "%g (mesh)", st->budgets[b]);
+    else
+        tb__budget_label(st, b, buf, n);
+    return buf;
+}
+
+/* The time of the equal-time axis: mean wall or CPU seconds. */
+static const tb_summary *tb__time(const tb_study *st, const tb__point *p)
+{
+    return st->time_cpu ? &p->cpu : &p->wall;
+}
+
+/* The name of that time. */
+static const char *tb__time_name(const tb_study *st)
+{
+    return st->time_cpu ? "CPU seconds" : "wall seconds";
+}
+
 /* A display file name's stem for (method m, budget b) ("path-spp4"). */
 static void tb__img_stem(const tb_study *st, int m, int b, char *buf, size_t n)
 {
@@ -182,7 +204,7 @@ static void tb__summarise(const tb_study *st, int s, tb__scene_report *r)
             tb__point *p = tb__pt(st, r, m, b);
             p->relmse = tb_summarize(v[0], k), p->rmse = tb_summarize(v[1], k), p->ssim = tb_summarize(v[2], k);
             p->wall = tb_summarize(v[3], k), p->cpu = tb_summarize(v[4], k), p->rss = tb_summarize(v[5], k);
-            tx[b] = p->wall.mean, ty[b] = p->relmse.mean;
+            tx[b] = tb__time(st, p)->mean, ty[b] = p->relmse.mean;
         }
         r->has_fit_budget[m] = tb_fit_loglog(allx, ally, n, &r->fit_budget[m]) == TB_OK;
         r->has_fit_time[m] = tb_fit_loglog(tx, ty, st->nbudgets, &r->fit_time[m]) == TB_OK;
@@ -197,7 +219,7 @@ static void tb__summarise(const tb_study *st, int s, tb__scene_report *r)
 static void tb__curve(const tb_study *st, tb__scene_report *r, int m, double *t, double *e)
 {
     for (int b = 0; b < st->nbudgets; b++) {
-        t[b] = tb__pt(st, r, m, b)->wall.mean;
+        t[b] = tb__time(st, tb__pt(st, r, m, b))->mean;
         e[b] = tb__pt(st, r, m, b)->relmse.mean;
     }
 }
@@ -438,13 +460,13 @@ static tb_status tb__plots(const tb_study *st, int s, tb__scene_report *r)
         return e;
     fprintf(of.fp, "# testbed study: %s; one block per method (gnuplot index = method order)\n", name);
     for (int m = 0; m < st->nmethods; m++) {
-        fprintf(of.fp, "%s# %s: budget wall_mean wall_ci95 relmse_mean relmse_lo relmse_hi seeds\n", m ? "\n\n" : "",
-                tb__mname(st, m));
+        fprintf(of.fp, "%s# %s: budget %s_mean %s_ci95 relmse_mean relmse_lo relmse_hi seeds\n", m ? "\n\n" : "",
+                tb__mname(st, m), st->time_cpu ? "cpu" : "wall", st->time_cpu ? "cpu" : "wall");
         for (int b = 0; b < st->nbudgets; b++) {
             const tb__point *p = tb__pt(st, r, m, b);
             double hi = p->relmse.mean + (isfinite(p->relmse.ci95) ? p->relmse.ci95 : 0);
-            fprintf(of.fp, "%.9g %.9g %.9g %.9g %.9g %.9g %d\n", st->budgets[b], p->wall.mean,
-                    isfinite(p->wall.ci95) ? p->wall.ci95 : 0, p->relmse.mean, tb__band_lo(&p->relmse), hi,
+            const tb_summary *t = tb__time(st, p);
+            fprintf(of.fp, "%.9g %.9g %.9g %.9g %.9g %.9g %d\n", st->budgets[b], t->mean, isfinite(t->ci95) ? t->ci95 : 0, p->relmse.mean, tb__band_lo(&p->relmse), hi,
                     p->relmse.n);
         }
     }
@@ -460,7 +482,7 @@ static tb_status tb__plots(const tb_study *st, int s, tb__scene_report *r)
     for (int plot = 0; plot < 2; plot++) {
         const char *what = plot == 0 ? "error-time" : "error-budget";
         if (plot == 0)
-            fprintf(f, "set xlabel 'wall seconds per render (mean over seeds)'\n");
+            fprintf(f, "set xlabel '%s per render (mean over seeds)'\n", tb__time_name(st));
         else
             fprintf(f, "set xlabel 'budget (%s)'\n", st->kind == TB_STUDY_SPP ? "samples per pixel" : "seconds");
         fprintf(f, "set title ");
@@ -589,8 +611,8 @@ static tb_status tb__write_json(const tb_study *st, tb__scene_report *reps)
     fprintf(f, "],\n  \"budgets\": [");
     for (int b = 0; b < st->nbudgets; b++)
         fprintf(f, "%s%.17g", b ? ", " : "", st->budgets[b]);
-    fprintf(f, "],\n  \"seeds\": %d,\n  \"cells_total\": %zu,\n  \"cells_rendered\": %d,\n  \"cells_reused\": %d,\n",
-            st->nseeds, st->ncells, st->rendered, st->reused);
+    fprintf(f, "],\n  \"time_axis\": \"%s\",\n  \"seeds\": %d,\n  \"cells_total\": %zu,\n  \"cells_rendered\": %d,\n  \"cells_reused\": %d,\n",
+            st->time_cpu ? "cpu" : "wall", st->nseeds, st->ncells, st->rendered, st->reused);
     fprintf(f, "  \"scenes\": [\n");
     for (int s = 0; s < st->nscenes; s++) {
         const tb_study_scene *sc = &st->scenes[s];
@@ -704,7 +726,7 @@ static void tb__tables(FILE *f, const tb_study *st, tb__scene_report *r, bool md
             const tb__point *p = tb__pt(st, r, m, b);
             const char *sep = md ? " | " : "</td><td>";
             fprintf(f, "%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s", md ? "| " : "<tr><td>", tb__mname(st, m), sep,
-                    tb__budget_label(st, b, a, sizeof a), sep, tb__pm(&p->wall, 1, b1, sizeof b1), sep,
+                    tb__method_budget(st, m, b, a, sizeof a), sep, tb__pm(&p->wall, 1, b1, sizeof b1), sep,
                     tb__pm(&p->cpu, 1, c1, sizeof c1), sep, tb__fmt(p->rss.max / 1048576.0, d1, sizeof d1), sep,
                     tb__pm(&p->relmse, 1, e1, sizeof e1), sep, tb__pm(&p->rmse, 1, g1, sizeof g1), sep,
                     tb__pm(&p->ssim, 1, h1, sizeof h1), md ? " |\n" : "</td></tr>\n");
@@ -737,10 +759,10 @@ static void tb__tables(FILE *f, const tb_study *st, tb__scene_report *r, bool md
     tb__curve(st, r, 0, t0, e0);
     for (int table = 0; table < 2; table++) {
         if (md) {
-            fprintf(f, table == 0 ? "\n#### Equal time: relMSE each method reaches in the time %s takes\n\n| seconds |"
-                                  : "\n#### Equal error: seconds each method needs to reach the relMSE %s reaches\n\n"
+            fprintf(f, table == 0 ? "\n#### Equal time: relMSE each method reaches in the time %s takes\n\n| %s |"
+                                  : "\n#### Equal error: %s each method needs to reach the relMSE %s reaches\n\n"
                                     "| relMSE |",
-                    m0);
+                    table == 0 ? m0 : tb__time_name(st), table == 0 ? tb__time_name(st) : m0);
             for (int m = 0; m < st->nmethods; m++)
                 fprintf(f, " %s |", tb__mname(st, m));
             fputs("\n|---|", f);
@@ -749,10 +771,10 @@ static void tb__tables(FILE *f, const tb_study *st, tb__scene_report *r, bool md
             fputc('\n', f);
         } else {
             fprintf(f, table == 0 ? "<h4>Equal time: relMSE each method reaches in the time %s takes</h4>\n"
-                                    "<table>\n<tr><th>seconds</th>"
-                                  : "<h4>Equal error: seconds each method needs to reach the relMSE %s reaches</h4>\n"
+                                    "<table>\n<tr><th>%s</th>"
+                                  : "<h4>Equal error: %s each method needs to reach the relMSE %s reaches</h4>\n"
                                     "<table>\n<tr><th>relMSE</th>",
-                    m0);
+                    table == 0 ? m0 : tb__time_name(st), table == 0 ? tb__time_name(st) : m0);
             for (int m = 0; m < st->nmethods; m++)
                 fprintf(f, "<th>%s</th>", tb__mname(st, m));
             fputs("</tr>\n", f);
@@ -888,7 +910,7 @@ static tb_status tb__write_html(const tb_study *st, tb__scene_report *reps)
         }
         fprintf(f, "</td></tr>\n<tr><th>method</th>");
         for (int b = 0; b < st->nbudgets; b++)
-            fprintf(f, "<th>%s</th>", tb__budget_label(st, b, alt, sizeof alt));
+            fprintf(f, "<th>budget %s</th>", tb__budget_label(st, b, alt, sizeof alt));
         fprintf(f, "</tr>\n");
         for (int m = 0; m < st->nmethods; m++) {
             fprintf(f, "<tr><th>%s</th>", tb__mname(st, m));
