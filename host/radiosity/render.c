@@ -273,7 +273,7 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
     tb_rad_mesh_init(&r.mesh);
     tb_rad_options ro = opt->solver;
     tb_rad_adapt_stats as = {0};
-    tb_scene_options so = {.no_accel = true, .threads = opt->threads};
+    tb_scene_options so = {.no_accel = true, .no_emitters = true, .threads = opt->threads};
     if ((st = tb_scene_load(scene_path, &so, &r.scene)))
         goto done;
     if (opt->image_path && !r.scene->has_camera) {

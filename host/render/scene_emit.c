@@ -87,13 +87,11 @@ static bool tb__tree_flat(const tb_object *o)
 
 static bool tb__similarity(const tb_transform *t, double *s);
 
-tb_status tb__scene_leaf_area(const tb_object *leaf, double *area)
+bool tb__scene_leaf_area_exact(const tb_object *leaf, double *area)
 {
-    if (tb_prim_is_csg(leaf->kind))
-        return tb_error(TB_ERR_UNSUPPORTED, "scene: no area for a CSG node");
     if (leaf->kind == TB_PRIM_POLYGONS) {
         *area = tb__mesh_area(leaf);
-        return TB_OK;
+        return true;
     }
     double sc;
     if (leaf->kind == TB_PRIM_SPHERE && tb__similarity(&leaf->to_world, &sc)) {
@@ -101,8 +99,17 @@ tb_status tb__scene_leaf_area(const tb_object *leaf, double *area)
          * exactly, instead of two fine tessellations (a render's largest
          * fixed cost on a scene with a lamp globe). */
         *area = 4.0 * TB_PI * sc * sc;
-        return TB_OK;
+        return true;
     }
+    return false;
+}
+
+tb_status tb__scene_leaf_area(const tb_object *leaf, double *area)
+{
+    if (tb_prim_is_csg(leaf->kind))
+        return tb_error(TB_ERR_UNSUPPORTED, "scene: no area for a CSG node");
+    if (tb__scene_leaf_area_exact(leaf, area))
+        return TB_OK;
     double fine;
     tb_status st = tb__tess_area(leaf, TB__AREA_ANGLE_FINE, &fine);
     if (st)
