@@ -164,6 +164,13 @@ def main():
         fail("missing scene: the message does not name it: " + p.stderr)
     if os.path.exists(bad):
         fail("a failed study left %s behind" % bad)
+    # a render that fails: exit 1, the cell and the end of its log named, no report
+    p = run([box, "-o", bad, "--methods", "path", "--budgets", "1", "--seeds", "1", "--reference-spp", "1",
+             "--args", "path=--max-depth 9999"], 1, "failing render")
+    if "failed (exit status 2)" not in p.stderr or "log.txt" not in p.stderr or "--max-depth" not in p.stderr:
+        fail("failing render: " + p.stderr)
+    if os.path.exists(os.path.join(bad, "index.html")) or os.path.exists(os.path.join(bad, "study.json")):
+        fail("a failed study wrote its report")
 
     # 2. convergence of the path tracer
     out = os.path.join(TMP, "conv")

@@ -649,6 +649,8 @@ int tb_cmd_study(int argc, char **argv)
                   tb__arg(&j->args, "--spp") && tb__arg(&j->args, "%d", spp) && tb__arg(&j->args, "--passes") &&
                   tb__arg(&j->args, "%d", passes) && tb__arg(&j->args, "--seed") &&
                   tb__arg(&j->args, "%d", TB__STUDY_REFERENCE_SEED);
+        if (ok && !strcmp(st.reference_method, "raytrace"))
+            ok = tb__arg(&j->args, "--backend") && tb__arg(&j->args, "cpu");
         if (!ok) {
             fprintf(stderr, "testbed study: a render's command line is too long\n");
             goto done;
