@@ -470,8 +470,8 @@ int tb_cmd_study(int argc, char **argv)
         {"budgets", .type = TB_OPT_CUSTOM, .dest = &st, .metavar = "B,...", .parse = tb__study_parse_budgets,
          .help = "increasing budgets (default 1,2,4,8,16); what one means per method:\ndocs/study.md, \"Budgets\""},
         {"budget-kind", .type = TB_OPT_CHOICE, .dest = &kind, .choices = kinds,
-         .help = "spp (default: samples per pixel; radiosity: B times the default number of\n"
-                 "elements) or seconds (each renderer's --time-budget)"},
+         .help = "spp (default: samples per pixel; radiosity: about sqrt(B) times the elements\n"
+                 "of budget 1, see --radiosity-edge) or seconds (each renderer's --time-budget)"},
         {"seeds", .type = TB_OPT_INT, .dest = &st.nseeds, .min = 1, .max = TB_STUDY_MAX_SEEDS, .metavar = "N",
          .help = "renders per method and budget, with seeds 0 .. N-1 (default %D)"},
         {"reference", .type = TB_OPT_REPEAT, .dest = &refs, .metavar = "REF.exr",
@@ -528,6 +528,12 @@ int tb_cmd_study(int argc, char **argv)
                                   refs.n, npos);
     if (refs.n && ref_spp_seen)
         return tb_cli_usage_error(&cli, "--reference-spp renders a reference: not with --reference");
+    int ref_pass_spp = st.reference_spp, ref_passes = 1;
+    while (ref_pass_spp > 256 && ref_pass_spp % 2 == 0) /* passes of at most 256 samples where N allows */
+        ref_pass_spp /= 2, ref_passes *= 2;
+    if (ref_pass_spp > 65536)
+        return tb_cli_usage_error(&cli, "--reference-spp %d: more than 65536 needs a multiple of a power of two "
+                                        "(passes of at most 65536 samples)", st.reference_spp);
     if (st.kind == TB_STUDY_SPP)
         for (int b = 0; b < st.nbudgets; b++)
             if (st.budgets[b] != floor(st.budgets[b]) || st.budgets[b] > 65536)
@@ -614,13 +620,13 @@ int tb_cmd_study(int argc, char **argv)
             tb_image_free(st.scenes[i].ref);
         return TB_EXIT_FAIL;
     }
-    char exe[PATH_MAX];
-    ssize_t exe_len = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    if (exe_len <= 0) {
-        fprintf(stderr, "testbed study: cannot find this program (/proc/self/exe): %s\n", strerror(errno));
+    /* the renders run this very binary: /proc/self/exe in the spawned child is
+     * the parent's image, even if the file was rebuilt since the study began */
+    const char *exe = "/proc/self/exe";
+    if (access(exe, X_OK)) {
+        fprintf(stderr, "testbed study: cannot run this program again (%s): %s\n", exe, strerror(errno));
         goto fail_scenes;
     }
-    exe[exe_len] = 0;
 
     /* the plan: references first (their failures show early), then the cells */
     st.ncells = (size_t)st.nscenes * (size_t)st.nmethods * (size_t)st.nbudgets * (size_t)st.nseeds;
@@ -641,9 +647,7 @@ int tb_cmd_study(int argc, char **argv)
         tb__job *j = &jobs[nj++];
         j->scene = s;
         snprintf(j->dir, sizeof j->dir, "%s/reference/%s", st.out, sc->name);
-        int spp = st.reference_spp, passes = 1;
-        while (spp > 256 && spp % 2 == 0) /* passes of at most 256 samples: the same image, a finer bar in the log */
-            spp /= 2, passes *= 2;
+        int spp = ref_pass_spp, passes = ref_passes;
         sc->reference_spp = (double)spp * passes;
         bool ok = tb__arg(&j->args, "--method") && tb__arg(&j->args, "%s", st.reference_method) &&
                   tb__arg(&j->args, "--spp") && tb__arg(&j->args, "%d", spp) && tb__arg(&j->args, "--passes") &&
