@@ -183,15 +183,17 @@ static tb_status tb__mkdir(const char *path)
 
 /* ------------------------------------------------------------- statistics */
 
-static void tb__summarise(const tb_study *st, int s, tb__scene_report *r)
+static tb_status tb__summarise(const tb_study *st, int s, tb__scene_report *r)
 {
     int k = st->nseeds;
     double *v[6];
+    bool ok = true;
     for (int i = 0; i < 6; i++)
-        v[i] = malloc(sizeof(double) * (size_t)k);
+        ok = (v[i] = malloc(sizeof(double) * (size_t)k)) && ok;
     double *allx = malloc(sizeof(double) * (size_t)(st->nbudgets * k));
     double *ally = malloc(sizeof(double) * (size_t)(st->nbudgets * k));
-    for (int m = 0; m < st->nmethods; m++) {
+    ok = ok && allx && ally;
+    for (int m = 0; ok && m < st->nmethods; m++) {
         double tx[TB_STUDY_MAX_BUDGETS], ty[TB_STUDY_MAX_BUDGETS];
         int n = 0;
         for (int b = 0; b < st->nbudgets; b++) {
@@ -213,6 +215,7 @@ static void tb__summarise(const tb_study *st, int s, tb__scene_report *r)
         free(v[i]);
     free(allx);
     free(ally);
+    return ok ? TB_OK : tb_error(TB_ERR_NOMEM, "out of memory");
 }
 
 /* The mean curves of method m: x = mean wall seconds, y = mean relMSE, by budget. */
@@ -960,8 +963,9 @@ tb_status tb_study_write_outputs(tb_study *st)
             e = tb_error(TB_ERR_NOMEM, "out of memory");
             break;
         }
-        tb__summarise(st, s, &reps[s]);
-        e = tb__display_images(st, s, &reps[s]);
+        e = tb__summarise(st, s, &reps[s]);
+        if (!e)
+            e = tb__display_images(st, s, &reps[s]);
         if (!e)
             e = tb__plots(st, s, &reps[s]);
     }
