@@ -162,6 +162,17 @@ def main():
     p = run([os.path.join(TMP, "missing.mid"), "-o", bad], 1, "missing scene")
     if "missing.mid" not in p.stderr:
         fail("missing scene: the message does not name it: " + p.stderr)
+    p = run([box, "-o", bad, "--reference", os.path.join(TMP, "nope.exr")], 1, "missing reference")
+    if "nope.exr" not in p.stderr:
+        fail("missing reference: the message does not name it: " + p.stderr)
+    tiny = os.path.join(TMP, "tiny.mid")
+    open(tiny, "w").write(text.replace("resolution = [512 512]", "resolution = [16 16]"))
+    tiny_ref = os.path.join(TMP, "tiny.exr")
+    subprocess.run([TESTBED, "render", tiny, "--spp", "1", "--backend", "cpu", "-o", tiny_ref], check=True,
+                   capture_output=True)
+    p = run([box, "-o", bad, "--reference", tiny_ref], 1, "reference of another size")
+    if "is 16x16, the renders of" not in p.stderr or "32x32" not in p.stderr:
+        fail("reference of another size: " + p.stderr)
     if os.path.exists(bad):
         fail("a failed study left %s behind" % bad)
     # a render that fails: exit 1, the cell and the end of its log named, no report
