@@ -44,6 +44,8 @@ int tb_cmd_render(int argc, char **argv);
 int tb_cmd_render_radiosity(int argc, char **argv);
 /* `testbed render SCENE --method hybrid`: radiosity + ray tracing (cmd_render_hybrid.c; called by tb_cmd_render). */
 int tb_cmd_render_hybrid(int argc, char **argv);
+/* `testbed study SCENE... -o DIR`: methods x budgets x seeds against a reference (cmd_study.c, study_report.c). */
+int tb_cmd_study(int argc, char **argv);
 /* `testbed trace SCENE --rays RAYS --hits HITS`: closest hits of a ray file (cmd_trace.c). */
 int tb_cmd_trace(int argc, char **argv);
 /* `testbed validate SCENE`: Vulkan kernels vs the CPU path (cmd_validate.c). */
