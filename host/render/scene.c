@@ -836,13 +836,19 @@ tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel
         return tb_error(TB_ERR_ARG, "scene: NULL argument");
     int64_t t0 = tb_stats_now_ns();
     tb_timer_token tt = tb_timer_start(&tb__t_accel);
-    /* The triangle references' corners, for the build to copy in its order. */
-    tb_accel_tri *tris = s->nprims ? malloc(sizeof *tris * s->nprims) : NULL;
-    if (s->nprims && !tris) {
+    /* The triangle references' corners, for the build to copy in its order;
+     * none when there is no triangle reference (the structure then keeps no
+     * 80-byte record per reference: every one goes to the callbacks, as a
+     * whole-object reference does anyway). */
+    bool any_tri = false;
+    for (size_t k = 0; k < s->nprims && !any_tri; k++)
+        any_tri = s->prims[k].sub != TB_SCENE_WHOLE_OBJECT;
+    tb_accel_tri *tris = any_tri ? malloc(sizeof *tris * s->nprims) : NULL;
+    if (any_tri && !tris) {
         tb_timer_stop(tt);
         return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", s->nprims);
     }
-    for (size_t k = 0; k < s->nprims; k++) {
+    for (size_t k = 0; tris && k < s->nprims; k++) {
         const tb_accel_prim *r = &s->prims[k];
         if (r->sub == TB_SCENE_WHOLE_OBJECT)
             tris[k] = (tb_accel_tri){.object = TB_ACCEL_TRI_NONE};
