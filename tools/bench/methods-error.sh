@@ -148,9 +148,9 @@ ladder() {
             path) printf '%s\n' "path|path|1 spp|--spp 1" "path|path|4 spp|--spp 4" "path|path|16 spp|--spp 16" ;;
             radiosity) printf '%s\n' "radiosity|radiosity|edge 160, 1%|--max-edge 160 --threshold 0.01" ;;
             hybrid) printf '%s\n' "hybrid|interpolated|edge 160, 1 spp|--max-edge 160 --threshold 0.01 --spp 1" \
-                                  "hybrid|interpolated|edge 160, 4 spp|--max-edge 160 --threshold 0.01 --spp 4" ;;
+                                  "hybrid|interpolated|edge 80, 4 spp|--max-edge 80 --threshold 0.01 --spp 4" ;;
             gather) printf '%s\n' "hybrid|gather|edge 160, 1 spp|--max-edge 160 --threshold 0.01 --spp 1 --hybrid-mode gather" \
-                                  "hybrid|gather|edge 160, 4 spp|--max-edge 160 --threshold 0.01 --spp 4 --hybrid-mode gather" ;;
+                                  "hybrid|gather|edge 80, 4 spp|--max-edge 80 --threshold 0.01 --spp 4 --hybrid-mode gather" ;;
         esac
         return
     fi
