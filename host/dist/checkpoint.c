@@ -222,3 +222,74 @@ tb_render_persist tb_ckpt_render_persist(tb_ckpt_render *c)
 {
     return (tb_render_persist){.ctx = c, .restore = tb__ckpt_restore, .save = tb__ckpt_save};
 }
+
+/* ------------------------------------------------- a radiosity solve */
+
+static tb_status tb__ckpt_rad_restore(void *ctx, tb_rad_solver *s)
+{
+    tb_ckpt_rad *c = ctx;
+    c->last_save = tb__dist_now();
+    if (!c->resume_path)
+        return TB_OK;
+    void *buf = NULL;
+    size_t len = 0;
+    uint64_t units = 0;
+    tb_status st = TB_OK;
+    if (tb_dist_rank() == 0)
+        st = tb_ckpt_read(c->resume_path, TB_CKPT_RADIOSITY, c->key, &buf, &len, &units);
+    /* rank 0 read it (or failed); the others get its bytes */
+    if ((st = tb_dist_agree_status(st, NULL)))
+        return st;
+    if (tb_dist_size() > 1) {
+        uint64_t n = tb_dist_rank() == 0 ? (uint64_t)len : 0;
+        if ((st = tb_dist_bcast_bytes(&n, sizeof n)))
+            return st;
+        if (tb_dist_rank() != 0) {
+            len = (size_t)n;
+            if (!(buf = malloc(len ? len : 1)))
+                st = tb_error(TB_ERR_NOMEM, "out of memory for a checkpoint of %zu bytes", len);
+        }
+        if ((st = tb_dist_agree_status(st, NULL)) || (st = tb_dist_bcast_bytes(buf, len))) {
+            free(buf);
+            return st;
+        }
+    }
+    st = tb_rad_solver_unpack(s, buf, len);
+    free(buf);
+    if (st)
+        return tb_error_context(st, "%s", c->resume_path);
+    char what[64];
+    snprintf(what, sizeof what, "%llu shots", (unsigned long long)tb_rad_solver_shots(s));
+    if (tb_dist_rank() == 0)
+        tb_ckpt_note(c->resume_path, what);
+    return TB_OK;
+}
+
+static tb_status tb__ckpt_rad_save(void *ctx, const tb_rad_solver *s, bool last)
+{
+    tb_ckpt_rad *c = ctx;
+    if (!c->path || tb_dist_rank() != 0 || (!last && tb__dist_now() - c->last_save < c->every))
+        return TB_OK;
+    size_t len = tb_rad_solver_packed_size(s);
+    void *buf = malloc(len);
+    if (!buf)
+        return tb_error(TB_ERR_NOMEM, "out of memory for a checkpoint of %zu bytes", len);
+    tb_rad_solver_pack(s, buf);
+    uint64_t shots = tb_rad_solver_shots(s);
+    tb_status st = tb_ckpt_write(c->path, TB_CKPT_RADIOSITY, c->key, shots, buf, len);
+    free(buf);
+    if (st)
+        return st;
+    c->last_save = tb__dist_now();
+    char what[64];
+    snprintf(what, sizeof what, "%llu shots", (unsigned long long)shots);
+    tb_ckpt_note(c->path, what);
+    if (!c->quiet && last)
+        fprintf(stderr, "testbed: checkpoint %s: %s\n", c->path, what);
+    return TB_OK;
+}
+
+tb_rad_persist tb_ckpt_rad_persist(tb_ckpt_rad *c)
+{
+    return (tb_rad_persist){.ctx = c, .restore = tb__ckpt_rad_restore, .save = tb__ckpt_rad_save};
+}

@@ -18,6 +18,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "host/radiosity/render.h"
 #include "host/render/render.h"
 #include "util/base/error.h"
 
@@ -62,6 +63,23 @@ typedef struct tb_ckpt_render {
 
 /* The persist callbacks over `c` (which must outlive the render). */
 tb_render_persist tb_ckpt_render_persist(tb_ckpt_render *c);
+
+/* The checkpoints of a radiosity solve (tb_rad_persist of
+ * host/radiosity/render.h): the solver's packed state (tb_rad_solver_pack).
+ * In a job of several ranks rank 0 reads the checkpoint and broadcasts it
+ * (no shared file system needed), and rank 0 alone writes. */
+typedef struct tb_ckpt_rad {
+    const char *path;        /* where to save, or NULL: never */
+    double every;            /* seconds between saves (0: after every shot); the last shot always saves */
+    const char *resume_path; /* checkpoint to continue, or NULL */
+    uint64_t key;            /* the job key (scene and options) */
+    double last_save;        /* clock of the last save (set by the persist) */
+    bool quiet;              /* no line on stderr per save */
+} tb_ckpt_rad;
+
+/* The persist callbacks over `c` (which must outlive the solve); every
+ * rank of a job calls them. */
+tb_rad_persist tb_ckpt_rad_persist(tb_ckpt_rad *c);
 
 /* Says where the last checkpoint is when the launcher stops this process
  * (SIGTERM, as mpirun does when another rank dies): installs a handler that

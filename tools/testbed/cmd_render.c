@@ -4,6 +4,7 @@
  * (host/render/render_file.h); this file holds the options, the Ctrl-C
  * handler, the Vulkan backend (host/render may not use host/gpu) and the
  * summary lines. */
+#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -41,6 +42,28 @@ static int tb__render_filter(const char *val, void *dest, char *why, size_t len)
         return 0;
     snprintf(why, len, "%s", tb_last_error());
     return 1;
+}
+
+/* --memory-budget BYTES: a whole number of bytes, or with a binary suffix
+ * k, M, G or T (1 k = 1024 bytes): 512M, 2G. */
+static int tb__render_budget(const char *val, void *dest, char *why, size_t len)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(val, &end);
+    double mul = 1.0;
+    if (*end && !end[1]) {
+        const char *units = "kMGT", *u = strchr(units, *end == 'K' ? 'k' : *end);
+        if (u && *end)
+            mul = ldexp(1.0, 10 * (int)(u - units + 1)), end++;
+    }
+    v *= mul;
+    if (end == val || *end || errno || !(v >= 1.0) || v > 0x1p62 || v != floor(v)) {
+        snprintf(why, len, "'%s' is not a number of bytes >= 1 (e.g. 1000000, 512M, 2G)", val);
+        return 1;
+    }
+    *(size_t *)dest = (size_t)v;
+    return 0;
 }
 
 /* The command's side of tb_render_file: the Ctrl-C handler around the
@@ -213,6 +236,9 @@ static int tb__cmd_render(int argc, char **argv)
         {"resume", .type = TB_OPT_STRING, .dest = &resume_path, .metavar = "FILE",
          .help = "continue the render saved in FILE (same scene and options; --passes\n"
                  "may grow): the image equals an uninterrupted run's bit for bit"},
+        {"memory-budget", .type = TB_OPT_CUSTOM, .dest = &o.scene.memory_budget, .metavar = "BYTES",
+         .parse = tb__render_budget,
+         .help = "refuse, before loading, a scene predicted to need more (512M, 2G; docs/performance.md)"},
         {"exposure", .type = TB_OPT_DOUBLE, .dest = &o.exposure, .min = -INFINITY, .max = INFINITY, .metavar = "STOPS",
          .help = "PNG/RLE only: scale by 2^STOPS (default: mean luminance to 0.18)"},
         {"stats", .type = TB_OPT_STRING, .dest = &o.stats_path, .metavar = "FILE.json",

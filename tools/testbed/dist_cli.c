@@ -8,7 +8,7 @@
 const char *const tb_cli_free_opts[] = {"-o", "--threads", "--passes", "--time-budget", "--checkpoint",
                                         "--checkpoint-every", "--resume", "--stats", "--sample-map", "--report",
                                         "--reference", "--exposure", "--backend", "--device", "--patches",
-                                        "--mesh", "--fed", "--gltf", NULL};
+                                        "--mesh-out", "--threshold", "--max-shots", NULL};
 
 /* True if argv[i] is one of `free_opts` ("--name" or "--name=value"); *skip
  * is 1 if its value is the next argument. */
