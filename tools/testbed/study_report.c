@@ -487,7 +487,15 @@ static tb_status tb__plots(const tb_study *st, int s, tb__scene_report *r)
         if (plot == 0)
             fprintf(f, "set xlabel '%s per render (mean over seeds)'\n", tb__time_name(st));
         else
-            fprintf(f, "set xlabel 'budget (%s)'\n", st->kind == TB_STUDY_SPP ? "samples per pixel" : "seconds");
+        {
+            bool rad = false;
+            for (int m = 0; m < st->nmethods; m++)
+                rad = rad || st->methods[m] == TB_STUDY_RADIOSITY;
+            fprintf(f, "set xlabel 'budget (%s)'\n",
+                    st->kind == TB_STUDY_SECONDS ? "seconds"
+                    : rad                        ? "samples per pixel; radiosity: mesh refinement"
+                                                 : "samples per pixel");
+        }
         fprintf(f, "set title ");
         char title[200];
         snprintf(title, sizeof title, "%s: relMSE against %s", name, plot == 0 ? "time" : "budget");
