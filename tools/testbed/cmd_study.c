@@ -694,7 +694,9 @@ int tb_cmd_study(int argc, char **argv)
             k += snprintf(j->key + k, sizeof j->key - (size_t)k, " %s", j->args.v[a]);
         char rec[PATH_MAX + 16];
         snprintf(rec, sizeof rec, "%s/cell.json", j->dir);
-        j->finished = tb__cell_finished(rec, j->key, &j->rec);
+        char img[PATH_MAX + 16];
+        snprintf(img, sizeof img, "%s/image.exr", j->dir);
+        j->finished = tb__cell_finished(rec, j->key, &j->rec) && access(img, R_OK) == 0; /* image deleted: again */
         if (!j->finished)
             todo_units += j->units, todo++;
     }
