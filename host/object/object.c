@@ -12,6 +12,10 @@
 #include "util/math/mat.h"
 #include "util/mesh/fed.h"
 #include "util/mesh/predicates.h"
+#include "util/stats/stats.h"
+
+TB_STAT_COUNTER(tb__n_fed_reads, "Object/FED files read");
+TB_STAT_COUNTER(tb__n_fed_shared, "Object/FED references shared");
 
 /* Largest regular prism tested edge by edge; above it the sector test is used. */
 #define TB__PRISM_PROFILE_MAX 64
@@ -100,28 +104,73 @@ uint32_t tb__face_count(tb_prim_kind kind, const tb_mid_geometry *g)
 
 /* ------------------------------------------------------------------ geometry */
 
-/* Polygons from a FED file: load it, and give param and bounds the inline
- * form (vertices, outer loops as polygons). */
-static tb_status tb__load_fed(tb_object *o, const tb_geom_polygons *src)
+/* ------------------------------------------------------------------ shared FED files */
+
+/* One FED file read once for every object of a cache that refers to it: the
+ * loaded mesh and its inline form (geometry arrays), owned here and lent to
+ * the objects. Freed when its last holder (the cache or an object) lets go. */
+struct tb__fed_shared {
+    char *path;             /* the resolved path: the key */
+    tb_fed *fed;
+    tb_geom_polygons inl;   /* vertices, normals, uvs, face_start, indices (owned) */
+    size_t refs;            /* the cache's reference and one per object */
+    struct tb__fed_shared *next;
+};
+
+struct tb_object_fed_cache {
+    struct tb__fed_shared *head;
+    size_t files;           /* files read through this cache */
+    size_t bytes;           /* their memory (FED mesh and inline form) */
+};
+
+tb_object_fed_cache *tb_object_fed_cache_new(void) { return calloc(1, sizeof(tb_object_fed_cache)); }
+
+static void tb__fed_shared_release(struct tb__fed_shared *e)
 {
-    tb_geom_polygons *g = &o->geom.polygons;
-    const char *path = src->mesh.path ? src->mesh.path : src->mesh.text;
-    o->mesh_file.text = tb_strdup(src->mesh.text);
-    o->mesh_file.path = tb_strdup(src->mesh.path);
-    if (!o->mesh_file.text || (src->mesh.path && !o->mesh_file.path))
-        return tb_error(TB_ERR_NOMEM, "out of memory");
+    if (!e || --e->refs > 0)
+        return;
+    free((void *)e->inl.vertices);
+    free((void *)e->inl.normals);
+    free((void *)e->inl.uvs);
+    free((void *)e->inl.face_start);
+    free((void *)e->inl.indices);
+    tb_fed_free(e->fed);
+    free(e->path);
+    free(e);
+}
+
+void tb_object_fed_cache_free(tb_object_fed_cache *c)
+{
+    if (!c)
+        return;
+    for (struct tb__fed_shared *e = c->head, *n; e; e = n) {
+        n = e->next;
+        tb__fed_shared_release(e);
+    }
+    free(c);
+}
+
+size_t tb_object_fed_cache_files(const tb_object_fed_cache *c) { return c ? c->files : 0; }
+
+size_t tb_object_fed_cache_bytes(const tb_object_fed_cache *c) { return c ? c->bytes : 0; }
+
+/* Reads the FED file at `path` and makes its inline form in g (vertices,
+ * outer loops as polygons; owned by the caller, also on failure). */
+static tb_status tb__read_fed(const char *path, const char *text, tb_fed **out, tb_geom_polygons *g)
+{
     tb_fed *fed = NULL;
     tb_status st = tb_fed_read_file(path, &fed);
     if (st)
-        return tb_error_context(st, "polygons: mesh file(\"%s\")", src->mesh.text);
-    o->fed = fed;
+        return tb_error_context(st, "polygons: mesh file(\"%s\")", text);
+    tb_stat_add(&tb__n_fed_reads, 1);
+    *out = fed;
     if (fed->nfaces == 0)
-        return tb_error(TB_ERR_ARG, "polygons: mesh file(\"%s\") has no faces", src->mesh.text);
+        return tb_error(TB_ERR_ARG, "polygons: mesh file(\"%s\") has no faces", text);
     size_t nidx = 0;
     for (uint32_t f = 0; f < fed->nfaces; f++)
         nidx += tb_fed_loop_size(fed, tb_fed_face_outer(fed, f));
     if (nidx > (size_t)INT32_MAX)
-        return tb_error(TB_ERR_ARG, "polygons: mesh file(\"%s\") is too large", src->mesh.text);
+        return tb_error(TB_ERR_ARG, "polygons: mesh file(\"%s\") is too large", text);
     bool ok = true;
     g->nvertices = (int)fed->nverts;
     g->nfaces = (int)fed->nfaces;
@@ -132,7 +181,7 @@ static tb_status tb__load_fed(tb_object *o, const tb_geom_polygons *src)
     g->face_start = start;
     g->indices = idx;
     if (!ok || !start || !idx)
-        return tb_error(TB_ERR_NOMEM, "polygons: out of memory for mesh file(\"%s\")", src->mesh.text);
+        return tb_error(TB_ERR_NOMEM, "polygons: out of memory for mesh file(\"%s\")", text);
     int k = 0;
     for (uint32_t f = 0; f < fed->nfaces; f++) {
         uint32_t l = tb_fed_face_outer(fed, f), n = tb_fed_loop_size(fed, l);
@@ -141,15 +190,72 @@ static tb_status tb__load_fed(tb_object *o, const tb_geom_polygons *src)
             idx[k++] = (int)tb_fed_loop_vertex(fed, l, i);
     }
     start[fed->nfaces] = k;
+    return TB_OK;
+}
+
+/* Bytes of a FED mesh's arrays and of its inline form. */
+static size_t tb__fed_bytes(const tb_fed *f, const tb_geom_polygons *g)
+{
+    size_t nv = f->nverts, nf = f->nfaces, nl = f->nloops, nc = f->ncorners, ne = f->nedges;
+    size_t n = sizeof *f + nv * sizeof(tb_vec3) * (1 + (f->normals != NULL)) + nv * sizeof(tb_vec2) * (f->uvs != NULL);
+    n += nf * sizeof(int32_t) * ((f->face_ids != NULL) + (f->face_materials != NULL));
+    n += sizeof(uint32_t) * ((nf + 1) + (nl + 1) + nl + 3 * nc + (ne + 1) + nc + (nv + 1));
+    n += sizeof(tb_fed_edge) * ne;
+    if (f->vert_faces)
+        n += sizeof(uint32_t) * f->vert_faces[nv];
+    n += (size_t)g->nvertices * (sizeof(tb_vec3) * (1 + (g->normals != NULL)) + sizeof(tb_vec2) * (g->uvs != NULL));
+    n += ((size_t)g->nfaces + 1 + (size_t)g->face_start[g->nfaces]) * sizeof(int);
+    return n;
+}
+
+/* Polygons from a FED file: load it (or, with a cache, take the copy read
+ * for an earlier object), and give param and bounds the inline form. */
+static tb_status tb__load_fed(tb_object *o, const tb_geom_polygons *src, tb_object_fed_cache *cache)
+{
+    tb_geom_polygons *g = &o->geom.polygons;
+    const char *path = src->mesh.path ? src->mesh.path : src->mesh.text;
+    o->mesh_file.text = tb_strdup(src->mesh.text);
+    o->mesh_file.path = tb_strdup(src->mesh.path);
+    if (!o->mesh_file.text || (src->mesh.path && !o->mesh_file.path))
+        return tb_error(TB_ERR_NOMEM, "out of memory");
+    if (!cache) {
+        tb_status st = tb__read_fed(path, src->mesh.text, &o->fed, g);
+        return st ? st : tb__mesh_build(o);
+    }
+    struct tb__fed_shared *e = cache->head;
+    while (e && strcmp(e->path, path) != 0)
+        e = e->next;
+    if (e) {
+        tb_stat_add(&tb__n_fed_shared, 1);
+    } else {
+        if (!(e = calloc(1, sizeof *e)) || !(e->path = tb_strdup(path))) {
+            free(e);
+            return tb_error(TB_ERR_NOMEM, "out of memory");
+        }
+        e->refs = 1;
+        tb_status st = tb__read_fed(path, src->mesh.text, &e->fed, &e->inl);
+        if (st) {
+            tb__fed_shared_release(e);
+            return st;
+        }
+        e->next = cache->head;
+        cache->head = e;
+        cache->files++;
+        cache->bytes += tb__fed_bytes(e->fed, &e->inl);
+    }
+    e->refs++;
+    o->fed_shared = e;
+    o->fed = e->fed;
+    *g = e->inl;
     return tb__mesh_build(o);
 }
 
-static tb_status tb__copy_polygons(tb_object *o, const tb_geom_polygons *src)
+static tb_status tb__copy_polygons(tb_object *o, const tb_geom_polygons *src, tb_object_fed_cache *cache)
 {
     tb_geom_polygons *g = &o->geom.polygons;
     memset(g, 0, sizeof *g);
     if (src->mesh.text)
-        return tb__load_fed(o, src);
+        return tb__load_fed(o, src, cache);
     if (src->nvertices < 0 || src->nfaces < 0 || (src->nvertices > 0 && !src->vertices) ||
         (src->nfaces > 0 && (!src->face_start || !src->indices)))
         return tb_error(TB_ERR_ARG, "polygons: inconsistent vertex or face arrays");
@@ -187,7 +293,7 @@ static tb_status tb__copy_polygons(tb_object *o, const tb_geom_polygons *src)
 
 /* Copies and checks the parameters of a primitive and derives the
  * intersection data. */
-static tb_status tb__copy_geometry(tb_object *o, const tb_mid_geometry *src)
+static tb_status tb__copy_geometry(tb_object *o, const tb_mid_geometry *src, tb_object_fed_cache *cache)
 {
     tb_mid_geometry *g = &o->geom;
     switch (o->kind) {
@@ -286,7 +392,7 @@ static tb_status tb__copy_geometry(tb_object *o, const tb_mid_geometry *src)
         o->closed = true;
         return TB_OK;
     case TB_PRIM_POLYGONS:
-        return tb__copy_polygons(o, &src->polygons);
+        return tb__copy_polygons(o, &src->polygons, cache);
     case TB_PRIM_CONIC: {
         g->conic = src->conic;
         const tb_geom_conic *c = &g->conic;
@@ -339,7 +445,8 @@ static tb_status tb__copy_geometry(tb_object *o, const tb_mid_geometry *src)
 static void tb__object_clear(tb_object *o);
 
 static tb_status tb__build(tb_object *o, const tb_mid_object *m, uint32_t index, const tb_object *parent,
-                           bool flip, uint32_t *face_next, tb_object_material_fn material, void *user, int depth)
+                           bool flip, uint32_t *face_next, tb_object_material_fn material, void *user,
+                           tb_object_fed_cache *cache, int depth)
 {
     memset(o, 0, sizeof *o);
     o->kind = m->kind;
@@ -370,7 +477,7 @@ static tb_status tb__build(tb_object *o, const tb_mid_object *m, uint32_t index,
     if (!tb_prim_is_csg(m->kind)) {
         if (m->nchildren > 0)
             return tb_error(TB_ERR_ARG, "%s: only CSG nodes may contain objects", tb_prim_kind_name(m->kind));
-        if ((st = tb__copy_geometry(o, &m->geom)))
+        if ((st = tb__copy_geometry(o, &m->geom, cache)))
             return tb_error_context(st, "%s", tb_prim_kind_name(m->kind));
         if (o->kind == TB_PRIM_CYLINDER || o->kind == TB_PRIM_CONE || o->kind == TB_PRIM_CONIC)
             tb__revolved_prepare(o);
@@ -394,7 +501,7 @@ static tb_status tb__build(tb_object *o, const tb_mid_object *m, uint32_t index,
     o->closed = true;
     for (int i = 0; i < m->nchildren; i++) {
         bool f = flip ^ (m->kind == TB_PRIM_DIFFERENCE && i > 0);
-        st = tb__build(&o->children[i], &m->children[i], index, o, f, face_next, material, user, depth + 1);
+        st = tb__build(&o->children[i], &m->children[i], index, o, f, face_next, material, user, cache, depth + 1);
         if (st)
             return tb_error_context(st, "%s child %d", tb_prim_kind_name(m->kind), i);
         if (!o->children[i].closed)
@@ -410,6 +517,12 @@ static tb_status tb__build(tb_object *o, const tb_mid_object *m, uint32_t index,
 tb_status tb_object_from_mid(const tb_mid_object *m, uint32_t index, tb_object_material_fn material, void *user,
                              tb_object **out)
 {
+    return tb_object_from_mid_shared(m, index, material, user, NULL, out);
+}
+
+tb_status tb_object_from_mid_shared(const tb_mid_object *m, uint32_t index, tb_object_material_fn material,
+                                    void *user, tb_object_fed_cache *cache, tb_object **out)
+{
     if (!out)
         return tb_error(TB_ERR_ARG, "tb_object_from_mid: NULL output");
     *out = NULL;
@@ -419,7 +532,7 @@ tb_status tb_object_from_mid(const tb_mid_object *m, uint32_t index, tb_object_m
     if (!o)
         return tb_error(TB_ERR_NOMEM, "out of memory");
     uint32_t next = 0;
-    tb_status st = tb__build(o, m, index, NULL, false, &next, material, user, 0);
+    tb_status st = tb__build(o, m, index, NULL, false, &next, material, user, cache, 0);
     if (st) {
         tb_object_free(o);
         return st;
@@ -442,14 +555,18 @@ static void tb__object_clear(tb_object *o)
     free(o->profile);
     if (o->kind == TB_PRIM_POLYGONS) {
         tb_geom_polygons *g = &o->geom.polygons;
-        free((void *)g->vertices);
-        free((void *)g->normals);
-        free((void *)g->uvs);
-        free((void *)g->face_start);
-        free((void *)g->indices);
+        if (o->fed_shared) {
+            tb__fed_shared_release(o->fed_shared); /* the FED and inline arrays are its */
+        } else {
+            free((void *)g->vertices);
+            free((void *)g->normals);
+            free((void *)g->uvs);
+            free((void *)g->face_start);
+            free((void *)g->indices);
+            tb_fed_free(o->fed);
+        }
         free((void *)o->mesh_file.text);
         free((void *)o->mesh_file.path);
-        tb_fed_free(o->fed);
     } else if (o->kind == TB_PRIM_PRISM) {
         free((void *)o->geom.prism.profile);
     }

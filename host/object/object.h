@@ -65,6 +65,14 @@ typedef struct tb_object_mesh {
 
 typedef struct tb_object tb_object;
 
+/* FED files shared by the objects built through one cache (a scene): each
+ * resolved path is read once, and every polygons object referring to it
+ * borrows the loaded mesh and its inline form (docs/fed.md, "Shared files").
+ * Refcounted: the cache and each such object hold a reference, so objects
+ * may outlive the cache. Not thread-safe: build and free the objects of one
+ * cache from one thread at a time. */
+typedef struct tb_object_fed_cache tb_object_fed_cache;
+
 /* A primitive or a CSG node with its children. */
 struct tb_object {
     tb_prim_kind kind;
@@ -78,6 +86,8 @@ struct tb_object {
                                 are in `fed` */
     tb_object_mesh *mesh;    /* polygons: the triangulated mesh; NULL for other kinds */
     struct tb_fed *fed;      /* polygons from a FED file: the loaded mesh (util/mesh/fed.h); NULL otherwise */
+    struct tb__fed_shared *fed_shared; /* when fed and the geom arrays are borrowed from a
+                                tb_object_fed_cache entry (private); NULL when the object owns them */
     tb_mid_ref mesh_file;    /* polygons from a FED file: the reference as written and resolved (owned copies) */
     int nchildren;
     tb_object *children;     /* CSG nodes: the children, in MID order */
@@ -116,6 +126,24 @@ typedef tb_status (*tb_object_material_fn)(void *user, const tb_mid_material *m,
  * TB_ERR_IO or TB_ERR_FORMAT, with the file named). *out is NULL on failure. */
 tb_status tb_object_from_mid(const tb_mid_object *m, uint32_t index, tb_object_material_fn material,
                              void *user, tb_object **out);
+
+/* tb_object_from_mid with FED files shared through `cache` (NULL: each
+ * object reads its own copy): a file already read through the cache is not
+ * read again. */
+tb_status tb_object_from_mid_shared(const tb_mid_object *m, uint32_t index, tb_object_material_fn material,
+                                    void *user, tb_object_fed_cache *cache, tb_object **out);
+
+/* A new, empty FED cache; NULL when out of memory. */
+tb_object_fed_cache *tb_object_fed_cache_new(void);
+
+/* Drops the cache's references (files still used by objects stay until those are freed); NULL is allowed. */
+void tb_object_fed_cache_free(tb_object_fed_cache *c);
+
+/* FED files read through the cache so far. */
+size_t tb_object_fed_cache_files(const tb_object_fed_cache *c);
+
+/* Bytes held for them (the FED meshes and their inline forms), counted once however many objects share them. */
+size_t tb_object_fed_cache_bytes(const tb_object_fed_cache *c);
 
 /* Frees an object and its children; NULL is allowed. */
 void tb_object_free(tb_object *obj);

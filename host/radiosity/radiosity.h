@@ -168,6 +168,29 @@ typedef enum tb_rad_ff_method {
 } tb_rad_ff_method;
 
 /* Solver options; zeroed means defaults. */
+/* A shot's receivers shared over the processes of a job (host/dist over
+ * MPI; host/radiosity does not know MPI). Every process runs the same
+ * solver on the same mesh: each computes the ray-cast form factors of its
+ * share of the receiver clusters (cluster c belongs to process c mod
+ * ranks), the shares are gathered, and every process then makes the same
+ * update, so the shooting order and every value are those of one process. */
+typedef struct tb_rad_exchange {
+    void *ctx;  /* passed to every function */
+    int rank;   /* this process */
+    int ranks;  /* processes in the job */
+    /* Collective: every process's `mine` (n_mine values) concatenated in rank
+     * order into all[] (counts[r] values from rank r). */
+    tb_status (*allgather)(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts);
+    /* Rank 0's `flag` on every process (a stop decision that reads a clock). */
+    int (*agree)(void *ctx, int flag);
+    /* The lowest-ranked failure among every process's `st` (its message as
+     * this process's last error), or TB_OK on all. */
+    tb_status (*agree_status)(void *ctx, tb_status st);
+    /* After the solve, on every process: each process's share of the work
+     * into the stats values. NULL: nothing. */
+    tb_status (*report)(void *ctx);
+} tb_rad_exchange;
+
 typedef struct tb_rad_options {
     tb_rad_ff_method ff;  /* form-factor method */
     int samples;          /* ray cast: sample points per shooter; 0: TB_RAD_DEFAULT_SAMPLES */
@@ -181,6 +204,8 @@ typedef struct tb_rad_options {
     const tb_light *lights; /* point, spot and directional lights shot as sources (host/radiosity/lights.h),
                                copied at create; an IES table they point to must outlive the solver */
     int nlights;            /* how many */
+    const tb_rad_exchange *exchange; /* NULL: one process; else ray-cast form factors (CPU backend) shared
+                                      * over processes, the same answer */
 } tb_rad_options;
 
 /* Initial state (e.g. carried over a refinement); NULL arrays mean zero H
@@ -285,6 +310,24 @@ void tb_rad_vertex_irradiance(const tb_rad_solver *s, size_t v, double *out);
 /* The current state (pointers into the solver, valid until the next step
  * or free): what tb_rad_solver_create takes to continue elsewhere. */
 tb_rad_state tb_rad_solver_state(const tb_rad_solver *s);
+
+/* The whole progressive state of a solver as bytes, for checkpoints
+ * (host/dist/checkpoint.h): shots, energy sums, gathered irradiance at
+ * vertices and elements, unshot radiosity and power, lights shot. A solver
+ * made again for the same mesh and options and given these bytes
+ * (tb_rad_solver_unpack) shoots on exactly as the original would have:
+ * shooter order and every value, bit for bit. (The shooters' sample points
+ * come from a seed per shooter, so there is no random stream to save.) */
+size_t tb_rad_solver_packed_size(const tb_rad_solver *s);
+
+/* Writes the state into buf[0 .. tb_rad_solver_packed_size). */
+void tb_rad_solver_pack(const tb_rad_solver *s, void *buf);
+
+/* Replaces the state of `s` (a solver of the same mesh and options) by
+ * packed bytes. TB_ERR_FORMAT if they are short or were packed from a mesh
+ * of another size, channel count or light count; `s` is unchanged then. */
+tb_status tb_rad_solver_unpack(tb_rad_solver *s, const void *buf, size_t len);
+
 
 /* The form factor F_ij from shooter i (a patch; an element on one level) to
  * element j (fraction of the power leaving i that reaches j; 0 for j in i) exactly as a shot from i moves energy: ray cast, A_j / A_i times F_ji, F_ji the mean over j's

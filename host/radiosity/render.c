@@ -104,6 +104,9 @@ static tb_status tb__rad_check(const tb_rad_render_options *o)
         return tb_error(TB_ERR_ARG, "--mesh-out '%s': unknown mesh format (.ply, .gltf, .glb)", o->mesh_path);
     if (!o->report_path != !o->reference_path)
         return tb_error(TB_ERR_ARG, "--report and --reference go together");
+    if (o->adapt.threshold > 0 && o->persist)
+        return tb_error(TB_ERR_ARG, "--checkpoint and --resume are for solves without --adapt (the adaptive "
+                                    "mesh changes between rounds; its checkpoints are not written yet)");
     if (o->adapt.threshold > 0 && o->report_path)
         return tb_error(TB_ERR_ARG, "--report compares with a reference of the same mesh: not with --adapt");
     return TB_OK;
@@ -138,6 +141,27 @@ static void tb__rad_size_text(const tb_rad_mesh_options *mo, bool given, char *s
                  given ? "" : " (default: bounding-box diagonal / " TB__RAD_STR(TB_RAD_DEFAULT_EDGE_DIVISIONS) ")");
     else
         snprintf(size, len, "faces whole");
+}
+
+/* The solver's per-shot callback when a checkpoint is kept: the report
+ * rows every `every` shots, as tb_rad_solver_run would write them, and the
+ * persist's save after every shot (it keeps its own schedule). */
+typedef struct tb__rad_shot_hook {
+    tb__rad_report *rep; /* NULL: no report */
+    uint64_t every, n;   /* rows every `every` shots; shots so far */
+    const tb_rad_persist *persist;
+} tb__rad_shot_hook;
+
+static tb_status tb__rad_on_shot(void *user, const tb_rad_solver *s)
+{
+    tb__rad_shot_hook *h = user;
+    tb_status st = TB_OK;
+    h->n++;
+    if (h->rep && h->n % h->every == 0)
+        st = tb__rad_report_row(h->rep, s);
+    if (!st && h->persist->save)
+        st = h->persist->save(h->persist->ctx, s, false);
+    return st;
 }
 
 /* Everything tb_rad_render holds, freed in one place. */
@@ -273,14 +297,19 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
     tb_rad_mesh_init(&r.mesh);
     tb_rad_options ro = opt->solver;
     tb_rad_adapt_stats as = {0};
-    tb_scene_options so = {.no_accel = true, .threads = opt->threads};
-    if ((st = tb_scene_load(scene_path, &so, &r.scene)))
-        goto done;
-    if (opt->image_path && !r.scene->has_camera) {
+    tb_scene_options so = {.no_accel = true, .no_emitters = true, .threads = opt->threads};
+    const tb_rad_exchange *ex = ro.exchange && ro.exchange->ranks > 1 ? ro.exchange : NULL;
+    bool root = !ex || ex->rank == 0;
+    st = tb_scene_load(scene_path, &so, &r.scene);
+    if (!st && opt->image_path && !r.scene->has_camera)
         st = tb_error(TB_ERR_ARG, "%s: the scene has no camera: use --patches or --mesh-out instead of -o",
                       scene_path);
+    /* every process reads the scene itself; one that cannot stops them all
+     * with its own file:line:col message */
+    if (ex)
+        st = ex->agree_status(ex->ctx, st);
+    if (st)
         goto done;
-    }
     tb_rad_mesh_options mo = opt->mesh;
     if (!opt->mesh_given) {
         mo = tb_rad_default_mesh_options(r.scene);
@@ -290,11 +319,15 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
     if ((st = tb_rad_mesh_from_scene(r.scene, &mo, &r.mesh)))
         goto done;
     t_mesh = 1e-9 * (double)tb_stats_now_ns() - t_mesh;
-    if (opt->reference_path && (st = tb__rad_reference(&r, opt->reference_path)))
+    if (opt->reference_path)
+        st = tb__rad_reference(&r, opt->reference_path);
+    if (ex)
+        st = ex->agree_status(ex->ctx, st);
+    if (st)
         goto done;
     if (opt->backend && (st = opt->backend(opt->backend_user, &r.mesh, &ro)))
         goto done;
-    if (opt->log)
+    if (opt->log && root)
         tb__rad_log_mesh(opt, scene_path, &r, &mo, &ro);
     ro.lights = r.scene->lights; /* the scene outlives the solver (IES tables) */
     ro.nlights = r.scene->nlights;
@@ -303,20 +336,39 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
         /* host/radiosity/adaptive.h: the mesh becomes the refined mesh */
         if ((st = tb_rad_adapt_solve(&r.mesh, &ro, &opt->stop, &opt->adapt, &r.solver, &as)))
             goto done;
-        if (opt->log)
+        if (opt->log && root)
             fprintf(opt->log, "%sadaptive subdivision: %d rounds, %zu -> %zu elements, %llu shots in all\n",
                     opt->log_prefix ? opt->log_prefix : "", as.rounds, as.elems_in, as.elems_out,
                     (unsigned long long)as.shots);
     } else {
         if ((st = tb_rad_solver_create(&r.mesh, NULL, &ro, &r.solver)))
             goto done;
+        const tb_rad_persist *pe = opt->persist;
+        if (pe && pe->restore && (st = pe->restore(pe->ctx, r.solver)))
+            goto done;
         uint64_t every = r.mesh.nelems / 20 ? r.mesh.nelems / 20 : 1;
         if (r.rep.ref && (st = tb__rad_report_row(&r.rep, r.solver)))
             goto done;
-        if ((st = tb_rad_solver_run(r.solver, &opt->stop, r.rep.ref ? tb__rad_report_row : NULL, &r.rep, every)))
+        if (pe) {
+            /* after every shot: the persist decides when to save */
+            tb__rad_shot_hook hook = {.rep = r.rep.ref ? &r.rep : NULL, .every = every, .persist = pe};
+            if ((st = tb_rad_solver_run(r.solver, &opt->stop, tb__rad_on_shot, &hook, 1)))
+                goto done;
+            if (hook.rep && hook.n % every != 0 && (st = tb__rad_report_row(&r.rep, r.solver)))
+                goto done;
+            if (pe->save && (st = pe->save(pe->ctx, r.solver, true)))
+                goto done;
+        } else if ((st = tb_rad_solver_run(r.solver, &opt->stop, r.rep.ref ? tb__rad_report_row : NULL, &r.rep,
+                                           every)))
             goto done;
     }
     int nthreads = opt->threads > 0 ? opt->threads : omp_get_max_threads();
+    /* every process's share of the work in the stats (collective); then
+     * rank 0 alone writes */
+    if (ex && ex->report && (st = ex->report(ex->ctx)))
+        goto done;
+    if (!root)
+        goto result;
     if ((st = tb__rad_provenance(&r, scene_path, &ro, &mo, opt, nthreads)))
         goto done;
     if (opt->image_path) {
@@ -338,6 +390,7 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
         goto done;
     if (opt->image_path && (st = tb_image_write_exposed(opt->image_path, r.img, opt->exposure)))
         goto done;
+result:
     if (out) {
         *out = (tb_rad_render_result){
             .elements = r.mesh.nelems,

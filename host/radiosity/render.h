@@ -19,6 +19,19 @@
  * kernel, whose context the caller frees after tb_rad_render returns. */
 typedef tb_status (*tb_rad_backend_fn)(void *user, const tb_rad_mesh *mesh, tb_rad_options *opt);
 
+/* Saving and restoring a solve (checkpoints, host/dist/checkpoint.h);
+ * not with adaptive subdivision (its mesh changes between rounds). */
+typedef struct tb_rad_persist {
+    void *ctx; /* passed to both */
+    /* After the solver is made: may replace its state (tb_rad_solver_unpack)
+     * by a saved one. NULL: a new solve. */
+    tb_status (*restore)(void *ctx, tb_rad_solver *s);
+    /* After each shot (its own schedule, e.g. every N seconds) and with
+     * `last` after the final one: may save the state (tb_rad_solver_pack).
+     * NULL: never. An error stops the solve. */
+    tb_status (*save)(void *ctx, const tb_rad_solver *s, bool last);
+} tb_rad_persist;
+
 /* What tb_rad_render does; tb_rad_render_defaults() gives the defaults. */
 typedef struct tb_rad_render_options {
     tb_rad_options solver;     /* form factors, samples, seed (lights are the scene's, set by the call) */
@@ -42,6 +55,7 @@ typedef struct tb_rad_render_options {
     const char *backend_name;  /* recorded in the provenance when backend installed a batch ("vulkan") */
     FILE *log;                 /* progress lines (mesh size, lights, rounds), or NULL for none */
     const char *log_prefix;    /* starts every log line ("testbed render: ") */
+    const tb_rad_persist *persist; /* NULL: no checkpoints */
 } tb_rad_render_options;
 
 /* What tb_rad_render did. */

@@ -84,6 +84,10 @@ struct tb_rad_solver {
     unsigned char *lshot;   /* nlights: shot yet */
     double *lpower;         /* nlights: power summed over channels */
     double lpending;        /* power of the lights not yet shot */
+    /* over several processes (opt.exchange): this one's clusters' form
+     * factors, everyone's gathered, and how many each process computes */
+    double *xmine, *xall;
+    size_t *xcounts;
 };
 
 static tb_status tb__lights_init(tb_rad_solver *s, const tb_rad_state *state);
@@ -251,6 +255,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     tb_hemicube_free(s->hc);
     tb_pqueue_free(&s->q);
     tb_rad_lights_free(s->lights);
+    free(s->xmine), free(s->xall), free(s->xcounts);
     free(s->lshot);
     free(s->lpower);
     free(s);
@@ -432,6 +437,30 @@ static bool tb__cluster_faces(const tb_rad_solver *s, tb_vec3 ns, size_t q0, siz
     return false;
 }
 
+/* Several processes: every process's clusters' form factors into s->ff on
+ * every process. Each packs its clusters' values in cluster order; the
+ * gathered blocks come in rank order and unpack by the same rule. */
+static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex)
+{
+    size_t nv = s->m.nverts, ncl = s->ncl, R = (size_t)ex->ranks, n = 0;
+    for (size_t c = (size_t)ex->rank; c < ncl; c += R) {
+        size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
+        for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++)
+            s->xmine[n++] = s->ff[s->corder[q]];
+    }
+    tb_status st = ex->allgather(ex->ctx, s->xmine, n, s->xall, s->xcounts);
+    if (st)
+        return st;
+    size_t at = 0;
+    for (size_t r = 0; r < R; r++)
+        for (size_t c = r; c < ncl; c += R) {
+            size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
+            for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++)
+                s->ff[s->corder[q]] = s->xall[at++];
+        }
+    return TB_OK;
+}
+
 /* The CPU form factors of shooter i to every vertex: tb_ff_raycast over the
  * solver's occluders. Each cluster of receivers first lists the occluders
  * in the shaft between it and the sample points (most lists are empty: no
@@ -450,8 +479,13 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k)
     }
     ptrdiff_t ncl = (ptrdiff_t)s->ncl;
     size_t nv = s->m.nverts;
+    /* several processes: this one's clusters are rank, rank + R, ... */
+    const tb_rad_exchange *ex = s->xcounts ? s->opt.exchange : NULL;
+    ptrdiff_t c0 = ex ? ex->rank : 0, dc = ex ? ex->ranks : 1;
+    ptrdiff_t nmine = ncl > c0 ? (ncl - c0 + dc - 1) / dc : 0;
 #pragma omp parallel for schedule(dynamic, 4)
-    for (ptrdiff_t c = 0; c < ncl; c++) {
+    for (ptrdiff_t ci = 0; ci < nmine; ci++) {
+        ptrdiff_t c = c0 + ci * dc;
         tb_ff_shaft sh;
         tb_ff_visible_fn fn = tb_ff_shaft_visible;
         void *ctx = &sh;
@@ -469,7 +503,7 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k)
             s->ff[v] = tb_ff_raycast(s->pts, s->opt.samples, nrm, area, s->rp[v], s->rn[v], fn, ctx);
         }
     }
-    return TB_OK;
+    return ex ? tb__gather_clusters(s, ex) : TB_OK;
 }
 
 /* Most distinct reflectance rows the update shares dot products over. */
@@ -504,6 +538,23 @@ static void tb__reflectance_rows(tb_rad_solver *s)
         free(s->rrow);
         s->rrow = NULL;
     }
+}
+
+/* Several processes: how many form factors each computes (its clusters'
+ * receivers) and the buffers of the gather. */
+static tb_status tb__exchange_init(tb_rad_solver *s, const tb_rad_exchange *ex)
+{
+    size_t nv = s->m.nverts, R = (size_t)ex->ranks;
+    s->xmine = malloc(nv * sizeof *s->xmine);
+    s->xall = malloc(nv * sizeof *s->xall);
+    s->xcounts = calloc(R, sizeof *s->xcounts);
+    if (!s->xmine || !s->xall || !s->xcounts)
+        return tb_error(TB_ERR_NOMEM, "radiosity: out of memory for the exchange");
+    for (size_t c = 0; c < s->ncl; c++) {
+        size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
+        s->xcounts[c % R] += q1 - c * TB__RAD_CLUSTER;
+    }
+    return TB_OK;
 }
 
 tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *state, const tb_rad_options *opt,
@@ -749,6 +800,8 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
                     st = tb__occluder_boxes(s, occ, nocc);
                 if (!st)
                     st = tb__receiver_clusters(s);
+                if (!st && o.exchange && o.exchange->ranks > 1)
+                    st = tb__exchange_init(s, o.exchange);
                 free(occ);
                 if (st) {
                     tb_rad_solver_free(s);
@@ -1159,8 +1212,14 @@ tb_status tb_rad_solver_run(tb_rad_solver *s, const tb_rad_stop *stop, tb_rad_re
     while (frac >= thr) {
         if (sp.max_shots > 0 && n >= sp.max_shots)
             break;
-        if (sp.time_budget > 0.0 && tb__now() - t0 >= sp.time_budget)
-            break;
+        if (sp.time_budget > 0.0) {
+            /* a clock: over several processes rank 0's reading counts */
+            int out_of_time = tb__now() - t0 >= sp.time_budget;
+            if (s->opt.exchange && s->opt.exchange->ranks > 1)
+                out_of_time = s->opt.exchange->agree(s->opt.exchange->ctx, out_of_time);
+            if (out_of_time)
+                break;
+        }
         bool shot;
         if ((st = tb_rad_solver_step(s, &shot)))
             break;
@@ -1385,5 +1444,73 @@ static tb_status tb__lights_step(tb_rad_solver *s, bool *shot)
     tb_stat_add(&tb__rad_shots, 1);
     s->seconds += tb__now() - t0;
     *shot = true;
+    return TB_OK;
+}
+
+/* ---------------------------------------------------------------- packing */
+
+/* Header: u64 nelems, nverts, nchannels, nlights, shooters, shots; f64
+ * absorbed, escaped, lpending, seconds. Then He, Hv, dB, up (doubles),
+ * lshot (bytes). */
+#define TB__RAD_PACK_HEAD (6 * sizeof(uint64_t) + 4 * sizeof(double))
+
+size_t tb_rad_solver_packed_size(const tb_rad_solver *s)
+{
+    size_t ne = s->m.nelems, nv = s->m.nverts, nc = (size_t)s->nc;
+    return TB__RAD_PACK_HEAD + (ne * nc + nv * nc + ne * nc + ne) * sizeof(double) + (size_t)s->opt.nlights;
+}
+
+void tb_rad_solver_pack(const tb_rad_solver *s, void *buf)
+{
+    size_t ne = s->m.nelems, nv = s->m.nverts, nc = (size_t)s->nc;
+    unsigned char *p = buf;
+    uint64_t h[6] = {ne, nv, nc, (uint64_t)s->opt.nlights, s->nsh, s->shots};
+    double d[4] = {s->absorbed, s->escaped, s->lpending, s->seconds};
+    memcpy(p, h, sizeof h), p += sizeof h;
+    memcpy(p, d, sizeof d), p += sizeof d;
+    memcpy(p, s->He, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
+    memcpy(p, s->Hv, nv * nc * sizeof(double)), p += nv * nc * sizeof(double);
+    memcpy(p, s->dB, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
+    memcpy(p, s->up, ne * sizeof(double)), p += ne * sizeof(double);
+    if (s->opt.nlights > 0)
+        memcpy(p, s->lshot, (size_t)s->opt.nlights);
+}
+
+tb_status tb_rad_solver_unpack(tb_rad_solver *s, const void *buf, size_t len)
+{
+    size_t ne = s->m.nelems, nv = s->m.nverts, nc = (size_t)s->nc;
+    uint64_t h[6];
+    double d[4];
+    if (len < TB__RAD_PACK_HEAD)
+        return tb_error(TB_ERR_FORMAT, "radiosity: packed state of %zu bytes is shorter than its header", len);
+    const unsigned char *p = buf;
+    memcpy(h, p, sizeof h), p += sizeof h;
+    memcpy(d, p, sizeof d), p += sizeof d;
+    if (h[0] != ne || h[1] != nv || h[2] != nc || h[3] != (uint64_t)s->opt.nlights || h[4] != s->nsh)
+        return tb_error(TB_ERR_FORMAT,
+                        "radiosity: packed state of %llu elements, %llu vertices, %llu channels, %llu lights, "
+                        "%llu shooters; this solver has %zu, %zu, %zu, %d, %zu (another scene or meshing)",
+                        (unsigned long long)h[0], (unsigned long long)h[1], (unsigned long long)h[2],
+                        (unsigned long long)h[3], (unsigned long long)h[4], ne, nv, nc, s->opt.nlights, s->nsh);
+    if (len != tb_rad_solver_packed_size(s))
+        return tb_error(TB_ERR_FORMAT, "radiosity: packed state has %zu bytes, expected %zu", len,
+                        tb_rad_solver_packed_size(s));
+    s->shots = h[5];
+    s->absorbed = d[0], s->escaped = d[1], s->lpending = d[2], s->seconds = d[3];
+    memcpy(s->He, p, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
+    memcpy(s->Hv, p, nv * nc * sizeof(double)), p += nv * nc * sizeof(double);
+    memcpy(s->dB, p, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
+    memcpy(s->up, p, ne * sizeof(double)), p += ne * sizeof(double);
+    if (s->opt.nlights > 0)
+        memcpy(s->lshot, p, (size_t)s->opt.nlights);
+    /* the queue is a function of the unshot powers (ties go to the lower
+     * key), so rebuilding it gives the original's order */
+    for (size_t k = 0; k < s->nsh; k++) {
+        double pw = tb__shooter_power(s, k);
+        if (pw > 0.0)
+            tb_pqueue_set(&s->q, (uint32_t)k, pw);
+        else
+            tb_pqueue_remove(&s->q, (uint32_t)k);
+    }
     return TB_OK;
 }

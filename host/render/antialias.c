@@ -461,6 +461,9 @@ tb_status tb_aa_render(tb_film *film, const tb_aa_options *aa, const tb_aa_rende
     if (desc->threads < 0)
         return tb_error(TB_ERR_ARG, "antialias render: negative thread count %d", desc->threads);
     st = tb_film_begin_pass(film);
+    if (!st && desc->exchange)
+        st = desc->exchange->begin_pass(desc->exchange->ctx, film, desc->pass_index, desc->progress,
+                                         desc->cancel);
     if (st)
         return st;
     int channels = tb_film_channels(film);
@@ -507,38 +510,46 @@ tb_status tb_aa_render(tb_film *film, const tb_aa_options *aa, const tb_aa_rende
             }
             atomic_store(&failed, 1);
         }
+        const tb_tile_exchange *ex = desc->exchange;
+        /* the tiles: all of them over this process's threads, or those the
+         * exchange hands this process */
 #pragma omp for schedule(dynamic, 1)
-        for (int t = 0; t < ntiles; t++) {
-            bool cancel = desc->cancel && atomic_load(desc->cancel);
-            tb_film_tile *tile = NULL;
-            if (!atomic_load(&failed) && !cancel) {
-                tile = tb_film_tile_create(film, t);
-                if (!tile) {
+        for (int k = 0; k < (ex ? nthreads : ntiles); k++) {
+            int t = k;
+            while (ex ? ex->claim(ex->ctx, &t) : t == k) {
+                bool cancel = desc->cancel && atomic_load(desc->cancel);
+                tb_film_tile *tile = NULL;
+                if (!atomic_load(&failed) && !cancel) {
+                    tile = tb_film_tile_create(film, t);
+                    if (!tile) {
+#pragma omp critical(tb__aa_error)
+                        if (!first_err) {
+                            first_err = TB_ERR_NOMEM;
+                            snprintf(err_msg, sizeof err_msg, "%s", tb_last_error());
+                        }
+                        atomic_store(&failed, 1);
+                    }
+                }
+                tb_tile_rect r = tile ? tb_film_tile_pixels(tile) : (tb_tile_rect){0, 0, 0, 0};
+                if (tile)
+                    tb__render_tile(&w, tile);
+                else
+                    skipped++;
+                tb_status fst = ex ? ex->finish(ex->ctx, film, t, tile)
+                                   : (tile ? tb_film_tile_submit(film, tile) : tb_film_tile_skip(film, t));
+                if (fst != TB_OK) {
 #pragma omp critical(tb__aa_error)
                     if (!first_err) {
-                        first_err = TB_ERR_NOMEM;
+                        first_err = fst;
                         snprintf(err_msg, sizeof err_msg, "%s", tb_last_error());
                     }
                     atomic_store(&failed, 1);
                 }
+                if (tile && desc->progress)
+                    tb_progress_add(desc->progress, (int64_t)(r.x1 - r.x0) * (r.y1 - r.y0));
+                if (!ex)
+                    t = -1; /* one tile per iteration without an exchange */
             }
-            if (!tile) {
-                tb_film_tile_skip(film, t);
-                skipped++;
-                continue;
-            }
-            tb_tile_rect r = tb_film_tile_pixels(tile);
-            tb__render_tile(&w, tile);
-            if (tb_film_tile_submit(film, tile) != TB_OK) {
-#pragma omp critical(tb__aa_error)
-                if (!first_err) {
-                    first_err = TB_ERR_ARG;
-                    snprintf(err_msg, sizeof err_msg, "%s", tb_last_error());
-                }
-                atomic_store(&failed, 1);
-            }
-            if (desc->progress)
-                tb_progress_add(desc->progress, (int64_t)(r.x1 - r.x0) * (r.y1 - r.y0));
         }
         total_samples += w.samples;
         total_ring += w.ring_samples;
@@ -550,6 +561,21 @@ tb_status tb_aa_render(tb_film *film, const tb_aa_options *aa, const tb_aa_rende
         free(w.vals);
         free(w.ring_vals);
         free(w.ring_flag);
+    }
+    tb_aa_stats all;
+    all.samples = total_samples;
+    all.ring_samples = total_ring;
+    all.pixels = total_pixels;
+    all.pixels_refined = total_refined;
+    all.max_spp_used = max_used;
+    all.tiles_skipped = skipped;
+    /* the other processes' tiles: rank 0 waits for them, everyone sums */
+    if (!first_err && desc->exchange) {
+        tb_status est = desc->exchange->end_pass(desc->exchange->ctx, film, &all);
+        if (est)
+            return est;
+        total_samples = all.samples, total_ring = all.ring_samples, total_pixels = all.pixels;
+        total_refined = all.pixels_refined, max_used = all.max_spp_used, skipped = all.tiles_skipped;
     }
     if (stats) {
         stats->samples = total_samples;

@@ -131,6 +131,40 @@ bool tb_aa_needs_more(const tb_aa_options *o, int channels, const float *lum_w, 
  * stream (tb_aa_sample_rng). Called from many threads at once. */
 typedef void (*tb_aa_sample_fn)(void *ctx, double x, double y, tb_rng *rng, float *out);
 
+typedef struct tb_aa_stats tb_aa_stats;
+
+/* Where a pass's tiles come from and where finished ones go, when they are
+ * not all rendered and merged in this process (host/dist shares them over
+ * MPI ranks; host/render does not know MPI). A tile's buffer depends only on
+ * its index and the options, so it may be rendered in any process. */
+typedef struct tb_tile_exchange {
+    void *ctx;  /* passed to every function */
+    int rank;   /* this process (0: the one whose film is the image) */
+    int ranks;  /* processes sharing the tiles */
+    /* Starts pass `pass` on `film` (already begun); progress (may be NULL)
+     * counts pixels of tiles merged from elsewhere; once `cancel` (may be
+     * NULL) is set on rank 0, no more tiles go out. */
+    tb_status (*begin_pass)(void *ctx, tb_film *film, int pass, tb_progress *progress, const atomic_int *cancel);
+    /* Claims the next tile for this process into *index: 1, or 0 when none
+     * is left in this pass. Called from any thread. */
+    int (*claim)(void *ctx, int *index);
+    /* Hands over the finished tile `index` (ownership; NULL: skipped after a
+     * cancel). Called from any thread. */
+    tb_status (*finish)(void *ctx, tb_film *film, int index, tb_film_tile *tile);
+    /* Ends the pass once this process's claims are finished: rank 0 returns
+     * when every tile of the pass is merged into its film; tiles not claimed
+     * are skipped. *stats (this process's) becomes the sum over processes. */
+    tb_status (*end_pass)(void *ctx, tb_film *film, tb_aa_stats *stats);
+    /* Rank 0's `flag` on every process (a decision all must share). */
+    int (*agree)(void *ctx, int flag);
+    /* The lowest-ranked failure among every process's `st` (its message as
+     * this process's last error), or TB_OK on all: a step all must pass. */
+    tb_status (*agree_status)(void *ctx, tb_status st);
+    /* After the render, on every process: puts each process's share of the
+     * work into the stats values (tb_stats_set_value). NULL: nothing. */
+    tb_status (*report)(void *ctx);
+} tb_tile_exchange;
+
 /* How tb_aa_render runs; zero fields take the defaults. */
 typedef struct tb_aa_render_desc {
     tb_aa_sample_fn sample; /* required */
@@ -139,17 +173,19 @@ typedef struct tb_aa_render_desc {
     const float *lum_weights; /* per channel luminance weights; NULL: tb_aa_luminance_weights */
     tb_progress *progress;  /* NULL: none; counts pixels */
     const atomic_int *cancel; /* NULL: never; when nonzero, tiles not yet started are skipped */
+    const tb_tile_exchange *exchange; /* NULL: every tile here, merged here */
+    int pass_index;         /* exchange only: the driver's pass number (begin_pass) */
 } tb_aa_render_desc;
 
 /* What a render did. */
-typedef struct tb_aa_stats {
+struct tb_aa_stats {
     uint64_t samples;        /* camera samples in the image */
     uint64_t ring_samples;   /* adaptive: extra first-round samples of neighbouring tiles' pixels */
     uint64_t pixels;         /* pixels rendered */
     uint64_t pixels_refined; /* pixels that took more than one round */
     int max_spp_used;        /* largest sample count of a pixel */
     int tiles_skipped;       /* tiles skipped because of a cancel */
-} tb_aa_stats;
+};
 
 /* Renders one pass of `aa` into `film`: every tile (dynamic OpenMP schedule,
  * any order) renders its pixels in scanline order, each pixel its rounds of

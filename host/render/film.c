@@ -533,3 +533,121 @@ double tb_film_weight_sum(const tb_film *film, int x, int y)
 }
 
 uint64_t tb_film_dropped(const tb_film *film) { return film->dropped; }
+
+/* ---------------------------------------------------------------- packing */
+
+/* Tile bytes: a header of 6 int32 (index, channels, buf x0 y0 x1 y1), the
+ * dropped count (uint64), then the sums (doubles) and the own pixels'
+ * counts (uint32). The own rectangle follows from the index. */
+#define TB__TILE_HEADER (6 * sizeof(int32_t) + sizeof(uint64_t))
+
+static size_t tb__tile_nbuf(const tb_film_tile *t)
+{
+    return (size_t)(t->buf.x1 - t->buf.x0) * (size_t)(t->buf.y1 - t->buf.y0);
+}
+
+static size_t tb__tile_nown(const tb_film_tile *t)
+{
+    return (size_t)(t->own.x1 - t->own.x0) * (size_t)(t->own.y1 - t->own.y0);
+}
+
+size_t tb_film_tile_packed_size(const tb_film_tile *tile)
+{
+    return TB__TILE_HEADER + tb__tile_nbuf(tile) * (size_t)(tile->channels + 1) * sizeof(double) +
+           tb__tile_nown(tile) * sizeof(uint32_t);
+}
+
+void tb_film_tile_pack(const tb_film_tile *tile, void *buf)
+{
+    unsigned char *p = buf;
+    int32_t h[6] = {tile->index, tile->channels, tile->buf.x0, tile->buf.y0, tile->buf.x1, tile->buf.y1};
+    memcpy(p, h, sizeof h);
+    p += sizeof h;
+    memcpy(p, &tile->dropped, sizeof tile->dropped);
+    p += sizeof tile->dropped;
+    size_t ns = tb__tile_nbuf(tile) * (size_t)(tile->channels + 1) * sizeof(double);
+    memcpy(p, tile->sum, ns);
+    p += ns;
+    memcpy(p, tile->count, tb__tile_nown(tile) * sizeof(uint32_t));
+}
+
+tb_film_tile *tb_film_tile_unpack(const tb_film *film, const void *buf, size_t len)
+{
+    int32_t h[6];
+    if (len < TB__TILE_HEADER) {
+        tb_error(TB_ERR_FORMAT, "film: a packed tile of %zu bytes is shorter than its header", len);
+        return NULL;
+    }
+    memcpy(h, buf, sizeof h);
+    if (h[0] < 0 || h[0] >= film->ntiles || h[1] != film->channels) {
+        tb_error(TB_ERR_FORMAT, "film: packed tile %d with %d channels does not fit this film (%d tiles, %d channels)",
+                 (int)h[0], (int)h[1], film->ntiles, film->channels);
+        return NULL;
+    }
+    tb_film_tile *t = tb_film_tile_create(film, h[0]);
+    if (!t)
+        return NULL;
+    if (h[2] != t->buf.x0 || h[3] != t->buf.y0 || h[4] != t->buf.x1 || h[5] != t->buf.y1 ||
+        len != tb_film_tile_packed_size(t)) {
+        tb_film_tile_free(t);
+        tb_error(TB_ERR_FORMAT, "film: packed tile %d (%zu bytes) has another apron or size than this film's",
+                 (int)h[0], len);
+        return NULL;
+    }
+    const unsigned char *p = (const unsigned char *)buf + sizeof h;
+    memcpy(&t->dropped, p, sizeof t->dropped);
+    p += sizeof t->dropped;
+    size_t ns = tb__tile_nbuf(t) * (size_t)(t->channels + 1) * sizeof(double);
+    memcpy(t->sum, p, ns);
+    p += ns;
+    memcpy(t->count, p, tb__tile_nown(t) * sizeof(uint32_t));
+    return t;
+}
+
+/* Film bytes: width, height, channels (int32 each), pad, dropped (uint64),
+ * the sums, the counts. */
+#define TB__FILM_HEADER (4 * sizeof(int32_t) + sizeof(uint64_t))
+
+size_t tb_film_packed_size(const tb_film *film)
+{
+    size_t npix = (size_t)film->width * (size_t)film->height;
+    return TB__FILM_HEADER + npix * (size_t)(film->channels + 1) * sizeof(double) + npix * sizeof(uint32_t);
+}
+
+void tb_film_pack(const tb_film *film, void *buf)
+{
+    unsigned char *p = buf;
+    int32_t h[4] = {film->width, film->height, film->channels, 0};
+    memcpy(p, h, sizeof h);
+    p += sizeof h;
+    memcpy(p, &film->dropped, sizeof film->dropped);
+    p += sizeof film->dropped;
+    size_t npix = (size_t)film->width * (size_t)film->height;
+    size_t ns = npix * (size_t)(film->channels + 1) * sizeof(double);
+    memcpy(p, film->sum, ns);
+    p += ns;
+    memcpy(p, film->count, npix * sizeof(uint32_t));
+}
+
+tb_status tb_film_unpack(tb_film *film, const void *buf, size_t len)
+{
+    int32_t h[4];
+    if (len < TB__FILM_HEADER)
+        return tb_error(TB_ERR_FORMAT, "film: packed film of %zu bytes is shorter than its header", len);
+    memcpy(h, buf, sizeof h);
+    if (h[0] != film->width || h[1] != film->height || h[2] != film->channels)
+        return tb_error(TB_ERR_FORMAT, "film: packed film is %d x %d with %d channels, this one %d x %d with %d",
+                        (int)h[0], (int)h[1], (int)h[2], film->width, film->height, film->channels);
+    if (len != tb_film_packed_size(film))
+        return tb_error(TB_ERR_FORMAT, "film: packed film has %zu bytes, expected %zu", len,
+                        tb_film_packed_size(film));
+    const unsigned char *p = (const unsigned char *)buf + sizeof h;
+    memcpy(&film->dropped, p, sizeof film->dropped);
+    p += sizeof film->dropped;
+    size_t npix = (size_t)film->width * (size_t)film->height;
+    size_t ns = npix * (size_t)(film->channels + 1) * sizeof(double);
+    memcpy(film->sum, p, ns);
+    p += ns;
+    memcpy(film->count, p, npix * sizeof(uint32_t));
+    return TB_OK;
+}

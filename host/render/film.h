@@ -145,6 +145,39 @@ tb_status tb_film_tile_submit(tb_film *film, tb_film_tile *tile);
  * tiles after it still merge (thread-safe). */
 tb_status tb_film_tile_skip(tb_film *film, int index);
 
+/* ------------------------------------------------ packing (host/dist, checkpoints)
+ *
+ * A tile buffer or a whole film as plain bytes in this machine's byte order,
+ * so another process with the same film (size, channels, filter, tile size)
+ * can merge the tile or continue the film. The bytes carry the exact doubles,
+ * so a tile merged from its packed copy adds what the original would have:
+ * the image stays bit-identical however tiles travel. */
+
+/* Bytes tb_film_tile_pack writes for `tile`. */
+size_t tb_film_tile_packed_size(const tb_film_tile *tile);
+
+/* Writes the tile (index, rectangles, sums, sample counts, dropped count)
+ * into buf[0 .. tb_film_tile_packed_size). */
+void tb_film_tile_pack(const tb_film_tile *tile, void *buf);
+
+/* A tile of `film` rebuilt from tb_film_tile_pack's bytes; NULL with
+ * TB_ERR_FORMAT (tb_last_error) if they do not describe a tile of this film
+ * (index, rectangles or length), TB_ERR_NOMEM on no memory. */
+tb_film_tile *tb_film_tile_unpack(const tb_film *film, const void *buf, size_t len);
+
+/* Bytes tb_film_pack writes for `film`. */
+size_t tb_film_packed_size(const tb_film *film);
+
+/* Writes the film's accumulators (size, channels, per-pixel weighted sums
+ * and weights, sample counts, dropped count) into buf[0 ..
+ * tb_film_packed_size). Only between passes (every tile merged). */
+void tb_film_pack(const tb_film *film, void *buf);
+
+/* Replaces the accumulators of `film` by packed ones: TB_ERR_FORMAT if the
+ * bytes are short or were packed from a film of another size or channel
+ * count; the film is unchanged then. */
+tb_status tb_film_unpack(tb_film *film, const void *buf, size_t len);
+
 /* Frees a tile buffer that is not going to be submitted; NULL is allowed. */
 void tb_film_tile_free(tb_film_tile *tile);
 

@@ -99,11 +99,28 @@ tb_status tb__render_drive(const tb_scene *s, const tb_render_options *o, const 
     tb_progress prog;
     if (o->progress && tb_progress_start(&prog, "render", (int64_t)fd.width * fd.height * o->passes, NULL, 0) == TB_OK)
         run.progress = &prog;
+    const tb_tile_exchange *ex = o->exchange;
+    bool root = !ex || ex->rank == 0;
+    /* a checkpoint's passes: rank 0 restores the film, every rank starts
+     * after them */
+    if (!err && root && o->persist && o->persist->restore)
+        err = o->persist->restore(o->persist->ctx, film, &st);
+    int first = st.passes_done;
+    if (ex)
+        first = ex->agree(ex->ctx, err ? -1 : first);
+    if (first < 0 && !err)
+        err = tb_error(TB_ERR_IO, "render: rank 0 could not restore the checkpoint");
+    if (!err && first > o->passes)
+        err = tb_error(TB_ERR_ARG, "render: the checkpoint has %d passes, more than the %d asked for", first,
+                       o->passes);
+    if (run.progress && first > 0)
+        tb_progress_add(run.progress, (int64_t)fd.width * fd.height * first);
     tb_aa_options aa = o->aa;
-    for (int pass = 0; pass < o->passes && !err; pass++) {
+    for (int pass = first; pass < o->passes && !err; pass++) {
         aa.pass = o->aa.pass + (uint32_t)pass;
         tb_aa_stats as;
         memset(&as, 0, sizeof as);
+        run.pass_index = pass;
         err = e->pass(e->ctx, &run, film, &aa, &as);
         if (err)
             break;
@@ -114,14 +131,28 @@ tb_status tb__render_drive(const tb_scene *s, const tb_render_options *o, const 
         st.aa.tiles_skipped += as.tiles_skipped;
         if (as.max_spp_used > st.aa.max_spp_used)
             st.aa.max_spp_used = as.max_spp_used;
-        if (as.tiles_skipped > 0 || atomic_load(&run.stop)) {
+        /* every process stops where rank 0 stops (its clock, its cancel flag) */
+        int stop = as.tiles_skipped > 0 || atomic_load(&run.stop);
+        if (ex)
+            stop = ex->agree(ex->ctx, stop);
+        if (stop) {
             st.interrupted = as.tiles_skipped > 0 || pass + 1 < o->passes;
-            if (as.tiles_skipped == 0)
+            if (as.tiles_skipped == 0) {
                 st.passes_done++;
+                if (root && o->persist && o->persist->save)
+                    err = o->persist->save(o->persist->ctx, film, &st, true);
+            }
             break;
         }
         st.passes_done++;
-        if (o->on_pass && o->on_pass(o->on_pass_ctx, pass, aa.spp * (pass + 1), tb__render_seconds(&run), film))
+        int quit = 0;
+        if (root && o->persist && o->persist->save)
+            err = o->persist->save(o->persist->ctx, film, &st, pass + 1 == o->passes);
+        if (root && !err && o->on_pass)
+            quit = o->on_pass(o->on_pass_ctx, pass, aa.spp * (pass + 1), tb__render_seconds(&run), film);
+        if (ex)
+            quit = ex->agree(ex->ctx, quit || err);
+        if (quit)
             break;
     }
     st.seconds = tb__render_seconds(&run);
@@ -163,7 +194,8 @@ static tb_status tb__render_cpu_pass(void *ctx, tb__render_run *run, tb_film *fi
     tb__render_ctx c = *(const tb__render_ctx *)ctx;
     c.run = run;
     tb_aa_render_desc desc = {.sample = tb__render_sample, .ctx = &c, .threads = run->o->threads,
-                              .progress = run->progress, .cancel = &run->stop};
+                              .progress = run->progress, .cancel = &run->stop, .exchange = run->o->exchange,
+                              .pass_index = run->pass_index};
     return tb_aa_render(film, aa, &desc, as);
 }
 

@@ -28,6 +28,22 @@
  * tb_render_resolve); a nonzero return stops the render. */
 typedef int (*tb_render_pass_fn)(void *ctx, int pass, int spp_total, double seconds, const tb_film *film);
 
+typedef struct tb_render_stats tb_render_stats;
+
+/* Saving and restoring a progressive render (checkpoints): the film's
+ * accumulators and the passes done. Only rank 0 of an exchange calls them. */
+typedef struct tb_render_persist {
+    void *ctx; /* passed to both */
+    /* Before the first pass: fills `film` and *done (passes_done and aa
+     * counts of the passes in it) from a checkpoint, or leaves both as they
+     * are (a new render). NULL: a new render. */
+    tb_status (*restore)(void *ctx, tb_film *film, tb_render_stats *done);
+    /* After each complete pass: may save `film` and *done (its own
+     * schedule, e.g. every N seconds, and always after the last pass when
+     * `last`). NULL: never. An error stops the render. */
+    tb_status (*save)(void *ctx, const tb_film *film, const tb_render_stats *done, bool last);
+} tb_render_persist;
+
 /* Render options; start from tb_render_defaults(). */
 typedef struct tb_render_options {
     tb_aa_options aa;       /* samples per pixel (per pass), pattern, adaptive, seed */
@@ -41,15 +57,18 @@ typedef struct tb_render_options {
     tb_render_pass_fn on_pass; /* NULL: none */
     void *on_pass_ctx;
     uint32_t *sample_counts; /* NULL, or width x height (row by row): set to each pixel's camera samples, all passes */
+    const tb_tile_exchange *exchange; /* NULL: every tile in this process; else tiles shared over processes
+                                       * (host/dist); only rank 0's image, on_pass and persist count */
+    const tb_render_persist *persist; /* NULL: no checkpoints */
 } tb_render_options;
 
 /* What a render did. */
-typedef struct tb_render_stats {
+struct tb_render_stats {
     tb_aa_stats aa;        /* summed over passes (max_spp_used: the largest of one pass) */
     int passes_done;       /* complete passes */
     bool interrupted;      /* cancelled or out of time: some tiles were skipped */
-    double seconds;        /* wall time of the passes */
-} tb_render_stats;
+    double seconds;        /* wall time of the passes (of this run, not of passes restored) */
+};
 
 /* 1 sample per pixel, box filter of radius 0.5, one pass, defaults elsewhere. */
 tb_render_options tb_render_defaults(void);

@@ -65,6 +65,9 @@ static tb_status tb__rf_check(const tb_render_file_options *o)
         return tb_error(TB_ERR_ARG, "--report and --reference go together");
     if (o->method && (!o->method->init || !o->method->name))
         return tb_error(TB_ERR_ARG, "render method without a name or an init function");
+    if (o->backend && o->render.exchange && o->render.exchange->ranks > 1)
+        return tb_error(TB_ERR_ARG, "the Vulkan backend renders in one process, not over %d ranks",
+                        o->render.exchange->ranks);
     if (o->method && o->backend)
         return tb_error(TB_ERR_ARG, "method %s: a backend renders only the ray tracer", o->method->name);
     return TB_OK;
@@ -167,6 +170,10 @@ static tb_status tb__rf_provenance(tb__rf_run *r, const char *scene_path, const 
              ro->rt.glossy_samples ? ro->rt.glossy_samples : TB_RT_DEFAULT_GLOSSY_SAMPLES, nthreads,
              r->scene->spectral ? "spectral" : "rgb",
              on_backend ? (o->backend_name ? o->backend_name : "backend") : "cpu");
+    if (ro->exchange && ro->exchange->ranks > 1) {
+        size_t n = strlen(popts);
+        snprintf(popts + n, sizeof popts - n, " ranks=%d", ro->exchange->ranks);
+    }
     tb_provenance_set_seed(&r->prov, ro->aa.seed);
     if (strcmp(scene_path, "-") != 0 && (st = tb_provenance_hash_file(&r->prov, scene_path)))
         return st;
@@ -222,13 +229,23 @@ tb_status tb_render_file(const char *scene_path, const tb_render_file_options *o
     tb_scene_options so = opt->scene;
     if (so.threads == 0)
         so.threads = ro.threads;
-    if ((st = tb_scene_load(scene_path, &so, &r.scene)))
-        goto done;
-    if (opt->report_path) {
-        if ((st = tb__rf_report_open(&r, opt)))
-            goto done;
+    const tb_tile_exchange *ex = ro.exchange;
+    bool root = !ex || ex->rank == 0;
+    st = tb_scene_load(scene_path, &so, &r.scene);
+    if (!st && root && opt->report_path && !(st = tb__rf_report_open(&r, opt))) {
         ro.on_pass = tb__rf_report_pass;
         ro.on_pass_ctx = &r.rep;
+    }
+    /* every process reads the scene itself; one that cannot stops them all
+     * with its own file:line:col message */
+    if (ex)
+        st = ex->agree_status(ex->ctx, st);
+    if (st)
+        goto done;
+    if (!root) {
+        /* rank 0 reports, writes and counts samples; the others only render */
+        ro.sample_counts = NULL;
+        ro.progress = false;
     }
 
     /* The render, between the caller's hooks. */
@@ -236,7 +253,7 @@ tb_status tb_render_file(const char *scene_path, const tb_render_file_options *o
         opt->on_render(opt->on_render_user, true);
     tb_render_stats rs;
     bool on_backend = false;
-    if (opt->sample_map_path) {
+    if (root && opt->sample_map_path) {
         r.map = tb_image_create(r.scene->camera.width, r.scene->camera.height, 1, NULL);
         r.counts = r.map ? calloc((size_t)r.map->width * (size_t)r.map->height, sizeof *r.counts) : NULL;
         if (!r.counts)
@@ -248,8 +265,21 @@ tb_status tb_render_file(const char *scene_path, const tb_render_file_options *o
         st = tb__rf_render(&r, opt, &ro, &rs, &on_backend);
     if (opt->on_render)
         opt->on_render(opt->on_render_user, false);
+    /* every process's share of the work in the stats (collective) */
+    if (ex && ex->report) {
+        tb_status rst = ex->report(ex->ctx);
+        st = st ? st : rst;
+    }
     if (st)
         goto done;
+    if (!root) {
+        if (out)
+            *out = (tb_render_file_result){.stats = rs, .width = r.scene->camera.width,
+                                           .height = r.scene->camera.height,
+                                           .threads = ro.threads > 0 ? ro.threads : omp_get_max_threads(),
+                                           .spectral = r.scene->spectral};
+        goto done;
+    }
     if (r.rep.failed) {
         st = tb_error(r.rep.failed, "report: %s", r.rep.why);
         goto done;

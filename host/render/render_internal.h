@@ -26,6 +26,7 @@ typedef struct tb__render_run {
     int64_t t0_ns;              /* monotonic clock at the start of the passes */
     int64_t deadline_ns;        /* end of the time budget (0: none) */
     atomic_int stop;            /* latched by tb__render_should_stop: tiles not started are skipped */
+    int pass_index;             /* the pass being rendered (0-based, counting restored passes) */
 } tb__render_run;
 
 /* True once the render must stop: the caller's cancel flag is set or the

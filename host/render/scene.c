@@ -10,6 +10,7 @@
 #include "util/base/str.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -41,6 +42,15 @@ TB_STAT_COUNTER(tb__n_materials, "Scene/materials");
 TB_STAT_COUNTER(tb__n_lights, "Scene/lights");
 TB_STAT_COUNTER(tb__n_emissive, "Scene/emissive objects");
 TB_STAT_TIMER(tb__t_load, "Scene/load");
+TB_STAT_MEMORY(tb__m_objects, "Scene/memory of objects");
+TB_STAT_MEMORY(tb__m_meshes, "Scene/memory of meshes");
+TB_STAT_MEMORY(tb__m_fed, "Scene/memory of FED files");
+TB_STAT_MEMORY(tb__m_emitters, "Scene/memory of emitters");
+TB_STAT_MEMORY(tb__m_accel, "Scene/memory of acceleration");
+TB_STAT_MEMORY(tb__m_total, "Scene/memory");
+TB_STAT_MEMORY(tb__m_predicted, "Scene/memory predicted");
+TB_STAT_RATIO(tb__r_per_object, "Scene/memory per object");
+TB_STAT_RATIO(tb__r_per_tri, "Scene/memory per triangle");
 TB_STAT_TIMER(tb__t_accel, "Scene/accel build");
 
 static tb_stat *const tb__kind_counters[TB_PRIM_COUNT] = {
@@ -87,7 +97,24 @@ struct tb__scene_priv {
     int capemissive;
     const char *errname;   /* file name for messages */
     tb__scene_attrs *attrs;/* unknown attributes (scene_attrs.c); NULL until the first one */
+    tb_object_fed_cache *feds; /* FED files read so far, shared by the objects (while loading) */
+    size_t used;           /* bytes taken so far (objects, references at their build cost) */
+    size_t limit;          /* stop past this many (0: no check) */
+    bool budget;           /* limit is the caller's memory budget (else 90% of the available memory) */
 };
+
+/* Fails cleanly when the load has taken more than its limit (`what`: where). */
+static tb_status tb__check_memory(const tb_scene *s, const char *what)
+{
+    const tb__scene_priv *p = s->priv;
+    if (!p->limit || p->used <= p->limit)
+        return TB_OK;
+    return tb_error(TB_ERR_NOMEM,
+                    "%s: out of memory: the scene would take more than %s of %.1f MiB (%.1f MiB taken %s, "
+                    "%u objects read); nothing was rendered",
+                    p->errname, p->budget ? "the memory budget" : "90% of the available memory",
+                    (double)p->limit / 1048576.0, (double)p->used / 1048576.0, what, s->nobjects);
+}
 
 tb__scene_attrs *tb__attrs_store(tb_scene *s)
 {
@@ -334,6 +361,26 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     return TB_OK;
 }
 
+tb_status tb__scene_predict_materials(const tb_mid_object *m, tb_htab *set)
+{
+    tb__bytes key = {0};
+    tb__material_key(&key, &m->material, (tb_mid_attrs){NULL, 0});
+    if (key.oom) {
+        free(key.p);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
+    }
+    uint64_t h = tb_hash_bytes(key.p, key.n);
+    free(key.p);
+    if (tb_htab_put(set, h, 1))
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for a material");
+    for (int i = 0; i < m->nchildren; i++) {
+        tb_status st = tb__scene_predict_materials(&m->children[i], set);
+        if (st)
+            return st;
+    }
+    return TB_OK;
+}
+
 static void tb__free_mat_src(tb__mat_src *e)
 {
     for (int k = 0; k < 4; k++) {
@@ -384,7 +431,7 @@ static tb_status tb__add_object(tb_scene *s, const tb_mid_object *m)
              m->name ? m->name : "", m->name ? "'" : "");
     tb_status st = tb__attrs_begin_object(s, m);
     if (!st)
-        st = tb_object_from_mid(m, s->nobjects, tb__material_cb, s, &o);
+        st = tb_object_from_mid_shared(m, s->nobjects, tb__material_cb, s, p->feds, &o);
     tb_status st2 = tb__attrs_end_object(s, m, st ? NULL : o);
     if (!st && st2) {
         tb_object_free(o);
@@ -393,6 +440,10 @@ static tb_status tb__add_object(tb_scene *s, const tb_mid_object *m)
     if (st)
         return tb__located(st, s, m->loc, what);
     s->objects[s->nobjects++] = o;
+    size_t refs = o->kind == TB_PRIM_POLYGONS && o->mesh ? o->mesh->ntris : 1;
+    p->used += tb__scene_object_bytes(o) + 2 * sizeof o + refs * TB__SCENE_BUILD_PER_REF;
+    if ((st = tb__check_memory(s, "by this object")))
+        return tb__located(st, s, m->loc, what);
     s->stats.objects_by_kind[o->kind]++;
     tb_stat_add(tb__kind_counters[o->kind], 1);
     if (o->kind == TB_PRIM_POLYGONS && o->mesh)
@@ -404,16 +455,29 @@ static tb_status tb__add_object(tb_scene *s, const tb_mid_object *m)
             return tb_error(TB_ERR_NOMEM, "scene: out of memory for emissive objects");
         tb_scene_emissive *e = &s->emissive[s->nemissive];
         *e = (tb_scene_emissive){o->index, leaf->material, NAN, 0, 0};
-        /* An area that cannot be computed is not worth refusing the scene
-         * for: it stays NaN, as for CSG objects (only memory is fatal). */
-        if (!tb_prim_is_csg(o->kind) && (st = tb__scene_leaf_area(o, &e->area))) {
+        /* Only the areas that need no tessellation are computed here
+         * (polygons, a sphere under a similarity); the others on demand,
+         * tb_scene_emissive_area (docs/rendering.md, "Emissive objects"). */
+        if (tb_prim_is_csg(o->kind) || !tb__scene_leaf_area_exact(o, &e->area))
             e->area = NAN;
-            if (st == TB_ERR_NOMEM)
-                return tb__located(st, s, m->loc, what);
-        }
         s->nemissive++;
     }
     return TB_OK;
+}
+
+tb_status tb_scene_emissive_area(const tb_scene *s, int i, double *area)
+{
+    if (!s || !area || i < 0 || i >= s->nemissive)
+        return tb_error(TB_ERR_ARG, "scene: no emissive object %d", i);
+    const tb_scene_emissive *e = &s->emissive[i];
+    if (!isnan(e->area)) {
+        *area = e->area;
+        return TB_OK;
+    }
+    const tb_object *o = s->objects[e->object];
+    if (tb_prim_is_csg(o->kind))
+        return tb_error(TB_ERR_UNSUPPORTED, "scene: no area for CSG object %u", e->object);
+    return tb__scene_leaf_area(o, area);
 }
 
 /* ------------------------------------------------------------------ lights */
@@ -640,38 +704,64 @@ static tb_status tb__finish_lights(tb_scene *s)
     return TB_OK;
 }
 
-static tb_status tb__finish_emitters(tb_scene *s)
+/* The emitters of every emissive object: each object tessellated once (the
+ * objects in parallel, each into its own array), then put together in
+ * object order, so the result does not depend on the threads. */
+static tb_status tb__finish_emitters(tb_scene *s, int threads)
 {
-    size_t total = 0;
-    for (int i = 0; i < s->nemissive; i++) {
-        const tb_object *o = s->objects[s->emissive[i].object];
-        int k;
-        tb_status st = tb__scene_leaf_emitters(o, tb_channels_splat(s->nchannels, 0.0f), NULL, &k);
-        if (st)
-            return st;
-        total += (size_t)k;
+    int ne = s->nemissive;
+    if (ne == 0)
+        return TB_OK;
+    tb_array *per = calloc((size_t)ne, sizeof *per);
+    tb_status *sts = calloc((size_t)ne, sizeof *sts);
+    if (!per || !sts) {
+        free(per);
+        free(sts);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for emitters");
     }
-    if (total > (size_t)INT32_MAX)
-        return tb_error(TB_ERR_UNSUPPORTED, "scene: more than 2^31 - 1 emitters");
-    if (total) {
-        s->emitters = malloc(sizeof *s->emitters * total);
-        if (!s->emitters)
-            return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu emitters", total);
-    }
-    int n = 0;
-    for (int i = 0; i < s->nemissive; i++) {
+    for (int i = 0; i < ne; i++)
+        tb_array_init(&per[i], sizeof(tb_emitter));
+    if (threads <= 0)
+        threads = omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (ne > 1)
+    for (int i = 0; i < ne; i++) {
         tb_scene_emissive *e = &s->emissive[i];
         const tb_object *o = s->objects[e->object];
-        e->first_emitter = n;
-        e->nemitters = 0;
         tb_channels L = tb_radiance_from_exitance(s->materials[e->material].emission);
-        tb_status st = tb__scene_leaf_emitters(o, L, s->emitters + n, &e->nemitters);
-        if (st)
-            return st;
-        n += e->nemitters;
+        sts[i] = tb__scene_leaf_emitters(o, L, &per[i], &e->nemitters);
     }
+    tb_status st = TB_OK;
+    size_t total = 0;
+    for (int i = 0; i < ne && !st; i++) {
+        st = sts[i] ? tb_error(sts[i], "scene: out of memory for emitters") : TB_OK;
+        total += per[i].len;
+    }
+    if (!st && total > (size_t)INT32_MAX)
+        st = tb_error(TB_ERR_UNSUPPORTED, "scene: more than 2^31 - 1 emitters");
+    if (!st) {
+        /* The emitters and a renderer's area-light tables over them. */
+        s->priv->used += total * (sizeof *s->emitters + 3 * sizeof(double));
+        st = tb__check_memory(s, "with the emitters");
+    }
+    if (!st && total && !(s->emitters = malloc(sizeof *s->emitters * total)))
+        st = tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu emitters", total);
+    int n = 0;
+    for (int i = 0; i < ne; i++) {
+        tb_scene_emissive *e = &s->emissive[i];
+        if (!st) {
+            e->first_emitter = n;
+            e->nemitters = (int)per[i].len;
+            if (per[i].len)
+                memcpy(s->emitters + n, per[i].data, per[i].len * sizeof(tb_emitter));
+            n += e->nemitters;
+        }
+        tb_array_free(&per[i]);
+    }
+    free(per);
+    free(sts);
+    if (st)
+        return st;
     s->nemitters = n;
-    tb_stat_add(&tb__n_emissive, s->nemissive);
     return TB_OK;
 }
 
@@ -791,9 +881,12 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
     }
     s->priv = p;
     tb_htab_init(&p->mat_hash, TB_HTAB_U64);
+    p->feds = tb_object_fed_cache_new();
+    p->budget = opt->memory_budget > 0;
+    p->limit = p->budget ? opt->memory_budget : tb_scene_available_memory() / 10 * 9;
     s->name = tb_strdup(name);
     p->errname = s->name ? s->name : "";
-    tb_status st = s->name ? TB_OK : tb_error(TB_ERR_NOMEM, "scene: out of memory");
+    tb_status st = s->name && p->feds ? TB_OK : tb_error(TB_ERR_NOMEM, "scene: out of memory");
     tb_mid_item it;
     while (!st && !(st = tb_mid_reader_next(r, &it)) && it.type != TB_MID_ITEM_END) {
         if (it.type == TB_MID_ITEM_OBJECT)
@@ -827,12 +920,19 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
         st = tb__finish_materials(s, opt);
     if (!st)
         st = tb__finish_lights(s);
+    if (!st && !opt->no_emitters)
+        st = tb__finish_emitters(s, opt->threads);
     if (!st)
-        st = tb__finish_emitters(s);
+        tb_stat_add(&tb__n_emissive, s->nemissive);
     if (!st)
         st = tb__make_prims(s);
-    /* The copies were needed only for the conversion. */
+    /* The copies were needed only for the conversion; the shared FED files
+     * live on with the objects that hold them. */
     tb_htab_free(&p->mat_hash);
+    s->stats.fed_files = tb_object_fed_cache_files(p->feds);
+    s->stats.fed_bytes = tb_object_fed_cache_bytes(p->feds);
+    tb_object_fed_cache_free(p->feds);
+    p->feds = NULL;
     s->stats.load_seconds = (double)(tb_stats_now_ns() - t0) * 1e-9;
     tb_timer_stop(tt);
     if (!st && !opt->no_accel) {
@@ -845,6 +945,19 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
         tb_scene_free(s);
         return st;
     }
+    tb_scene_memory_use mu;
+    tb_scene_memory(s, &mu);
+    tb_stat_add(&tb__m_objects, (int64_t)mu.objects);
+    tb_stat_add(&tb__m_meshes, (int64_t)mu.meshes);
+    tb_stat_add(&tb__m_fed, (int64_t)mu.fed);
+    tb_stat_add(&tb__m_emitters, (int64_t)mu.emitters);
+    tb_stat_add(&tb__m_accel, (int64_t)(mu.prims + mu.accel));
+    tb_stat_add(&tb__m_total, (int64_t)mu.total);
+    if (mu.nobjects)
+        tb_stat_ratio_add(&tb__r_per_object, (int64_t)(mu.per_object * (double)mu.nobjects + 0.5), (int64_t)mu.nobjects);
+    if (mu.triangles)
+        tb_stat_ratio_add(&tb__r_per_tri, (int64_t)(mu.per_triangle * (double)mu.triangles + 0.5),
+                          (int64_t)mu.triangles);
     *out = s;
     return TB_OK;
 }
@@ -856,6 +969,22 @@ tb_status tb_scene_load(const char *path, const tb_scene_options *opt, tb_scene 
     *out = NULL;
     if (!path)
         return tb_error(TB_ERR_ARG, "scene: NULL path");
+    if (opt && opt->memory_budget && strcmp(path, "-") != 0) {
+        /* Refuse before building anything: a streaming pass predicts the need. */
+        tb_scene_memory_use u;
+        tb_status pst = tb_scene_predict_memory(path, &u);
+        if (pst)
+            return pst;
+        tb_stat_add(&tb__m_predicted, (int64_t)u.total);
+        if (u.total > opt->memory_budget) {
+            char parts[1024];
+            tb__scene_memory_describe(&u, parts, sizeof parts);
+            return tb_error(TB_ERR_NOMEM,
+                            "%s: the scene needs about %.1f MiB, more than the memory budget of %.1f MiB: %s; "
+                            "nothing was loaded",
+                            path, (double)u.total / 1048576.0, (double)opt->memory_budget / 1048576.0, parts);
+        }
+    }
     tb_mid_reader *r;
     tb_status st = tb_mid_reader_open(&r, path);
     if (st)
@@ -915,6 +1044,7 @@ void tb_scene_free(tb_scene *s)
         free(p->ies);
         free(p->ies_paths);
         tb__attrs_free(p->attrs);
+        tb_object_fed_cache_free(p->feds);
         free(p);
     }
     free(s->name);
@@ -1005,4 +1135,11 @@ void tb_scene_print_summary(const tb_scene *s, FILE *out)
         fprintf(out, "\n");
     }
     fprintf(out, "load: %.3f ms\n", s->stats.load_seconds * 1e3);
+    tb_scene_memory_use mu;
+    tb_scene_memory(s, &mu);
+    fprintf(out, "memory: %.1f MiB (objects %.1f, meshes %.1f, FED files %.1f, materials %.1f, emitters %.1f, "
+                 "acceleration %.1f); %.0f bytes per object, %.0f per triangle\n",
+            (double)mu.total / 1048576.0, (double)mu.objects / 1048576.0, (double)mu.meshes / 1048576.0,
+            (double)mu.fed / 1048576.0, (double)mu.materials / 1048576.0, (double)mu.emitters / 1048576.0,
+            (double)(mu.prims + mu.accel) / 1048576.0, mu.per_object, mu.per_triangle);
 }

@@ -66,6 +66,14 @@ typedef struct tb_scene_options {
     tb_scene_color color;         /* colour representation (default: as the scene needs) */
     const tb_bands *bands;        /* bands of a spectral scene (NULL: util/color's default 400-700 nm at 10 nm) */
     bool no_accel;                /* build no acceleration structure (tb_scene_intersect then misses) */
+    size_t memory_budget;         /* bytes the scene may take (0: no budget). tb_scene_load predicts the
+                                     need first (tb_scene_predict_memory) and refuses a scene over it before
+                                     building anything, saying what takes the memory; every load also stops
+                                     cleanly once it has taken more than the budget, or without one, 90% of
+                                     the memory available when it started */
+    bool no_emitters;             /* make no area-light emitters (nemitters 0, the emissive list is still
+                                     made): for renderers that do not sample emitters (radiosity), so
+                                     curved and CSG emitters are not tessellated */
 } tb_scene_options;
 
 /* A procedural pattern or bump map of a material (MID 1.1, docs/mid.md 7.2),
@@ -107,8 +115,9 @@ typedef struct tb_material {
 typedef struct tb_scene_emissive {
     uint32_t object;     /* top-level object index */
     int material;        /* material of the (first, in pre-order) emitting leaf */
-    double area;         /* world-space area of its emitting surface, scene units^2; NaN when
-                            not computed (CSG objects: docs/rendering.md, "Emissive objects") */
+    double area;         /* world-space area of its emitting surface, scene units^2, when known
+                            without tessellating (polygons, a sphere under a similarity); else NaN:
+                            tb_scene_emissive_area computes it (docs/rendering.md, "Emissive objects") */
     int first_emitter;   /* its emitters are emitters[first_emitter .. first_emitter + nemitters) */
     int nemitters;       /* curved and CSG objects: the triangles of their tessellation (scene_emit.c) */
 } tb_scene_emissive;
@@ -120,6 +129,8 @@ typedef struct tb_scene_stats {
     size_t nprims;           /* acceleration references */
     double load_seconds;     /* wall time of reading and building the objects, lights and materials */
     double accel_seconds;    /* wall time of the acceleration structure build */
+    size_t fed_files;        /* FED files read: each once, however many objects refer to it */
+    size_t fed_bytes;        /* memory of those files' meshes (held once, shared by their objects) */
 } tb_scene_stats;
 
 typedef struct tb__scene_priv tb__scene_priv;
@@ -170,6 +181,47 @@ tb_status tb_scene_load_stream(FILE *fp, const char *name, const char *base_dir,
 /* Replaces the acceleration structure by a new one of `kind` (opt NULL:
  * defaults). On failure the scene keeps its old structure. */
 tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel_options *opt);
+
+/* The world-space area of emissive object `i` (index into s->emissive): the
+ * stored one, or else computed now from two tessellations (Richardson
+ * extrapolation, docs/rendering.md). TB_ERR_UNSUPPORTED for a CSG object,
+ * TB_ERR_ARG for a bad index; a failed tessellation's error otherwise. */
+tb_status tb_scene_emissive_area(const tb_scene *s, int i, double *area);
+
+/* Heap bytes counted per allocation on top of the size asked for (glibc's
+ * chunk header and rounding): part of every figure of tb_scene_memory. */
+#define TB_SCENE_MALLOC_OVERHEAD 16
+
+/* Where a loaded scene's memory is (bytes; docs/rendering.md, "Memory"). */
+typedef struct tb_scene_memory_use {
+    size_t objects;      /* objects other than polygons meshes: structs, parameters, CSG trees, names */
+    size_t meshes;       /* polygons objects: their structs and triangulated meshes (corners, BVH) */
+    size_t fed;          /* FED files, held once however many objects share them */
+    size_t materials;    /* the material table */
+    size_t emitters;     /* area-light emitters and the emissive-object list */
+    size_t lights;       /* point, spot and directional lights */
+    size_t prims;        /* acceleration references */
+    size_t accel;        /* the acceleration structure */
+    size_t total;        /* the sum */
+    size_t nobjects;     /* objects counted in `objects` */
+    uint64_t triangles;  /* triangles of the polygons objects */
+    double per_object;   /* (objects + their references' share of prims and accel) / nobjects */
+    double per_triangle; /* (meshes + the triangle references' share of prims and accel) / triangles */
+} tb_scene_memory_use;
+
+/* Fills *m with where the scene's memory is (all zero for NULL). */
+void tb_scene_memory(const tb_scene *s, tb_scene_memory_use *m);
+
+/* Predicts what loading and rendering the scene at `path` will take (the
+ * same parts as tb_scene_memory, the acceleration structure at its build
+ * peak, emitters with a renderer's area-light tables over them) from one
+ * streaming pass over the file, which holds one object at a time. FED
+ * meshes are estimated from their file sizes. The reader's errors. */
+tb_status tb_scene_predict_memory(const char *path, tb_scene_memory_use *u);
+
+/* The memory the system can give without swapping (Linux MemAvailable), in
+ * bytes; 0 when unknown. */
+size_t tb_scene_available_memory(void);
 
 /* Frees the scene; NULL is allowed. */
 void tb_scene_free(tb_scene *s);

@@ -87,13 +87,11 @@ static bool tb__tree_flat(const tb_object *o)
 
 static bool tb__similarity(const tb_transform *t, double *s);
 
-tb_status tb__scene_leaf_area(const tb_object *leaf, double *area)
+bool tb__scene_leaf_area_exact(const tb_object *leaf, double *area)
 {
-    if (tb_prim_is_csg(leaf->kind))
-        return tb_error(TB_ERR_UNSUPPORTED, "scene: no area for a CSG node");
     if (leaf->kind == TB_PRIM_POLYGONS) {
         *area = tb__mesh_area(leaf);
-        return TB_OK;
+        return true;
     }
     double sc;
     if (leaf->kind == TB_PRIM_SPHERE && tb__similarity(&leaf->to_world, &sc)) {
@@ -101,8 +99,17 @@ tb_status tb__scene_leaf_area(const tb_object *leaf, double *area)
          * exactly, instead of two fine tessellations (a render's largest
          * fixed cost on a scene with a lamp globe). */
         *area = 4.0 * TB_PI * sc * sc;
-        return TB_OK;
+        return true;
     }
+    return false;
+}
+
+tb_status tb__scene_leaf_area(const tb_object *leaf, double *area)
+{
+    if (tb_prim_is_csg(leaf->kind))
+        return tb_error(TB_ERR_UNSUPPORTED, "scene: no area for a CSG node");
+    if (tb__scene_leaf_area_exact(leaf, area))
+        return TB_OK;
     double fine;
     tb_status st = tb__tess_area(leaf, TB__AREA_ANGLE_FINE, &fine);
     if (st)
@@ -156,7 +163,7 @@ static bool tb__similarity(const tb_transform *t, double *s)
  * out along its normal by a bound on that gap, half its longest edge times
  * tan(angle / 2). Writes the count to *count (0 if the shape cannot be
  * tessellated). TB_ERR_NOMEM. */
-static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_emitter *out, int *count)
+static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_array *out, int *count)
 {
     *count = 0;
     /* As for areas (scene.c), a shape that cannot be tessellated is not worth
@@ -228,8 +235,10 @@ static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_emitter
             }
             e.object = o->index;
             e.face = face;
-            if (out)
-                out[n] = e;
+            if (out && tb_array_push(out, &e)) {
+                n = -1;
+                break;
+            }
             n++;
         }
     }
@@ -243,7 +252,7 @@ static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_emitter
     return TB_OK;
 }
 
-tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out, int *count)
+tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_array *out, int *count)
 {
     *count = 0;
     if (leaf->kind == TB_PRIM_SPHERE) {
@@ -252,9 +261,11 @@ tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitt
             return tb__tess_emitters(leaf, L, out, count);
         if (out) {
             tb_dvec3 c = tb_transform_dpoint(&leaf->to_world, (tb_dvec3){0.0, 0.0, 0.0});
-            *out = tb_emitter_sphere(tb_dvec3_to_f(c), (float)s, L);
-            out->object = leaf->index;
-            out->face = leaf->face_base;
+            tb_emitter e = tb_emitter_sphere(tb_dvec3_to_f(c), (float)s, L);
+            e.object = leaf->index;
+            e.face = leaf->face_base;
+            if (tb_array_push(out, &e))
+                return tb_error(TB_ERR_NOMEM, "scene: out of memory for emitters");
         }
         *count = 1;
         return TB_OK;
@@ -278,8 +289,8 @@ tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitt
             continue; /* a sliver that vanished in float: nothing to sample */
         e.object = leaf->index;
         e.face = leaf->face_base + m->tri_face[i];
-        if (out)
-            out[n] = e;
+        if (out && tb_array_push(out, &e))
+            return tb_error(TB_ERR_NOMEM, "scene: out of memory for emitters");
         n++;
     }
     *count = n;

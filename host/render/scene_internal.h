@@ -13,6 +13,7 @@
 #include "host/render/scene.h"
 #include "util/base/error.h"
 #include "util/container/arena.h"
+#include "util/container/array.h"
 #include "util/container/hash_table.h"
 #include "util/math/aabb.h"
 #include "util/math/ray.h"
@@ -37,6 +38,10 @@ tb_status tb__scene_tri_bounds(const tb_object *o, uint32_t tri, tb_aabb *out);
  * vertices, or the CSG combination of the children's boxes. */
 tb_status tb__scene_object_bounds(const tb_object *o, tb_aabb *out);
 
+/* The world-space area of primitive `leaf` when it needs no tessellation
+ * (polygons, a sphere under a similarity): true and *area set; else false. */
+bool tb__scene_leaf_area_exact(const tb_object *leaf, double *area);
+
 /* World-space surface area of primitive `leaf` (not a CSG node): exact for
  * polygons and for primitives with only flat faces, otherwise from two
  * tessellations and Richardson extrapolation (docs/rendering.md). */
@@ -45,9 +50,26 @@ tb_status tb__scene_leaf_area(const tb_object *leaf, double *area);
 /* The emitters of object `leaf` (a primitive or a CSG tree) with radiance L:
  * one triangle per triangle of a polygons object, one sphere for a sphere
  * under a similarity transform, otherwise the triangles of its world-space
- * tessellation (scene_emit.c). Writes them to out (when not NULL) and their
- * count to *n (none if the tessellation fails). TB_ERR_NOMEM only. */
-tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out, int *n);
+ * tessellation (scene_emit.c). Appends them to out (a tb_array of
+ * tb_emitter, when not NULL) and writes their count to *n (none if the
+ * tessellation fails). TB_ERR_NOMEM only. */
+tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_array *out, int *n);
+
+/* ------------------------------------------------------------------ memory (scene_memory.c) */
+
+/* Bytes of object o (struct, parameters, children, mesh), as tb_scene_memory counts them. */
+size_t tb__scene_object_bytes(const tb_object *o);
+
+/* Bytes per acceleration reference while the structure is built (the
+ * prediction and the load's running check use it). */
+#define TB__SCENE_BUILD_PER_REF 400
+
+/* Puts the hash of every node material of m (as the material table keys
+ * them, unknown attributes aside) into `set` (scene.c). TB_ERR_NOMEM only. */
+tb_status tb__scene_predict_materials(const tb_mid_object *m, tb_htab *set);
+
+/* Writes the parts of u, largest first, as "objects 12.0 MiB (... each), ...". */
+void tb__scene_memory_describe(const tb_scene_memory_use *u, char *buf, size_t len);
 
 /* ------------------------------------------------------------------ unknown attributes (scene_attrs.c) */
 

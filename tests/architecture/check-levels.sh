@@ -33,6 +33,10 @@ declare -A may_use=(
   [host/gpu]="util/* host/mid host/object host/render host/radiosity shaders/shared"
   # the hybrid radiosity + ray-tracing renderer: a user of both renderers
   [host/hybrid]="util/* host/mid host/object host/render host/radiosity"
+  # the distributed layer (MPI): above the renderers, which it drives through
+  # callbacks (tile exchange, radiosity exchange, checkpoints); none of them
+  # may include it
+  [host/dist]="util/* host/mid host/object host/render host/radiosity host/hybrid"
 )
 
 # check MODULE INCLUDE-PATH: 0 when MODULE may include INCLUDE-PATH.
@@ -61,6 +65,9 @@ check host/gpu host/render/scene.h || { echo "self-test: host/gpu -> host/render
 check host/object util/roots/roots.h || { echo "self-test: host/object -> util/roots refused"; selftest_bad=1; }
 check host/radiosity host/hybrid/hybrid.h && { echo "self-test: host/radiosity -> host/hybrid accepted"; selftest_bad=1; }
 check util/roots util/math/vec.h || { echo "self-test: util/roots -> util/math refused"; selftest_bad=1; }
+check host/render host/dist/tiles.h && { echo "self-test: host/render -> host/dist accepted"; selftest_bad=1; }
+check host/radiosity host/dist/dist.h && { echo "self-test: host/radiosity -> host/dist accepted"; selftest_bad=1; }
+check host/dist host/render/film.h || { echo "self-test: host/dist -> host/render refused"; selftest_bad=1; }
 if ((selftest_bad)); then echo "check-levels: self-test failed"; exit 1; fi
 
 cd "$root" || exit 2

@@ -93,6 +93,11 @@ static void test_scenes(void **state)
     s = ti_run_scene("cornell-box-rgb.mid");
     assert_int_equal(s.front, s.hits);
     assert_int_equal(s.points, s.hits);
+    /* The spheres variant: the mirror and glass spheres are closed, seen from outside. */
+    s = ti_run_scene("cornell-box-spheres.mid");
+    assert_true(s.objects >= 8);
+    assert_int_equal(s.front, s.hits);
+    assert_int_equal(s.points, s.hits);
     const char *others[] = {"radiosity-room.mid", "showcase.mid"};
     for (int i = 0; i < 2; i++) {
         s = ti_run_scene(others[i]);

@@ -371,6 +371,61 @@ static void test_continue(void **state)
     tb_scene_free(sc);
 }
 
+/* Checkpoints (tb_rad_solver_pack/unpack): a solver stopped after 60
+ * shots, packed, and unpacked into a new solver of the same mesh, shoots on
+ * exactly as the original: same shots, every element's radiosity and the
+ * energy sums bit for bit. Packed bytes of another mesh, or cut short, are
+ * refused and leave the solver as it was. */
+static void test_pack(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb_rad_test_load("scenes/cornell-box-rgb.mid");
+    tb_rad_mesh m, other;
+    tb_rad_mesh_options mo = {.max_edge = 150};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    mo.max_edge = 200;
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &other), TB_OK);
+    tb_rad_options o = {.samples = 8, .seed = 3};
+    tb_rad_solver *whole = NULL, *first = NULL, *second = NULL, *wrong = NULL;
+    assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &whole), TB_OK);
+    assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &first), TB_OK);
+    assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &second), TB_OK);
+    assert_int_equal(tb_rad_solver_create(&other, NULL, &o, &wrong), TB_OK);
+    tb_rad_stop all = {.threshold = 0.01}, part = {.threshold = 0.01, .max_shots = 60};
+    assert_int_equal(tb_rad_solver_run(whole, &all, NULL, NULL, 0), TB_OK);
+    assert_int_equal(tb_rad_solver_run(first, &part, NULL, NULL, 0), TB_OK);
+    assert_int_equal(tb_rad_solver_shots(first), 60);
+    size_t len = tb_rad_solver_packed_size(first);
+    unsigned char *buf = malloc(len);
+    assert_non_null(buf);
+    tb_rad_solver_pack(first, buf);
+    assert_int_equal(tb_rad_solver_unpack(wrong, buf, len), TB_ERR_FORMAT);
+    assert_int_equal(tb_rad_solver_shots(wrong), 0);
+    assert_int_equal(tb_rad_solver_unpack(second, buf, len - 8), TB_ERR_FORMAT);
+    assert_int_equal(tb_rad_solver_shots(second), 0);
+    assert_int_equal(tb_rad_solver_unpack(second, buf, len), TB_OK);
+    free(buf);
+    assert_int_equal(tb_rad_solver_shots(second), 60);
+    assert_int_equal(tb_rad_solver_run(second, &all, NULL, NULL, 0), TB_OK);
+    assert_true(tb_rad_solver_shots(whole) > 60);
+    assert_int_equal(tb_rad_solver_shots(second), tb_rad_solver_shots(whole));
+    double x[TB_CHANNELS_MAX], y[TB_CHANNELS_MAX];
+    for (size_t i = 0; i < m.nelems; i++) {
+        tb_rad_element_radiosity(whole, i, false, x);
+        tb_rad_element_radiosity(second, i, false, y);
+        assert_memory_equal(x, y, (size_t)m.nchannels * sizeof x[0]);
+    }
+    tb_rad_energy a = tb_rad_solver_energy(whole), b = tb_rad_solver_energy(second);
+    assert_memory_equal(&a, &b, sizeof a);
+    tb_rad_solver_free(whole);
+    tb_rad_solver_free(first);
+    tb_rad_solver_free(second);
+    tb_rad_solver_free(wrong);
+    tb_rad_mesh_free(&m);
+    tb_rad_mesh_free(&other);
+    tb_scene_free(sc);
+}
+
 /* Bad arguments are refused with a message. */
 static void test_errors(void **state)
 {
@@ -621,7 +676,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_furnace_raycast), cmocka_unit_test(test_furnace_hemicube),
         cmocka_unit_test(test_sphere_cap),      cmocka_unit_test(test_energy),
         cmocka_unit_test(test_reciprocity),     cmocka_unit_test(test_threads),
-        cmocka_unit_test(test_patches_csv),     cmocka_unit_test(test_continue),
+        cmocka_unit_test(test_patches_csv),     cmocka_unit_test(test_continue), cmocka_unit_test(test_pack),
         cmocka_unit_test(test_errors),          cmocka_unit_test(test_cornell_image),
         cmocka_unit_test(test_occluders), cmocka_unit_test(test_shaft),
     };

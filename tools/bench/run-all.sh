@@ -49,6 +49,11 @@ benchmarks=(
     "radiosity|radiosity solver: form-factor methods, patches, default element size"
     "ff-cpu|CPU form factors: ray casting, exact point form factor, hemicube (ff_table timing)"
     "adaptive|mesh refinement and radiosity --adapt"
+<<<<<<< HEAD
+    "dist|mpirun: 2 ranks x 1 thread vs 1 rank (tools/bench/dist-scaling.sh)"
+=======
+    "methods-error|speed versus error of raytrace, radiosity, hybrid and path (tools/bench/methods-error.sh)"
+>>>>>>> main
 )
 
 usage() {
@@ -603,6 +608,38 @@ print(f"{label}\t{d['elements']}\t{d['counters']['Radiosity/shots']}\t{d['adapt_
       f"{float(open(tm).read().split()[0]):.2f}")
 EOF
     done
+}
+
+<<<<<<< HEAD
+bench_dist() {
+    need mpirun "Open MPI: tools/setup.sh"
+    local q=()
+    is_quick && q=(--quick)
+    table scaling "Distributed: 1 rank x 1 thread vs 2 ranks x 1 thread (best of 3; CPU = every process of the job)" \
+        case "1 rank: wall / CPU s" "2 ranks: wall / CPU s" "speedup (wall)" "CPU cost of 2 ranks" "load before/after"
+    cmd env TESTBED="$TB" "$root/tools/bench/dist-scaling.sh" "${q[@]}"
+    last_output | awk -F' *[|] *' '/^[|] [a-z]+-[a-z]+ [|] [0-9.]+ \// { printf "%s\t%s\t%s\t%s\t%s\t%s\n", $2, $3, $4, $5, $6, $7 }' | rows
+=======
+bench_methods-error() {
+    need_gnu_time
+    need gnuplot "the plots of tools/bench/methods-error.sh"
+    local q=()
+    is_quick && q=(--quick)
+    # the reference is cached in build/methods-error-cache (rendered once: minutes)
+    cmd env TESTBED="$TB" bash "$root/tools/bench/methods-error.sh" "${q[@]}" --out "$work/methods-error"
+    table renders "Speed versus error: every render against the converged path-traced reference (CPU s: user + system)" \
+        scene method mode budget "wall s" "CPU s" relMSE RMSE
+    python3 - "$work/methods-error/methods-error.csv" <<'PY' | rows
+import csv, sys
+for r in csv.DictReader(open(sys.argv[1])):
+    print("\t".join([r["scene"], r["method"], r["mode"], r["budget"], r["seconds"], r["cpu_seconds"],
+                     f"{float(r['relMSE']):.4g}", f"{float(r['RMSE']):.4g}"]))
+PY
+    table equal "Speed versus error: relMSE of the Whitted and the path tracer at each hybrid render's CPU time, over the hybrid's" \
+        scene "hybrid mode" budget "CPU s" "hybrid relMSE" "Whitted relMSE" "Whitted / hybrid" "path relMSE" "path / hybrid"
+    last_output | awk -F' [|] ' '/^[|] / && NF == 9 && $4 ~ /^[0-9.]+$/ { sub(/^[|] /, "", $1); sub(/ [|]$/, "", $9)
+        printf "%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n", $1, $2, $3, $4, $5, $6, $7, $8, $9 }' | rows
+>>>>>>> main
 }
 
 # ------------------------------------------------------------------ header

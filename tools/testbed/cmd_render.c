@@ -4,6 +4,7 @@
  * (host/render/render_file.h); this file holds the options, the Ctrl-C
  * handler, the Vulkan backend (host/render may not use host/gpu) and the
  * summary lines. */
+#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -14,6 +15,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "dist_cli.h"
 #include "host/gpu/gpu.h"
 #include "host/gpu/render.h"
 #include "host/render/pathtrace.h"
@@ -40,6 +42,28 @@ static int tb__render_filter(const char *val, void *dest, char *why, size_t len)
         return 0;
     snprintf(why, len, "%s", tb_last_error());
     return 1;
+}
+
+/* --memory-budget BYTES: a whole number of bytes, or with a binary suffix
+ * k, M, G or T (1 k = 1024 bytes): 512M, 2G. */
+static int tb__render_budget(const char *val, void *dest, char *why, size_t len)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(val, &end);
+    double mul = 1.0;
+    if (*end && !end[1]) {
+        const char *units = "kMGT", *u = strchr(units, *end == 'K' ? 'k' : *end);
+        if (u && *end)
+            mul = ldexp(1.0, 10 * (int)(u - units + 1)), end++;
+    }
+    v *= mul;
+    if (end == val || *end || errno || !(v >= 1.0) || v > 0x1p62 || v != floor(v)) {
+        snprintf(why, len, "'%s' is not a number of bytes >= 1 (e.g. 1000000, 512M, 2G)", val);
+        return 1;
+    }
+    *(size_t *)dest = (size_t)v;
+    return 0;
 }
 
 /* The command's side of tb_render_file: the Ctrl-C handler around the
@@ -110,7 +134,21 @@ static tb_status tb__render_gpu_stats(void *user)
     return st;
 }
 
+static int tb__cmd_render(int argc, char **argv);
+
 int tb_cmd_render(int argc, char **argv)
+{
+    /* every method runs as one rank, or as a rank of an mpirun job */
+    if (tb_dist_init(&argc, &argv)) {
+        fprintf(stderr, "testbed render: %s\n", tb_last_error());
+        return TB_EXIT_FAIL;
+    }
+    int rc = tb__cmd_render(argc, argv);
+    tb_dist_finalize();
+    return rc;
+}
+
+static int tb__cmd_render(int argc, char **argv)
 {
     /* --method radiosity is another renderer with options of its own */
     for (int i = 1; i + 1 < argc && strcmp(argv[i], "--"); i++)
@@ -133,6 +171,8 @@ int tb_cmd_render(int argc, char **argv)
     enum { TB__RAYTRACE, TB__RADIOSITY, TB__PATH, TB__HYBRID };
     static const tb_opt_choice methods[] = {
         {"raytrace", TB__RAYTRACE}, {"path", TB__PATH}, {"hybrid", TB__HYBRID}, {"radiosity", TB__RADIOSITY}, {NULL, 0}};
+    const char *ckpt_path = NULL, *resume_path = NULL;
+    double ckpt_every = 0.0;
     static const tb_opt_choice criteria[] = {{"stderr", TB_AA_STDERR}, {"contrast", TB_AA_CONTRAST}, {NULL, 0}};
     static const tb_opt_choice patterns[] = {{"stratified", TB_AA_STRATIFIED}, {"sobol", TB_AA_SOBOL}, {NULL, 0}};
     static const tb_opt_choice tex_filters[] = {{"bilinear", 1}, {"trilinear", 2}, {"ewa", 3}, {NULL, 0}};
@@ -188,6 +228,17 @@ int tb_cmd_render(int argc, char **argv)
          .help = "progressive passes of --spp samples each (default %D)"},
         {"time-budget", .type = TB_OPT_DOUBLE, .dest = &ro->time_budget, .min = 0, .max = INFINITY, .metavar = "S",
          .flags = TB_OPTF_OPEN_MIN, .help = "stop starting new tiles after S seconds"},
+        {"checkpoint", .type = TB_OPT_STRING, .dest = &ckpt_path, .metavar = "FILE",
+         .help = "save the film and the passes done to FILE (atomically) after\n"
+                 "passes, at most every --checkpoint-every seconds, and after the last"},
+        {"checkpoint-every", .type = TB_OPT_DOUBLE, .dest = &ckpt_every, .min = 0, .max = INFINITY, .metavar = "S",
+         .help = "seconds between checkpoints (default 0: after every pass)"},
+        {"resume", .type = TB_OPT_STRING, .dest = &resume_path, .metavar = "FILE",
+         .help = "continue the render saved in FILE (same scene and options; --passes\n"
+                 "may grow): the image equals an uninterrupted run's bit for bit"},
+        {"memory-budget", .type = TB_OPT_CUSTOM, .dest = &o.scene.memory_budget, .metavar = "BYTES",
+         .parse = tb__render_budget,
+         .help = "refuse, before loading, a scene predicted to need more (512M, 2G; docs/performance.md)"},
         {"exposure", .type = TB_OPT_DOUBLE, .dest = &o.exposure, .min = -INFINITY, .max = INFINITY, .metavar = "STOPS",
          .help = "PNG/RLE only: scale by 2^STOPS (default: mean luminance to 0.18)"},
         {"stats", .type = TB_OPT_STRING, .dest = &o.stats_path, .metavar = "FILE.json",
@@ -205,7 +256,9 @@ int tb_cmd_render(int argc, char **argv)
         .err = "testbed render: ",
         .usage = "SCENE.mid -o OUT.{png,exr,pfm,rle} [options]",
         .opts = opts,
-        .outro = "Ctrl-C writes the image rendered so far and exits with status 130.",
+        .outro = "Ctrl-C writes the image rendered so far and exits with status 130.\n"
+                 "Under mpirun every rank renders tiles and rank 0 writes the image, the same\n"
+                 "bits as one process (docs/distributed.md).",
         .pos = &scene_path,
         .max_pos = 1,
         .min_pos = 1,
@@ -258,19 +311,34 @@ int tb_cmd_render(int argc, char **argv)
     if (!o.report_path != !o.reference_path)
         return tb_cli_usage_error(&cli, "--report and --reference go together");
     tb__render_cmd cmd = {.scene_path = scene_path, .mode = (tb_gpu_mode)backend, .device = gdevice};
-    if (method != TB__PATH) { /* the Vulkan backend renders only the ray tracer */
-        o.backend = tb__render_gpu;
+    bool root = tb_dist_rank() == 0;
+    if (tb_dist_size() > 1 && (backend == TB_GPU_MODE_VULKAN || gdevice >= 0))
+        return tb_cli_usage_error(&cli, "--backend vulkan renders in one process, not over %d ranks",
+                                  tb_dist_size());
+    tb_tile_exchange *ex = NULL;
+    tb_ckpt_render ck;
+    tb_render_persist persist;
+    if (!tb_cli_dist_render_setup("testbed render", scene_path, argc, argv, ro, ckpt_path, ckpt_every,
+                                  resume_path, &ex, &ck, &persist))
+        return TB_EXIT_FAIL;
+    ro->progress = root;
+    if (method != TB__PATH) { /* the Vulkan backend renders only the ray tracer, in one process */
+        if (tb_dist_size() == 1)
+            o.backend = tb__render_gpu;
         o.backend_stats = tb__render_gpu_stats;
         o.backend_user = &cmd;
         o.backend_name = "vulkan";
     }
-    o.on_render = tb__render_hook;
-    o.on_render_user = &cmd;
+    if (root) {
+        o.on_render = tb__render_hook;
+        o.on_render_user = &cmd;
+    }
 
     /* the provenance records the whole command line */
     char **full = malloc(sizeof *full * ((size_t)argc + 2));
     if (!full) {
         fprintf(stderr, "testbed render: out of memory\n");
+        tb_dist_tiles_free(ex);
         return TB_EXIT_FAIL;
     }
     full[0] = "testbed";
@@ -280,10 +348,17 @@ int tb_cmd_render(int argc, char **argv)
     tb_render_file_result res;
     tb_status st = tb_render_file(scene_path, &o, &res);
     free(full);
+    tb_dist_tiles_free(ex);
+    /* collective: every rank gets here, failed or not */
+    tb_cli_dist_summary("testbed render", "tiles", st == TB_OK);
     if (st) {
-        fprintf(stderr, "testbed render: %s\n", tb_last_error());
+        /* every rank has the same error (the failing rank's); one says it */
+        if (root)
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
         return TB_EXIT_FAIL;
     }
+    if (!root)
+        return TB_EXIT_OK;
     printf("testbed render: %s: %s%dx%d, %llu samples, %.3f s (%d threads, %s)%s; wrote %s\n", scene_path,
            method == TB__PATH ? "path tracer, " : "", res.width,
            res.height, (unsigned long long)res.stats.aa.samples, res.stats.seconds, res.threads,

@@ -12,6 +12,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "dist_cli.h"
 #include "host/gpu/gpu.h"
 #include "host/hybrid/hybrid.h"
 #include "host/render/render_file.h"
@@ -170,17 +171,32 @@ int tb_cmd_render_hybrid(int argc, char **argv)
     if (glossy_seen)
         ro->rt.glossy_samples = glossy_samples;
     ro->cancel = &tb__hyb_interrupt;
-    ro->progress = true;
     o.scene.accel = (tb_accel_kind)accel;
     tb_render_method m = tb_hybrid_method(&hs);
     o.method = &m;
-    o.on_render = tb__hyb_hook;
-    o.on_render_user = (void *)scene_path;
+    /* under mpirun every rank solves the radiosity pass itself (the same
+     * solution: it is deterministic) and the ray-tracing tiles are shared */
+    bool root = tb_dist_rank() == 0;
+    tb_tile_exchange *ex = NULL;
+    tb_ckpt_render ck;
+    tb_render_persist persist;
+    if (!tb_cli_dist_render_setup("testbed render", scene_path, argc, argv, ro, NULL, 0.0, NULL, &ex, &ck,
+                                  &persist))
+        return TB_EXIT_FAIL;
+    ro->progress = root;
+    ho->stop.progress = root;
+    if (!root)
+        ho->log = NULL;
+    else {
+        o.on_render = tb__hyb_hook;
+        o.on_render_user = (void *)scene_path;
+    }
 
     /* the provenance records the whole command line */
     char **full = malloc(sizeof *full * ((size_t)argc + 2));
     if (!full) {
         fprintf(stderr, "testbed render: out of memory\n");
+        tb_dist_tiles_free(ex);
         return TB_EXIT_FAIL;
     }
     full[0] = "testbed";
@@ -190,10 +206,15 @@ int tb_cmd_render_hybrid(int argc, char **argv)
     tb_render_file_result res;
     tb_status st = tb_render_file(scene_path, &o, &res);
     free(full);
+    tb_dist_tiles_free(ex);
+    tb_cli_dist_summary("testbed render", "tiles", st == TB_OK);
     if (st) {
-        fprintf(stderr, "testbed render: %s\n", tb_last_error());
+        if (root)
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
         return TB_EXIT_FAIL;
     }
+    if (!root)
+        return TB_EXIT_OK;
     printf("testbed render: %s: hybrid (%s), radiosity %zu elements, %llu shots, %.3f s; ray tracing %dx%d, %llu "
            "samples, %.3f s (%d threads, %s)%s; wrote %s\n",
            scene_path, mode == TB_HYBRID_GATHER ? "gather" : "interpolated", hs.stats.elements,

@@ -9,6 +9,8 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "dist_cli.h"
+#include "host/dist/radiosity.h"
 #include "host/gpu/formfactor.h"
 #include "host/gpu/gpu.h"
 #include "host/radiosity/render.h"
@@ -69,6 +71,8 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     bool edge_given = false, area_given = false, samples_given = false, res_given = false, levels_given = false;
     bool device_given = false;
     uint64_t seed = 0;
+    const char *ckpt_path = NULL, *resume_path = NULL;
+    double ckpt_every = 5.0;
     static const tb_opt_choice methods[] = {{"radiosity", 0}, {NULL, 0}};
     static const tb_opt_choice ffs[] = {{"raycast", TB_RAD_FF_RAYCAST}, {"hemicube", TB_RAD_FF_HEMICUBE}, {NULL, 0}};
     const tb_opt opts[] = {
@@ -144,6 +148,15 @@ int tb_cmd_render_radiosity(int argc, char **argv)
                  "error over the reference's RMS reflected radiosity B - E)"},
         {"reference", .type = TB_OPT_STRING, .dest = &o.reference_path, .metavar = "REF.csv",
          .help = "the reference of --report"},
+        {"checkpoint", .type = TB_OPT_STRING, .dest = &ckpt_path, .metavar = "FILE",
+         .help = "save the solver's state (gathered and unshot radiosity, shots) to FILE,\n"
+                 "atomically, every --checkpoint-every seconds and after the last shot\n"
+                 "(not with --adapt)"},
+        {"checkpoint-every", .type = TB_OPT_DOUBLE, .dest = &ckpt_every, .min = 0, .max = INFINITY,
+         .metavar = "S", .help = "seconds between checkpoints (default %D; 0: after every shot)"},
+        {"resume", .type = TB_OPT_STRING, .dest = &resume_path, .metavar = "FILE",
+         .help = "continue the solve saved in FILE (same scene and options; --threshold\n"
+                 "may drop): the outputs equal an uninterrupted run's bit for bit"},
         {"stats", .type = TB_OPT_STRING, .dest = &o.stats_path, .metavar = "FILE.json",
          .help = "counters, times and provenance"},
         {0},
@@ -198,13 +211,48 @@ int tb_cmd_render_radiosity(int argc, char **argv)
         o.backend_user = &gpu;
         o.backend_name = "vulkan";
     }
-    o.log = stderr;
+    /* under mpirun: every rank solves, each shot's receivers are shared */
+    bool root = tb_dist_rank() == 0;
+    tb_rad_exchange *ex = NULL;
+    if (tb_dist_size() > 1) {
+        if (gpu.mode != TB_GPU_MODE_CPU)
+            return tb_cli_usage_error(&cli, "--backend vulkan solves in one process, not over %d ranks",
+                                      tb_dist_size());
+        if (ff == TB_RAD_FF_HEMICUBE && root)
+            fprintf(stderr, "testbed render: note: hemicube form factors are not shared over ranks: every rank "
+                            "computes all of them (use --formfactor raycast to divide the work)\n");
+        if (!(ex = tb_dist_rad_exchange_create())) {
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
+            return TB_EXIT_FAIL;
+        }
+        o.solver.exchange = ex;
+    }
+    tb_ckpt_rad ck = {.path = ckpt_path, .every = ckpt_every, .resume_path = resume_path};
+    tb_rad_persist persist;
+    if (ckpt_path || resume_path) {
+        if (o.adapt.threshold > 0) {
+            tb_dist_rad_exchange_free(ex);
+            return tb_cli_usage_error(&cli, "--checkpoint and --resume are for solves without --adapt");
+        }
+        if (!(ck.key = tb_cli_job_key(scene_path, argc, argv, tb_cli_free_opts))) {
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
+            tb_dist_rad_exchange_free(ex);
+            return TB_EXIT_FAIL;
+        }
+        persist = tb_ckpt_rad_persist(&ck);
+        o.persist = &persist;
+    }
+    if (root && tb_dist_size() > 1)
+        tb_ckpt_on_term("testbed render");
+    o.log = root ? stderr : NULL;
     o.log_prefix = "testbed render: ";
+    o.stop.progress = o.stop.progress && root;
 
     /* the provenance records the whole command line */
     char **full = malloc(sizeof *full * ((size_t)argc + 2));
     if (!full) {
         fprintf(stderr, "testbed render: out of memory\n");
+        tb_dist_rad_exchange_free(ex);
         return TB_EXIT_FAIL;
     }
     full[0] = "testbed";
@@ -215,10 +263,15 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     tb_status st = tb_rad_render(scene_path, &o, &res);
     free(full);
     tb__rad_gpu_close(&gpu);
+    tb_dist_rad_exchange_free(ex);
+    tb_cli_dist_summary("testbed render", "receivers", st == TB_OK);
     if (st) {
-        fprintf(stderr, "testbed render: %s\n", tb_last_error());
+        if (root)
+            fprintf(stderr, "testbed render: %s\n", tb_last_error());
         return TB_EXIT_FAIL;
     }
+    if (!root)
+        return TB_EXIT_OK;
     printf("testbed render: %s: radiosity, %zu elements, %llu shots (%.2f N), unshot %.3g, %.3f s (%d threads, %s, "
            "%s)\n",
            scene_path, res.elements, (unsigned long long)res.shots, (double)res.shots / (double)res.elements,

@@ -1,0 +1,113 @@
+/* Radiosity shots over ranks (radiosity.h): the gather of every rank's
+ * form factors and the accounts of work and waiting. */
+#include "host/dist/radiosity.h"
+#include "host/dist/dist.h"
+#include "host/dist/dist_internal.h"
+
+#include <limits.h>
+#include <stdlib.h>
+#include <time.h>
+
+#ifdef TB_HAVE_MPI
+#include <mpi.h>
+#endif
+
+/* An exchange and its accounts. */
+typedef struct tb__radx {
+    tb_rad_exchange ex;  /* handed to the solver (ex.ctx == this) */
+    int *counts, *displs; /* MPI's int counts and offsets per rank */
+    double last;          /* clock when the previous gather returned (work runs from there) */
+} tb__radx;
+
+static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts)
+{
+    tb__radx *x = ctx;
+    double t0 = tb__dist_now();
+#ifdef TB_HAVE_MPI
+    int R = x->ex.ranks, off = 0;
+    for (int r = 0; r < R; r++) {
+        if (counts[r] > (size_t)INT_MAX - (size_t)off)
+            return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange: more than %d receivers", INT_MAX);
+        x->counts[r] = (int)counts[r];
+        x->displs[r] = off;
+        off += (int)counts[r];
+    }
+    /* non-blocking, polled with short sleeps: a rank that is done early
+     * leaves the core to one still casting rays (Open MPI's blocking
+     * collectives spin, which on shared or oversubscribed cores slows the
+     * very rank everyone waits for) */
+    MPI_Request req;
+    if (MPI_Iallgatherv(mine, (int)n_mine, MPI_DOUBLE, all, x->counts, x->displs, MPI_DOUBLE, MPI_COMM_WORLD,
+                        &req) != MPI_SUCCESS)
+        return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallgatherv failed");
+    for (long us = 5;;) {
+        int done = 0;
+        MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+        if (done)
+            break;
+        /* 5 us doubling to 200 us: a gather of a few kilobytes is answered
+         * within microseconds when both ranks are there */
+        struct timespec ts = {0, us * 1000L};
+        nanosleep(&ts, NULL);
+        us = us * 2 < 200 ? us * 2 : 200;
+    }
+#else
+    (void)mine, (void)all, (void)counts;
+    return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
+#endif
+    double t1 = tb__dist_now();
+    /* bytes: this rank's form factors, delivered to every other rank */
+    tb__dist_account(t0 - x->last, t1 - t0, (uint64_t)n_mine * sizeof(double) * (uint64_t)(x->ex.ranks - 1), 1,
+                     n_mine);
+    x->last = t1;
+    return TB_OK;
+}
+
+static int tb__radx_agree(void *ctx, int flag)
+{
+    (void)ctx;
+    return tb_dist_bcast_int(flag);
+}
+
+static tb_status tb__radx_agree_status(void *ctx, tb_status st)
+{
+    (void)ctx;
+    return tb_dist_agree_status(st, NULL);
+}
+
+static tb_status tb__radx_report(void *ctx)
+{
+    (void)ctx;
+    return tb_dist_report_stats("receivers");
+}
+
+tb_rad_exchange *tb_dist_rad_exchange_create(void)
+{
+    tb__radx *x = calloc(1, sizeof *x);
+    int R = tb_dist_size();
+    if (x) {
+        x->counts = calloc((size_t)R, sizeof *x->counts);
+        x->displs = calloc((size_t)R, sizeof *x->displs);
+    }
+    if (!x || !x->counts || !x->displs) {
+        if (x)
+            free(x->counts), free(x->displs), free(x);
+        tb_error(TB_ERR_NOMEM, "out of memory for the radiosity exchange");
+        return NULL;
+    }
+    x->last = tb__dist_now();
+    x->ex = (tb_rad_exchange){.ctx = x, .rank = tb_dist_rank(), .ranks = R, .allgather = tb__radx_allgather,
+                              .agree = tb__radx_agree, .agree_status = tb__radx_agree_status,
+                              .report = tb__radx_report};
+    return &x->ex;
+}
+
+void tb_dist_rad_exchange_free(tb_rad_exchange *ex)
+{
+    if (!ex)
+        return;
+    tb__radx *x = ex->ctx;
+    free(x->counts);
+    free(x->displs);
+    free(x);
+}

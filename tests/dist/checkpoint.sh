@@ -1,0 +1,79 @@
+#!/bin/sh
+# Checkpoints of a progressive render (docs/distributed.md): in one process,
+# 2 passes saved then resumed to 5 give the 5-pass image bit for bit, and
+# resuming with other options is refused; over 2 ranks, killing rank 1
+# mid-render stops the job with a message naming the rank and the last
+# checkpoint, which is intact, and `--resume` over 3 ranks finishes with
+# the uninterrupted image. Radiosity: stopped and resumed solves write the
+# uninterrupted solve's patches (one process and 2 ranks); wrong jobs and
+# kinds are refused.
+#   checkpoint.sh  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)
+set -u
+. "$(dirname "$0")/mpirun.sh"
+T="${TB_TEST_TMPDIR:-/tmp}/dist_checkpoint.$$"
+rm -rf "$T" && mkdir -p "$T"
+sed 's/resolution = \[512 512\]/resolution = [64 64]/' "$TB_SOURCE_DIR/scenes/cornell-box.mid" > "$T/box.mid"
+grep -q 'resolution = \[64 64\]' "$T/box.mid" || fail "could not shrink the Cornell box"
+R="$T/box.mid --spp 1 --seed 3"
+tb() { "$TESTBED" render "$@" > "$T/out" 2>&1 || { cat "$T/out"; fail "testbed render $*"; }; }
+
+# one process: 5 passes at once, or 2 saved and 3 more resumed
+tb $R --passes 5 -o "$T/full.pfm"
+tb $R --passes 2 -o "$T/half.pfm" --checkpoint "$T/c.ckpt"
+grep -q "checkpoint $T/c.ckpt: 2 passes" "$T/out" || { cat "$T/out"; fail "no checkpoint line"; }
+tb $R --passes 5 -o "$T/res.pfm" --resume "$T/c.ckpt" --threads 1
+cmp "$T/full.pfm" "$T/res.pfm" || fail "resumed render differs from the uninterrupted one"
+"$TESTBED" render $R --spp 2 --passes 5 -o "$T/x.pfm" --resume "$T/c.ckpt" > "$T/out" 2>&1 &&
+    fail "resume with another --spp accepted"
+grep -q "c.ckpt: written for another job" "$T/out" || { cat "$T/out"; fail "no message for another job"; }
+[ ! -e "$T/x.pfm" ] || fail "an image was written for a refused resume"
+"$TESTBED" render $R --passes 5 -o "$T/x.pfm" --resume "$T/box.mid" > "$T/out" 2>&1 && fail "a scene taken as a checkpoint"
+grep -q "box.mid: not a testbed checkpoint" "$T/out" || { cat "$T/out"; fail "no message for a non-checkpoint"; }
+
+# two ranks, rank 1 killed once the first checkpoint is there
+rm -f "$T/c.ckpt"
+TB_DIST_JOB=$$ $MPIRUN -np 2 "$TESTBED" render $R --passes 400 --threads 1 -o "$T/k.pfm" --checkpoint "$T/c.ckpt" \
+    > "$T/kout" 2>&1 &
+job=$!
+i=0
+while [ ! -s "$T/c.ckpt" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
+[ -s "$T/c.ckpt" ] || { kill $job; cat "$T/kout"; fail "no checkpoint within a minute"; }
+victim=$(rank_pid $$ 1) || { kill $job; fail "rank 1 not found"; }
+kill -9 "$victim"
+wait $job && { cat "$T/kout"; fail "the job went on after rank 1 died"; }
+grep -q "rank 1 .*exited on signal 9" "$T/kout" || { cat "$T/kout"; fail "the dead rank is not named"; }
+grep -q "last checkpoint: $T/c.ckpt ([0-9]* passes), intact: continue with --resume" "$T/kout" ||
+    { cat "$T/kout"; fail "the last checkpoint is not named"; }
+[ ! -e "$T/k.pfm" ] || fail "an image was written by the killed job"
+done_passes=$(sed -n 's/.*last checkpoint: .*(\([0-9]*\) passes).*/\1/p' "$T/kout" | head -1)
+# the checkpoint is whole (its checksum), so the job resumes from it: to 12
+# passes if it got no further, else to its own count plus 2
+want=12
+[ "$done_passes" -lt 12 ] || want=$((done_passes + 2))
+$MPIRUN -np 3 "$TESTBED" render $R --passes $want --threads 1 -o "$T/k.pfm" --resume "$T/c.ckpt" > "$T/out" 2>&1 ||
+    { cat "$T/out"; fail "resume after the kill"; }
+tb $R --passes $want -o "$T/k1.pfm"
+cmp "$T/k1.pfm" "$T/k.pfm" || fail "killed and resumed job differs from one uninterrupted process"
+# radiosity: a solve stopped at unshot 0.05 and resumed to 0.005, in one
+# process and over 2 ranks, writes the patches of the uninterrupted solve;
+# another seed is another job; --adapt is refused
+Q="$TB_SOURCE_DIR/scenes/cornell-box.mid --method radiosity --max-edge 120"
+tb $Q --threshold 0.005 --patches "$T/rf.csv"
+tb $Q --threshold 0.05 --patches "$T/rh.csv" --checkpoint "$T/r.ckpt"
+grep -q "checkpoint $T/r.ckpt: [0-9]* shots" "$T/out" || { cat "$T/out"; fail "no radiosity checkpoint line"; }
+tb $Q --threshold 0.005 --patches "$T/rr.csv" --resume "$T/r.ckpt"
+cmp "$T/rf.csv" "$T/rr.csv" || fail "resumed radiosity differs from the uninterrupted solve"
+$MPIRUN -np 2 "$TESTBED" render $Q --threshold 0.005 --patches "$T/rr2.csv" --resume "$T/r.ckpt" --threads 1 \
+    > "$T/out" 2>&1 || { cat "$T/out"; fail "radiosity resume over 2 ranks"; }
+cmp "$T/rf.csv" "$T/rr2.csv" || fail "radiosity resumed over 2 ranks differs from the uninterrupted solve"
+"$TESTBED" render $Q --threshold 0.005 --patches "$T/x.csv" --resume "$T/r.ckpt" --seed 4 > "$T/out" 2>&1 &&
+    fail "radiosity resume with another seed accepted"
+grep -q "r.ckpt: written for another job" "$T/out" || { cat "$T/out"; fail "no message for another seed"; }
+"$TESTBED" render $Q --patches "$T/x.csv" --resume "$T/c.ckpt" > "$T/out" 2>&1 && fail "render checkpoint resumed as radiosity"
+grep -q "c.ckpt: a render checkpoint, not a radiosity one" "$T/out" || { cat "$T/out"; fail "no message for the kind"; }
+"$TESTBED" render $Q --adapt 0.1 --patches "$T/x.csv" --checkpoint "$T/y.ckpt" > "$T/out" 2>&1
+[ $? = 2 ] || { cat "$T/out"; fail "--adapt with --checkpoint is not a usage error"; }
+[ ! -e "$T/x.csv" ] || fail "patches written by a refused run"
+
+rm -rf "$T"
+echo "dist checkpoint: ok (killed after $done_passes passes)"

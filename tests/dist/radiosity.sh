@@ -1,0 +1,46 @@
+#!/bin/sh
+# `mpirun -np N testbed render --method radiosity` (docs/distributed.md,
+# "Radiosity"): each shot's receivers shared over 2 and over 3 ranks give
+# the one-process `--patches` CSV byte for byte, also with adaptive
+# subdivision and two levels (patches and elements), and any thread count;
+# the stats have per-rank figures; a bad scene stops every rank with its
+# file:line:col error.
+#   radiosity.sh  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)
+set -u
+. "$(dirname "$0")/mpirun.sh"
+T="${TB_TEST_TMPDIR:-/tmp}/dist_radiosity.$$"
+rm -rf "$T" && mkdir -p "$T"
+S="$TB_SOURCE_DIR/scenes/cornell-box.mid"
+R="--method radiosity --max-edge 120 --threshold 0.02"
+rad1() { "$TESTBED" render "$S" $R "$@" > "$T/out" 2>&1 || { cat "$T/out"; fail "one process: $*"; }; }
+radN() { n=$1; shift; $MPIRUN -np "$n" "$TESTBED" render "$S" $R "$@" > "$T/out" 2>&1 || { cat "$T/out"; fail "$n ranks: $*"; }; }
+
+rad1 --patches "$T/p1.csv" --threads 2
+rad1 --patches "$T/a1.csv" --adapt 0.2 --adapt-levels 2
+rad1 --patches "$T/t1.csv" --patch-edge 300 --seed 5
+for n in 2 3; do
+    radN $n --patches "$T/p$n.csv" --threads 1 --stats "$T/s$n.json"
+    cmp "$T/p1.csv" "$T/p$n.csv" || fail "$n ranks: patches differ from one process"
+    grep -q "rank $((n - 1)): [0-9]* receivers, work" "$T/out" || { cat "$T/out"; fail "no per-rank line"; }
+    python3 - "$T/s$n.json" "$n" <<'PY' || fail "per-rank stats of $n ranks"
+import json, sys
+j = json.load(open(sys.argv[1])); n = int(sys.argv[2])
+assert j['ranks'] == n, j.get('ranks')
+got = [j['rank%d_receivers' % r] for r in range(n)]
+assert all(g > 0 for g in got), got
+# cluster c belongs to rank c mod n: the shares differ by at most a cluster per shot
+assert max(got) <= 1.2 * min(got), got
+PY
+    radN $n --patches "$T/a$n.csv" --adapt 0.2 --adapt-levels 2 --threads 2
+    cmp "$T/a1.csv" "$T/a$n.csv" || fail "$n ranks: adaptive patches differ from one process"
+done
+radN 2 --patches "$T/t2.csv" --patch-edge 300 --seed 5
+cmp "$T/t1.csv" "$T/t2.csv" || fail "2 ranks, two levels: patches differ from one process"
+
+printf 'mid 1\ncamera {\n  eye = [0 0 oops]\n}\n' > "$T/bad.mid"
+$MPIRUN -np 2 "$TESTBED" render "$T/bad.mid" --method radiosity --patches "$T/bad.csv" > "$T/out" 2>&1 &&
+    { cat "$T/out"; fail "bad scene accepted"; }
+grep -q "bad.mid:3:[0-9]*: error:" "$T/out" || { cat "$T/out"; fail "no file:line:col error"; }
+[ ! -e "$T/bad.csv" ] || fail "patches written for a bad scene"
+rm -rf "$T"
+echo "dist radiosity: ok"

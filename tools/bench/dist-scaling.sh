@@ -1,0 +1,132 @@
+#!/usr/bin/env bash
+# Scaling of `mpirun -np N testbed render` on this machine (docs/distributed.md,
+# docs/performance.md "Distributed"): 1 rank x 1 thread against 2 ranks x 1
+# thread for the ray tracer, the path tracer and radiosity on the Cornell
+# boxes and on a larger generated scene, the per-rank work, wait and bytes
+# from the stats, the figures the scaling model needs (compute and bytes per
+# tile and per shot), and what reading the MID file costs against parsing it
+# (every rank reads the scene itself; the alternative is rank 0 broadcasting
+# the bytes).
+#
+#   tools/bench/dist-scaling.sh [--quick] [--reps N]
+#
+# Environment: TESTBED (default build/ci/testbed), MPIRUN (default: mpirun
+# on loopback shared memory, allowed as root). Prints the load average
+# before and after every case: figures taken at a load above the core count
+# are not a measure of scaling (the ranks wait for cores, not for each other).
+# Exit status: 0 done, 1 a run failed, 2 usage error.
+set -euo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+quick=0 reps=3
+while [[ $# -gt 0 ]]; do
+    case $1 in
+        --quick) quick=1 reps=1 ;;
+        --reps) [[ $# -ge 2 ]] || { echo "dist-scaling: --reps needs N" >&2; exit 2; }; reps=$2; shift ;;
+        -h|--help) sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        *) echo "dist-scaling: unknown option '$1' (see --help)" >&2; exit 2 ;;
+    esac
+    shift
+done
+TB=${TESTBED:-$root/build/ci/testbed}
+[[ -x $TB ]] || { echo "dist-scaling: no testbed at $TB (set TESTBED)" >&2; exit 2; }
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_WAIT_POLICY=passive
+MPIRUN=${MPIRUN:-mpirun --oversubscribe --bind-to none --mca btl self,vader}
+work=$(mktemp -d "${TMPDIR:-/tmp}/dist-scaling.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+
+load() { cut -d' ' -f1 /proc/loadavg; }
+now() { date +%s.%N; }
+
+# scenes: the boxes as shipped (quick: shrunk), and a generated grid
+box=$root/scenes/cornell-box.mid spheres=$root/scenes/cornell-box-spheres.mid room=$root/scenes/radiosity-room.mid
+count=3000 room_thr=0.01
+if ((quick)); then
+    sed 's/resolution = \[512 512\]/resolution = [96 96]/' "$box" > "$work/box.mid"
+    sed 's/resolution = \[512 512\]/resolution = [96 96]/' "$spheres" > "$work/spheres.mid"
+    box=$work/box.mid spheres=$work/spheres.mid count=200 room_thr=0.3
+fi
+"$TB" generate grid --count $count --seed 1 -o "$work/grid.mid"
+
+# timed CMD...: runs CMD, prints "WALL CPU" (seconds; CPU = user + system of
+# every process it started, mpirun and the ranks included)
+timed() {
+    python3 - "$@" <<'PY'
+import resource, subprocess, sys, time
+t0 = time.monotonic()
+with open(sys.argv[1], 'w') as log:
+    rc = subprocess.call(sys.argv[2:], stdout=log, stderr=subprocess.STDOUT)
+wall = time.monotonic() - t0
+ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+print('%.3f %.3f' % (wall, ru.ru_utime + ru.ru_stime))
+sys.exit(rc)
+PY
+}
+
+# case NAME ARGS...: the fastest of `reps` runs of 1 rank and of 2 ranks (1
+# thread each): wall seconds and CPU seconds; then the 2-rank run's stats.
+# Under load the wall times measure the scheduler, not the code: the CPU
+# seconds still show what distributing costs (2 ranks' CPU over 1 rank's).
+printf '| case | 1 rank x 1 thread: wall / CPU (s) | 2 ranks x 1 thread: wall / CPU (s) | speedup (wall) | CPU cost of 2 ranks | load before/after |\n'
+printf '|---|---|---|---|---|---|\n'
+failed=0
+case_() {
+    local name=$1; shift
+    local l0 w1=999999 c1=0 w2=999999 c2=0 r w c
+    l0=$(load)
+    for ((r = 0; r < reps; r++)); do
+        read -r w c < <(timed "$work/out1" "$TB" render "$@" --threads 1) || { cat "$work/out1"; failed=1; return; }
+        if awk -v a="$w" -v b="$w1" 'BEGIN { exit !(a < b) }'; then w1=$w c1=$c; fi
+        # shellcheck disable=SC2086
+        read -r w c < <(timed "$work/out2" $MPIRUN -np 2 "$TB" render "$@" --threads 1 --stats "$work/$name.json") ||
+            { cat "$work/out2"; failed=1; return; }
+        if awk -v a="$w" -v b="$w2" 'BEGIN { exit !(a < b) }'; then w2=$w c2=$c; fi
+    done
+    printf '| %s | %.2f / %.2f | %.2f / %.2f | %.2fx | %.2fx | %s / %s |\n' "$name" "$w1" "$c1" "$w2" "$c2" \
+        "$(awk -v a="$w1" -v b="$w2" 'BEGIN { print a / b }')" "$(awk -v a="$c2" -v b="$c1" 'BEGIN { print a / b }')" \
+        "$l0" "$(load)"
+}
+case_ raytrace-box "$box" --spp 4 --passes 2 -o "$work/a.pfm"
+case_ path-spheres "$spheres" --method path --spp 4 -o "$work/b.pfm"
+case_ radiosity-box "$box" --method radiosity --patches "$work/c.csv"
+case_ raytrace-grid "$work/grid.mid" --spp 2 -o "$work/d.pfm"
+case_ path-grid "$work/grid.mid" --method path --spp 1 -o "$work/e.pfm"
+# the generated grid's palette has a reflectance of 1 (no radiosity): the
+# bundled room of 5167 elements is the larger radiosity scene
+case_ radiosity-room "$room" --method radiosity --threshold $room_thr --patches "$work/f.csv"
+
+# the model's inputs, from the 2-rank stats of each case
+echo
+printf '| case | rank | units | work (s) | wait (s) | bytes sent | compute per unit (ms) | bytes per unit |\n'
+printf '|---|---|---|---|---|---|---|---|\n'
+for j in "$work"/*.json; do
+    python3 - "$j" <<'PY'
+import json, os, sys
+j = json.load(open(sys.argv[1])); name = os.path.basename(sys.argv[1])[:-5]
+for r in range(int(j.get('ranks', 1))):
+    u = next(v for k, v in j.items() if k.startswith('rank%d_' % r) and k.split('_', 1)[1] in ('tiles', 'receivers'))
+    w = j['rank%d_work_seconds' % r]; b = j['rank%d_bytes_sent' % r]
+    print('| %s | %d | %d | %.3f | %.3f | %d | %.4f | %.1f |' % (name, r, u, w, j['rank%d_wait_seconds' % r], b,
+          1e3 * w / u if u else 0, b / u if u else 0))
+t = j.get('timers', {})
+ff = t.get('Radiosity/form factor time'); up = t.get('Radiosity/update time')
+if ff and ff['calls']:
+    print('| %s | form factors | %d computed shots | %.3f s (%.3f ms/shot) | update %.3f s in %d shots | | | |' % (
+          name, ff['calls'], ff['seconds'], 1e3 * ff['seconds'] / ff['calls'], up['seconds'], up['calls']))
+PY
+done
+
+# reading the MID file against loading (parsing + building) it
+echo
+for s in "$box" "$work/grid.mid"; do
+    a=$(now); cat "$s" > /dev/null; b=$(now); rd=$(awk -v a="$a" -v b="$b" 'BEGIN { print b - a }')
+    "$TB" render "$s" --spp 1 --max-depth 0 --threads 1 -o "$work/x.pfm" --stats "$work/load.json" > /dev/null 2>&1 || failed=1
+    python3 - "$work/load.json" "$s" "$rd" <<'PY'
+import json, os, sys
+j = json.load(open(sys.argv[1])); t = j['timers']['Scene/load']['seconds']
+print('scene %s: %d bytes, read %.4f s (page cache), load (parse + build) %.4f s' % (
+      os.path.basename(sys.argv[2]), os.path.getsize(sys.argv[2]), float(sys.argv[3]), t))
+PY
+done
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); load now $(load)"
+exit $failed
