@@ -196,8 +196,9 @@ static void test_furnace_spectral(void **state)
 /* ---------------------------------------------------------- direct light */
 
 /* The floor: z = 0 over [-40, 40]^2, front side up, Lambert rho. */
-#define FLOOR "polygons { geometry = { vertices = [[-40 -40 0] [40 -40 0] [40 40 0] [-40 40 0]] faces = [[0 1 2 3]] } " \
-              "rendering = { diffuse = 0.5 } }\n"
+#define FLOOR                                                                              \
+    "polygons { geometry = { vertices = [[-40 -40 0] [40 -40 0] [40 40 0] [-40 40 0]] "    \
+    "faces = [[0 1 2 3]] } rendering = { diffuse = 0.5 } }\n"
 
 /* Floor radiance at (x, y) seen from low on the -x side (below the emitters), channel 0. */
 static est floor_radiance(const tb_pathtracer *pt, double x, double y, long n, uint64_t seed)
@@ -223,7 +224,8 @@ static void test_direct_sphere(void **state)
     (void)state;
     uint64_t seed = tb_test_seed("pt direct sphere", 162);
     tb_scene *s = load("mid 1.1\n" FLOOR
-                       "sphere { transform = [translate([0 0 6])] rendering = { diffuse = 0 emission = 3.14159265358979 } }\n");
+                       "sphere { transform = [translate([0 0 6])] "
+                       "rendering = { diffuse = 0 emission = 3.14159265358979 } }\n");
     tb_pathtracer *pt = pt_make(s, 0, 0);
     const double pts[][2] = {{0, 0}, {3, 1}, {-4, -2}};
     for (int k = 0; k < 3; k++) {
