@@ -40,11 +40,11 @@ now() { date +%s.%N; }
 
 # scenes: the boxes as shipped (quick: shrunk), and a generated grid
 box=$root/scenes/cornell-box.mid spheres=$root/scenes/cornell-box-spheres.mid room=$root/scenes/radiosity-room.mid
-count=3000 room_thr=0.01
+count=3000 room_thr=0.01 spp=8
 if ((quick)); then
     sed 's/resolution = \[512 512\]/resolution = [96 96]/' "$box" > "$work/box.mid"
     sed 's/resolution = \[512 512\]/resolution = [96 96]/' "$spheres" > "$work/spheres.mid"
-    box=$work/box.mid spheres=$work/spheres.mid count=200 room_thr=0.3
+    box=$work/box.mid spheres=$work/spheres.mid count=200 room_thr=0.3 spp=2
 fi
 "$TB" generate grid --count $count --seed 1 -o "$work/grid.mid"
 
@@ -86,11 +86,11 @@ case_() {
         "$(awk -v a="$w1" -v b="$w2" 'BEGIN { print a / b }')" "$(awk -v a="$c2" -v b="$c1" 'BEGIN { print a / b }')" \
         "$l0" "$(load)"
 }
-case_ raytrace-box "$box" --spp 4 --passes 2 -o "$work/a.pfm"
-case_ path-spheres "$spheres" --method path --spp 4 -o "$work/b.pfm"
+case_ raytrace-box "$box" --spp $spp --passes 2 -o "$work/a.pfm"
+case_ path-spheres "$spheres" --method path --spp $spp -o "$work/b.pfm"
 case_ radiosity-box "$box" --method radiosity --patches "$work/c.csv"
-case_ raytrace-grid "$work/grid.mid" --spp 2 -o "$work/d.pfm"
-case_ path-grid "$work/grid.mid" --method path --spp 1 -o "$work/e.pfm"
+case_ raytrace-grid "$work/grid.mid" --spp $spp -o "$work/d.pfm"
+case_ path-grid "$work/grid.mid" --method path --spp $spp -o "$work/e.pfm"
 # the generated grid's palette has a reflectance of 1 (no radiosity): the
 # bundled room of 5167 elements is the larger radiosity scene
 case_ radiosity-room "$room" --method radiosity --threshold $room_thr --patches "$work/f.csv"
