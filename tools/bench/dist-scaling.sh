@@ -6,7 +6,8 @@
 # from the stats, the figures the scaling model needs (compute and bytes per
 # tile and per shot), and what reading the MID file costs against parsing it
 # (every rank reads the scene itself; the alternative is rank 0 broadcasting
-# the bytes).
+# the bytes), and radiosity with several shooters in flight against the
+# deterministic mode (time, and the difference of the results).
 #
 #   tools/bench/dist-scaling.sh [--quick] [--reps N]
 #
@@ -114,6 +115,31 @@ if ff and ff['calls']:
     print('| %s | form factors | %d computed shots | %.3f s (%.3f ms/shot) | update %.3f s in %d shots | | | |' % (
           name, ff['calls'], ff['seconds'], 1e3 * ff['seconds'] / ff['calls'], up['seconds'], up['calls']))
 PY
+done
+
+# radiosity with several shooters in flight against the deterministic mode:
+# time, shots, and the difference of the patches from the deterministic
+# solve and from a converged one (unshot 1e-4, one process)
+echo
+printf '| radiosity, Cornell box | wall / CPU (s) | shots | difference from 1 process | from the converged solve |\n'
+printf '|---|---|---|---|---|\n'
+Q=("$box" --method radiosity)
+timed "$work/o" "$TB" render "${Q[@]}" --threshold 0.0001 --patches "$work/ref.csv" > /dev/null || failed=1
+for run in "1 process:1:" "2 ranks:2:" "2 ranks, --several-shooters:2:--several-shooters" \
+           "3 ranks, --several-shooters:3:--several-shooters"; do
+    IFS=: read -r label n flag <<<"$run"
+    if [[ $n == 1 ]]; then
+        read -r w c < <(timed "$work/o" "$TB" render "${Q[@]}" --threads 1 --patches "$work/r$n$flag.csv") || failed=1
+        cp "$work/r$n$flag.csv" "$work/det.csv"
+    else
+        # shellcheck disable=SC2086
+        read -r w c < <(timed "$work/o" $MPIRUN -np "$n" "$TB" render "${Q[@]}" --threads 1 $flag \
+            --patches "$work/r$n$flag.csv") || failed=1
+    fi
+    shots=$(sed -n 's/.*radiosity, [0-9]* elements, \([0-9]*\) shots.*/\1/p' "$work/o")
+    printf '| %s | %.2f / %.2f | %s | %s | %s |\n' "$label" "$w" "$c" "$shots" \
+        "$(python3 "$root/tools/bench/rad-diff.py" "$work/det.csv" "$work/r$n$flag.csv")" \
+        "$(python3 "$root/tools/bench/rad-diff.py" "$work/ref.csv" "$work/r$n$flag.csv")"
 done
 
 # reading the MID file against loading (parsing + building) it
