@@ -823,6 +823,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
 
 static void tb__near_field(tb_rad_solver *s, size_t i);
 static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0);
+static void tb__cache_store(tb_rad_solver *s, size_t k);
 static tb_status tb__step_several(tb_rad_solver *s, const tb_rad_exchange *ex, bool *shot);
 static void tb__hemicube_near_patch(tb_rad_solver *s, size_t k);
 static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i, bool share);
@@ -873,8 +874,17 @@ static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k, bool share)
             s->gnear[s->near_list[k]] = NAN;
         s->nnear = 0;
     }
+    tb__cache_store(s, k);
+    return TB_OK;
+}
+
+/* Keeps s->vff and s->eff as shooter k's cached form factors, if it has
+ * none yet and the cache has room (the same rule on every process). */
+static void tb__cache_store(tb_rad_solver *s, size_t k)
+{
+    size_t nvf = s->opt.ff == TB_RAD_FF_HEMICUBE ? 0 : s->m.nverts, ne = s->m.nelems;
     size_t bytes = (nvf + ne) * sizeof(float);
-    if (s->cache && s->cache_bytes + bytes <= TB__RAD_CACHE_BYTES) {
+    if (s->cache && !s->cache[k] && s->cache_bytes + bytes <= TB__RAD_CACHE_BYTES) {
         float *c = malloc(bytes);
         if (c) {
             memcpy(c, s->vff, nvf * sizeof(float));
@@ -883,7 +893,6 @@ static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k, bool share)
             s->cache_bytes += bytes;
         }
     }
-    return TB_OK;
 }
 
 /* Form factors of one shot from shooter k: s->ff[r] for every receiver.
@@ -1217,6 +1226,25 @@ static tb_status tb__step_several(tb_rad_solver *s, const tb_rad_exchange *ex, b
         for (size_t r = 0; r < R; r++)
             s->xsevcounts[r] = per;
     }
+    /* every process keeps the same cache (each stores every gathered
+     * shooter under the same byte limit), so each knows without asking
+     * whether the whole group is cached: then there is nothing to compute
+     * or exchange. (A malloc that fails on one process only would break
+     * this; the processes would then wait for each other.) */
+    bool all_cached = s->cache != NULL;
+    for (size_t k = 0; k < n && all_cached; k++)
+        all_cached = s->cache[keys[k]] != NULL;
+    if (all_cached) {
+        for (size_t k = 0; k < n; k++) {
+            tb_status st = tb__shooter_ff(s, keys[k], false); /* from the cache */
+            if (st)
+                return st;
+            tb__shoot(s, keys[k], k == 0 ? t0 : tb__now());
+        }
+        if (shot)
+            *shot = true;
+        return TB_OK;
+    }
     /* this process's shooter (none: zeros) */
     size_t me = (size_t)ex->rank;
     if (me < n) {
@@ -1239,6 +1267,7 @@ static tb_status tb__step_several(tb_rad_solver *s, const tb_rad_exchange *ex, b
             s->vff[v] = (float)f[v];
         for (size_t j = 0; j < ne; j++)
             s->eff[j] = (float)f[nvf + j];
+        tb__cache_store(s, keys[k]);
         tb__shoot(s, keys[k], k == 0 ? t0 : tb__now());
     }
     if (shot)
