@@ -66,6 +66,8 @@ typedef struct tb__tiles {
     int nout, out_cap;
 } tb__tiles;
 
+#ifdef TB_HAVE_MPI
+
 /* Sleeps *us microseconds after a poll that moved nothing (and doubles it
  * for the next), or resets *us after one that moved something. */
 static void tb__tiles_pause(int *us, int moved)
@@ -87,8 +89,6 @@ static void tb__tiles_fail(tb__tiles *t, tb_status st)
         snprintf(t->comm_msg, sizeof t->comm_msg, "%s", tb_last_error());
     }
 }
-
-#ifdef TB_HAVE_MPI
 
 /* Rank 0: one waiting message, if there is one (1: handled one). The
  * communication thread, lock not held (taken for the shared fields). */
