@@ -410,18 +410,21 @@ void tb_area_light_release(tb_area_light *a)
 {
     if (!a)
         return;
-    free(a->emitters);
+    if (!a->shared)
+        free(a->emitters);
     free(a->areas);
     tb_distrib1d_release(&a->select);
     *a = (tb_area_light){0};
 }
 
-tb_status tb_area_light_init(tb_area_light *a, const tb_emitter *e, int n)
+/* tb_area_light_init, copying the emitters or (shared) pointing at them. */
+static tb_status tb__area_light_init(tb_area_light *a, const tb_emitter *e, int n, bool shared)
 {
     *a = (tb_area_light){0};
     if (!e || n < 1)
         return tb_error(TB_ERR_ARG, "area light: needs at least one emitter (got %d)", n);
-    a->emitters = malloc(sizeof(tb_emitter) * (size_t)n);
+    a->shared = shared;
+    a->emitters = shared ? (tb_emitter *)e : malloc(sizeof(tb_emitter) * (size_t)n);
     a->areas = malloc(sizeof(double) * (size_t)n);
     double *w = malloc(sizeof(double) * (size_t)n);
     if (!a->emitters || !a->areas || !w) {
@@ -429,7 +432,8 @@ tb_status tb_area_light_init(tb_area_light *a, const tb_emitter *e, int n)
         tb_area_light_release(a);
         return tb_error(TB_ERR_NOMEM, "area light: out of memory for %d emitters", n);
     }
-    memcpy(a->emitters, e, sizeof(tb_emitter) * (size_t)n);
+    if (!shared)
+        memcpy(a->emitters, e, sizeof(tb_emitter) * (size_t)n);
     a->n = n;
     tb_status st = TB_OK;
     for (int i = 0; i < n && !st; i++) {
@@ -464,6 +468,13 @@ tb_status tb_area_light_init(tb_area_light *a, const tb_emitter *e, int n)
         return tb_error_context(st, "area light");
     }
     return TB_OK;
+}
+
+tb_status tb_area_light_init(tb_area_light *a, const tb_emitter *e, int n) { return tb__area_light_init(a, e, n, false); }
+
+tb_status tb_area_light_init_shared(tb_area_light *a, const tb_emitter *e, int n)
+{
+    return tb__area_light_init(a, e, n, true);
 }
 
 /* max(x, 0), NaN -> 0: what fmax(0.0, x) gives for these arguments (never

@@ -184,7 +184,9 @@ tb_channels tb_emitter_radiance(const tb_emitter *e, tb_vec3 n, tb_vec3 w);
  * custom surfaces. */
 typedef struct tb_area_light {
     int n;                 /* emitters */
-    tb_emitter *emitters;  /* copies of the emitters given */
+    tb_emitter *emitters;  /* copies of the emitters given (read-only); with tb_area_light_init_shared the
+                              caller's array itself */
+    bool shared;           /* emitters is the caller's (tb_area_light_init_shared): not freed here */
     double *areas;         /* their areas */
     tb_distrib1d select;   /* choice of emitter */
     double power;          /* total power: pi x sum of area x mean radiance (x 2 two-sided), W */
@@ -194,6 +196,11 @@ typedef struct tb_area_light {
  * degenerate shape (zero area, zero normal), negative or non-finite
  * radiance, or when no emitter has power; TB_ERR_NOMEM. */
 tb_status tb_area_light_init(tb_area_light *a, const tb_emitter *e, int n);
+
+/* tb_area_light_init without copying the emitters: the light reads e[0..n),
+ * which must not change or be freed while it is in use (a scene's emitters,
+ * held once instead of twice: docs/performance.md, "Scale"). */
+tb_status tb_area_light_init_shared(tb_area_light *a, const tb_emitter *e, int n);
 
 /* Frees what tb_area_light_init allocated (harmless on a zeroed struct). */
 void tb_area_light_release(tb_area_light *a);

@@ -35,8 +35,8 @@
 
 /* Bounces before Russian roulette starts (tb_pt_options.rr_depth 0). */
 #define TB_PT_DEFAULT_RR_DEPTH 3
-/* Hard cap on the bounces of any path (reached with probability below
- * 0.95^1000 under Russian roulette: no visible truncation). */
+/* Hard cap on the bounces of any path: under Russian roulette only paths
+ * between surfaces of albedo 1 get near it (docs/pathtrace.md). */
 #define TB_PT_MAX_BOUNCES 1024
 
 /* Path tracer options; a zeroed struct (or NULL) means the defaults. */

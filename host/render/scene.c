@@ -10,6 +10,7 @@
 #include "util/base/str.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -703,41 +704,63 @@ static tb_status tb__finish_lights(tb_scene *s)
     return TB_OK;
 }
 
-static tb_status tb__finish_emitters(tb_scene *s)
+/* The emitters of every emissive object: each object tessellated once (the
+ * objects in parallel, each into its own array), then put together in
+ * object order, so the result does not depend on the threads. */
+static tb_status tb__finish_emitters(tb_scene *s, int threads)
 {
-    size_t total = 0;
-    for (int i = 0; i < s->nemissive; i++) {
-        const tb_object *o = s->objects[s->emissive[i].object];
-        int k;
-        tb_status st = tb__scene_leaf_emitters(o, tb_channels_splat(s->nchannels, 0.0f), NULL, &k);
-        if (st)
-            return st;
-        total += (size_t)k;
+    int ne = s->nemissive;
+    if (ne == 0)
+        return TB_OK;
+    tb_array *per = calloc((size_t)ne, sizeof *per);
+    tb_status *sts = calloc((size_t)ne, sizeof *sts);
+    if (!per || !sts) {
+        free(per);
+        free(sts);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for emitters");
     }
-    if (total > (size_t)INT32_MAX)
-        return tb_error(TB_ERR_UNSUPPORTED, "scene: more than 2^31 - 1 emitters");
-    /* The emitters and a renderer's area-light copy of them. */
-    s->priv->used += 2 * total * sizeof *s->emitters;
-    tb_status cst = tb__check_memory(s, "with the emitters");
-    if (cst)
-        return cst;
-    if (total) {
-        s->emitters = malloc(sizeof *s->emitters * total);
-        if (!s->emitters)
-            return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu emitters", total);
-    }
-    int n = 0;
-    for (int i = 0; i < s->nemissive; i++) {
+    for (int i = 0; i < ne; i++)
+        tb_array_init(&per[i], sizeof(tb_emitter));
+    if (threads <= 0)
+        threads = omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (ne > 1)
+    for (int i = 0; i < ne; i++) {
         tb_scene_emissive *e = &s->emissive[i];
         const tb_object *o = s->objects[e->object];
-        e->first_emitter = n;
-        e->nemitters = 0;
         tb_channels L = tb_radiance_from_exitance(s->materials[e->material].emission);
-        tb_status st = tb__scene_leaf_emitters(o, L, s->emitters + n, &e->nemitters);
-        if (st)
-            return st;
-        n += e->nemitters;
+        sts[i] = tb__scene_leaf_emitters(o, L, &per[i], &e->nemitters);
     }
+    tb_status st = TB_OK;
+    size_t total = 0;
+    for (int i = 0; i < ne && !st; i++) {
+        st = sts[i] ? tb_error(sts[i], "scene: out of memory for emitters") : TB_OK;
+        total += per[i].len;
+    }
+    if (!st && total > (size_t)INT32_MAX)
+        st = tb_error(TB_ERR_UNSUPPORTED, "scene: more than 2^31 - 1 emitters");
+    if (!st) {
+        /* The emitters and a renderer's area-light tables over them. */
+        s->priv->used += total * (sizeof *s->emitters + 3 * sizeof(double));
+        st = tb__check_memory(s, "with the emitters");
+    }
+    if (!st && total && !(s->emitters = malloc(sizeof *s->emitters * total)))
+        st = tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu emitters", total);
+    int n = 0;
+    for (int i = 0; i < ne; i++) {
+        tb_scene_emissive *e = &s->emissive[i];
+        if (!st) {
+            e->first_emitter = n;
+            e->nemitters = (int)per[i].len;
+            if (per[i].len)
+                memcpy(s->emitters + n, per[i].data, per[i].len * sizeof(tb_emitter));
+            n += e->nemitters;
+        }
+        tb_array_free(&per[i]);
+    }
+    free(per);
+    free(sts);
+    if (st)
+        return st;
     s->nemitters = n;
     return TB_OK;
 }
@@ -898,7 +921,7 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
     if (!st)
         st = tb__finish_lights(s);
     if (!st && !opt->no_emitters)
-        st = tb__finish_emitters(s);
+        st = tb__finish_emitters(s, opt->threads);
     if (!st)
         tb_stat_add(&tb__n_emissive, s->nemissive);
     if (!st)

@@ -214,7 +214,7 @@ void tb_scene_memory(const tb_scene *s, tb_scene_memory_use *m);
 
 /* Predicts what loading and rendering the scene at `path` will take (the
  * same parts as tb_scene_memory, the acceleration structure at its build
- * peak, emitters twice: the scene's and a renderer's area light) from one
+ * peak, emitters with a renderer's area-light tables over them) from one
  * streaming pass over the file, which holds one object at a time. FED
  * meshes are estimated from their file sizes. The reader's errors. */
 tb_status tb_scene_predict_memory(const char *path, tb_scene_memory_use *u);

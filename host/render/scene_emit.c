@@ -163,7 +163,7 @@ static bool tb__similarity(const tb_transform *t, double *s)
  * out along its normal by a bound on that gap, half its longest edge times
  * tan(angle / 2). Writes the count to *count (0 if the shape cannot be
  * tessellated). TB_ERR_NOMEM. */
-static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_emitter *out, int *count)
+static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_array *out, int *count)
 {
     *count = 0;
     /* As for areas (scene.c), a shape that cannot be tessellated is not worth
@@ -235,8 +235,10 @@ static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_emitter
             }
             e.object = o->index;
             e.face = face;
-            if (out)
-                out[n] = e;
+            if (out && tb_array_push(out, &e)) {
+                n = -1;
+                break;
+            }
             n++;
         }
     }
@@ -250,7 +252,7 @@ static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_emitter
     return TB_OK;
 }
 
-tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out, int *count)
+tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_array *out, int *count)
 {
     *count = 0;
     if (leaf->kind == TB_PRIM_SPHERE) {
@@ -259,9 +261,11 @@ tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitt
             return tb__tess_emitters(leaf, L, out, count);
         if (out) {
             tb_dvec3 c = tb_transform_dpoint(&leaf->to_world, (tb_dvec3){0.0, 0.0, 0.0});
-            *out = tb_emitter_sphere(tb_dvec3_to_f(c), (float)s, L);
-            out->object = leaf->index;
-            out->face = leaf->face_base;
+            tb_emitter e = tb_emitter_sphere(tb_dvec3_to_f(c), (float)s, L);
+            e.object = leaf->index;
+            e.face = leaf->face_base;
+            if (tb_array_push(out, &e))
+                return tb_error(TB_ERR_NOMEM, "scene: out of memory for emitters");
         }
         *count = 1;
         return TB_OK;
@@ -285,8 +289,8 @@ tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitt
             continue; /* a sliver that vanished in float: nothing to sample */
         e.object = leaf->index;
         e.face = leaf->face_base + m->tri_face[i];
-        if (out)
-            out[n] = e;
+        if (out && tb_array_push(out, &e))
+            return tb_error(TB_ERR_NOMEM, "scene: out of memory for emitters");
         n++;
     }
     *count = n;

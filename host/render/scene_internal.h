@@ -13,6 +13,7 @@
 #include "host/render/scene.h"
 #include "util/base/error.h"
 #include "util/container/arena.h"
+#include "util/container/array.h"
 #include "util/container/hash_table.h"
 #include "util/math/aabb.h"
 #include "util/math/ray.h"
@@ -49,9 +50,10 @@ tb_status tb__scene_leaf_area(const tb_object *leaf, double *area);
 /* The emitters of object `leaf` (a primitive or a CSG tree) with radiance L:
  * one triangle per triangle of a polygons object, one sphere for a sphere
  * under a similarity transform, otherwise the triangles of its world-space
- * tessellation (scene_emit.c). Writes them to out (when not NULL) and their
- * count to *n (none if the tessellation fails). TB_ERR_NOMEM only. */
-tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_emitter *out, int *n);
+ * tessellation (scene_emit.c). Appends them to out (a tb_array of
+ * tb_emitter, when not NULL) and writes their count to *n (none if the
+ * tessellation fails). TB_ERR_NOMEM only. */
+tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_array *out, int *n);
 
 /* ------------------------------------------------------------------ memory (scene_memory.c) */
 

@@ -236,8 +236,10 @@ tb_status tb_scene_predict_memory(const char *path, tb_scene_memory_use *u)
     u->fed = fedsize;
     /* The material table and the copies kept until colours are converted. */
     u->materials = nmats * (tb__alloc(sizeof(tb_material)) + 1024);
-    /* The scene's emitters and the area light's copy of them (host/render/lights.c). */
-    u->emitters = 2 * tb__alloc(nemitters * sizeof(tb_emitter)) + tb__alloc(nemissive * sizeof(tb_scene_emissive));
+    /* The scene's emitters (the renderers' area light reads them in place,
+     * tb_area_light_init_shared) and the light's areas and selection table. */
+    u->emitters = tb__alloc(nemitters * (sizeof(tb_emitter) + 3 * sizeof(double))) +
+                  tb__alloc(nemissive * sizeof(tb_scene_emissive));
     u->prims = tb__alloc(refs * sizeof(tb_accel_prim));
     u->accel = refs * (TB__SCENE_BUILD_PER_REF - sizeof(tb_accel_prim));
     u->total = u->objects + u->meshes + u->fed + u->materials + u->emitters + u->lights + u->prims + u->accel;

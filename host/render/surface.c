@@ -475,7 +475,8 @@ tb_status tb_light_set_init(tb_light_set *ls, const tb_scene *s)
     ls->scene = s;
     ls->nlights = s->nlights;
     if (s->nemitters > 0) {
-        tb_status st = tb_area_light_init(&ls->area, s->emitters, s->nemitters);
+        /* The scene outlives the light set: its emitters are read in place. */
+        tb_status st = tb_area_light_init_shared(&ls->area, s->emitters, s->nemitters);
         if (st)
             return st;
         ls->has_area = true;

@@ -42,6 +42,7 @@
 #include "host/hybrid/hybrid.h"
 #include "host/radiosity/locate.h"
 #include "host/radiosity/radiosity.h"
+#include "host/render/pathtrace.h"
 #include "host/render/raytrace.h"
 #include "host/render/scene.h"
 #include "tb_test.h"
@@ -51,12 +52,11 @@
 /* Points per surface and samples per point (before the divisor). */
 #define TB__POINTS 256
 #define TB__HYBRID_SAMPLES 16
+#define TB__PATH_SAMPLES 512
 /* The ray starts this far off the surface (mm): below the 0.1 mm between the
  * light and the ceiling; or, where that misses the surface, TB__OFFSET_FAR. */
 #define TB__OFFSET 0.01f
 #define TB__OFFSET_FAR 5.0f
-/* Allowed |renderer / radiosity - 1| beyond 3 standard errors of the renderer's noise. */
-#define TB__TOL 0.02
 
 /* n divided by $TB_TRUTH_TEST_DIVISOR (the sanitizer build sets 4), at least 1. */
 static int tb__scaled(int n)
@@ -234,8 +234,8 @@ static tb__agreement tb__agree_radiosity(const tb__surface *sf)
     return a;
 }
 
-/* The Cornell box with the hybrid's radiosity pass (the command's default
- * 40 mm elements, 16 samples per shooter, 0.3% unshot). */
+/* The Cornell box with the hybrid's radiosity pass (elements of at most
+ * `edge` mm, 16 samples per shooter, 0.3% unshot, the ambient term). */
 typedef struct tb__box {
     tb_scene *scene;
     tb_hybrid *hybrid;
@@ -243,7 +243,7 @@ typedef struct tb__box {
     int nsurf;
 } tb__box;
 
-static void tb__box_open(tb__box *b, int points)
+static void tb__box_open(tb__box *b, double edge, int points)
 {
     memset(b, 0, sizeof *b);
     char path[1024];
@@ -257,6 +257,11 @@ static void tb__box_open(tb__box *b, int points)
             assert_true(mt->specular.v[c] == 0.0f && mt->transmission.v[c] == 0.0f);
     }
     tb_hybrid_options ho = tb_hybrid_defaults();
+    ho.mesh_given = true;
+    ho.mesh.max_edge = edge;
+    const char *e = getenv("TB_TRUTH_EDGE"); /* to try other element sizes */
+    if (e)
+        ho.mesh.max_edge = atof(e);
     if (tb_hybrid_create(b->scene, &ho, &b->hybrid))
         fail_msg("%s", tb_last_error());
     tb_hybrid_stats st = tb_hybrid_get_stats(b->hybrid);
@@ -292,10 +297,11 @@ typedef struct tb__renderer {
 /* Checks renderer `a` against `b` on every surface: |a / b - 1| <= 2% + 3
  * standard errors of the difference (both renderers' noise); prints the
  * table. */
-static void tb__check_surfaces(const tb__box *bx, const tb__renderer *a, const tb__renderer *b)
+static void tb__check_surfaces(const tb__box *bx, const tb__renderer *a, const tb__renderer *b, double tol)
 {
     int bad = 0;
-    print_message("[ truth    ] %s against %s: surface, points, means, ratio - 1, standard error\n", a->name, b->name);
+    print_message("[ truth    ] %s against %s (tolerance %.1f%% + 3 standard errors): surface, points, means, "
+                  "ratio - 1, standard error\n", a->name, b->name, 100 * tol);
     for (int i = 0; i < bx->nsurf; i++) {
         const tb__surface *sf = &bx->surf[i];
         tb__agreement ea = {0}, eb = {0};
@@ -307,17 +313,22 @@ static void tb__check_surfaces(const tb__box *bx, const tb__renderer *a, const t
             else
                 *e[k] = tb__agree_radiosity(sf);
         }
+        if (ea.mean == 0.0 && eb.mean == 0.0) { /* no light at all (the ceiling, direct light only) */
+            print_message("[ truth    ] %-12s %4zu  both 0\n", sf->name ? sf->name : "?", sf->n);
+            continue;
+        }
+        assert_true(eb.mean > 0.0);
         double ratio = ea.mean / eb.mean - 1.0;
         /* standard error of the ratio, to first order */
-        double se = (1.0 + ratio) * sqrt(ea.se * ea.se / (ea.mean * ea.mean) + eb.se * eb.se / (eb.mean * eb.mean));
-        bool ok = fabs(ratio) <= TB__TOL + 3.0 * se;
+        double se = (1.0 + ratio) * sqrt(ea.se * ea.se / (ea.mean * ea.mean + 1e-300) + eb.se * eb.se / (eb.mean * eb.mean));
+        bool ok = fabs(ratio) <= tol + 3.0 * se;
         print_message("[ truth    ] %-12s %4zu  %-9s %9.5g  %-9s %9.5g  %+7.4f  %6.4f%s\n", sf->name ? sf->name : "?",
                       sf->n, a->name, ea.mean, b->name, eb.mean, ratio, se, ok ? "" : "  FAILED");
         bad += !ok;
     }
     if (bad)
-        fail_msg("%s against %s: %d surfaces disagree beyond %.0f%% + 3 standard errors", a->name, b->name, bad,
-                 100 * TB__TOL);
+        fail_msg("%s against %s: %d surfaces disagree beyond %.1f%% + 3 standard errors", a->name, b->name, bad,
+                 100 * tol);
 }
 
 static tb_channels tb__rt_fn(const void *ctx, const tb_ray *ray, tb_rng *rng)
@@ -325,19 +336,93 @@ static tb_channels tb__rt_fn(const void *ctx, const tb_ray *ray, tb_rng *rng)
     return tb_rt_radiance((const tb_raytracer *)ctx, ray, rng);
 }
 
-/* The hybrid (interpolated) against its own radiosity solution: its direct
- * light by shadow rays (4 light samples) replaces the solution's
- * discretized first bounce, its indirect part is the solution's. */
+static tb_channels tb__pt_fn(const void *ctx, const tb_ray *ray, tb_rng *rng)
+{
+    return tb_pt_radiance((const tb_pathtracer *)ctx, ray, rng);
+}
+
+/* The element size and tolerance of the cases against the path tracer:
+ * 20 mm elements, within 2% (measured at most 1.5%, the blocks); in the
+ * sanitizer build (TB_TRUTH_TEST_DIVISOR > 1) the command's default 40 mm,
+ * a quarter of the solve's time, within 4% (measured at most 3.2%: the
+ * coarser solution loses more of the interreflected light, the ceiling and
+ * the short block most; docs/accuracy.md, "Ground truth"). */
+static double tb__fine_edge(void)
+{
+    return tb__scaled(4) == 4 ? 20.0 : 40.0;
+}
+
+static double tb__fine_tol(void)
+{
+    return tb__scaled(4) == 4 ? 0.02 : 0.04;
+}
+
+/* The hybrid (interpolated) against its own radiosity solution (the
+ * command's default 40 mm elements): its direct light by shadow rays (4
+ * light samples) replaces the solution's discretized first bounce, its
+ * indirect part is the solution's. Within 2% (measured at most 1.2%, the
+ * floor: the solution blurs the blocks' shadows). */
 static void test_hybrid_radiosity(void **state)
 {
     (void)state;
     tb__box b;
-    tb__box_open(&b, tb__scaled(TB__POINTS));
+    tb__box_open(&b, 40.0, tb__scaled(TB__POINTS));
     tb_raytracer rt;
     assert_int_equal(tb_hybrid_tracer_init(b.hybrid, NULL, &rt), TB_OK);
     tb__renderer hy = {"hybrid", tb__rt_fn, &rt, tb__scaled(TB__HYBRID_SAMPLES)}, rad = {"radiosity", NULL, NULL, 0};
-    tb__check_surfaces(&b, &hy, &rad);
+    tb__check_surfaces(&b, &hy, &rad, 0.02);
     tb_rt_release(&rt);
+    tb__box_close(&b);
+}
+
+/* Direct light alone: the path tracer capped at one bounce against the
+ * Whitted ray tracer (no indirect callback). Both estimate the same
+ * integral without bias (the tracer: 4 stratified area-light samples; the
+ * path tracer: one light sample and one BSDF ray, power heuristic), so
+ * within 1% + 3 standard errors. (The radiosity solve only places the
+ * points: 80 mm elements.) */
+static void test_path_direct(void **state)
+{
+    (void)state;
+    tb__box b;
+    tb__box_open(&b, 80.0, tb__scaled(TB__POINTS));
+    tb_pt_options po = {.max_depth = 1};
+    tb_pathtracer *pt;
+    if (tb_pt_create(b.scene, &po, &pt))
+        fail_msg("%s", tb_last_error());
+    tb_raytracer rt;
+    assert_int_equal(tb_rt_init(&rt, b.scene, NULL), TB_OK);
+    tb__renderer pa = {"path 1", tb__pt_fn, pt, tb__scaled(TB__PATH_SAMPLES)},
+                 wh = {"Whitted", tb__rt_fn, &rt, tb__scaled(TB__HYBRID_SAMPLES)};
+    tb__check_surfaces(&b, &pa, &wh, 0.01);
+    tb_rt_release(&rt);
+    tb_pt_free(pt);
+    tb__box_close(&b);
+}
+
+/* The path tracer (its defaults: Russian roulette, no depth cap) against a
+ * converged radiosity solution: the issue's "agreement with the radiosity
+ * renderer on purely diffuse scenes (mean radiance per surface within 1-2%
+ * when both are converged)"; then the hybrid over the same solution against
+ * the path tracer on the same points (its direct light is exact, its
+ * indirect light the solution's). One case: the 20 mm solve is most of the
+ * time, and both comparisons read it. */
+static void test_path_agreement(void **state)
+{
+    (void)state;
+    tb__box b;
+    tb__box_open(&b, tb__fine_edge(), tb__scaled(TB__POINTS));
+    tb_pathtracer *pt;
+    if (tb_pt_create(b.scene, NULL, &pt))
+        fail_msg("%s", tb_last_error());
+    tb_raytracer rt;
+    assert_int_equal(tb_hybrid_tracer_init(b.hybrid, NULL, &rt), TB_OK);
+    tb__renderer pa = {"path", tb__pt_fn, pt, tb__scaled(TB__PATH_SAMPLES)}, rad = {"radiosity", NULL, NULL, 0},
+                 hy = {"hybrid", tb__rt_fn, &rt, tb__scaled(TB__HYBRID_SAMPLES)};
+    tb__check_surfaces(&b, &pa, &rad, tb__fine_tol());
+    tb__check_surfaces(&b, &hy, &pa, tb__fine_tol());
+    tb_rt_release(&rt);
+    tb_pt_free(pt);
     tb__box_close(&b);
 }
 
@@ -345,6 +430,8 @@ int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hybrid_radiosity),
+        cmocka_unit_test(test_path_direct),
+        cmocka_unit_test(test_path_agreement),
     };
     if (argc > 1)
         cmocka_set_test_filter(argv[1]);

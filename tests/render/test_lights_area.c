@@ -142,6 +142,16 @@ static void test_rectangle(void **state)
     E = irradiance(&A, ORIGIN, UP, 1024, seed + 1, NULL, NULL);
     tb_assert_near(E, want, 3e-3 * want);
     tb_area_light_release(&A);
+    /* The same two triangles read in place (tb_area_light_init_shared): the
+     * very same estimate, and releasing the light leaves the array alone. */
+    tb_area_light S;
+    assert_int_equal(tb_area_light_init_shared(&S, tris, 2), TB_OK);
+    assert_ptr_equal(S.emitters, tris);
+    assert_true(irradiance(&S, ORIGIN, UP, 1024, seed + 1, NULL, NULL) == E);
+    tb_area_light_release(&S);
+    assert_int_equal(tris[1].kind, TB_EMITTER_TRIANGLE);
+    assert_int_equal(tb_area_light_init_shared(&S, tris, 0), TB_ERR_ARG);
+    tb_area_light_release(&S);
     /* Through the custom-surface callbacks. */
     rect r = {a, b, h};
     tb_emitter cu = {.kind = TB_EMITTER_CUSTOM, .radiance = Lc, .area = a * b, .sample = rect_sample,

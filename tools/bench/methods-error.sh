@@ -18,8 +18,8 @@
 #   3. OUT/methods-error.csv, one row per render:
 #        scene,method,mode,budget,seconds,cpu_seconds,relMSE,RMSE
 #      (seconds: wall clock of the process; cpu_seconds: user + system);
-#   4. OUT/methods-error-SCENE.png and .svg (gnuplot): relMSE against CPU
-#      seconds, log-log, one curve per method and mode;
+#   4. OUT/methods-error-SCENE.png and .svg (gnuplot): relMSE and RMSE
+#      against CPU seconds, log-log, one curve per method and mode;
 #   5. on standard output: the table, and the equal-time ratios: for each
 #      hybrid render, the Whitted and the path tracer's relMSE at the same
 #      CPU time (log-log interpolation along their curves) over the hybrid's.
@@ -28,7 +28,7 @@
 # and unshot threshold, the image at 4 rays per pixel. hybrid: the radiosity
 # pass's element size together with the ray-tracing pass's spp (the radiosity
 # pass is a fixed cost that a finer mesh raises). gather: the same with 16
-# gather rays. --quick: 32 x 32 pixels, a 1024-spp reference, two or three
+# gather rays. --quick: 32 x 32 pixels, a 512-spp reference, two or three
 # rungs per method: checks the script (tests/bench: bench_methods_error_quick);
 # its figures mean little.
 #
@@ -61,8 +61,9 @@ CPU seconds, log-log).
   --out DIR          where the CSV and the plots go (default: methods-error)
   --scenes LIST      comma-separated scene names of scenes/ (default:
                      cornell-box-spheres,cornell-box)
-  --res N            image width and height (default 128; --quick 32)
-  --ref-spp N        the reference's samples per pixel (default 16384; --quick 1024)
+  --res N            image width and height (default 96; --quick 32)
+  --ref-spp N        the reference's samples per pixel (default 4096, 8 times the path ladder's
+                     largest; --quick 512)
   --reference IMG    use IMG as the reference (one scene only) instead of rendering one
   --cache DIR        reference cache (default: build/methods-error-cache)
   --threads N        threads of every render (default 2)
@@ -97,8 +98,8 @@ while [[ $# -gt 0 ]]; do
     esac
     shift
 done
-(( quick )) && : "${res:=32}" "${ref_spp:=1024}"
-: "${res:=128}" "${ref_spp:=16384}"
+(( quick )) && : "${res:=32}" "${ref_spp:=512}"
+: "${res:=96}" "${ref_spp:=4096}"
 [[ $res =~ ^[0-9]+$ && $res -ge 4 ]] || { echo "methods-error: --res must be an integer >= 4" >&2; exit 2; }
 [[ $ref_spp =~ ^[0-9]+$ && $ref_spp -ge 1 ]] || { echo "methods-error: --ref-spp must be a positive integer" >&2; exit 2; }
 [[ $threads =~ ^[0-9]+$ && $threads -ge 1 ]] || { echo "methods-error: --threads must be a positive integer" >&2; exit 2; }
@@ -156,17 +157,16 @@ ladder() {
     local n
     case $1 in
         raytrace) for n in 1 4 16 64; do echo "raytrace|whitted|$n spp|--spp $n"; done ;;
-        path) for n in 1 4 16 64 256 1024; do echo "path|path|$n spp|--spp $n"; done ;;
+        path) for n in 1 4 16 64 256 512; do echo "path|path|$n spp|--spp $n"; done ;;
         radiosity)
             printf '%s\n' "radiosity|radiosity|edge 160, 1%|--max-edge 160 --threshold 0.01" \
                           "radiosity|radiosity|edge 80, 1%|--max-edge 80 --threshold 0.01" \
-                          "radiosity|radiosity|edge 40, 0.3%|--max-edge 40 --threshold 0.003" \
-                          "radiosity|radiosity|edge 20, 0.3%|--max-edge 20 --threshold 0.003" ;;
+                          "radiosity|radiosity|edge 40, 0.3%|--max-edge 40 --threshold 0.003" ;;
         hybrid)
             printf '%s\n' "hybrid|interpolated|edge 160, 1 spp|--max-edge 160 --threshold 0.01 --spp 1" \
                           "hybrid|interpolated|edge 80, 4 spp|--max-edge 80 --threshold 0.01 --spp 4" \
                           "hybrid|interpolated|edge 40, 16 spp|--max-edge 40 --threshold 0.003 --spp 16" \
-                          "hybrid|interpolated|edge 20, 64 spp|--max-edge 20 --threshold 0.003 --spp 64" ;;
+                          "hybrid|interpolated|edge 40, 64 spp|--max-edge 40 --threshold 0.003 --spp 64" ;;
         gather)
             printf '%s\n' "hybrid|gather|edge 160, 1 spp|--max-edge 160 --threshold 0.01 --spp 1 --hybrid-mode gather" \
                           "hybrid|gather|edge 80, 4 spp|--max-edge 80 --threshold 0.01 --spp 4 --hybrid-mode gather" \
@@ -213,11 +213,11 @@ for s in "${scene_list[@]}"; do
     echo
     echo "=== $s (${res}x${res})"
     if [[ -n $reference ]]; then
-        ref=$reference
+        ref=$reference ref_desc="given"
         echo "reference: $ref (given)"
     else
         key=$( { cat "$f"; echo "res=$res spp=$ref_spp seed=1000003 $version"; } | sha256sum | cut -c1-16)
-        ref=$cache/$s-${res}px-${ref_spp}spp-$key.pfm
+        ref=$cache/$s-${res}px-${ref_spp}spp-$key.pfm ref_desc="path, $ref_spp spp"
         if [[ -f $ref ]]; then
             echo "reference: $ref (cached)"
         else
@@ -353,18 +353,22 @@ for mode in dict.fromkeys(r["mode"] for r in rows):
 EOF
         nblocks=$(grep -c '^"' "$work/plot.dat")
         for term in png svg; do
-            if [[ $term == png ]]; then t="pngcairo size 900,600 font ',11'"; else t="svg size 900,600 font 'sans,13'"; fi
+            if [[ $term == png ]]; then t="pngcairo size 1200,520 font ',10'"; else t="svg size 1200,520 font 'sans,12'"; fi
             gnuplot <<EOF
 set terminal $t
 set output '$out/methods-error-$s.$term'
-set title "Error against a converged path-traced reference: $s, ${res}x${res}"
+set multiplot layout 1,2 title "Error against a converged path-traced reference ($ref_desc): $s, ${res}x${res}" noenhanced
 set xlabel 'CPU seconds (user + system, whole process, $threads threads)'
-set ylabel 'relMSE'
 set logscale xy
 set grid
-set key outside right top
 set style data linespoints
+set key top right noenhanced
+set ylabel 'relMSE'
 plot for [i=0:$((nblocks - 1))] '$work/plot.dat' index i using 1:2 title columnheader(1) lw 2 pt 7
+set ylabel 'RMSE'
+set key off
+plot for [i=0:$((nblocks - 1))] '$work/plot.dat' index i using 1:3 title columnheader(1) lw 2 pt 7
+unset multiplot
 EOF
         done
         echo "methods-error: wrote $out/methods-error-$s.png and .svg"

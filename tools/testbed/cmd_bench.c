@@ -67,6 +67,11 @@ static void tb__bench_usage(FILE *out)
             "  formfactor   ray-cast form factors per second, the Vulkan kernel vs the CPU batch, on the\n"
             "               scene meshed as for radiosity (details: testbed bench formfactor --help)\n"
             "\n"
+            "usage: testbed bench scale [--kind grid|csg|mesh] [--counts 1e4,1e5,...] [--threads T]\n"
+            "\n"
+            "  scale        generated scenes of growing size: parse, prepare, build and first-pixel\n"
+            "               time and peak memory per count (details: testbed bench scale --help)\n"
+            "\n"
             "Exit status: 0 done, 1 an object could not be built, 2 usage error.\n");
 }
 
@@ -306,6 +311,7 @@ static const struct {
     {"rays", tb_cmd_bench_rays}, /* cmd_bench_rays.c */
     {"gpu", tb_cmd_bench_gpu},   /* cmd_bench_gpu.c */
     {"formfactor", tb_cmd_bench_formfactor}, /* cmd_bench_formfactor.c */
+    {"scale", tb_cmd_bench_scale},           /* cmd_bench_scale.c */
 };
 
 int tb_cmd_bench(int argc, char **argv)

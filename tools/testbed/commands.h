@@ -22,6 +22,8 @@ int tb_cmd_bench_rays(int argc, char **argv);
 int tb_cmd_bench_formfactor(int argc, char **argv);
 /* `testbed bench gpu`: the Vulkan intersect kernel vs the CPU path per ray set (cmd_bench_gpu.c; argv[0] is "gpu"). */
 int tb_cmd_bench_gpu(int argc, char **argv);
+/* `testbed bench scale`: load and first-pixel time and peak memory of generated scenes by size (cmd_bench_scale.c; argv[0] is "scale"). */
+int tb_cmd_bench_scale(int argc, char **argv);
 /* `testbed check SCENE.mid`: validate and summarise a MID scene (cmd_check.c). */
 int tb_cmd_check(int argc, char **argv);
 /* `testbed compare A B`: error metrics against a reference image (cmd_compare.c). */
@@ -42,6 +44,8 @@ int tb_cmd_render(int argc, char **argv);
 int tb_cmd_render_radiosity(int argc, char **argv);
 /* `testbed render SCENE --method hybrid`: radiosity + ray tracing (cmd_render_hybrid.c; called by tb_cmd_render). */
 int tb_cmd_render_hybrid(int argc, char **argv);
+/* `testbed study SCENE... -o DIR`: methods x budgets x seeds against a reference (cmd_study.c, study_report.c). */
+int tb_cmd_study(int argc, char **argv);
 /* `testbed trace SCENE --rays RAYS --hits HITS`: closest hits of a ray file (cmd_trace.c). */
 int tb_cmd_trace(int argc, char **argv);
 /* `testbed validate SCENE`: Vulkan kernels vs the CPU path (cmd_validate.c). */

@@ -16,6 +16,7 @@ static const tb_command tb__commands[] = {
     {"help", "list the subcommands, or show one's help", tb_cmd_help},
     {"import", "convert a model (OBJ, PLY, STL, glTF, ... via Assimp) to MID + FED files", tb_cmd_import},
     {"render", "render a MID scene to an image with the Whitted ray tracer", tb_cmd_render},
+    {"study", "compare renderers over budgets and seeds against a reference: tables, plots, an HTML page", tb_cmd_study},
     {"trace", "closest hits of a file of rays through a scene (a ray server for scripts)", tb_cmd_trace},
     {"validate", "the Vulkan kernels against the CPU path on the same rays (agreement, routing, --bench)", tb_cmd_validate},
     {"version", "print the version and git revision", tb_cmd_version},
