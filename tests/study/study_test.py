@@ -248,6 +248,12 @@ def main():
         fail("study.json of the second run: %s rendered" % j2["cells_rendered"])
     if snapshot(out) != before:
         fail("the second run changed files under cells/")
+    # a cell whose image was deleted renders again, alone
+    victim = os.path.join(out, j2["cells"][0]["dir"], "image.exr")
+    os.remove(victim)
+    p = run(args, 0, "a deleted image")
+    if "%d cells: 1 rendered, %d reused" % (total, total - 1) not in p.stdout or not os.path.isfile(victim):
+        fail("a deleted image should render its cell again: " + p.stdout)
     # a changed option is another key: only those cells render again
     p = run(args[:-2] + ["--threads", "1", "--budgets", "4," + ",".join(map(str, budgets))], 0, "one more budget")
     if "%d cells: %d rendered, %d reused" % (total + SEEDS, SEEDS, total) not in p.stdout:

@@ -148,9 +148,9 @@ ladder() {
             path) printf '%s\n' "path|path|1 spp|--spp 1" "path|path|4 spp|--spp 4" "path|path|16 spp|--spp 16" ;;
             radiosity) printf '%s\n' "radiosity|radiosity|edge 160, 1%|--max-edge 160 --threshold 0.01" ;;
             hybrid) printf '%s\n' "hybrid|interpolated|edge 160, 1 spp|--max-edge 160 --threshold 0.01 --spp 1" \
-                                  "hybrid|interpolated|edge 160, 4 spp|--max-edge 160 --threshold 0.01 --spp 4" ;;
+                                  "hybrid|interpolated|edge 80, 4 spp|--max-edge 80 --threshold 0.01 --spp 4" ;;
             gather) printf '%s\n' "hybrid|gather|edge 160, 1 spp|--max-edge 160 --threshold 0.01 --spp 1 --hybrid-mode gather" \
-                                  "hybrid|gather|edge 160, 4 spp|--max-edge 160 --threshold 0.01 --spp 4 --hybrid-mode gather" ;;
+                                  "hybrid|gather|edge 80, 4 spp|--max-edge 80 --threshold 0.01 --spp 4 --hybrid-mode gather" ;;
         esac
         return
     fi
@@ -266,7 +266,9 @@ for r in rows:
             bad.append(f"{r['scene']} {r['method']} {r['mode']} {r['budget']}: {k} = {r[k]}")
 
 def curve(scene, mode):
-    return sorted((r["cpu_seconds"], r["relMSE"]) for r in rows if r["scene"] == scene and r["mode"] == mode)
+    """(CPU s, relMSE) in budget order (the CSV's), and sorted by time (ties kept in budget order)."""
+    c = [(r["cpu_seconds"], r["relMSE"]) for r in rows if r["scene"] == scene and r["mode"] == mode]
+    return c, sorted(c, key=lambda x: x[0])
 
 def at(c, t):
     """relMSE of curve c at CPU time t, log-log interpolation; None outside its span."""
@@ -295,12 +297,13 @@ print()
 print("| scene | hybrid mode | budget | CPU s | hybrid relMSE | Whitted relMSE | Whitted / hybrid | path relMSE | path / hybrid |")
 print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
 for s in scenes:
-    wh, pa = curve(s, "whitted"), curve(s, "path")
+    (wb, wh), (_, pa) = curve(s, "whitted"), curve(s, "path")
     for r in rows:
         if r["scene"] != s or r["method"] != "hybrid":
             continue
         t, e = r["cpu_seconds"], r["relMSE"]
-        w = at(wh, t) if wh and t <= wh[-1][0] else (wh[-1][1] if wh and t > wh[-1][0] else None)
+        # past its slowest render the Whitted error stays at its largest budget's (its floor)
+        w = None if not wh else (at(wh, t) if t <= wh[-1][0] else wb[-1][1])
         p = at(pa, t)
         fmt = lambda v: "-" if v is None else f"{v:.4g}"
         ratio = lambda v: "-" if v is None or e <= 0 else f"{v / e:.2f}"

@@ -49,11 +49,8 @@ benchmarks=(
     "radiosity|radiosity solver: form-factor methods, patches, default element size"
     "ff-cpu|CPU form factors: ray casting, exact point form factor, hemicube (ff_table timing)"
     "adaptive|mesh refinement and radiosity --adapt"
-<<<<<<< HEAD
     "dist|mpirun: 2 ranks x 1 thread vs 1 rank (tools/bench/dist-scaling.sh)"
-=======
     "methods-error|speed versus error of raytrace, radiosity, hybrid and path (tools/bench/methods-error.sh)"
->>>>>>> main
 )
 
 usage() {
@@ -610,16 +607,16 @@ EOF
     done
 }
 
-<<<<<<< HEAD
 bench_dist() {
     need mpirun "Open MPI: tools/setup.sh"
     local q=()
     is_quick && q=(--quick)
-    table scaling "Distributed: 1 rank x 1 thread vs 2 ranks x 1 thread (best of 3; CPU = every process of the job)" \
+    table scaling "Distributed: 1 rank x 1 thread vs 2 ranks x 1 thread (fastest of 3 runs, 1 with --quick; CPU = every process of the job)" \
         case "1 rank: wall / CPU s" "2 ranks: wall / CPU s" "speedup (wall)" "CPU cost of 2 ranks" "load before/after"
     cmd env TESTBED="$TB" "$root/tools/bench/dist-scaling.sh" "${q[@]}"
     last_output | awk -F' *[|] *' '/^[|] [a-z]+-[a-z]+ [|] [0-9.]+ \// { printf "%s\t%s\t%s\t%s\t%s\t%s\n", $2, $3, $4, $5, $6, $7 }' | rows
-=======
+}
+
 bench_methods-error() {
     need_gnu_time
     need gnuplot "the plots of tools/bench/methods-error.sh"
@@ -639,7 +636,6 @@ PY
         scene "hybrid mode" budget "CPU s" "hybrid relMSE" "Whitted relMSE" "Whitted / hybrid" "path relMSE" "path / hybrid"
     last_output | awk -F' [|] ' '/^[|] / && NF == 9 && $4 ~ /^[0-9.]+$/ { sub(/^[|] /, "", $1); sub(/ [|]$/, "", $9)
         printf "%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n", $1, $2, $3, $4, $5, $6, $7, $8, $9 }' | rows
->>>>>>> main
 }
 
 # ------------------------------------------------------------------ header

@@ -440,6 +440,7 @@ static tb_status tb__measure(const tb_study *st, tb_study_cell *c)
     if (e)
         return tb_error_context(e, "%s against the reference %s", path, st->scenes[c->scene].reference);
     c->relmse = r.all.relmse, c->rmse = r.all.rmse, c->ssim = r.all.ssim;
+    c->nonfinite = r.nonfinite_a;
     return TB_OK;
 }
 
@@ -693,7 +694,9 @@ int tb_cmd_study(int argc, char **argv)
             k += snprintf(j->key + k, sizeof j->key - (size_t)k, " %s", j->args.v[a]);
         char rec[PATH_MAX + 16];
         snprintf(rec, sizeof rec, "%s/cell.json", j->dir);
-        j->finished = tb__cell_finished(rec, j->key, &j->rec);
+        char img[PATH_MAX + 16];
+        snprintf(img, sizeof img, "%s/image.exr", j->dir);
+        j->finished = tb__cell_finished(rec, j->key, &j->rec) && access(img, R_OK) == 0; /* image deleted: again */
         if (!j->finished)
             todo_units += j->units, todo++;
     }
@@ -773,11 +776,15 @@ int tb_cmd_study(int argc, char **argv)
             fprintf(stderr, "testbed study: reference of %s: %s\n", st.scenes[s].path, tb_last_error());
             goto done;
         }
-    for (size_t i = 0; i < st.ncells; i++)
+    for (size_t i = 0; i < st.ncells; i++) {
         if (tb__measure(&st, &st.cells[i])) {
             fprintf(stderr, "testbed study: %s\n", tb_last_error());
             goto done;
         }
+        if (st.cells[i].nonfinite) /* a broken render: its errors leave those pixels out */
+            fprintf(stderr, "testbed study: warning: %s/%s/image.exr has %lld NaN or infinite pixel(s)\n", st.out,
+                    st.cells[i].dir, st.cells[i].nonfinite);
+    }
     if (tb_study_write_outputs(&st)) {
         fprintf(stderr, "testbed study: %s\n", tb_last_error());
         goto done;

@@ -56,6 +56,7 @@ typedef struct tb_study_cell {
     double cpu_seconds;              /* its user + system time */
     double peak_rss_bytes;           /* its peak resident set size */
     double relmse, rmse, ssim;       /* against the scene's reference (util/image/compare.h, all channels) */
+    long long nonfinite;             /* its pixels with a NaN or infinite channel (left out of the errors) */
 } tb_study_cell;
 
 /* A whole study, as planned and measured. */

@@ -487,7 +487,15 @@ static tb_status tb__plots(const tb_study *st, int s, tb__scene_report *r)
         if (plot == 0)
             fprintf(f, "set xlabel '%s per render (mean over seeds)'\n", tb__time_name(st));
         else
-            fprintf(f, "set xlabel 'budget (%s)'\n", st->kind == TB_STUDY_SPP ? "samples per pixel" : "seconds");
+        {
+            bool rad = false;
+            for (int m = 0; m < st->nmethods; m++)
+                rad = rad || st->methods[m] == TB_STUDY_RADIOSITY;
+            fprintf(f, "set xlabel 'budget (%s)'\n",
+                    st->kind == TB_STUDY_SECONDS ? "seconds"
+                    : rad                        ? "samples per pixel; radiosity: mesh refinement"
+                                                 : "samples per pixel");
+        }
         fprintf(f, "set title ");
         char title[200];
         snprintf(title, sizeof title, "%s: relMSE against %s", name, plot == 0 ? "time" : "budget");
@@ -553,13 +561,13 @@ static tb_status tb__write_csv(const tb_study *st)
     if (e)
         return e;
     fprintf(of.fp, "scene,method,budget_kind,budget,seed,wall_seconds,cpu_seconds,peak_rss_bytes,relmse,rmse,ssim,"
-                   "reused,dir\n");
+                   "nonfinite_pixels,reused,dir\n");
     for (size_t i = 0; i < st->ncells; i++) {
         const tb_study_cell *c = &st->cells[i];
         tb__csv(of.fp, st->scenes[c->scene].name);
-        fprintf(of.fp, ",%s,%s,%.17g,%d,%.6f,%.6f,%.0f,%.9g,%.9g,%.9g,%d,", tb__mname(st, c->method),
+        fprintf(of.fp, ",%s,%s,%.15g,%d,%.6f,%.6f,%.0f,%.9g,%.9g,%.9g,%lld,%d,", tb__mname(st, c->method),
                 st->kind == TB_STUDY_SPP ? "spp" : "seconds", st->budgets[c->budget], c->seed, c->wall_seconds,
-                c->cpu_seconds, c->peak_rss_bytes, c->relmse, c->rmse, c->ssim, c->reused);
+                c->cpu_seconds, c->peak_rss_bytes, c->relmse, c->rmse, c->ssim, c->nonfinite, c->reused);
         tb__csv(of.fp, c->dir);
         fputc('\n', of.fp);
     }
@@ -704,7 +712,7 @@ static tb_status tb__write_json(const tb_study *st, tb__scene_report *reps)
         tb__jnum(f, c->rmse);
         fprintf(f, ", \"ssim\": ");
         tb__jnum(f, c->ssim);
-        fprintf(f, "}%s\n", i + 1 == st->ncells ? "" : ",");
+        fprintf(f, ", \"nonfinite_pixels\": %lld}%s\n", c->nonfinite, i + 1 == st->ncells ? "" : ",");
     }
     fprintf(f, "  ]\n}\n");
     return tb_outfile_commit(&of);
@@ -802,6 +810,33 @@ static void tb__tables(FILE *f, const tb_study *st, tb__scene_report *r, bool md
                    "between budgets.</p>\n");
 }
 
+/* The cells of scene s with NaN or infinite pixels (a broken render: the
+ * errors leave those pixels out, the means may be absurd), if any. */
+static void tb__warnings(FILE *f, const tb_study *st, int s, bool md)
+{
+    int n = 0;
+    for (size_t i = 0; i < st->ncells; i++) {
+        const tb_study_cell *c = &st->cells[i];
+        if (c->scene != s || !c->nonfinite)
+            continue;
+        if (n++ == 0)
+            fputs(md ? "\n#### Warnings: renders with NaN or infinite pixels (left out of their errors)\n\n"
+                     : "<h4>Warnings: renders with NaN or infinite pixels (left out of their errors)</h4>\n<ul>\n",
+                  f);
+        if (md)
+            fprintf(f, "- `%s/image.exr`: %lld pixel(s)\n", c->dir, c->nonfinite);
+        else {
+            fprintf(f, "<li><a href=\"");
+            tb__html(f, c->dir);
+            fprintf(f, "/image.exr\">");
+            tb__html(f, c->dir);
+            fprintf(f, "/image.exr</a>: %lld pixel(s)</li>\n", c->nonfinite);
+        }
+    }
+    if (n && !md)
+        fputs("</ul>\n", f);
+}
+
 static tb_status tb__write_md(const tb_study *st, tb__scene_report *reps)
 {
     char path[PATH_MAX + 32];
@@ -832,6 +867,7 @@ static tb_status tb__write_md(const tb_study *st, tb__scene_report *reps)
             fprintf(f, "\n![relMSE against time](plots/%s-error-time.png)\n"
                        "![relMSE against budget](plots/%s-error-budget.png)\n", sc->name, sc->name);
         tb__tables(f, st, &reps[s], true);
+        tb__warnings(f, st, s, true);
     }
     return tb_outfile_commit(&of);
 }
@@ -895,6 +931,7 @@ static tb_status tb__write_html(const tb_study *st, tb__scene_report *reps)
             fprintf(f, "</p>\n");
         }
         tb__tables(f, st, r, false);
+        tb__warnings(f, st, s, false);
         if (!r->images)
             continue;
         fprintf(f, "<h4>Images (seed 0; PNGs at the reference's exposure, %+.2f stops; error maps: RMS difference "
