@@ -26,8 +26,6 @@ bool tb_dist_built_with_mpi(void)
 #endif
 }
 
-int tb__dist_mpi_on(void) { return tb__dist_mpi; }
-
 double tb__dist_now(void)
 {
     struct timespec ts;

@@ -21,7 +21,4 @@ void tb__dist_account(double work, double wait, uint64_t bytes, uint64_t message
 /* Monotonic seconds. */
 double tb__dist_now(void);
 
-/* True once MPI is running in this process (mpirun started it). */
-int tb__dist_mpi_on(void);
-
 #endif

@@ -66,6 +66,8 @@ typedef struct tb__tiles {
     int nout, out_cap;
 } tb__tiles;
 
+#ifdef TB_HAVE_MPI
+
 /* Sleeps *us microseconds after a poll that moved nothing (and doubles it
  * for the next), or resets *us after one that moved something. */
 static void tb__tiles_pause(int *us, int moved)
@@ -87,8 +89,6 @@ static void tb__tiles_fail(tb__tiles *t, tb_status st)
         snprintf(t->comm_msg, sizeof t->comm_msg, "%s", tb_last_error());
     }
 }
-
-#ifdef TB_HAVE_MPI
 
 /* Rank 0: one waiting message, if there is one (1: handled one). The
  * communication thread, lock not held (taken for the shared fields). */
@@ -381,10 +381,12 @@ static tb_status tb__tiles_finish(void *ctx, tb_film *film, int index, tb_film_t
     return TB_OK;
 }
 
-static tb_status tb__tiles_end(void *ctx, tb_film *film, tb_aa_stats *stats)
+static tb_status tb__tiles_end(void *ctx, tb_film *film, tb_aa_stats *stats, tb_status mine)
 {
     tb__tiles *t = ctx;
-    tb_status st = TB_OK;
+    tb_status st = mine;
+    char why[512];
+    snprintf(why, sizeof why, "%s", mine ? tb_last_error() : "");
     double t0 = tb__dist_now();
     pthread_mutex_lock(&t->lock);
     t->local_done = true;
@@ -394,12 +396,21 @@ static tb_status tb__tiles_end(void *ctx, tb_film *film, tb_aa_stats *stats)
         t->comm_running = false;
     }
     t->wait += tb__dist_now() - t0;
-    if (t->comm_err)
+    if (st)
+        tb_error(st, "%s", why);
+    else if (t->comm_err)
         st = tb_error(t->comm_err, "%s", t->comm_msg);
     /* rank 0: tiles never handed out (a cancel) are skipped */
     while (!st && t->ex.rank == 0 && t->next < t->ntiles) {
         st = tb_film_tile_skip(film, t->next++);
         stats->tiles_skipped++;
+    }
+    /* a failure anywhere stops every rank, with the failing rank's message */
+    if (t->ex.ranks > 1) {
+        int who = -1;
+        st = tb_dist_agree_status(st, &who);
+        if (st && who != t->ex.rank)
+            tb_error_context(st, "rank %d", who);
     }
 #ifdef TB_HAVE_MPI
     if (!st && t->ex.ranks > 1) {

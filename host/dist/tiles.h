@@ -1,11 +1,12 @@
 /* A render's tiles shared over the ranks of a job (docs/distributed.md):
  * the tb_tile_exchange that tb_render (host/render/render.h) takes in
  * tb_render_options.exchange. Rank 0 hands out tiles on request, in index
- * order, a few at a time (workers ask ahead so they do not wait for rank 0
- * between tiles); each rank renders its tiles with its OpenMP threads and
- * sends them, packed (film.h), to rank 0, which merges every tile into its
- * film in tile order as the one-process render does: the image is
- * bit-identical for any number of ranks and threads.
+ * order, a few at a time; each rank renders its tiles with its OpenMP
+ * threads and sends them, packed (film.h), to rank 0, which merges every
+ * tile into its film in tile order as the one-process render does: the
+ * image is bit-identical for any number of ranks and threads. During a pass
+ * a communication thread per rank makes every MPI call (requests ahead,
+ * grants, tiles), so messages move while the renderer's threads work.
  *
  *     tb_tile_exchange *ex = tb_dist_tiles_create(threads);
  *     ro.exchange = ex;                 (every rank calls tb_render)

@@ -189,7 +189,18 @@ typedef struct tb_rad_exchange {
     /* After the solve, on every process: each process's share of the work
      * into the stats values. NULL: nothing. */
     tb_status (*report)(void *ctx);
+    /* false: the deterministic mode above. true: several shooters in flight
+     * (one per process, at most TB_RAD_MAX_IN_FLIGHT): each process
+     * computes one shooter's form factors whole, all are exchanged, and
+     * every process shoots them in rank order. Faster (one exchange per
+     * `ranks` shots, no waiting on each other's rays) but a different
+     * shooting order: the answer depends on the number of processes
+     * (docs/distributed.md gives the measured difference). */
+    bool several;
 } tb_rad_exchange;
+
+/* Most shooters in flight at once in the several-shooters mode. */
+#define TB_RAD_MAX_IN_FLIGHT 1024
 
 typedef struct tb_rad_options {
     tb_rad_ff_method ff;  /* form-factor method */

@@ -88,6 +88,10 @@ struct tb_rad_solver {
      * factors, everyone's gathered, and how many each process computes */
     double *xmine, *xall;
     size_t *xcounts;
+    /* several shooters in flight: this process's shooter's form factors,
+     * everyone's, and the counts (all equal) */
+    double *xsev, *xsevall;
+    size_t *xsevcounts;
 };
 
 static tb_status tb__lights_init(tb_rad_solver *s, const tb_rad_state *state);
@@ -256,6 +260,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     tb_pqueue_free(&s->q);
     tb_rad_lights_free(s->lights);
     free(s->xmine), free(s->xall), free(s->xcounts);
+    free(s->xsev), free(s->xsevall), free(s->xsevcounts);
     free(s->lshot);
     free(s->lpower);
     free(s);
@@ -467,7 +472,7 @@ static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex
  * visibility test at all); a cluster with too many goes through tb__visible.
  * Either way a segment gets the BVH's answer, so each receiver's value
  * depends only on its own inputs: any schedule gives the same results. */
-static tb_status tb__batch(tb_rad_solver *s, size_t k)
+static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
 {
     const tb_vec3 nrm = s->snrm[k]; /* the shooter's (a patch's, or an element's) */
     const double area = s->sarea[k];
@@ -480,7 +485,7 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k)
     ptrdiff_t ncl = (ptrdiff_t)s->ncl;
     size_t nv = s->m.nverts;
     /* several processes: this one's clusters are rank, rank + R, ... */
-    const tb_rad_exchange *ex = s->xcounts ? s->opt.exchange : NULL;
+    const tb_rad_exchange *ex = s->xcounts && share ? s->opt.exchange : NULL;
     ptrdiff_t c0 = ex ? ex->rank : 0, dc = ex ? ex->ranks : 1;
     ptrdiff_t nmine = ncl > c0 ? (ncl - c0 + dc - 1) / dc : 0;
 #pragma omp parallel for schedule(dynamic, 4)
@@ -817,8 +822,11 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
 
 
 static void tb__near_field(tb_rad_solver *s, size_t i);
+static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0);
+static void tb__cache_store(tb_rad_solver *s, size_t k);
+static tb_status tb__step_several(tb_rad_solver *s, const tb_rad_exchange *ex, bool *shot);
 static void tb__hemicube_near_patch(tb_rad_solver *s, size_t k);
-static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i);
+static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i, bool share);
 
 /* Most bytes of form factors kept for shooters shot again. */
 #define TB__RAD_CACHE_BYTES ((size_t)512 << 20)
@@ -827,7 +835,7 @@ static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i);
  * that caching never changes an answer): s->vff[v] = F(v -> i) for every
  * vertex (ray cast) and s->eff[j] = F_ji for every element (0 for the
  * shooter's own elements). */
-static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k)
+static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k, bool share)
 {
     size_t nv = s->m.nverts, ne = s->m.nelems;
     bool hemi = s->opt.ff == TB_RAD_FF_HEMICUBE;
@@ -838,7 +846,7 @@ static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k)
         tb_stat_add(&tb__rad_cached, 1);
         return TB_OK;
     }
-    tb_status st = tb__shot_formfactors(s, k);
+    tb_status st = tb__shot_formfactors(s, k, share);
     if (st)
         return st;
     if (hemi) {
@@ -866,8 +874,17 @@ static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k)
             s->gnear[s->near_list[k]] = NAN;
         s->nnear = 0;
     }
+    tb__cache_store(s, k);
+    return TB_OK;
+}
+
+/* Keeps s->vff and s->eff as shooter k's cached form factors, if it has
+ * none yet and the cache has room (the same rule on every process). */
+static void tb__cache_store(tb_rad_solver *s, size_t k)
+{
+    size_t nvf = s->opt.ff == TB_RAD_FF_HEMICUBE ? 0 : s->m.nverts, ne = s->m.nelems;
     size_t bytes = (nvf + ne) * sizeof(float);
-    if (s->cache && s->cache_bytes + bytes <= TB__RAD_CACHE_BYTES) {
+    if (s->cache && !s->cache[k] && s->cache_bytes + bytes <= TB__RAD_CACHE_BYTES) {
         float *c = malloc(bytes);
         if (c) {
             memcpy(c, s->vff, nvf * sizeof(float));
@@ -876,11 +893,12 @@ static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k)
             s->cache_bytes += bytes;
         }
     }
-    return TB_OK;
 }
 
-/* Form factors of one shot from shooter k: s->ff[r] for every receiver. */
-static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t k)
+/* Form factors of one shot from shooter k: s->ff[r] for every receiver.
+ * share: over several processes, each computes its receiver clusters and
+ * they gather (else this process computes them all). */
+static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t k, bool share)
 {
     tb_timer_token tt = tb_timer_start(&tb__rad_ff_time);
     tb_status st;
@@ -892,7 +910,7 @@ static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t k)
     } else {
         st = tb_ff_sample_polygon(&s->spoly[k], s->opt.samples, tb__shot_seed(s->opt.seed, k), s->pts);
         if (!st)
-            st = s->boxes ? tb__batch(s, k)
+            st = s->boxes ? tb__batch(s, k, share)
                           : s->opt.batch(s->opt.batch_ctx, s->pts, s->opt.samples, s->snrm[k], s->sarea[k], s->rp,
                                          s->rn, s->m.nverts, s->ff);
         tb_stat_add(&tb__rad_rays, (int64_t)s->m.nverts * s->opt.samples);
@@ -1067,15 +1085,29 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
             return st;
         }
     }
+    const tb_rad_exchange *ex = s->opt.exchange;
+    if (ex && ex->ranks > 1 && ex->several)
+        return tb__step_several(s, ex, shot);
     uint32_t i; /* the shooter: a patch, or an element on one level */
     double pri;
     if (!tb_pqueue_peek(&s->q, &i, &pri) || !(pri > 0.0))
         return TB_OK;
     double t0 = tb__now();
-    int nc = s->nc;
-    tb_status st = tb__shooter_ff(s, i);
+    tb_status st = tb__shooter_ff(s, i, true);
     if (st)
         return st;
+    tb__shoot(s, i, t0);
+    if (shot)
+        *shot = true;
+    return TB_OK;
+}
+
+/* Shoots shooter i with the form factors in s->vff and s->eff: its unshot
+ * power goes to every receiver, the queue follows. t0: the clock when the
+ * shot began (its seconds). */
+static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0)
+{
+    int nc = s->nc;
     tb_timer_token tt = tb_timer_start(&tb__rad_update_time);
     /* the patch shoots its elements' unshot power as one density over its area */
     double dBi[TB_CHANNELS_MAX];
@@ -1162,6 +1194,82 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
     s->shots++;
     tb_stat_add(&tb__rad_shots, 1);
     s->seconds += tb__now() - t0;
+}
+
+/* Several shooters in flight (Recker, George and Greenberg 1990), one per
+ * process: the `ranks` shooters of most unshot power are taken at once,
+ * each process computes one shooter's form factors whole, the processes
+ * exchange them, and every process shoots them all in rank order. Fewer
+ * exchanges, none of them waiting on the others' rays, but the shooters of
+ * a group are chosen before the group's earlier shots are made: another
+ * (deterministic, for a given number of processes) order than one process. */
+static tb_status tb__step_several(tb_rad_solver *s, const tb_rad_exchange *ex, bool *shot)
+{
+    size_t R = (size_t)ex->ranks, nvf = s->opt.ff == TB_RAD_FF_HEMICUBE ? 0 : s->m.nverts, ne = s->m.nelems;
+    size_t per = nvf + ne; /* values one shooter's form factors take */
+    uint32_t keys[TB_RAD_MAX_IN_FLIGHT];
+    size_t n = 0;
+    double pri;
+    double t0 = tb__now();
+    while (n < R && n < TB_RAD_MAX_IN_FLIGHT && tb_pqueue_peek(&s->q, &keys[n], &pri) && pri > 0.0) {
+        tb_pqueue_remove(&s->q, keys[n]);
+        n++;
+    }
+    if (n == 0)
+        return TB_OK;
+    if (!s->xsev) {
+        s->xsev = malloc(per * sizeof *s->xsev);
+        s->xsevall = malloc(per * R * sizeof *s->xsevall);
+        s->xsevcounts = malloc(R * sizeof *s->xsevcounts);
+        if (!s->xsev || !s->xsevall || !s->xsevcounts)
+            return tb_error(TB_ERR_NOMEM, "radiosity: out of memory for shooters in flight");
+        for (size_t r = 0; r < R; r++)
+            s->xsevcounts[r] = per;
+    }
+    /* every process keeps the same cache (each stores every gathered
+     * shooter under the same byte limit), so each knows without asking
+     * whether the whole group is cached: then there is nothing to compute
+     * or exchange. (A malloc that fails on one process only would break
+     * this; the processes would then wait for each other.) */
+    bool all_cached = s->cache != NULL;
+    for (size_t k = 0; k < n && all_cached; k++)
+        all_cached = s->cache[keys[k]] != NULL;
+    if (all_cached) {
+        for (size_t k = 0; k < n; k++) {
+            tb_status st = tb__shooter_ff(s, keys[k], false); /* from the cache */
+            if (st)
+                return st;
+            tb__shoot(s, keys[k], k == 0 ? t0 : tb__now());
+        }
+        if (shot)
+            *shot = true;
+        return TB_OK;
+    }
+    /* this process's shooter (none: zeros) */
+    size_t me = (size_t)ex->rank;
+    if (me < n) {
+        tb_status st = tb__shooter_ff(s, keys[me], false);
+        if (st)
+            return st;
+        for (size_t v = 0; v < nvf; v++)
+            s->xsev[v] = s->vff[v];
+        for (size_t j = 0; j < ne; j++)
+            s->xsev[nvf + j] = s->eff[j];
+    } else {
+        memset(s->xsev, 0, per * sizeof *s->xsev);
+    }
+    tb_status st = ex->allgather(ex->ctx, s->xsev, per, s->xsevall, s->xsevcounts);
+    if (st)
+        return st;
+    for (size_t k = 0; k < n; k++) {
+        const double *f = s->xsevall + k * per;
+        for (size_t v = 0; v < nvf; v++)
+            s->vff[v] = (float)f[v];
+        for (size_t j = 0; j < ne; j++)
+            s->eff[j] = (float)f[nvf + j];
+        tb__cache_store(s, keys[k]);
+        tb__shoot(s, keys[k], k == 0 ? t0 : tb__now());
+    }
     if (shot)
         *shot = true;
     return TB_OK;
@@ -1337,7 +1445,7 @@ tb_status tb_rad_formfactor(tb_rad_solver *s, size_t i, size_t j, double *f)
     if (s->pof[j] == i)
         return TB_OK;
     /* exactly what a shot from i uses */
-    tb_status st = tb__shooter_ff(s, i);
+    tb_status st = tb__shooter_ff(s, i, false); /* this process alone: not collective */
     if (st)
         return st;
     *f = (double)s->eff[j] * s->m.elems[j].area / s->sarea[i];

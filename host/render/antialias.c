@@ -570,8 +570,11 @@ tb_status tb_aa_render(tb_film *film, const tb_aa_options *aa, const tb_aa_rende
     all.max_spp_used = max_used;
     all.tiles_skipped = skipped;
     /* the other processes' tiles: rank 0 waits for them, everyone sums */
-    if (!first_err && desc->exchange) {
-        tb_status est = desc->exchange->end_pass(desc->exchange->ctx, film, &all);
+    if (desc->exchange) {
+        /* always: the others wait for this process's tiles (a failed one
+         * sent skips), and all must learn of a failure anywhere */
+        tb_status mine = first_err ? tb_error(first_err, "%s", err_msg) : TB_OK;
+        tb_status est = desc->exchange->end_pass(desc->exchange->ctx, film, &all, mine);
         if (est)
             return est;
         total_samples = all.samples, total_ring = all.ring_samples, total_pixels = all.pixels;

@@ -151,10 +151,13 @@ typedef struct tb_tile_exchange {
     /* Hands over the finished tile `index` (ownership; NULL: skipped after a
      * cancel). Called from any thread. */
     tb_status (*finish)(void *ctx, tb_film *film, int index, tb_film_tile *tile);
-    /* Ends the pass once this process's claims are finished: rank 0 returns
+    /* Ends the pass once this process's claims are finished (`st`: this
+     * process's outcome, its message in tb_last_error()): rank 0 returns
      * when every tile of the pass is merged into its film; tiles not claimed
-     * are skipped. *stats (this process's) becomes the sum over processes. */
-    tb_status (*end_pass)(void *ctx, tb_film *film, tb_aa_stats *stats);
+     * are skipped. Returns the lowest-ranked failure of any process, with
+     * its message, on every process (so all stop together), else TB_OK with
+     * *stats (this process's) become the sum over processes. */
+    tb_status (*end_pass)(void *ctx, tb_film *film, tb_aa_stats *stats, tb_status st);
     /* Rank 0's `flag` on every process (a decision all must share). */
     int (*agree)(void *ctx, int flag);
     /* The lowest-ranked failure among every process's `st` (its message as

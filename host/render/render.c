@@ -158,7 +158,9 @@ tb_status tb__render_drive(const tb_scene *s, const tb_render_options *o, const 
     st.seconds = tb__render_seconds(&run);
     if (run.progress)
         tb_progress_finish(run.progress);
-    if (!err) {
+    if (!err && root) {
+        /* the other processes' films hold only what they did not send:
+         * rank 0's is the image */
         *out = tb_render_resolve(s, film);
         if (!*out)
             err = TB_ERR_NOMEM;

@@ -58,7 +58,8 @@ typedef struct tb_render_options {
     void *on_pass_ctx;
     uint32_t *sample_counts; /* NULL, or width x height (row by row): set to each pixel's camera samples, all passes */
     const tb_tile_exchange *exchange; /* NULL: every tile in this process; else tiles shared over processes
-                                       * (host/dist); only rank 0's image, on_pass and persist count */
+                                       * (host/dist); rank 0 alone gets the image (*out NULL elsewhere) and
+                                       * calls on_pass and persist */
     const tb_render_persist *persist; /* NULL: no checkpoints */
 } tb_render_options;
 

@@ -1,7 +1,8 @@
 #!/bin/sh
 # Checkpoints of a progressive render (docs/distributed.md): in one process,
 # 2 passes saved then resumed to 5 give the 5-pass image bit for bit, and
-# resuming with other options is refused; over 2 ranks, killing rank 1
+# resuming with other options is refused; the path tracer's checkpoint
+# resumed over 2 ranks gives its uninterrupted image, the hybrid's too; over 2 ranks, killing rank 1
 # mid-render stops the job with a message naming the rank and the last
 # checkpoint, which is intact, and `--resume` over 3 ranks finishes with
 # the uninterrupted image. Radiosity: stopped and resumed solves write the
@@ -29,6 +30,23 @@ grep -q "c.ckpt: written for another job" "$T/out" || { cat "$T/out"; fail "no m
 [ ! -e "$T/x.pfm" ] || fail "an image was written for a refused resume"
 "$TESTBED" render $R --passes 5 -o "$T/x.pfm" --resume "$T/box.mid" > "$T/out" 2>&1 && fail "a scene taken as a checkpoint"
 grep -q "box.mid: not a testbed checkpoint" "$T/out" || { cat "$T/out"; fail "no message for a non-checkpoint"; }
+
+# the path tracer: 2 passes saved in one process, resumed to 4 over 2 ranks
+sed 's/resolution = \[512 512\]/resolution = [48 40]/' "$TB_SOURCE_DIR/scenes/cornell-box-spheres.mid" > "$T/sp.mid"
+P="$T/sp.mid --method path --spp 2"
+tb $P --passes 4 -o "$T/pf.pfm"
+tb $P --passes 2 -o "$T/ph.pfm" --checkpoint "$T/p.ckpt"
+$MPIRUN -np 2 "$TESTBED" render $P --passes 4 -o "$T/pr.pfm" --resume "$T/p.ckpt" --threads 1 > "$T/out" 2>&1 ||
+    { cat "$T/out"; fail "path tracer resume over 2 ranks"; }
+cmp "$T/pf.pfm" "$T/pr.pfm" || fail "path tracer: resumed over 2 ranks differs from the uninterrupted render"
+
+# the hybrid renderer: its film resumes, its radiosity pass is solved again
+sed 's/resolution = \[512 512\]/resolution = [32 32]/' "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" > "$T/hb.mid"
+Hy="$T/hb.mid --method hybrid --max-edge 150 --spp 1"
+tb $Hy --passes 2 -o "$T/hf.pfm"
+tb $Hy --passes 1 -o "$T/hh.pfm" --checkpoint "$T/h.ckpt"
+tb $Hy --passes 2 -o "$T/hr.pfm" --resume "$T/h.ckpt"
+cmp "$T/hf.pfm" "$T/hr.pfm" || fail "hybrid: resumed render differs from the uninterrupted one"
 
 # two ranks, rank 1 killed once the first checkpoint is there
 rm -f "$T/c.ckpt"

@@ -11,7 +11,7 @@ fail() { echo "FAIL: $*"; exit 1; }
 # TB_DIST_JOB=MARK in its environment (mpirun passes it on to local ranks).
 rank_pid() {
     for d in /proc/[0-9]*; do
-        e=$(tr '\0' '\n' < "$d/environ" 2>/dev/null) || continue
+        e=$({ tr '\0' '\n' < "$d/environ"; } 2>/dev/null) || continue
         if printf '%s\n' "$e" | grep -qx "TB_DIST_JOB=$1" && printf '%s\n' "$e" | grep -qx "OMPI_COMM_WORLD_RANK=$2"; then
             echo "${d#/proc/}"; return 0
         fi

@@ -4,15 +4,20 @@
  * unpacked continues as the original (checkpoints); wrong or damaged bytes
  * are refused with a message; checkpoint files round-trip, are replaced
  * atomically, and refuse another job, another kind, a bad checksum and a
- * truncated file. */
+ * truncated file; host/dist's tile exchange in a job of one rank gives the
+ * plain loop's film. */
 #include "tb_test.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "host/dist/checkpoint.h"
+#include "host/dist/dist.h"
+#include "host/dist/tiles.h"
+#include "host/render/antialias.h"
 #include "host/render/film.h"
 #include "util/math/rng.h"
 
@@ -198,6 +203,63 @@ static void test_checkpoint_file(void **state)
     remove(path);
 }
 
+/* A radiance that varies within pixels and with the sample's stream, so a
+ * tile rendered twice or merged out of order would show. */
+static void wavy(void *ctx, double x, double y, tb_rng *rng, float *out)
+{
+    (void)ctx;
+    float r = tb_rng_float(rng);
+    out[0] = (float)(0.5 + 0.5 * sin(0.37 * x) * cos(0.23 * y)) + 0.1f * r;
+    out[1] = (float)(x / 64.0);
+    out[2] = r;
+    out[3] = (float)(y / 48.0);
+}
+
+/* The tile exchange of host/dist in a job of one rank (no MPI): tb_aa_render
+ * through it (claims from its counter, every tile merged here) gives the
+ * film of the plain OpenMP loop bit for bit, for 1 and 3 threads and two
+ * passes; the job is one rank and a failure agreed on is the rank's own. */
+static void test_exchange_one_rank(void **state)
+{
+    (void)state;
+    assert_int_equal(tb_dist_size(), 1);
+    assert_int_equal(tb_dist_rank(), 0);
+    tb_clear_error();
+    assert_int_equal(tb_dist_agree_status(TB_OK, NULL), TB_OK);
+    int who = 7;
+    tb_error(TB_ERR_IO, "disk on fire");
+    assert_int_equal(tb_dist_agree_status(TB_ERR_IO, &who), TB_ERR_IO);
+    assert_int_equal(who, 0);
+    assert_string_equal(tb_last_error(), "disk on fire");
+    for (int threads = 1; threads <= 3; threads += 2) {
+        tb_film *plain = make_film(61, 45, 4), *viaex = make_film(61, 45, 4);
+        tb_tile_exchange *ex = tb_dist_tiles_create(threads);
+        assert_non_null(ex);
+        assert_int_equal(ex->ranks, 1);
+        tb_aa_options aa = tb_aa_defaults();
+        aa.spp = 3;
+        aa.seed = 11;
+        for (int pass = 0; pass < 2; pass++) {
+            aa.pass = (uint32_t)pass;
+            tb_aa_stats a, b;
+            tb_aa_render_desc d = {.sample = wavy, .threads = threads};
+            assert_int_equal(tb_aa_render(plain, &aa, &d, &a), TB_OK);
+            d.exchange = ex;
+            d.pass_index = pass;
+            assert_int_equal(tb_aa_render(viaex, &aa, &d, &b), TB_OK);
+            assert_int_equal(a.samples, b.samples);
+            assert_int_equal(b.tiles_skipped, 0);
+            assert_true(tb_film_pass_complete(viaex));
+        }
+        assert_films_equal(plain, viaex);
+        tb_dist_stats my = tb_dist_my_stats();
+        assert_true(my.units >= (uint64_t)tb_film_tile_count(plain)); /* tiles rendered here, all passes */
+        tb_dist_tiles_free(ex);
+        tb_film_free(plain);
+        tb_film_free(viaex);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -205,6 +267,7 @@ int main(void)
         cmocka_unit_test(test_tile_refused),
         cmocka_unit_test(test_film_continues),
         cmocka_unit_test(test_checkpoint_file),
+        cmocka_unit_test(test_exchange_one_rank),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -6,7 +6,8 @@
 # from the stats, the figures the scaling model needs (compute and bytes per
 # tile and per shot), and what reading the MID file costs against parsing it
 # (every rank reads the scene itself; the alternative is rank 0 broadcasting
-# the bytes).
+# the bytes), and radiosity with several shooters in flight against the
+# deterministic mode (time, and the difference of the results).
 #
 #   tools/bench/dist-scaling.sh [--quick] [--reps N]
 #
@@ -40,11 +41,11 @@ now() { date +%s.%N; }
 
 # scenes: the boxes as shipped (quick: shrunk), and a generated grid
 box=$root/scenes/cornell-box.mid spheres=$root/scenes/cornell-box-spheres.mid room=$root/scenes/radiosity-room.mid
-count=3000 room_thr=0.01
+count=3000 room_thr=0.01 spp=8
 if ((quick)); then
     sed 's/resolution = \[512 512\]/resolution = [96 96]/' "$box" > "$work/box.mid"
     sed 's/resolution = \[512 512\]/resolution = [96 96]/' "$spheres" > "$work/spheres.mid"
-    box=$work/box.mid spheres=$work/spheres.mid count=200 room_thr=0.3
+    box=$work/box.mid spheres=$work/spheres.mid count=200 room_thr=0.3 spp=2
 fi
 "$TB" generate grid --count $count --seed 1 -o "$work/grid.mid"
 
@@ -86,11 +87,11 @@ case_() {
         "$(awk -v a="$w1" -v b="$w2" 'BEGIN { print a / b }')" "$(awk -v a="$c2" -v b="$c1" 'BEGIN { print a / b }')" \
         "$l0" "$(load)"
 }
-case_ raytrace-box "$box" --spp 4 --passes 2 -o "$work/a.pfm"
-case_ path-spheres "$spheres" --method path --spp 4 -o "$work/b.pfm"
+case_ raytrace-box "$box" --spp $spp --passes 2 -o "$work/a.pfm"
+case_ path-spheres "$spheres" --method path --spp $spp -o "$work/b.pfm"
 case_ radiosity-box "$box" --method radiosity --patches "$work/c.csv"
-case_ raytrace-grid "$work/grid.mid" --spp 2 -o "$work/d.pfm"
-case_ path-grid "$work/grid.mid" --method path --spp 1 -o "$work/e.pfm"
+case_ raytrace-grid "$work/grid.mid" --spp $spp -o "$work/d.pfm"
+case_ path-grid "$work/grid.mid" --method path --spp $spp -o "$work/e.pfm"
 # the generated grid's palette has a reflectance of 1 (no radiosity): the
 # bundled room of 5167 elements is the larger radiosity scene
 case_ radiosity-room "$room" --method radiosity --threshold $room_thr --patches "$work/f.csv"
@@ -114,6 +115,31 @@ if ff and ff['calls']:
     print('| %s | form factors | %d computed shots | %.3f s (%.3f ms/shot) | update %.3f s in %d shots | | | |' % (
           name, ff['calls'], ff['seconds'], 1e3 * ff['seconds'] / ff['calls'], up['seconds'], up['calls']))
 PY
+done
+
+# radiosity with several shooters in flight against the deterministic mode:
+# time, shots, and the difference of the patches from the deterministic
+# solve and from a converged one (unshot 1e-4, one process)
+echo
+printf '| radiosity, Cornell box | wall / CPU (s) | shots | difference from 1 process | from the converged solve |\n'
+printf '|---|---|---|---|---|\n'
+Q=("$box" --method radiosity)
+timed "$work/o" "$TB" render "${Q[@]}" --threshold 0.0001 --patches "$work/ref.csv" > /dev/null || failed=1
+for run in "1 process:1:" "2 ranks:2:" "2 ranks, --several-shooters:2:--several-shooters" \
+           "3 ranks, --several-shooters:3:--several-shooters"; do
+    IFS=: read -r label n flag <<<"$run"
+    if [[ $n == 1 ]]; then
+        read -r w c < <(timed "$work/o" "$TB" render "${Q[@]}" --threads 1 --patches "$work/r$n$flag.csv") || failed=1
+        cp "$work/r$n$flag.csv" "$work/det.csv"
+    else
+        # shellcheck disable=SC2086
+        read -r w c < <(timed "$work/o" $MPIRUN -np "$n" "$TB" render "${Q[@]}" --threads 1 $flag \
+            --patches "$work/r$n$flag.csv") || failed=1
+    fi
+    shots=$(sed -n 's/.*radiosity, [0-9]* elements, \([0-9]*\) shots.*/\1/p' "$work/o")
+    printf '| %s | %.2f / %.2f | %s | %s | %s |\n' "$label" "$w" "$c" "$shots" \
+        "$(python3 "$root/tools/bench/rad-diff.py" "$work/det.csv" "$work/r$n$flag.csv")" \
+        "$(python3 "$root/tools/bench/rad-diff.py" "$work/ref.csv" "$work/r$n$flag.csv")"
 done
 
 # reading the MID file against loading (parsing + building) it

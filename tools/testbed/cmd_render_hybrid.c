@@ -70,6 +70,8 @@ int tb_cmd_render_hybrid(int argc, char **argv)
     int max_depth = TB_RT_DEFAULT_MAX_DEPTH, light_samples = TB_RT_DEFAULT_LIGHT_SAMPLES;
     int glossy_samples = TB_RT_DEFAULT_GLOSSY_SAMPLES;
     bool depth_seen = false, light_seen = false, glossy_seen = false, gather_seen = false;
+    const char *ckpt_path = NULL, *resume_path = NULL;
+    double ckpt_every = 0.0;
     bool edge_given = false, area_given = false;
     static const tb_opt_choice methods[] = {{"hybrid", 0}, {NULL, 0}};
     static const tb_opt_choice modes[] = {{"interpolated", TB_HYBRID_INTERPOLATED}, {"gather", TB_HYBRID_GATHER},
@@ -122,6 +124,13 @@ int tb_cmd_render_hybrid(int argc, char **argv)
          .help = "cpu (default; auto means cpu): the hybrid runs on the CPU only"},
         {"exposure", .type = TB_OPT_DOUBLE, .dest = &o.exposure, .min = -INFINITY, .max = INFINITY, .metavar = "STOPS",
          .help = "PNG/RLE only: scale by 2^STOPS (default: mean luminance to 0.18)"},
+        {"checkpoint", .type = TB_OPT_STRING, .dest = &ckpt_path, .metavar = "FILE",
+         .help = "save the ray tracer's film and passes to FILE after passes (the\n"
+                 "radiosity pass is solved again on --resume: it is deterministic)"},
+        {"checkpoint-every", .type = TB_OPT_DOUBLE, .dest = &ckpt_every, .min = 0, .max = INFINITY, .metavar = "S",
+         .help = "seconds between checkpoints (default 0: after every pass)"},
+        {"resume", .type = TB_OPT_STRING, .dest = &resume_path, .metavar = "FILE",
+         .help = "continue the render saved in FILE (--passes may grow)"},
         {"stats", .type = TB_OPT_STRING, .dest = &o.stats_path, .metavar = "FILE.json",
          .help = "counters, times (radiosity_seconds, ...) and provenance"},
         {"report", .type = TB_OPT_STRING, .dest = &o.report_path, .metavar = "FILE.csv",
@@ -180,8 +189,8 @@ int tb_cmd_render_hybrid(int argc, char **argv)
     tb_tile_exchange *ex = NULL;
     tb_ckpt_render ck;
     tb_render_persist persist;
-    if (!tb_cli_dist_render_setup("testbed render", scene_path, argc, argv, ro, NULL, 0.0, NULL, &ex, &ck,
-                                  &persist))
+    if (!tb_cli_dist_render_setup("testbed render", scene_path, argc, argv, ro, ckpt_path, ckpt_every,
+                                  resume_path, &ex, &ck, &persist))
         return TB_EXIT_FAIL;
     ro->progress = root;
     ho->stop.progress = root;

@@ -73,6 +73,7 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     uint64_t seed = 0;
     const char *ckpt_path = NULL, *resume_path = NULL;
     double ckpt_every = 5.0;
+    bool several = false;
     static const tb_opt_choice methods[] = {{"radiosity", 0}, {NULL, 0}};
     static const tb_opt_choice ffs[] = {{"raycast", TB_RAD_FF_RAYCAST}, {"hemicube", TB_RAD_FF_HEMICUBE}, {NULL, 0}};
     const tb_opt opts[] = {
@@ -148,6 +149,11 @@ int tb_cmd_render_radiosity(int argc, char **argv)
                  "error over the reference's RMS reflected radiosity B - E)"},
         {"reference", .type = TB_OPT_STRING, .dest = &o.reference_path, .metavar = "REF.csv",
          .help = "the reference of --report"},
+        {"several-shooters", .type = TB_OPT_FLAG, .dest = &several,
+         .help = "under mpirun: one shooter per rank in flight (Recker et al. 1990):\n"
+                 "faster, but another shooting order than one process (the result\n"
+                 "depends on the rank count; docs/distributed.md); default: each\n"
+                 "shot's receivers shared, the one-process result bit for bit"},
         {"checkpoint", .type = TB_OPT_STRING, .dest = &ckpt_path, .metavar = "FILE",
          .help = "save the solver's state (gathered and unshot radiosity, shots) to FILE,\n"
                  "atomically, every --checkpoint-every seconds and after the last shot\n"
@@ -225,6 +231,7 @@ int tb_cmd_render_radiosity(int argc, char **argv)
             fprintf(stderr, "testbed render: %s\n", tb_last_error());
             return TB_EXIT_FAIL;
         }
+        ex->several = several;
         o.solver.exchange = ex;
     }
     tb_ckpt_rad ck = {.path = ckpt_path, .every = ckpt_every, .resume_path = resume_path};
