@@ -110,11 +110,15 @@ static void tb__next_event(const tb_pathtracer *pt, const tb_surface *sf, const 
     tb_channels f = tb_surface_bsdf_eval(b, sf->wo, l.wi);
     if (tb_channels_is_black(f))
         return;
+    /* the sample's direction must reach the exact emitter: the light a
+     * BSDF-sampled ray finds there is weighted against this one */
     TB_STAT_INC(tb__pt_shadow_rays);
-    if (tb_light_set_occluded(ls, sf, &l))
+    tb_channels Le;
+    double pl;
+    if (!tb_light_set_visible_emitter(ls, pt->surfaces, sf, &l, &Le, &pl))
         return;
-    const double w = tb_power_heuristic(l.pdf, tb_surface_bsdf_pdf(b, sf->wo, l.wi));
-    tb__gather(path, &f, &l.L, fabs((double)tb_vec3_dot(l.wi, sf->n)) * w / l.pdf);
+    const double w = tb_power_heuristic(pl, tb_surface_bsdf_pdf(b, sf->wo, l.wi));
+    tb__gather(path, &f, &Le, fabs((double)tb_vec3_dot(l.wi, sf->n)) * w / pl);
 }
 
 void tb_pt_path_step(const tb_pathtracer *pt, tb_pt_path *path, const tb_vec3 *rd, tb_rng *rng)

@@ -547,6 +547,57 @@ bool tb_light_set_occluded(const tb_light_set *ls, const tb_surface *sf, const t
     return tb_scene_occluded_except(ls->scene, &r, s->delta ? UINT32_MAX : tb__self_object(ls, s->emitter));
 }
 
+/* Solid-angle density with which the area light, sampled at p, returns
+ * direction w through the emitters of top-level object `object`: the sum
+ * over those the line crosses (a facet seen from behind adds 0). */
+static double tb__object_pdf(const tb_light_set *ls, uint32_t object, tb_vec3 p, tb_vec3 w)
+{
+    if (!ls->has_area || object >= ls->scene->nobjects || ls->emissive_of[object] < 0)
+        return 0.0;
+    const tb_scene_emissive *em = &ls->scene->emissive[ls->emissive_of[object]];
+    double pdf = 0.0;
+    for (int i = em->first_emitter; i < em->first_emitter + em->nemitters; i++) {
+        double t;
+        tb_vec3 q, nq;
+        if (tb_emitter_intersect(&ls->area.emitters[i], p, w, &t, &q, &nq))
+            pdf += tb_area_light_pdf(&ls->area, i, p, q, nq);
+    }
+    return pdf;
+}
+
+bool tb_light_set_visible_emitter(const tb_light_set *ls, const tb_surfaces *ss, const tb_surface *sf,
+                                  const tb_light_sample *s, tb_channels *Le, double *pdf)
+{
+    if (!ls->has_area || s->delta || s->emitter < 0 || s->emitter >= ls->area.n)
+        return false;
+    const tb_scene *sc = ls->scene;
+    tb_ray r;
+    r.o = sf->org[tb_spawn_front(sf->ng, s->wi) ? 0 : 1];
+    r.d = s->wi;
+    r.tmin = 0.0f;
+    r.tmax = INFINITY;
+    tb_hit hit;
+    if (!tb_scene_intersect(sc, &r, &hit) || hit.object != ls->area.emitters[s->emitter].object)
+        return false;
+    if (!(tb_vec3_dot(s->wi, hit.ng) < 0.0f))
+        return false; /* its back side: emitters are one-sided */
+    const tb_material *m = tb_scene_hit_material(sc, &hit);
+    if (!m || !m->emits)
+        return false; /* a non-emitting part of the object (a CSG leaf of another material) */
+    *pdf = tb__object_pdf(ls, hit.object, sf->p, s->wi);
+    if (!(*pdf > 0.0))
+        return false;
+    if (ss && ss->textures) {
+        tb_surface e;
+        if (!tb_surface_at(ss, &r, &hit, NULL, &e))
+            return false;
+        *Le = tb_surface_emitted(&e);
+    } else {
+        *Le = tb_radiance_from_exitance(m->emission);
+    }
+    return true;
+}
+
 double tb_light_set_pdf_dir(const tb_light_set *ls, tb_vec3 p, tb_vec3 w)
 {
     double pdf = 0.0;
@@ -561,30 +612,11 @@ double tb_light_set_pdf_dir(const tb_light_set *ls, tb_vec3 p, tb_vec3 w)
 
 double tb_light_set_emitter_pdf(const tb_light_set *ls, tb_vec3 p, const tb_surface *hit)
 {
-    if (!ls->has_area || hit->object >= ls->scene->nobjects)
-        return 0.0;
-    int k = ls->emissive_of[hit->object];
-    if (k < 0)
-        return 0.0;
-    const tb_scene_emissive *em = &ls->scene->emissive[k];
     tb_vec3 w = tb_vec3_sub(hit->p, p);
-    double dist = (double)tb_vec3_length(w);
-    if (!(dist > 0.0))
+    float len = tb_vec3_length(w);
+    if (!(len > 0.0f))
         return 0.0;
-    w = tb_vec3_scale(w, (float)(1.0 / dist));
-    double best = INFINITY, pdf = 0.0;
-    for (int i = em->first_emitter; i < em->first_emitter + em->nemitters; i++) {
-        double t;
-        tb_vec3 q, nq;
-        if (!tb_emitter_intersect(&ls->area.emitters[i], p, w, &t, &q, &nq))
-            continue;
-        double gap = fabs(t - dist);
-        if (gap < best) {
-            best = gap;
-            pdf = tb_area_light_pdf(&ls->area, i, p, q, nq);
-        }
-    }
-    return pdf;
+    return tb__object_pdf(ls, hit->object, p, tb_vec3_scale(w, 1.0f / len));
 }
 
 double tb_power_heuristic(double a, double b) { return a > 0.0 ? a * a / (a * a + b * b) : 0.0; }

@@ -214,16 +214,33 @@ bool tb_light_set_sample(const tb_light_set *ls, int light, tb_vec3 p, float u1,
  * block the way to its own visible cap). */
 bool tb_light_set_occluded(const tb_light_set *ls, const tb_surface *sf, const tb_light_sample *s);
 
+/* The area-light sample `s` taken at sf, seen on the exact geometry: true
+ * when the ray from sf toward s->wi meets first the front side of an
+ * emitting part of the object the sample's emitter stands for; then *Le is
+ * that surface's emitted radiance (emission texture included; ss may be
+ * NULL: untextured) and *pdf the density of the direction s->wi, summed
+ * over every emitter of that object the line crosses (as
+ * tb_light_set_emitter_pdf). Curved and CSG emitters are sampled through
+ * their tessellation, whose facets leave gaps, overhang the exact
+ * silhouette and overlap along CSG seams: estimating f Le |cos| / pdf with
+ * this test and density counts each direction that reaches the exact
+ * emitter once, and the same emission a BSDF-sampled ray finds there is
+ * weighted with the same density, so MIS weights sum to one on the exact
+ * surface (docs/pathtrace.md). */
+bool tb_light_set_visible_emitter(const tb_light_set *ls, const tb_surfaces *ss, const tb_surface *sf,
+                                  const tb_light_sample *s, tb_channels *Le, double *pdf);
+
 /* Solid-angle density of the area light's sampler at p for direction w,
  * summed over every emitter the line crosses (the ray tracer's MIS weight
  * of glossy rays). 0 without area light. */
 double tb_light_set_pdf_dir(const tb_light_set *ls, tb_vec3 p, tb_vec3 w);
 
 /* Solid-angle density with which the area light, sampled at p, returns the
- * emitting point the surface record `hit` is at: of the emitter of hit's
- * object that the line p -> hit.p crosses nearest to hit.p (curved and CSG
- * emitters are sampled through their tessellation). 0 if none. For
- * multiple importance sampling of BSDF-sampled rays that meet an emitter. */
+ * direction of the emitting point the surface record `hit` is at, through
+ * the emitters of hit's object: the sum over those the line p -> hit.p
+ * crosses on a side the sampler returns (curved and CSG emitters are
+ * sampled through their tessellation). 0 if none. For multiple importance
+ * sampling of BSDF-sampled rays that meet an emitter. */
 double tb_light_set_emitter_pdf(const tb_light_set *ls, tb_vec3 p, const tb_surface *hit);
 
 /* Veach's power heuristic of a sample of density a against b: a^2 / (a^2 + b^2) (0 when a is 0). */

@@ -76,6 +76,51 @@ static void test_float_round_trip_bits(void **state)
     }
 }
 
+/* A ZIP chunk whose compressed size comes out EQUAL to its raw size: the
+ * reader takes a chunk of raw size as stored uncompressed, so the writer must
+ * store such a chunk raw (OpenEXR 3.1's encoder falls back to raw only when
+ * compression makes it strictly larger; a hybrid render at 64 x 64 once came
+ * back with 15 garbage pixels near 3e38). One 16-row chunk of random floats
+ * (incompressible: a few bytes more than raw) with a run of k equal values
+ * after it: each value more in the run saves about four compressed bytes, so
+ * over k = 0 .. 24 the compressed size steps down through the raw size, and
+ * every image must read back bit for bit. */
+static void test_zip_chunk_as_long_as_raw(void **state)
+{
+    (void)state;
+    tb_rng rng;
+    tb_rng_seed(&rng, tb_test_seed("exr zip equal to raw", 3), 0);
+    const int w = 8, h = 16; /* one ZIP chunk (16 scanlines), 512 bytes */
+    float noise[8 * 16];
+    for (int i = 0; i < w * h; i++) {
+        uint32_t u = tb_rng_u32(&rng) & 0x3fffffffu; /* finite, any magnitude */
+        memcpy(&noise[i], &u, 4);
+    }
+    size_t shortest = SIZE_MAX, longest = 0;
+    for (int k = 0; k <= 24; k++) {
+        tb_image *img = tb_image_create(w, h, 1, NULL);
+        assert_non_null(img);
+        for (int i = 0; i < w * h; i++)
+            img->pixels[i] = i < k ? 1.0f : noise[i];
+        char *buf;
+        size_t len;
+        assert_int_equal(write_mem(img, NULL, &buf, &len), TB_OK);
+        shortest = len < shortest ? len : shortest;
+        longest = len > longest ? len : longest;
+        tb_image *back = NULL;
+        assert_int_equal(read_mem(buf, len, &back), TB_OK);
+        for (int i = 0; i < w * h; i++)
+            if (fbits(back->pixels[i]) != fbits(img->pixels[i]))
+                fail_msg("k = %d: pixel %d wrote %a, read %a (file %zu bytes)", k, i, (double)img->pixels[i],
+                         (double)back->pixels[i], len);
+        tb_image_free(back);
+        free(buf);
+        tb_image_free(img);
+    }
+    /* the sweep crossed from stored raw (k = 0) to compressed: the file shrank */
+    assert_true(shortest + 32 < longest);
+}
+
 static void test_half_round_trip(void **state)
 {
     (void)state;
@@ -570,6 +615,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_float_round_trip_bits),
         cmocka_unit_test(test_half_round_trip),
+        cmocka_unit_test(test_zip_chunk_as_long_as_raw),
         cmocka_unit_test(test_named_channels_and_exposure),
         cmocka_unit_test(test_attributes),
         cmocka_unit_test(test_header_layout),

@@ -98,7 +98,8 @@ static const mat MATS[] = {
     {"ggx 1 a 0.15", 0.0, 1.0, 0, TB_MID_MODEL_GGX, 0, 0.15, 1, 0, TB_SURFACE_PHYSICAL},
     {"bumped 25 deg: lambert 0.6 + ggx 0.4", 0.6, 0.4, 0, TB_MID_MODEL_GGX, 0, 0.4, 1, 25, TB_SURFACE_PHYSICAL},
     {"lambert 0.3 + dielectric 0.9 ior 1.33", 0.3, 0, 0.9, TB_MID_MODEL_PHONG, 20, 0, 1.33, 0, TB_SURFACE_PHYSICAL},
-    {"glass: dielectric 1 ior 1.5 (+ ks 0.05)", 0.0, 0.05, 1.0, TB_MID_MODEL_PHONG, 1e4, 0, 1.5, 0, TB_SURFACE_PHYSICAL},
+    {"glass: dielectric 1 ior 1.5 (+ ks 0.05)", 0.0, 0.05, 1.0, TB_MID_MODEL_PHONG, 1e4, 0, 1.5, 0,
+     TB_SURFACE_PHYSICAL},
     {"whitted: lambert 0.5 + mirror 0.5", 0.5, 0.5, 0, TB_MID_MODEL_PHONG, 20, 0, 1, 0, TB_SURFACE_WHITTED},
 };
 #define NMATS ((int)(sizeof MATS / sizeof MATS[0]))

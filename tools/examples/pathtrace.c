@@ -43,11 +43,17 @@ static void direct(const renderer *r, const tb_surface *sf, const tb_surface_bsd
         tb_light_sample l;
         if (!tb_light_set_sample(ls, i, sf->p, u1, u2, &l))
             continue;
-        tb_channels f = tb_surface_bsdf_eval(b, sf->wo, l.wi);
-        if (tb_channels_is_black(f) || tb_light_set_occluded(ls, sf, &l))
+        tb_channels f = tb_surface_bsdf_eval(b, sf->wo, l.wi), Le = l.L;
+        double pl = 1.0;
+        if (tb_channels_is_black(f))
             continue;
-        double w = area ? tb_power_heuristic(l.pdf, tb_surface_bsdf_pdf(b, sf->wo, l.wi)) / l.pdf : 1.0;
-        gather(L, beta, f, l.L, fabs((double)tb_vec3_dot(l.wi, sf->n)) * w);
+        /* delta lights: the shadow ray; the area light: the exact emitter must be seen */
+        bool seen = area ? tb_light_set_visible_emitter(ls, r->surfaces, sf, &l, &Le, &pl)
+                         : !tb_light_set_occluded(ls, sf, &l);
+        if (!seen)
+            continue;
+        double w = area ? tb_power_heuristic(pl, tb_surface_bsdf_pdf(b, sf->wo, l.wi)) / pl : 1.0;
+        gather(L, beta, f, Le, fabs((double)tb_vec3_dot(l.wi, sf->n)) * w);
     }
 }
 

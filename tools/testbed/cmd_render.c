@@ -170,7 +170,8 @@ static int tb__cmd_render(int argc, char **argv)
     bool rr_seen = false;
     enum { TB__RAYTRACE, TB__RADIOSITY, TB__PATH, TB__HYBRID };
     static const tb_opt_choice methods[] = {
-        {"raytrace", TB__RAYTRACE}, {"path", TB__PATH}, {"hybrid", TB__HYBRID}, {"radiosity", TB__RADIOSITY}, {NULL, 0}};
+        {"raytrace", TB__RAYTRACE}, {"path", TB__PATH}, {"hybrid", TB__HYBRID},
+        {"radiosity", TB__RADIOSITY}, {NULL, 0}};
     const char *ckpt_path = NULL, *resume_path = NULL;
     double ckpt_every = 0.0;
     static const tb_opt_choice criteria[] = {{"stderr", TB_AA_STDERR}, {"contrast", TB_AA_CONTRAST}, {NULL, 0}};
@@ -215,7 +216,8 @@ static int tb__cmd_render(int argc, char **argv)
         {"max-depth", .type = TB_OPT_INT, .dest = &max_depth, .min = 0, .max = TB_PT_MAX_BOUNCES, .metavar = "N",
          .seen = &depth_seen,
          .help = "raytrace: deepest reflected/refracted ray (default %D, at most 64);\n"
-                 "path: most bounces, a cap (default: none, Russian roulette; at most " TB__RENDER_STR(TB_PT_MAX_BOUNCES) ")"},
+                 "path: most bounces, a cap (default: none, Russian roulette; at most "
+                 TB__RENDER_STR(TB_PT_MAX_BOUNCES) ")"},
         {"rr-depth", .type = TB_OPT_INT, .dest = &rr_depth, .min = 1, .max = TB_PT_MAX_BOUNCES, .metavar = "N",
          .seen = &rr_seen, .help = "path: bounces before Russian roulette (default %D)"},
         {"light-samples", .type = TB_OPT_INT, .dest = &light_samples, .min = 1, .max = 1024, .metavar = "N",

@@ -486,6 +486,30 @@ static tb_status tb__exr_check(const char *name, const tb_image *img)
     return TB_OK;
 }
 
+/* The library's compressor of this part, wrapped by tb__exr_compress. */
+typedef struct tb__exr_codec {
+    exr_result_t (*compress)(exr_encode_pipeline_t *p);
+} tb__exr_codec;
+
+/* Compresses a chunk and stores it raw when compression saved nothing.
+ * Readers take a chunk of exactly the raw size as stored uncompressed, but
+ * OpenEXR 3.1's encoder keeps the compressed bytes when they are EQUAL in
+ * size to the raw ones (it falls back only when they are larger), and such a
+ * chunk reads back as garbage (tests/image/test_exr.c,
+ * test_zip_chunk_as_long_as_raw). */
+static exr_result_t tb__exr_compress(exr_encode_pipeline_t *p)
+{
+    const tb__exr_codec *codec = p->encoding_user_data;
+    exr_result_t rv = codec->compress(p);
+    if (rv != EXR_ERR_SUCCESS || p->compressed_buffer == p->packed_buffer || p->compressed_bytes < p->packed_bytes)
+        return rv;
+    if (!p->compressed_buffer || p->compressed_alloc_size < p->packed_bytes)
+        return EXR_ERR_OUT_OF_MEMORY; /* the library sizes it for at least the raw bytes; never seen */
+    memcpy(p->compressed_buffer, p->packed_buffer, p->packed_bytes);
+    p->compressed_bytes = p->packed_bytes;
+    return rv;
+}
+
 /* The body of tb_exr_write_stream once the context exists. */
 static tb_status tb__exr_write_part(exr_context_t ctxt, const char *name, const tb_image *img, int half)
 {
@@ -516,6 +540,7 @@ static tb_status tb__exr_write_part(exr_context_t ctxt, const char *name, const 
         return rv ? tb__exr_fail(rv, name, "cannot write pixel data")
                   : tb_error(TB_ERR_FORMAT, "%s: bad scanlines per chunk", name);
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    tb__exr_codec codec = {NULL};
     int initialized = 0;
     tb_status st = TB_OK;
     int32_t pixel_stride = img->channels * (int32_t)sizeof(float);
@@ -549,9 +574,16 @@ static tb_status tb__exr_write_part(exr_context_t ctxt, const char *name, const 
         }
         if (st)
             break;
-        if (!enc.convert_and_pack_fn && (rv = exr_encoding_choose_default_routines(ctxt, part, &enc)))
+        if (!enc.convert_and_pack_fn && (rv = exr_encoding_choose_default_routines(ctxt, part, &enc))) {
             st = tb__exr_fail(rv, name, "cannot encode pixel data");
-        else if ((rv = exr_encoding_run(ctxt, part, &enc)))
+            break;
+        }
+        if (enc.compress_fn && enc.compress_fn != tb__exr_compress) {
+            codec.compress = enc.compress_fn;
+            enc.compress_fn = tb__exr_compress;
+            enc.encoding_user_data = &codec;
+        }
+        if ((rv = exr_encoding_run(ctxt, part, &enc)))
             st = tb__exr_fail(rv, name, "cannot write pixel data");
     }
     if (initialized)
