@@ -14,7 +14,9 @@
 #endif
 
 static int tb__dist_rank_v = 0, tb__dist_size_v = 1;
+#ifdef TB_HAVE_MPI
 static int tb__dist_mpi = 0; /* MPI_Init_thread was called here */
+#endif
 static tb_dist_stats tb__dist_totals;
 
 bool tb_dist_built_with_mpi(void)

@@ -469,6 +469,76 @@ bool tb_surface_bsdf_sample(const tb_surface_bsdf *b, tb_vec3 wo, float uc, floa
 
 /* -------------------------------------------------------------- lights */
 
+/* Grows the box lo..hi by the point q. */
+static void tb__grow(double lo[3], double hi[3], tb_vec3 q)
+{
+    const double v[3] = {q.x, q.y, q.z};
+    for (int k = 0; k < 3; k++) {
+        lo[k] = fmin(lo[k], v[k]);
+        hi[k] = fmax(hi[k], v[k]);
+    }
+}
+
+/* The bounding spheres of the emitters in blocks of TB_LIGHT_SET_BLOCK
+ * (a custom emitter's is infinite); nonzero when out of memory. */
+static int tb__blocks_init(tb_light_set *ls)
+{
+    const int n = ls->area.n, nb = (n + TB_LIGHT_SET_BLOCK - 1) / TB_LIGHT_SET_BLOCK;
+    ls->blocks = malloc((size_t)(nb > 0 ? nb : 1) * 4 * sizeof *ls->blocks);
+    if (!ls->blocks)
+        return 1;
+    for (int b = 0; b < nb; b++) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        bool unbounded = false;
+        for (int i = b * TB_LIGHT_SET_BLOCK; i < n && i < (b + 1) * TB_LIGHT_SET_BLOCK; i++) {
+            const tb_emitter *e = &ls->area.emitters[i];
+            switch (e->kind) {
+            case TB_EMITTER_TRIANGLE:
+                for (int k = 0; k < 3; k++)
+                    tb__grow(lo, hi, e->v[k]);
+                break;
+            case TB_EMITTER_PARALLELOGRAM:
+                for (int k = 0; k < 3; k++)
+                    tb__grow(lo, hi, e->v[k]);
+                tb__grow(lo, hi, tb_vec3_sub(tb_vec3_add(e->v[1], e->v[2]), e->v[0]));
+                break;
+            case TB_EMITTER_DISC:
+            case TB_EMITTER_SPHERE:
+                tb__grow(lo, hi, tb_vec3_sub(e->v[0], tb_vec3_splat(e->radius)));
+                tb__grow(lo, hi, tb_vec3_add(e->v[0], tb_vec3_splat(e->radius)));
+                break;
+            default: unbounded = true; break;
+            }
+        }
+        double *sp = &ls->blocks[4 * b];
+        double d2 = 0.0;
+        for (int k = 0; k < 3; k++) {
+            sp[k] = 0.5 * (lo[k] + hi[k]);
+            d2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+        }
+        /* half the diagonal, widened for the rounding of the tests */
+        sp[3] = unbounded || !isfinite(d2) ? INFINITY : 0.5 * sqrt(d2) * (1.0 + 1e-6) + 1e-9;
+    }
+    return 0;
+}
+
+/* False if the half-line p + t w (t > 0, w unit) certainly misses block b's sphere. */
+static bool tb__block_hit(const tb_light_set *ls, int b, tb_vec3 p, tb_vec3 w)
+{
+    const double *sp = &ls->blocks[4 * b];
+    if (isinf(sp[3]))
+        return true;
+    const double c[3] = {sp[0] - p.x, sp[1] - p.y, sp[2] - p.z};
+    const double c2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2], r2 = sp[3] * sp[3];
+    if (c2 <= r2)
+        return true; /* p inside the sphere */
+    const double proj = c[0] * w.x + c[1] * w.y + c[2] * w.z;
+    if (proj <= 0.0)
+        return false; /* the sphere is behind p */
+    const double ww = (double)w.x * w.x + (double)w.y * w.y + (double)w.z * w.z;
+    return c2 - proj * proj / ww <= r2;
+}
+
 tb_status tb_light_set_init(tb_light_set *ls, const tb_scene *s)
 {
     memset(ls, 0, sizeof *ls);
@@ -487,6 +557,10 @@ tb_status tb_light_set_init(tb_light_set *ls, const tb_scene *s)
         }
         for (uint32_t i = 0; i < s->nobjects; i++)
             ls->emissive_of[i] = -1;
+        if (tb__blocks_init(ls)) {
+            tb_light_set_release(ls);
+            return tb_error(TB_ERR_NOMEM, "lights: out of memory");
+        }
         for (int k = 0; k < s->nemissive; k++)
             if (s->emissive[k].object < s->nobjects)
                 ls->emissive_of[s->emissive[k].object] = k;
@@ -503,6 +577,8 @@ void tb_light_set_release(tb_light_set *ls)
     ls->has_area = false;
     free(ls->emissive_of);
     ls->emissive_of = NULL;
+    free(ls->blocks);
+    ls->blocks = NULL;
 }
 
 int tb_light_set_count(const tb_light_set *ls) { return ls->nlights + (ls->has_area ? 1 : 0); }
@@ -556,7 +632,13 @@ static double tb__object_pdf(const tb_light_set *ls, uint32_t object, tb_vec3 p,
         return 0.0;
     const tb_scene_emissive *em = &ls->scene->emissive[ls->emissive_of[object]];
     double pdf = 0.0;
-    for (int i = em->first_emitter; i < em->first_emitter + em->nemitters; i++) {
+    const int end = em->first_emitter + em->nemitters;
+    for (int i = em->first_emitter; i < end; i++) {
+        const bool block_start = i == em->first_emitter || i % TB_LIGHT_SET_BLOCK == 0;
+        if (block_start && !tb__block_hit(ls, i / TB_LIGHT_SET_BLOCK, p, w)) {
+            i = (i / TB_LIGHT_SET_BLOCK + 1) * TB_LIGHT_SET_BLOCK - 1; /* the rest of the block */
+            continue;
+        }
         double t;
         tb_vec3 q, nq;
         if (tb_emitter_intersect(&ls->area.emitters[i], p, w, &t, &q, &nq))

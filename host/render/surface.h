@@ -183,6 +183,9 @@ bool tb_surface_bsdf_sample(const tb_surface_bsdf *b, tb_vec3 wo, float uc, floa
 
 /* -------------------------------------------------------------- lights */
 
+/* Emitters per bounding sphere of tb_light_set.blocks. */
+#define TB_LIGHT_SET_BLOCK 32
+
 /* Every light of a scene: the point, spot and directional lights (with
  * their IES tables) as lights 0 .. nlights-1, and, as light nlights when
  * has_area, the area light made of every exact emitter (scene->emitters). */
@@ -192,6 +195,8 @@ typedef struct tb_light_set {
     bool has_area;          /* area below is set up (the scene has emitters) */
     tb_area_light area;     /* every emitter of the scene as one light */
     int *emissive_of;       /* per top-level object: its index in scene->emissive, or -1 */
+    double *blocks;         /* per TB_LIGHT_SET_BLOCK emitters: a bounding sphere (x, y, z, r), so that a line
+                               skips the facets of a tessellated emitter it cannot cross */
 } tb_light_set;
 
 /* Prepares the light set of `scene` (which must outlive it). TB_ERR_NOMEM,

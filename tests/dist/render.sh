@@ -5,7 +5,7 @@
 # RGB scene, and the path tracer's and the hybrid renderer's images, are
 # byte for byte the one-process image; the stats JSON has per-rank
 # figures; a scene with an error stops every rank with its file:line:col
-# message and no image.
+# message and no image; a scene on standard input is refused.
 #   render.sh  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)
 set -u
 . "$(dirname "$0")/mpirun.sh"
@@ -66,5 +66,11 @@ $MPIRUN -np 2 "$TESTBED" render "$T/bad.mid" -o "$T/bad.pfm" > "$T/out" 2>&1 && 
 grep -q "bad.mid:3:[0-9]*: error:" "$T/out" || { cat "$T/out"; fail "no file:line:col error for the bad scene"; }
 [ "$(grep -c 'bad.mid:3:' "$T/out")" = 1 ] || { cat "$T/out"; fail "the error should be said once, by rank 0"; }
 [ ! -e "$T/bad.pfm" ] || fail "an image was written for the bad scene"
+# the scene on standard input reaches rank 0 only: refused, said once
+$MPIRUN -np 2 "$TESTBED" render - -o "$T/in.pfm" < "$T/cornell-box-rgb.mid" > "$T/out" 2>&1 &&
+    { cat "$T/out"; fail "standard input accepted by 2 ranks"; }
+[ "$(grep -c 'under mpirun only rank 0 gets it' "$T/out")" = 1 ] || { cat "$T/out"; fail "no single message for stdin"; }
+[ ! -e "$T/in.pfm" ] || fail "an image was written from standard input"
+
 rm -rf "$T"
 echo "dist render: ok"

@@ -407,17 +407,17 @@ static void test_mis_weights(void **state)
              "polygons { geometry = { vertices = [[1 -6 5] [1 6 5] [9 6 5] [9 -6 5]] "
              "faces = [[0 1 2 3]] } rendering = { diffuse = 0 emission = 3 } }\n",
              tb_vec3_make(3.0f, 0.0f, 3.0f), tb_vec3_make(0.0f, 0.0f, 0.0f), scaled(200000), true, seed);
-    /* every kind of emitter: an exact sphere, a cylinder (tessellated: 360
-     * facets pushed out, with gaps), a CSG union of two cubes (its clipped
-     * faces) over a Lambert + GGX floor. (Sampling a tessellated emitter
-     * costs a loop over its facets: an ellipsoid's 8100 would make this
-     * test slow; it agreed to 0.4 sigma when measured.) */
-    mis_case("Lambert + GGX floor, sphere, cylinder, CSG emitters",
+    /* every kind of emitter: an exact sphere, an ellipsoid and a cylinder
+     * (tessellated: facets pushed out, with gaps), a CSG union of two cubes
+     * (its clipped faces) over a Lambert + GGX floor */
+    mis_case("Lambert + GGX floor, sphere, ellipsoid, cylinder, CSG emitters",
              "mid 1.1\n"
              "polygons { geometry = { vertices = [[-40 -40 0] [40 -40 0] [40 40 0] [-40 40 0]] "
              "faces = [[0 1 2 3]] } rendering = { diffuse = 0.5 specular = 0.4 model = ggx roughness = 0.3 } }\n"
              "sphere { transform = [scale(0.4) translate([-1.5 1 2.5])] rendering = { diffuse = 0 emission = 20 } }\n"
              "cylinder { transform = [scale([0.3 0.3 0.6]) translate([-1 -2 2])] "
+             "rendering = { diffuse = 0 emission = 10 } }\n"
+             "sphere { transform = [scale([0.8 0.5 0.3]) translate([1.5 -1 2])] "
              "rendering = { diffuse = 0 emission = 10 } }\n"
              "union { transform = [translate([1.5 1 2.5])] rendering = { diffuse = 0 emission = 8 } "
              "cube { transform = [scale(0.4)] } cube { transform = [scale(0.4) rotate([0 0 1] 45) "

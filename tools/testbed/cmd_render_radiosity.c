@@ -220,6 +220,8 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     /* under mpirun: every rank solves, each shot's receivers are shared */
     bool root = tb_dist_rank() == 0;
     tb_rad_exchange *ex = NULL;
+    if (!tb_cli_dist_scene_ok("testbed render", scene_path))
+        return TB_EXIT_FAIL;
     if (tb_dist_size() > 1) {
         if (gpu.mode != TB_GPU_MODE_CPU)
             return tb_cli_usage_error(&cli, "--backend vulkan solves in one process, not over %d ranks",

@@ -48,11 +48,24 @@ uint64_t tb_cli_job_key(const char *scene_path, int argc, char **argv, const cha
     return h ? h : 1;
 }
 
+bool tb_cli_dist_scene_ok(const char *prog, const char *scene_path)
+{
+    if (tb_dist_size() > 1 && strcmp(scene_path, "-") == 0) {
+        if (tb_dist_rank() == 0)
+            fprintf(stderr, "%s: the scene from standard input: under mpirun only rank 0 gets it; give the scene "
+                            "as a file every rank can read\n", prog);
+        return false;
+    }
+    return true;
+}
+
 bool tb_cli_dist_render_setup(const char *prog, const char *scene_path, int argc, char **argv,
                               tb_render_options *ro, const char *ckpt, double every, const char *resume,
                               tb_tile_exchange **ex, tb_ckpt_render *ck, tb_render_persist *persist)
 {
     *ex = NULL;
+    if (tb_dist_size() > 1 && !tb_cli_dist_scene_ok(prog, scene_path))
+        return false;
     if (tb_dist_size() > 1) {
         *ex = tb_dist_tiles_create(ro->threads);
         if (!*ex) {

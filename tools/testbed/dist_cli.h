@@ -22,6 +22,10 @@ uint64_t tb_cli_job_key(const char *scene_path, int argc, char **argv, const cha
 /* The options any render method leaves out of its job key. */
 extern const char *const tb_cli_free_opts[];
 
+/* False (rank 0 says why) when a job of several ranks is given the scene
+ * on standard input, which mpirun passes to rank 0 alone. */
+bool tb_cli_dist_scene_ok(const char *prog, const char *scene_path);
+
 /* A progressive render's tiles over ranks and checkpoints: sets *ex to the
  * tile exchange when the job has several ranks (else NULL; free it with
  * tb_dist_tiles_free), fills `ck` and *persist when a checkpoint is written
