@@ -1,10 +1,11 @@
 #!/bin/sh
-# tools/examples/raytrace.c, the ray tracer as a page of public calls (its
-# own pixel loop, no tiles or threads), makes the pixels of `testbed render
-# --backend cpu` at the same samples per pixel, to float rounding: the same
-# samples and radiance, summed into the film in another order (the driver
-# merges per-tile films), so relMSE < 1e-10 (below 1e-12 is seen), while one
-# sample more per pixel moves relMSE past 1e-4.
+# tools/examples/raytrace.c, the Whitted ray tracer as a page of public calls
+# (the surface, BSDF and light API of host/render/surface.h, driven by
+# tb_render), makes the pixels of `testbed render --backend cpu` at the same
+# samples per pixel, to float rounding: it draws the same numbers in the same
+# order and shades by the same rules, so relMSE < 1e-10 (below 1e-12 is
+# seen), while one sample more per pixel moves relMSE past 1e-4. A change of
+# the command's shading or sampling order must be made in the example too.
 # The RGB Cornell box at 48 x 48 and the spheres variant (mirror and glass)
 # at 32 x 32, 4 spp.
 #   example_raytrace.sh EXAMPLE  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)

@@ -9,8 +9,8 @@
  * smooth dielectric's Fresnel reflection and refraction, to depth 5. That
  * is the algorithm of `testbed render` (docs/raytrace.md) for Lambert,
  * Phong and Blinn materials (the command's GGX glossy rays and texture
- * footprints are left out here); its images equal the command's
- * statistically on such scenes (tests/render/rt_example.sh). tb_render
+ * footprints are left out here); its images equal the command's to float
+ * rounding on such scenes (tests/render/example_raytrace.sh). tb_render
  * drives the samples (tiles, threads, per-sample random streams);
  * render_file.c is the whole command as one call.
  *
