@@ -16,7 +16,7 @@ set logscale xy
 set grid xtics ytics mxtics mytics
 set format x '10^{%L}'
 set xlabel 'top-level objects N'
-set multiplot layout 1,2 title 'testbed bench scale (2 threads, shared 2-core machine)'
+set multiplot layout 1,2 title 'testbed bench scale (2 threads)'
 set ylabel 'seconds'
 set title 'load + build + first pixel'
 plot for [f in in] f using 2:7 skip 1 with linespoints title f
