@@ -494,6 +494,43 @@ static void test_subdivide_cornell_room(void **state)
     tb_fed_free(f);
 }
 
+/* The room's floor (face 0, a planar convex quad whose opposite sides are
+ * 552.8 and 549.6 mm, 559.2 and 559.21) is a grid of quads at every bound:
+ * where the two lengths round to different part counts (55 mm: 11 and 10)
+ * both sides take the larger, so the floor's element count never rises as
+ * the bound grows (it once jumped from 169 at 45 mm to 1537 at 55 mm, the
+ * floor triangulated and bisected), and the whole mesh stays conforming. */
+static void test_quad_sides_matched(void **state)
+{
+    (void)state;
+    tb_fed *f = fed_from(room_pos, 8, room_faces);
+    size_t last = SIZE_MAX;
+    for (double edge = 40; edge <= 80; edge += 2.5) {
+        tb_mesh m;
+        tb_mesh_init(&m);
+        tb_mesh_opts o = {.max_edge = edge, .quads = true};
+        assert_int_equal(tb_mesh_from_fed(f, &o, &m), TB_OK);
+        check_mesh(f, &m, (check){edge, true});
+        size_t floor_elems = 0, floor_quads = 0;
+        for (size_t i = 0; i < tb_mesh_nelems(&m); i++) {
+            const tb_mesh_elem *e = tb_mesh_elem_at(&m, i);
+            floor_elems += e->face == 0;
+            floor_quads += e->face == 0 && tb_mesh_elem_size(e) == 4;
+        }
+        /* x: the floor's 552.8 and 549.6 mm sides, tied through the back wall and
+         * the ceiling to their 556 mm sides; z: 559.2 and 559.21 mm */
+        size_t k = (size_t)ceil(556.0 / edge), kz = (size_t)ceil(559.21 / edge);
+        if (floor_quads != floor_elems || floor_elems != k * kz)
+            fail_msg("edge %g: floor %zu elements, %zu quads; expected a %zu x %zu grid", edge, floor_elems,
+                     floor_quads, k, kz);
+        if (floor_elems > last)
+            fail_msg("edge %g: floor %zu elements, more than %zu at a smaller bound", edge, floor_elems, last);
+        last = floor_elems;
+        tb_mesh_free(&m);
+    }
+    tb_fed_free(f);
+}
+
 static void test_subdivide_faces(void **state)
 {
     (void)state;
@@ -782,6 +819,7 @@ int main(void)
         cmocka_unit_test(test_subdivide_cube),
         cmocka_unit_test(test_subdivide_frame),
         cmocka_unit_test(test_subdivide_cornell_room),
+        cmocka_unit_test(test_quad_sides_matched),
         cmocka_unit_test(test_subdivide_faces),
         cmocka_unit_test(test_hole_touching_boundary),
         cmocka_unit_test(test_attributes_interpolated),

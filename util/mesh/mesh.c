@@ -724,6 +724,42 @@ static void tb__face(tb__mctx *c, uint32_t f)
     free(sides), free(loop_sides);
 }
 
+/* Gives opposite sides of every planar convex quad face the same number of
+ * parts, the larger of the two, so the face is meshed as a grid. Each edge
+ * is cut by its own length, so a quad whose opposite sides differ slightly
+ * (the published Cornell box floor: 552.8 and 549.6 mm) could get 11 and 10
+ * parts and fall to triangulation plus bisection: several times the
+ * elements of a finer grid, and element counts that jump as the bound
+ * shrinks. Counts only grow, so the sweeps end; edges are shared, so a
+ * change is carried to the neighbouring faces by the next sweep. */
+static void tb__match_quad_sides(tb__mctx *c)
+{
+    const tb_fed *m = c->fed;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (uint32_t f = 0; f < m->nfaces; f++) {
+            uint32_t l0 = m->face_loops[f];
+            if (tb_fed_face_nloops(m, f) != 1 || tb_fed_loop_size(m, l0) != 4)
+                continue;
+            uint32_t v[4], e[4];
+            for (uint32_t i = 0; i < 4; i++) {
+                uint32_t cr = m->loop_corners[l0] + i;
+                v[i] = m->corner_vert[cr];
+                e[i] = m->corner_edge[cr];
+            }
+            if (!tb_polygon_is_planar(m->positions, v, 4, c->tol) || !tb_mesh_quad_convex(c->out, v))
+                continue;
+            for (uint32_t i = 0; i < 2; i++) {
+                uint32_t a = c->edge_k[e[i]], b = c->edge_k[e[i + 2]];
+                if (a != b) {
+                    c->edge_k[e[i]] = c->edge_k[e[i + 2]] = a > b ? a : b;
+                    changed = true;
+                }
+            }
+        }
+    }
+}
+
 tb_status tb_mesh_from_fed(const tb_fed *fed, const tb_mesh_opts *opts, tb_mesh *out)
 {
     static const tb_mesh_opts defaults = {0};
@@ -783,10 +819,13 @@ tb_status tb_mesh_from_fed(const tb_fed *fed, const tb_mesh_opts *opts, tb_mesh 
         st = tb_array_push_n(&out->normals, fed->normals, fed->nverts);
     if (!st && fed->uvs && fed->nverts)
         st = tb_array_push_n(&out->uvs, fed->uvs, fed->nverts);
+    for (uint32_t e = 0; e < fed->nedges && !st; e++)
+        c.edge_k[e] = tb__parts(&c, tb__dist(out, fed->edges[e].v[0], fed->edges[e].v[1]));
+    if (!st)
+        tb__match_quad_sides(&c);
     /* Edge points, computed once per edge from v[0] toward v[1]. */
     for (uint32_t e = 0; e < fed->nedges && !st && !c.err; e++) {
         const tb_fed_edge *ed = &fed->edges[e];
-        c.edge_k[e] = tb__parts(&c, tb__dist(out, ed->v[0], ed->v[1]));
         c.edge_first[e] = (uint32_t)out->positions.len;
         for (uint32_t j = 1; j < c.edge_k[e]; j++) {
             double t = (double)j / c.edge_k[e];
