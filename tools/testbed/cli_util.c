@@ -1,7 +1,9 @@
-/* Command-line pieces shared by the Vulkan commands (cli_util.h). */
+/* Command-line pieces shared by the testbed commands (cli_util.h). */
 #include "cli_util.h"
 
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
 const tb_opt_choice tb_cli_backends[] = {
     {"auto", TB_GPU_MODE_AUTO}, {"vulkan", TB_GPU_MODE_VULKAN}, {"cpu", TB_GPU_MODE_CPU}, {NULL, 0}};
@@ -23,4 +25,15 @@ bool tb_cli_open_vulkan(const char *who, const char *path, long device, tb_scene
         return false;
     }
     return true;
+}
+
+char **tb_cli_full_argv(int argc, char **argv)
+{
+    char **full = malloc(sizeof *full * ((size_t)argc + 2));
+    if (!full)
+        return NULL;
+    full[0] = "testbed";
+    memcpy(full + 1, argv, sizeof *full * (size_t)argc);
+    full[argc + 1] = NULL;
+    return full;
 }

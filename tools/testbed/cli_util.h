@@ -1,5 +1,6 @@
-/* Command-line pieces shared by the testbed commands that run a Vulkan
- * kernel on a scene (render, bench gpu, bench formfactor, validate). */
+/* Command-line pieces shared by the testbed commands: the Vulkan set-up of
+ * those that run a kernel on a scene (render, bench gpu, bench formfactor,
+ * validate) and the command line the provenance records. */
 #ifndef TB_TOOLS_TESTBED_CLI_UTIL_H
 #define TB_TOOLS_TESTBED_CLI_UTIL_H
 
@@ -19,5 +20,10 @@ extern const tb_opt_choice tb_cli_accels[];
  * choice as `--backend vulkan`). On failure prints `who` followed by the
  * error message to stderr, frees what it made and returns false. */
 bool tb_cli_open_vulkan(const char *who, const char *path, long device, tb_scene **s, tb_gpu_session *sess);
+
+/* The whole command line for the provenance: "testbed" followed by the
+ * subcommand's argv[0 .. argc) and a NULL, in a malloc'd array (free it;
+ * the strings are argv's). NULL when out of memory. */
+char **tb_cli_full_argv(int argc, char **argv);
 
 #endif

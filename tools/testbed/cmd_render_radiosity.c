@@ -258,15 +258,12 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     o.stop.progress = o.stop.progress && root;
 
     /* the provenance records the whole command line */
-    char **full = malloc(sizeof *full * ((size_t)argc + 2));
+    char **full = tb_cli_full_argv(argc, argv);
     if (!full) {
         fprintf(stderr, "testbed render: out of memory\n");
         tb_dist_rad_exchange_free(ex);
         return TB_EXIT_FAIL;
     }
-    full[0] = "testbed";
-    memcpy(full + 1, argv, sizeof *full * (size_t)argc);
-    full[argc + 1] = NULL;
     o.argc = argc + 1, o.argv = full;
     tb_rad_render_result res;
     tb_status st = tb_rad_render(scene_path, &o, &res);

@@ -298,12 +298,9 @@ int tb_cmd_trace(int argc, char **argv)
     if (stats_path) {
         tb_provenance prov;
         /* The command line as typed: "testbed" and the subcommand's arguments. */
-        char **full = malloc(sizeof *full * ((size_t)argc + 2));
+        char **full = tb_cli_full_argv(argc, argv);
         tb_status st = full ? TB_OK : tb_error(TB_ERR_NOMEM, "out of memory");
         if (!st) {
-            full[0] = "testbed";
-            memcpy(full + 1, argv, sizeof *full * (size_t)argc);
-            full[argc + 1] = NULL;
             st = tb_provenance_init(&prov, argc + 1, full);
             free(full);
         }
