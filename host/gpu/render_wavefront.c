@@ -242,11 +242,8 @@ static uint8_t tb__surface(const tb_gpu_renderer *r, const tb__paths *P, tb__wav
     size_t path = w->path[a];
     if (w->depth[a] == 0 && P->xy) {
         tb_rng rng0 = P->rng0[path];
-        float lu = 0.5f, lv = 0.5f;
-        if (s->camera.lens_radius > 0.0) {
-            lu = tb_rng_float(&rng0);
-            lv = tb_rng_float(&rng0);
-        }
+        float lu, lv;
+        tb_camera_lens_numbers(&s->camera, &rng0, &lu, &lv);
         tb_camera_ray_diff cd;
         tb_camera_ray_differential(&s->camera, P->xy[2 * path], P->xy[2 * path + 1], lu, lv, &cd);
         rd[0] = cd.rx_o, rd[1] = cd.rx_d, rd[2] = cd.ry_o, rd[3] = cd.ry_d;
@@ -477,11 +474,8 @@ void tb__gr_push_camera(tb__paths *P, size_t q, const tb_camera *cam, double x, 
     for (int c = 0; c < P->nch; c++)
         one[c] = 1.0f;
     *rng0 = *rng;
-    float lu = 0.5f, lv = 0.5f;
-    if (cam->lens_radius > 0.0) {
-        lu = tb_rng_float(rng);
-        lv = tb_rng_float(rng);
-    }
+    float lu, lv;
+    tb_camera_lens_numbers(cam, rng, &lu, &lv);
     tb_ray ray = tb_camera_ray(cam, x, y, lu, lv);
     P->top[q] = 0;
     tb__gr_push(P, q, &ray, 0, one, NULL);

@@ -22,6 +22,7 @@
 #include "host/mid/mid.h"
 #include "util/base/error.h"
 #include "util/math/ray.h"
+#include "util/math/rng.h"
 #include "util/math/vec.h"
 
 /* A pinhole or thin-lens perspective camera (read-only after init). */
@@ -71,6 +72,18 @@ tb_status tb_camera_from_mid(const tb_mid_camera *m, int width, int height, tb_c
  * on the lens and pass through the point where the pinhole ray of (x, y)
  * meets the plane in focus. */
 tb_ray tb_camera_ray(const tb_camera *c, double x, double y, float lens_u, float lens_v);
+
+/* The lens numbers of one camera sample: for a thin lens two floats drawn
+ * from rng (lens_u first), for a pinhole 0.5 and 0.5 with nothing drawn, so
+ * a pinhole sample's stream is left for the renderer. */
+static inline void tb_camera_lens_numbers(const tb_camera *c, tb_rng *rng, float *lens_u, float *lens_v)
+{
+    *lens_u = *lens_v = 0.5f;
+    if (c->lens_radius > 0.0) {
+        *lens_u = tb_rng_float(rng);
+        *lens_v = tb_rng_float(rng);
+    }
+}
 
 /* tb_camera_ray plus the neighbours' rays (film points (x + 1, y) and
  * (x, y + 1) through the same lens point). */

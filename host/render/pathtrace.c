@@ -201,11 +201,8 @@ void tb_pt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
 {
     const tb_pathtracer *pt = ctx;
     const tb_camera *cam = &pt->scene->camera;
-    float lu = 0.5f, lv = 0.5f;
-    if (cam->lens_radius > 0.0) {
-        lu = tb_rng_float(rng);
-        lv = tb_rng_float(rng);
-    }
+    float lu, lv;
+    tb_camera_lens_numbers(cam, rng, &lu, &lv);
     tb_channels L;
     if (tb_surfaces_need_differentials(pt->surfaces)) {
         tb_camera_ray_diff cd;

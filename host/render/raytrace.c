@@ -315,11 +315,8 @@ void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
 {
     const tb_raytracer *rt = ctx;
     const tb_camera *cam = &rt->scene->camera;
-    float lu = 0.5f, lv = 0.5f;
-    if (cam->lens_radius > 0.0) {
-        lu = tb_rng_float(rng);
-        lv = tb_rng_float(rng);
-    }
+    float lu, lv;
+    tb_camera_lens_numbers(cam, rng, &lu, &lv);
     TB_STAT_INC(tb__rt_camera_rays);
     tb_channels L;
     if (rt->textures || rt->patterns) {

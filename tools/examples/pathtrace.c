@@ -109,11 +109,8 @@ static void sample(void *ctx, double x, double y, tb_rng *rng, float *out)
 {
     const renderer *r = ctx;
     const tb_camera *cam = &r->scene->camera;
-    float lu = 0.5f, lv = 0.5f;
-    if (cam->lens_radius > 0.0) {
-        lu = tb_rng_float(rng);
-        lv = tb_rng_float(rng);
-    }
+    float lu, lv;
+    tb_camera_lens_numbers(cam, rng, &lu, &lv);
     tb_channels L = radiance(r, tb_camera_ray(cam, x, y, lu, lv), rng);
     for (int c = 0; c < r->scene->nchannels; c++)
         out[c] = L.v[c];

@@ -104,11 +104,8 @@ static void sample(void *ctx, double x, double y, tb_rng *rng, float *out)
 {
     const tracer *t = ctx;
     const tb_camera *cam = &t->scene->camera;
-    float lu = 0.5f, lv = 0.5f;
-    if (cam->lens_radius > 0.0) {
-        lu = tb_rng_float(rng);
-        lv = tb_rng_float(rng);
-    }
+    float lu, lv;
+    tb_camera_lens_numbers(cam, rng, &lu, &lv);
     tb_ray r = tb_camera_ray(cam, x, y, lu, lv);
     tb_channels L = trace(t, &r, 0, rng);
     for (int c = 0; c < t->scene->nchannels; c++)
