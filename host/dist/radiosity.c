@@ -5,6 +5,7 @@
 #include "host/dist/dist_internal.h"
 
 #include <limits.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 
@@ -81,6 +82,14 @@ static tb_status tb__radx_report(void *ctx)
     return tb_dist_report_stats("receivers");
 }
 
+static void tb__radx_fail(void *ctx, tb_status st)
+{
+    tb__radx *x = ctx;
+    (void)st;
+    fprintf(stderr, "testbed: rank %d of %d: %s; stopping every rank\n", x->ex.rank, x->ex.ranks, tb_last_error());
+    tb_dist_abort(1);
+}
+
 tb_rad_exchange *tb_dist_rad_exchange_create(void)
 {
     tb__radx *x = calloc(1, sizeof *x);
@@ -98,7 +107,7 @@ tb_rad_exchange *tb_dist_rad_exchange_create(void)
     x->last = tb__dist_now();
     x->ex = (tb_rad_exchange){.ctx = x, .rank = tb_dist_rank(), .ranks = R, .allgather = tb__radx_allgather,
                               .agree = tb__radx_agree, .agree_status = tb__radx_agree_status,
-                              .report = tb__radx_report};
+                              .report = tb__radx_report, .fail = tb__radx_fail};
     return &x->ex;
 }
 

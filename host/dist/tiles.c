@@ -130,7 +130,7 @@ static tb_status tb__tiles_root_tile(tb__tiles *t, int src, int len)
     if (inject)
         tb_error(TB_ERR_NOMEM, "out of memory unpacking a tile (injected: TB_FAULT)");
     if (!tile)
-        return tb_error_context(inject ? TB_ERR_NOMEM : TB_ERR_FORMAT, "tile from rank %d", src);
+        return tb_error_context(inject ? TB_ERR_NOMEM : TB_ERR_FORMAT, "rank 0: merging a tile from rank %d", src);
     tb_tile_rect r = tb_film_tile_pixels(tile);
     tb_status st = tb_film_tile_submit(t->film, tile); /* thread-safe: the film orders the merges */
     if (!st && t->progress)

@@ -488,6 +488,9 @@ tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const
     }
     if (st) {
         tb_rad_solver_free(s);
+        /* over several processes the others are mid-solve: stop them all */
+        if (o.exchange && o.exchange->ranks > 1 && o.exchange->fail)
+            o.exchange->fail(o.exchange->ctx, st);
         return st;
     }
     sts.shots += tb_rad_solver_shots(s);

@@ -189,6 +189,11 @@ typedef struct tb_rad_exchange {
     /* After the solve, on every process: each process's share of the work
      * into the stats values. NULL: nothing. */
     tb_status (*report)(void *ctx);
+    /* A failure on this process alone during the solve (`st`, its message in
+     * tb_last_error()), where the others cannot learn of it: stops every
+     * process of the job with that message (does not return). NULL: return
+     * the failure (the others may then wait for this one forever). */
+    void (*fail)(void *ctx, tb_status st);
     /* false: the deterministic mode above. true: several shooters in flight
      * (one per process, at most TB_RAD_MAX_IN_FLIGHT): each process
      * computes one shooter's form factors whole, all are exchanged, and

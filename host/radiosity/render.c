@@ -341,7 +341,10 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
                     opt->log_prefix ? opt->log_prefix : "", as.rounds, as.elems_in, as.elems_out,
                     (unsigned long long)as.shots);
     } else {
-        if ((st = tb_rad_solver_create(&r.mesh, NULL, &ro, &r.solver)))
+        st = tb_rad_solver_create(&r.mesh, NULL, &ro, &r.solver);
+        if (ex) /* one process short of memory stops them all */
+            st = ex->agree_status(ex->ctx, st);
+        if (st)
             goto done;
         const tb_rad_persist *pe = opt->persist;
         if (pe && pe->restore && (st = pe->restore(pe->ctx, r.solver)))
