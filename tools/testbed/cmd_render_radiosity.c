@@ -239,11 +239,14 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     tb_ckpt_rad ck = {.path = ckpt_path, .every = ckpt_every, .resume_path = resume_path};
     tb_rad_persist persist;
     if (ckpt_path || resume_path) {
-        if (o.adapt.threshold > 0) {
-            tb_dist_rad_exchange_free(ex);
-            return tb_cli_usage_error(&cli, "--checkpoint and --resume are for solves without --adapt");
-        }
-        if (!(ck.key = tb_cli_job_key(scene_path, argc, argv, tb_cli_free_opts))) {
+        /* with --adapt the rounds depend on where each round stops: the
+         * threshold and the shot limit are part of the job */
+        static const char *const adapt_free[] = {"-o", "--threads", "--time-budget", "--checkpoint",
+                                                 "--checkpoint-every", "--resume", "--stats", "--report",
+                                                 "--reference", "--exposure", "--backend", "--device", "--patches",
+                                                 "--mesh-out", NULL};
+        const char *const *free_opts = o.adapt.threshold > 0 ? adapt_free : tb_cli_free_opts;
+        if (!(ck.key = tb_cli_job_key(scene_path, argc, argv, free_opts))) {
             fprintf(stderr, "testbed render: %s\n", tb_last_error());
             tb_dist_rad_exchange_free(ex);
             return TB_EXIT_FAIL;
