@@ -1,14 +1,14 @@
-/* Tiles over ranks (tiles.h). There is no thread of its own for MPI: the
- * render threads make the MPI calls between their tiles (one at a time,
- * under the `mpi` lock: MPI_THREAD_SERIALIZED), so no extra thread competes
- * with them for the cores. Rank 0 answers requests for tiles and takes in
- * the packed tiles of the others (merging them into the film, which orders
- * them) each time one of its threads finishes a tile, and at the end of the
- * pass until every tile is back; a worker asks ahead, keeps its queue filled
- * and sends its finished tiles the same way, and polls while it has nothing
- * to render. Where a thread waits it polls with short, growing sleeps rather
- * than block in MPI (Open MPI's blocking calls spin a core the renderer
- * needs). */
+/* Tiles over ranks (tiles.h). The MPI calls are made one thread at a time
+ * (under the `mpi` lock: MPI_THREAD_SERIALIZED) by whichever thread gets
+ * there: render threads between their tiles, and on rank 0 also a
+ * communication thread of its own, mostly asleep, so that requests for
+ * tiles are answered while rank 0's render threads are inside a tile (or
+ * parked by the scheduler on a loaded machine). Rank 0 answers requests
+ * and takes in the others' packed tiles (merging them into the film, which
+ * orders them); a worker asks ahead, keeps its queue filled and sends its
+ * finished tiles between tiles, and polls while it has nothing to render.
+ * Where a thread waits it polls with short, growing sleeps rather than
+ * block in MPI (Open MPI's blocking calls spin a core the renderer needs). */
 #include "host/dist/tiles.h"
 #include "host/dist/dist.h"
 #include "host/dist/dist_internal.h"
@@ -59,6 +59,9 @@ typedef struct tb__tiles {
     int next, ntiles;      /* the next tile to hand out; tiles in the pass */
     int owed;              /* tiles granted to workers and not yet back */
     int workers_done;      /* workers told that the pass has no tiles left */
+    bool comm_running;     /* rank 0's communication thread was started this pass */
+    pthread_t comm;
+    atomic_int comm_stop;  /* set by end_pass once the pass is over everywhere */
     void *rbuf;            /* (mpi) the receive buffer, and its bytes */
     size_t rcap;
     /* worker */
@@ -300,6 +303,19 @@ static int tb__tiles_service(tb__tiles *t, bool block)
     return moved;
 }
 
+/* Rank 0's communication thread: answers the others while this rank's
+ * render threads are inside their tiles (they answer too, between tiles),
+ * so a worker's queue never waits for one of rank 0's tiles to end, even
+ * when the scheduler has parked rank 0's render thread. Mostly asleep:
+ * polls with growing sleeps. */
+static void *tb__tiles_root_comm(void *arg)
+{
+    tb__tiles *t = arg;
+    for (int pause = TB__TILES_POLL_MIN_US; !atomic_load(&t->comm_stop);)
+        tb__tiles_pause(&pause, tb__tiles_service(t, true));
+    return NULL;
+}
+
 static tb_status tb__tiles_begin(void *ctx, tb_film *film, int pass, tb_progress *progress, const atomic_int *cancel)
 {
     (void)pass;
@@ -334,6 +350,10 @@ static tb_status tb__tiles_begin(void *ctx, tb_film *film, int pass, tb_progress
                 t->msgs++;
                 MPI_Send(g, 2, MPI_INT, w, TB__TAG_GRANT, MPI_COMM_WORLD);
             }
+            atomic_store(&t->comm_stop, 0);
+            if (pthread_create(&t->comm, NULL, tb__tiles_root_comm, t) == 0)
+                t->comm_running = true;
+            /* else the render threads answer between their tiles alone */
         } else {
             MPI_Irecv(t->grant, 2, MPI_INT, 0, TB__TAG_GRANT, MPI_COMM_WORLD, &t->greq);
             t->asked = true;
@@ -436,7 +456,12 @@ static tb_status tb__tiles_end(void *ctx, tb_film *film, tb_aa_stats *stats, tb_
     /* this rank's threads are done: serve the others (rank 0) or send the
      * last tiles (a worker) until the pass is over everywhere */
     for (int pause = TB__TILES_POLL_MIN_US; t->ex.ranks > 1 && !tb__tiles_over(t);)
-        tb__tiles_pause(&pause, tb__tiles_service(t, true));
+        tb__tiles_pause(&pause, tb__tiles_service(t, !t->comm_running));
+    if (t->comm_running) {
+        atomic_store(&t->comm_stop, 1);
+        pthread_join(t->comm, NULL);
+        t->comm_running = false;
+    }
     t->wait += tb__dist_now() - t0;
     if (st)
         tb_error(st, "%s", why);

@@ -5,9 +5,9 @@
  * threads and sends them, packed (film.h), to rank 0, which merges every
  * tile into its film in tile order as the one-process render does: the
  * image is bit-identical for any number of ranks and threads. The render
- * threads themselves make the MPI calls (requests ahead, grants, tiles)
- * between their tiles, one thread at a time: no thread of its own competes
- * with them for the cores.
+ * threads make the MPI calls (requests ahead, grants, tiles) between their
+ * tiles, one thread at a time; rank 0 also has a communication thread,
+ * mostly asleep, that answers requests while its render threads are busy.
  *
  *     tb_tile_exchange *ex = tb_dist_tiles_create(threads);
  *     ro.exchange = ex;                 (every rank calls tb_render)
