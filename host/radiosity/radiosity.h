@@ -181,6 +181,8 @@ typedef struct tb_rad_exchange {
     /* Collective: every process's `mine` (n_mine values) concatenated in rank
      * order into all[] (counts[r] values from rank r). */
     tb_status (*allgather)(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts);
+    /* The same for floats (the several-shooters mode's form factors). */
+    tb_status (*allgatherf)(void *ctx, const float *mine, size_t n_mine, float *all, const size_t *counts);
     /* Rank 0's `flag` on every process (a stop decision that reads a clock). */
     int (*agree)(void *ctx, int flag);
     /* The lowest-ranked failure among every process's `st` (its message as

@@ -91,7 +91,7 @@ struct tb_rad_solver {
     size_t *xcounts;
     /* several shooters in flight: this process's shooter's form factors,
      * everyone's, and the counts (all equal) */
-    double *xsev, *xsevall;
+    float *xsev, *xsevall; /* the form factors are floats: sent as they are, half the bytes of doubles */
     size_t *xsevcounts;
 };
 
@@ -1266,15 +1266,13 @@ static tb_status tb__step_several(tb_rad_solver *s, const tb_rad_exchange *ex, b
     } else {
         memset(s->xsev, 0, per * sizeof *s->xsev);
     }
-    tb_status st = ex->allgather(ex->ctx, s->xsev, per, s->xsevall, s->xsevcounts);
+    tb_status st = ex->allgatherf(ex->ctx, s->xsev, per, s->xsevall, s->xsevcounts);
     if (st)
         return st;
     for (size_t k = 0; k < n; k++) {
-        const double *f = s->xsevall + k * per;
-        for (size_t v = 0; v < nvf; v++)
-            s->vff[v] = (float)f[v];
-        for (size_t j = 0; j < ne; j++)
-            s->eff[j] = (float)f[nvf + j];
+        const float *f = s->xsevall + k * per;
+        memcpy(s->vff, f, nvf * sizeof *f);
+        memcpy(s->eff, f + nvf, ne * sizeof *f);
         if ((st = tb__cache_store(s, keys[k])))
             return st;
         tb__shoot(s, keys[k], k == 0 ? t0 : tb__now());
