@@ -52,18 +52,9 @@ cmp "$T/hf.pfm" "$T/hr.pfm" || fail "hybrid: resumed render differs from the uni
 rm -f "$T/c.ckpt"
 TB_DIST_JOB=$$ $MPIRUN -np 2 "$TESTBED" render $R --passes 400 --threads 1 -o "$T/k.pfm" --checkpoint "$T/c.ckpt" \
     > "$T/kout" 2>&1 &
-job=$!
-i=0
-while [ ! -s "$T/c.ckpt" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
-[ -s "$T/c.ckpt" ] || { kill $job; cat "$T/kout"; fail "no checkpoint within a minute"; }
-victim=$(rank_pid $$ 1) || { kill $job; fail "rank 1 not found"; }
-kill -9 "$victim"
-wait $job && { cat "$T/kout"; fail "the job went on after rank 1 died"; }
-grep -q "rank 1 .*exited on signal 9" "$T/kout" || { cat "$T/kout"; fail "the dead rank is not named"; }
-grep -q "last checkpoint: $T/c.ckpt ([0-9]* passes), intact: continue with --resume" "$T/kout" ||
-    { cat "$T/kout"; fail "the last checkpoint is not named"; }
+kill_rank1 $! "$T/c.ckpt" "$T/kout" passes
+done_passes=$killed_at
 [ ! -e "$T/k.pfm" ] || fail "an image was written by the killed job"
-done_passes=$(sed -n 's/.*last checkpoint: .*(\([0-9]*\) passes).*/\1/p' "$T/kout" | head -1)
 # the checkpoint is whole (its checksum), so the job resumes from it: to 12
 # passes if it got no further, else to its own count plus 2
 want=12

@@ -56,18 +56,9 @@ done
 R="$TB_SOURCE_DIR/scenes/cornell-box.mid --method radiosity --max-edge 60 --threshold 0.0005"
 TB_DIST_JOB=$$ $MPIRUN -np 2 "$TESTBED" render $R --threads 1 --patches "$T/k.csv" --checkpoint "$T/r.ckpt" \
     --checkpoint-every 0.2 > "$T/kout" 2>&1 &
-job=$!
-i=0
-while [ ! -s "$T/r.ckpt" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
-[ -s "$T/r.ckpt" ] || { kill $job; cat "$T/kout"; fail "no radiosity checkpoint within a minute"; }
-victim=$(rank_pid $$ 1) || { kill $job; wait $job; cat "$T/kout"; fail "rank 1 not found (the solve ended first?)"; }
-kill -9 "$victim"
-wait $job && { cat "$T/kout"; fail "the radiosity job went on after rank 1 died"; }
-grep -q "rank 1 .*exited on signal 9" "$T/kout" || { cat "$T/kout"; fail "the dead rank is not named"; }
-grep -q "last checkpoint: $T/r.ckpt ([0-9]* shots), intact: continue with --resume" "$T/kout" ||
-    { cat "$T/kout"; fail "the last radiosity checkpoint is not named"; }
+kill_rank1 $! "$T/r.ckpt" "$T/kout" shots
+shots=$killed_at
 [ ! -e "$T/k.csv" ] || fail "patches written by the killed job"
-shots=$(sed -n 's/.*last checkpoint: .*(\([0-9]*\) shots).*/\1/p' "$T/kout" | head -1)
 guarded resume $MPIRUN -np 3 "$TESTBED" render $R --threads 1 --patches "$T/k.csv" --resume "$T/r.ckpt" ||
     { cat "$T/resume.out"; fail "radiosity resume over 3 ranks after the kill"; }
 "$TESTBED" render $R --patches "$T/k1.csv" > "$T/out" 2>&1 || { cat "$T/out"; fail "one-process radiosity"; }

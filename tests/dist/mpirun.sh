@@ -18,3 +18,19 @@ rank_pid() {
     done
     return 1
 }
+# kill_rank1 JOB CKPT LOG UNIT: once CKPT is written (within a minute), kills
+# rank 1 of the job JOB (a background mpirun started with TB_DIST_JOB=$$,
+# output in LOG) with SIGKILL; the job must stop, LOG name rank 1 and the
+# intact checkpoint with its count of UNIT (passes, shots), set in $killed_at.
+kill_rank1() {
+    i=0
+    while [ ! -s "$2" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
+    [ -s "$2" ] || { kill "$1"; cat "$3"; fail "no checkpoint within a minute"; }
+    victim=$(rank_pid $$ 1) || { kill "$1"; wait "$1"; cat "$3"; fail "rank 1 not found (the job ended first?)"; }
+    kill -9 "$victim"
+    wait "$1" && { cat "$3"; fail "the job went on after rank 1 died"; }
+    grep -q "rank 1 .*exited on signal 9" "$3" || { cat "$3"; fail "the dead rank is not named"; }
+    grep -q "last checkpoint: $2 ([0-9]* $4), intact: continue with --resume" "$3" ||
+        { cat "$3"; fail "the last checkpoint is not named"; }
+    killed_at=$(sed -n "s/.*last checkpoint: .*(\([0-9]*\) $4).*/\1/p" "$3" | head -1)
+}
