@@ -11,10 +11,7 @@
 #   checkpoint.sh  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)
 set -u
 . "$(dirname "$0")/mpirun.sh"
-T="${TB_TEST_TMPDIR:-/tmp}/dist_checkpoint.$$"
-rm -rf "$T" && mkdir -p "$T"
-sed 's/resolution = \[512 512\]/resolution = [64 64]/' "$TB_SOURCE_DIR/scenes/cornell-box.mid" > "$T/box.mid"
-grep -q 'resolution = \[64 64\]' "$T/box.mid" || fail "could not shrink the Cornell box"
+test_dir dist_checkpoint
 R="$T/box.mid --spp 1 --seed 3"
 tb() { "$TESTBED" render "$@" > "$T/out" 2>&1 || { cat "$T/out"; fail "testbed render $*"; }; }
 

@@ -15,10 +15,7 @@
 #   faults.sh  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)
 set -u
 . "$(dirname "$0")/mpirun.sh"
-T="${TB_TEST_TMPDIR:-/tmp}/dist_faults.$$"
-rm -rf "$T" && mkdir -p "$T"
-sed 's/resolution = \[512 512\]/resolution = [64 64]/' "$TB_SOURCE_DIR/scenes/cornell-box.mid" > "$T/box.mid"
-grep -q 'resolution = \[64 64\]' "$T/box.mid" || fail "could not shrink the Cornell box"
+test_dir dist_faults
 
 # guarded NAME CMD...: runs CMD, stopped after 120 s (a hang: status 124);
 # output in $T/NAME.out; returns (and sets rc to) CMD's status

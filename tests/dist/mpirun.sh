@@ -34,3 +34,11 @@ kill_rank1() {
         { cat "$3"; fail "the last checkpoint is not named"; }
     killed_at=$(sed -n "s/.*last checkpoint: .*(\([0-9]*\) $4).*/\1/p" "$3" | head -1)
 }
+# test_dir NAME: a fresh folder $T for the test NAME, holding box.mid, the
+# Cornell box shrunk to 64 x 64 pixels.
+test_dir() {
+    T="${TB_TEST_TMPDIR:-/tmp}/$1.$$"
+    rm -rf "$T" && mkdir -p "$T"
+    sed 's/resolution = \[512 512\]/resolution = [64 64]/' "$TB_SOURCE_DIR/scenes/cornell-box.mid" > "$T/box.mid"
+    grep -q 'resolution = \[64 64\]' "$T/box.mid" || fail "could not shrink the Cornell box"
+}
