@@ -155,14 +155,15 @@ int tb_cmd_render_radiosity(int argc, char **argv)
                  "depends on the rank count; docs/distributed.md); default: each\n"
                  "shot's receivers shared, the one-process result bit for bit"},
         {"checkpoint", .type = TB_OPT_STRING, .dest = &ckpt_path, .metavar = "FILE",
-         .help = "save the solver's state (gathered and unshot radiosity, shots) to FILE,\n"
-                 "atomically, every --checkpoint-every seconds and after the last shot\n"
-                 "(not with --adapt)"},
+         .help = "save the solver's state (gathered and unshot radiosity, shots; with\n"
+                 "--adapt also the refinement rounds) to FILE, atomically, every\n"
+                 "--checkpoint-every seconds and after the last shot"},
         {"checkpoint-every", .type = TB_OPT_DOUBLE, .dest = &ckpt_every, .min = 0, .max = INFINITY,
          .metavar = "S", .help = "seconds between checkpoints (default %D; 0: after every shot)"},
         {"resume", .type = TB_OPT_STRING, .dest = &resume_path, .metavar = "FILE",
          .help = "continue the solve saved in FILE (same scene and options; --threshold\n"
-                 "may drop): the outputs equal an uninterrupted run's bit for bit"},
+                 "may drop, except with --adapt): the outputs equal an uninterrupted\n"
+                 "run's bit for bit"},
         {"stats", .type = TB_OPT_STRING, .dest = &o.stats_path, .metavar = "FILE.json",
          .help = "counters, times and provenance"},
         {0},
