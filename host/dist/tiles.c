@@ -216,6 +216,22 @@ static int tb__tiles_worker_poll(tb__tiles *t)
             pthread_mutex_lock(&t->lock);
             if (t->grant[1] == 0)
                 t->done = true;
+            if (t->qlen + t->grant[1] > t->qcap) {
+                /* rank 0's first grant follows its own thread count, which
+                 * may exceed this rank's: the queue grows (in order) */
+                int cap = t->qlen + t->grant[1] + t->ahead;
+                int *q = malloc(sizeof *q * (size_t)cap);
+                if (!q) {
+                    pthread_mutex_unlock(&t->lock);
+                    fprintf(stderr, "testbed: rank %d of %d: tile exchange: out of memory for a queue of %d tiles; "
+                            "stopping every rank\n", t->ex.rank, t->ex.ranks, cap);
+                    tb_dist_abort(1);
+                }
+                for (int k = 0; k < t->qlen; k++)
+                    q[k] = t->queue[(t->qhead + k) % t->qcap];
+                free(t->queue);
+                t->queue = q, t->qhead = 0, t->qcap = cap;
+            }
             for (int k = 0; k < t->grant[1]; k++)
                 t->queue[(t->qhead + t->qlen++) % t->qcap] = t->grant[0] + k;
             pthread_mutex_unlock(&t->lock);
