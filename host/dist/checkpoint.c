@@ -225,10 +225,14 @@ tb_render_persist tb_ckpt_render_persist(tb_ckpt_render *c)
 
 /* ------------------------------------------------- a radiosity solve */
 
-static tb_status tb__ckpt_rad_restore(void *ctx, tb_rad_solver *s)
+/* Radiosity payload: u64 bytes of the refinement's state, those bytes,
+ * then the solver's packed state. */
+static tb_status tb__ckpt_rad_load(void *ctx, bool *found, void **extra, size_t *extra_len, void **state,
+                                   size_t *state_len)
 {
     tb_ckpt_rad *c = ctx;
     c->last_save = tb__dist_now();
+    *found = false, *extra = *state = NULL, *extra_len = *state_len = 0;
     if (!c->resume_path)
         return TB_OK;
     void *buf = NULL;
@@ -241,11 +245,11 @@ static tb_status tb__ckpt_rad_restore(void *ctx, tb_rad_solver *s)
     if ((st = tb_dist_agree_status(st, NULL)))
         return st;
     if (tb_dist_size() > 1) {
-        uint64_t n = tb_dist_rank() == 0 ? (uint64_t)len : 0;
-        if ((st = tb_dist_bcast_bytes(&n, sizeof n)))
+        uint64_t n[2] = {(uint64_t)len, units};
+        if ((st = tb_dist_bcast_bytes(n, sizeof n)))
             return st;
         if (tb_dist_rank() != 0) {
-            len = (size_t)n;
+            len = (size_t)n[0], units = n[1];
             if (!(buf = malloc(len ? len : 1)))
                 st = tb_error(TB_ERR_NOMEM, "out of memory for a checkpoint of %zu bytes", len);
         }
@@ -254,28 +258,45 @@ static tb_status tb__ckpt_rad_restore(void *ctx, tb_rad_solver *s)
             return st;
         }
     }
-    st = tb_rad_solver_unpack(s, buf, len);
+    uint64_t xl = 0;
+    if (len >= sizeof xl)
+        memcpy(&xl, buf, sizeof xl);
+    if (len < sizeof xl || xl > len - sizeof xl) {
+        free(buf);
+        return tb_error(TB_ERR_FORMAT, "%s: radiosity payload of %zu bytes", c->resume_path, len);
+    }
+    size_t sl = len - sizeof xl - (size_t)xl;
+    if ((xl && !(*extra = malloc((size_t)xl))) || !(*state = malloc(sl ? sl : 1))) {
+        free(*extra), *extra = NULL;
+        free(buf);
+        return tb_error(TB_ERR_NOMEM, "out of memory for a checkpoint of %zu bytes", len);
+    }
+    memcpy(*extra, (char *)buf + sizeof xl, (size_t)xl);
+    memcpy(*state, (char *)buf + sizeof xl + xl, sl);
     free(buf);
-    if (st)
-        return tb_error_context(st, "%s", c->resume_path);
+    *extra_len = (size_t)xl, *state_len = sl, *found = true;
     char what[64];
-    snprintf(what, sizeof what, "%llu shots", (unsigned long long)tb_rad_solver_shots(s));
+    snprintf(what, sizeof what, "%llu shots", (unsigned long long)units);
     if (tb_dist_rank() == 0)
         tb_ckpt_note(c->resume_path, what);
     return TB_OK;
 }
 
-static tb_status tb__ckpt_rad_save(void *ctx, const tb_rad_solver *s, bool last)
+static tb_status tb__ckpt_rad_save(void *ctx, const tb_rad_solver *s, const void *extra, size_t extra_len,
+                                   uint64_t shots, bool last)
 {
     tb_ckpt_rad *c = ctx;
     if (!c->path || tb_dist_rank() != 0 || (!last && tb__dist_now() - c->last_save < c->every))
         return TB_OK;
-    size_t len = tb_rad_solver_packed_size(s);
-    void *buf = malloc(len);
+    uint64_t xl = extra_len;
+    size_t len = sizeof xl + extra_len + tb_rad_solver_packed_size(s);
+    char *buf = malloc(len);
     if (!buf)
         return tb_error(TB_ERR_NOMEM, "out of memory for a checkpoint of %zu bytes", len);
-    tb_rad_solver_pack(s, buf);
-    uint64_t shots = tb_rad_solver_shots(s);
+    memcpy(buf, &xl, sizeof xl);
+    if (extra_len)
+        memcpy(buf + sizeof xl, extra, extra_len);
+    tb_rad_solver_pack(s, buf + sizeof xl + extra_len);
     tb_status st = tb_ckpt_write(c->path, TB_CKPT_RADIOSITY, c->key, shots, buf, len);
     free(buf);
     if (st)
@@ -291,5 +312,5 @@ static tb_status tb__ckpt_rad_save(void *ctx, const tb_rad_solver *s, bool last)
 
 tb_rad_persist tb_ckpt_rad_persist(tb_ckpt_rad *c)
 {
-    return (tb_rad_persist){.ctx = c, .restore = tb__ckpt_rad_restore, .save = tb__ckpt_rad_save};
+    return (tb_rad_persist){.ctx = c, .load = tb__ckpt_rad_load, .save = tb__ckpt_rad_save};
 }

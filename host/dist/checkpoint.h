@@ -23,12 +23,12 @@
 #include "util/base/error.h"
 
 /* Version of the file layout; a reader refuses others. */
-#define TB_CKPT_VERSION 1u
+#define TB_CKPT_VERSION 2u
 
 /* What a checkpoint holds. */
 enum {
     TB_CKPT_RENDER = 1,    /* a progressive render: passes done, aa counts, the film */
-    TB_CKPT_RADIOSITY = 2, /* a radiosity solve: mesh, B, unshot, shots, RNG (host/radiosity) */
+    TB_CKPT_RADIOSITY = 2, /* a radiosity solve: the refinement's rounds (--adapt), the solver's state */
 };
 
 /* FNV-1a 64 of `len` bytes, continuing from `h` (start: TB_CKPT_HASH_SEED). */

@@ -5,6 +5,7 @@
 #include "host/dist/dist_internal.h"
 
 #include <limits.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
 
@@ -19,11 +20,13 @@ typedef struct tb__radx {
     double last;          /* clock when the previous gather returned (work runs from there) */
 } tb__radx;
 
-static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts)
-{
-    tb__radx *x = ctx;
-    double t0 = tb__dist_now();
 #ifdef TB_HAVE_MPI
+/* Every rank's `n_mine` values of `type` (`size` bytes each) into all[], in
+ * rank order (counts[r] from rank r). */
+static tb_status tb__radx_gather(tb__radx *x, const void *mine, size_t n_mine, void *all, const size_t *counts,
+                                 MPI_Datatype type, size_t size)
+{
+    double t0 = tb__dist_now();
     int R = x->ex.ranks, off = 0;
     for (int r = 0; r < R; r++) {
         if (counts[r] > (size_t)INT_MAX - (size_t)off)
@@ -37,8 +40,8 @@ static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine
      * collectives spin, which on shared or oversubscribed cores slows the
      * very rank everyone waits for) */
     MPI_Request req;
-    if (MPI_Iallgatherv(mine, (int)n_mine, MPI_DOUBLE, all, x->counts, x->displs, MPI_DOUBLE, MPI_COMM_WORLD,
-                        &req) != MPI_SUCCESS)
+    if (MPI_Iallgatherv(mine, (int)n_mine, type, all, x->counts, x->displs, type, MPI_COMM_WORLD, &req) !=
+        MPI_SUCCESS)
         return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallgatherv failed");
     for (long us = 5;;) {
         int done = 0;
@@ -51,16 +54,32 @@ static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine
         nanosleep(&ts, NULL);
         us = us * 2 < 200 ? us * 2 : 200;
     }
-#else
-    (void)mine, (void)all, (void)counts;
-    return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
-#endif
     double t1 = tb__dist_now();
-    /* bytes: this rank's form factors, delivered to every other rank */
-    tb__dist_account(t0 - x->last, t1 - t0, (uint64_t)n_mine * sizeof(double) * (uint64_t)(x->ex.ranks - 1), 1,
-                     n_mine);
+    /* bytes: this rank's values, delivered to every other rank */
+    tb__dist_account(t0 - x->last, t1 - t0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), 1, n_mine);
     x->last = t1;
     return TB_OK;
+}
+#endif
+
+static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts)
+{
+#ifdef TB_HAVE_MPI
+    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_DOUBLE, sizeof *mine);
+#else
+    (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts;
+    return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
+#endif
+}
+
+static tb_status tb__radx_allgatherf(void *ctx, const float *mine, size_t n_mine, float *all, const size_t *counts)
+{
+#ifdef TB_HAVE_MPI
+    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_FLOAT, sizeof *mine);
+#else
+    (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts;
+    return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
+#endif
 }
 
 static int tb__radx_agree(void *ctx, int flag)
@@ -81,6 +100,14 @@ static tb_status tb__radx_report(void *ctx)
     return tb_dist_report_stats("receivers");
 }
 
+static void tb__radx_fail(void *ctx, tb_status st)
+{
+    tb__radx *x = ctx;
+    (void)st;
+    fprintf(stderr, "testbed: rank %d of %d: %s; stopping every rank\n", x->ex.rank, x->ex.ranks, tb_last_error());
+    tb_dist_abort(1);
+}
+
 tb_rad_exchange *tb_dist_rad_exchange_create(void)
 {
     tb__radx *x = calloc(1, sizeof *x);
@@ -97,8 +124,9 @@ tb_rad_exchange *tb_dist_rad_exchange_create(void)
     }
     x->last = tb__dist_now();
     x->ex = (tb_rad_exchange){.ctx = x, .rank = tb_dist_rank(), .ranks = R, .allgather = tb__radx_allgather,
+                              .allgatherf = tb__radx_allgatherf,
                               .agree = tb__radx_agree, .agree_status = tb__radx_agree_status,
-                              .report = tb__radx_report};
+                              .report = tb__radx_report, .fail = tb__radx_fail};
     return &x->ex;
 }
 

@@ -1,16 +1,18 @@
-/* Tiles over ranks (tiles.h). During a pass every MPI call of a rank is
- * made by one communication thread of its own (MPI_THREAD_SERIALIZED: the
- * main thread's collectives come after it has been joined), so messages
- * move while the OpenMP threads render: rank 0's thread grants tile ranges
- * and receives packed tiles (merging them into the film, which orders
- * them), a worker's thread asks ahead, keeps its queue filled and sends its
- * finished tiles. The render threads only touch the queue and the outbox,
- * under the exchange's lock. The threads poll with short, growing sleeps
- * rather than block in MPI (Open MPI's blocking calls spin a core the
- * renderer needs). */
+/* Tiles over ranks (tiles.h). The MPI calls are made one thread at a time
+ * (under the `mpi` lock: MPI_THREAD_SERIALIZED) by whichever thread gets
+ * there: render threads between their tiles, and on rank 0 also a
+ * communication thread of its own, mostly asleep, so that requests for
+ * tiles are answered while rank 0's render threads are inside a tile (or
+ * parked by the scheduler on a loaded machine). Rank 0 answers requests
+ * and takes in the others' packed tiles (merging them into the film, which
+ * orders them); a worker asks ahead, keeps its queue filled and sends its
+ * finished tiles between tiles, and polls while it has nothing to render.
+ * Where a thread waits it polls with short, growing sleeps rather than
+ * block in MPI (Open MPI's blocking calls spin a core the renderer needs). */
 #include "host/dist/tiles.h"
 #include "host/dist/dist.h"
 #include "host/dist/dist_internal.h"
+#include "util/base/fault.h"
 
 #include <pthread.h>
 #include <stdio.h>
@@ -24,10 +26,10 @@
 #include <mpi.h>
 #endif
 
-/* Microseconds a communication thread sleeps when nothing moved: from the
- * first, doubling while nothing moves up to the last (a small fraction of
- * a tile's time), back to the first once something does, so a burst of
- * messages is answered at once and an idle wait costs little CPU. */
+/* Microseconds a waiting thread sleeps between polls: from the first,
+ * doubling while nothing moves up to the last (a small fraction of a tile's
+ * time), back to the first once something does, so a burst of messages is
+ * answered at once and an idle wait costs little CPU. */
 #define TB__TILES_POLL_MIN_US 20
 #define TB__TILES_POLL_MAX_US 400
 
@@ -38,35 +40,44 @@ typedef struct tb__outgoing {
     size_t len;
 } tb__outgoing;
 
-/* One exchange: the pass's shared state, guarded by `lock`. */
+/* One exchange: the pass's shared state. */
 typedef struct tb__tiles {
     tb_tile_exchange ex;   /* the callbacks handed to the renderer (ex.ctx == this) */
     pthread_mutex_t lock;  /* every field below that two threads touch */
-    pthread_cond_t moved;  /* a worker's queue got tiles, or rank 0 said there are none left */
-    int ahead;             /* tiles a worker asks for at a time and keeps queued (twice its threads) */
+    pthread_mutex_t mpi;   /* held by the one thread making MPI calls; guards the MPI-side fields */
+    int threads;           /* this rank's render threads */
+    int ahead;             /* tiles a worker keeps queued: it asks for what its queue lacks */
     tb_film *film;         /* this pass's film */
     tb_progress *progress; /* rank 0: counts the pixels of remote tiles */
     const atomic_int *cancel; /* rank 0: set -> no more grants */
     double t_pass;         /* clock at begin_pass */
     double wait;           /* seconds render threads waited for tiles, and the end of the pass */
     uint64_t bytes, msgs, units; /* this pass's sends, and tiles rendered here */
-    bool comm_running;     /* the communication thread was started this pass */
-    pthread_t comm;
-    bool local_done;       /* this rank's render threads have all left the pass */
-    tb_status comm_err;    /* the communication thread's failure (its message in comm_msg) */
+    tb_status comm_err;    /* the first failure of the exchange itself (its message in comm_msg) */
     char comm_msg[512];
     /* rank 0 */
     int next, ntiles;      /* the next tile to hand out; tiles in the pass */
     int owed;              /* tiles granted to workers and not yet back */
     int workers_done;      /* workers told that the pass has no tiles left */
+    bool comm_running;     /* rank 0's communication thread was started this pass */
+    pthread_t comm;
+    atomic_int comm_stop;  /* set by end_pass once the pass is over everywhere */
+    void *rbuf;            /* (mpi) the receive buffer, and its bytes */
+    size_t rcap;
     /* worker */
     int *queue, qhead, qlen, qcap; /* granted tiles not yet claimed (ring) */
     bool done;             /* rank 0 said no tiles are left */
-    tb__outgoing *outbox;  /* finished tiles for the communication thread to send */
+    tb__outgoing *outbox;  /* finished tiles not yet handed to MPI */
     int nout, out_cap;
-} tb__tiles;
-
+    bool asked;            /* (mpi) a request is out, its grant awaited in greq */
+    int grant[2];          /* (mpi) the grant's first tile and count */
 #ifdef TB_HAVE_MPI
+    MPI_Request greq;      /* (mpi) */
+    MPI_Request *sreq;     /* (mpi) sends in flight and their buffers */
+#endif
+    void **sbuf;
+    int nsend, send_cap;
+} tb__tiles;
 
 /* Sleeps *us microseconds after a poll that moved nothing (and doubles it
  * for the next), or resets *us after one that moved something. */
@@ -81,17 +92,57 @@ static void tb__tiles_pause(int *us, int moved)
     *us = *us * 2 < TB__TILES_POLL_MAX_US ? *us * 2 : TB__TILES_POLL_MAX_US;
 }
 
-/* Records the communication thread's first failure. Lock held. */
+#ifdef TB_HAVE_MPI
+
+/* Records the exchange's first failure (`st`, message in tb_last_error()). */
 static void tb__tiles_fail(tb__tiles *t, tb_status st)
 {
+    pthread_mutex_lock(&t->lock);
     if (!t->comm_err) {
         t->comm_err = st;
         snprintf(t->comm_msg, sizeof t->comm_msg, "%s", tb_last_error());
     }
+    pthread_mutex_unlock(&t->lock);
 }
 
-/* Rank 0: one waiting message, if there is one (1: handled one). The
- * communication thread, lock not held (taken for the shared fields). */
+/* Rank 0: one remote tile of `len` bytes from `src`, received into the
+ * exchange's buffer and merged (after a failure: received and dropped, so
+ * the pass still ends on every rank). MPI lock held. */
+static tb_status tb__tiles_root_tile(tb__tiles *t, int src, int len)
+{
+    size_t n = len > 0 ? (size_t)len : 1;
+    if (n > t->rcap) {
+        void *b = realloc(t->rbuf, n);
+        if (!b) {
+            /* the message cannot be taken off the wire without a buffer:
+             * nothing is left but to stop the job */
+            fprintf(stderr, "testbed: rank 0 of %d: tile exchange: out of memory for a tile of %d bytes from "
+                    "rank %d; stopping every rank\n", t->ex.ranks, len, src);
+            tb_dist_abort(1);
+        }
+        t->rbuf = b, t->rcap = n;
+    }
+    MPI_Recv(t->rbuf, len, MPI_BYTE, src, TB__TAG_TILE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    pthread_mutex_lock(&t->lock);
+    bool failed = t->comm_err != TB_OK;
+    pthread_mutex_unlock(&t->lock);
+    if (failed)
+        return TB_OK;
+    bool inject = tb_fault("tile-merge");
+    tb_film_tile *tile = inject ? NULL : tb_film_tile_unpack(t->film, t->rbuf, (size_t)len);
+    if (inject)
+        tb_error(TB_ERR_NOMEM, "out of memory unpacking a tile (injected: TB_FAULT)");
+    if (!tile)
+        return tb_error_context(inject ? TB_ERR_NOMEM : TB_ERR_FORMAT, "rank 0: merging a tile from rank %d", src);
+    tb_tile_rect r = tb_film_tile_pixels(tile);
+    tb_status st = tb_film_tile_submit(t->film, tile); /* thread-safe: the film orders the merges */
+    if (!st && t->progress)
+        tb_progress_add(t->progress, (int64_t)(r.x1 - r.x0) * (r.y1 - r.y0));
+    return st;
+}
+
+/* Rank 0: one waiting message, if there is one (1: handled one). MPI lock
+ * held. */
 static int tb__tiles_root_one(tb__tiles *t)
 {
     int flag = 0;
@@ -106,7 +157,7 @@ static int tb__tiles_root_one(tb__tiles *t)
         MPI_Recv(&want, 1, MPI_INT, src, TB__TAG_REQUEST, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
         pthread_mutex_lock(&t->lock);
         int left = t->ntiles - t->next;
-        if (t->cancel && atomic_load(t->cancel))
+        if ((t->cancel && atomic_load(t->cancel)) || t->comm_err)
             left = 0;
         /* guided: never more than a share of what is left, so the last
          * tiles spread over the ranks */
@@ -126,22 +177,7 @@ static int tb__tiles_root_one(tb__tiles *t)
     } else if (ms.MPI_TAG == TB__TAG_TILE) {
         int len = 0;
         MPI_Get_count(&ms, MPI_BYTE, &len);
-        void *buf = malloc(len > 0 ? (size_t)len : 1);
-        if (!buf) {
-            st = tb_error(TB_ERR_NOMEM, "out of memory for a tile of %d bytes from rank %d", len, src);
-        } else {
-            MPI_Recv(buf, len, MPI_BYTE, src, TB__TAG_TILE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-            tb_film_tile *tile = tb_film_tile_unpack(t->film, buf, (size_t)len);
-            free(buf);
-            if (!tile) {
-                st = tb_error_context(TB_ERR_FORMAT, "tile from rank %d", src);
-            } else {
-                tb_tile_rect r = tb_film_tile_pixels(tile);
-                st = tb_film_tile_submit(t->film, tile); /* thread-safe: the film orders the merges */
-                if (!st && t->progress)
-                    tb_progress_add(t->progress, (int64_t)(r.x1 - r.x0) * (r.y1 - r.y0));
-            }
-        }
+        st = tb__tiles_root_tile(t, src, len);
         pthread_mutex_lock(&t->lock);
         t->owed--;
         t->msgs++;
@@ -149,7 +185,11 @@ static int tb__tiles_root_one(tb__tiles *t)
     } else if (ms.MPI_TAG == TB__TAG_SKIP) {
         int index = -1;
         MPI_Recv(&index, 1, MPI_INT, src, TB__TAG_SKIP, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-        st = tb_film_tile_skip(t->film, index);
+        pthread_mutex_lock(&t->lock);
+        bool failed = t->comm_err != TB_OK;
+        pthread_mutex_unlock(&t->lock);
+        if (!failed)
+            st = tb_film_tile_skip(t->film, index);
         pthread_mutex_lock(&t->lock);
         t->owed--;
         t->msgs++;
@@ -157,137 +197,140 @@ static int tb__tiles_root_one(tb__tiles *t)
     } else {
         st = tb_error(TB_ERR_FORMAT, "tile exchange: unexpected message tag %d from rank %d", ms.MPI_TAG, src);
     }
-    if (st) {
-        pthread_mutex_lock(&t->lock);
+    if (st)
         tb__tiles_fail(t, st);
-        pthread_mutex_unlock(&t->lock);
-    }
     return 1;
 }
 
-/* Rank 0's communication thread: answers until every worker has been told
- * the pass is over, every granted tile is back and this rank's own
- * threads are done. */
-static void *tb__tiles_root_comm(void *arg)
+/* A worker: moves a grant that came into the queue, hands finished tiles
+ * to MPI, frees the sends that completed and asks for more tiles while the
+ * queue is short. 1 if anything moved. MPI lock held. */
+static int tb__tiles_worker_poll(tb__tiles *t)
 {
-    tb__tiles *t = arg;
-    int pause = TB__TILES_POLL_MIN_US;
-    for (;;) {
-        int moved = 0;
-        while (tb__tiles_root_one(t))
-            moved = 1;
-        pthread_mutex_lock(&t->lock);
-        bool over = t->comm_err || (t->local_done && t->owed == 0 && t->workers_done == t->ex.ranks - 1);
-        pthread_mutex_unlock(&t->lock);
-        if (over)
-            return NULL;
-        tb__tiles_pause(&pause, moved);
-    }
-}
-
-/* A worker's communication thread: keeps a request for tiles in flight
- * while its queue is short, moves grants into the queue, sends finished
- * tiles, and ends once rank 0 said there are no more tiles, the render
- * threads are done and every tile has left. */
-static void *tb__tiles_worker_comm(void *arg)
-{
-    tb__tiles *t = arg;
-    int grant[2] = {0, 0};
-    MPI_Request greq = MPI_REQUEST_NULL;
-    bool asked = false;
-    int nsend = 0, send_cap = 0;
-    MPI_Request *sreq = NULL;
-    void **sbuf = NULL;
-    int pause = TB__TILES_POLL_MIN_US;
-    for (;;) {
-        int moved = 0;
-        /* the grant in flight */
-        if (asked) {
-            int flag = 0;
-            MPI_Test(&greq, &flag, MPI_STATUS_IGNORE);
-            if (flag) {
-                asked = false, moved = 1;
-                pthread_mutex_lock(&t->lock);
-                if (grant[1] == 0)
-                    t->done = true;
-                for (int k = 0; k < grant[1]; k++)
-                    t->queue[(t->qhead + t->qlen++) % t->qcap] = grant[0] + k;
-                pthread_cond_broadcast(&t->moved);
-                pthread_mutex_unlock(&t->lock);
-            }
-        }
-        /* take the outbox */
-        pthread_mutex_lock(&t->lock);
-        int nout = t->nout;
-        tb__outgoing out[64];
-        if (nout > 64)
-            nout = 64;
-        memcpy(out, t->outbox, sizeof *out * (size_t)nout);
-        memmove(t->outbox, t->outbox + nout, sizeof *out * (size_t)(t->nout - nout));
-        t->nout -= nout;
-        bool ask = !asked && !t->done && t->qlen < t->ahead;
-        bool finished = t->done && t->local_done && t->nout == 0;
-        pthread_mutex_unlock(&t->lock);
-        if (nsend + nout > send_cap) {
-            int cap = 2 * (nsend + nout) + 16;
-            MPI_Request *r = realloc(sreq, sizeof *r * (size_t)cap);
-            void **b = r ? realloc(sbuf, sizeof *b * (size_t)cap) : NULL;
-            if (r)
-                sreq = r;
-            if (!r || !b) {
-                pthread_mutex_lock(&t->lock);
-                tb__tiles_fail(t, tb_error(TB_ERR_NOMEM, "out of memory for tiles in flight"));
-                pthread_mutex_unlock(&t->lock);
-                break;
-            }
-            sbuf = b, send_cap = cap;
-        }
-        for (int i = 0; i < nout; i++) {
-            if (out[i].buf) {
-                MPI_Isend(out[i].buf, (int)out[i].len, MPI_BYTE, 0, TB__TAG_TILE, MPI_COMM_WORLD, &sreq[nsend]);
-                sbuf[nsend++] = out[i].buf;
-            } else {
-                MPI_Send(&out[i].index, 1, MPI_INT, 0, TB__TAG_SKIP, MPI_COMM_WORLD);
-            }
-            moved = 1;
-        }
-        /* sends that completed */
-        for (int i = 0; i < nsend;) {
-            int flag = 0;
-            MPI_Test(&sreq[i], &flag, MPI_STATUS_IGNORE);
-            if (flag) {
-                free(sbuf[i]);
-                sreq[i] = sreq[nsend - 1], sbuf[i] = sbuf[nsend - 1];
-                nsend--, moved = 1;
-            } else {
-                i++;
-            }
-        }
-        if (ask) {
-            int want = t->ahead;
-            MPI_Send(&want, 1, MPI_INT, 0, TB__TAG_REQUEST, MPI_COMM_WORLD);
-            MPI_Irecv(grant, 2, MPI_INT, 0, TB__TAG_GRANT, MPI_COMM_WORLD, &greq);
-            asked = true, moved = 1;
+    int moved = 0;
+    if (t->asked) {
+        int flag = 0;
+        MPI_Test(&t->greq, &flag, MPI_STATUS_IGNORE);
+        if (flag) {
+            t->asked = false, moved = 1;
             pthread_mutex_lock(&t->lock);
-            t->bytes += sizeof want;
-            t->msgs += 2;
+            if (t->grant[1] == 0)
+                t->done = true;
+            if (t->qlen + t->grant[1] > t->qcap) {
+                /* rank 0's first grant follows its own thread count, which
+                 * may exceed this rank's: the queue grows (in order) */
+                int cap = t->qlen + t->grant[1] + t->ahead;
+                int *q = malloc(sizeof *q * (size_t)cap);
+                if (!q) {
+                    pthread_mutex_unlock(&t->lock);
+                    fprintf(stderr, "testbed: rank %d of %d: tile exchange: out of memory for a queue of %d tiles; "
+                            "stopping every rank\n", t->ex.rank, t->ex.ranks, cap);
+                    tb_dist_abort(1);
+                }
+                for (int k = 0; k < t->qlen; k++)
+                    q[k] = t->queue[(t->qhead + k) % t->qcap];
+                free(t->queue);
+                t->queue = q, t->qhead = 0, t->qcap = cap;
+            }
+            for (int k = 0; k < t->grant[1]; k++)
+                t->queue[(t->qhead + t->qlen++) % t->qcap] = t->grant[0] + k;
             pthread_mutex_unlock(&t->lock);
         }
-        if (finished && nout == 0 && !asked) {
-            MPI_Waitall(nsend, sreq, MPI_STATUSES_IGNORE);
-            for (int i = 0; i < nsend; i++)
-                free(sbuf[i]);
-            nsend = 0;
-            break;
-        }
-        tb__tiles_pause(&pause, moved);
     }
-    free(sreq);
-    free(sbuf);
-    return NULL;
+    /* the outbox, whole */
+    pthread_mutex_lock(&t->lock);
+    int nout = t->nout;
+    if (t->nsend + nout > t->send_cap) {
+        int cap = 2 * (t->nsend + nout) + 16;
+        MPI_Request *r = realloc(t->sreq, sizeof *r * (size_t)cap);
+        void **b = r ? realloc(t->sbuf, sizeof *b * (size_t)cap) : NULL;
+        if (r)
+            t->sreq = r;
+        if (b)
+            t->sbuf = b, t->send_cap = cap;
+        else
+            nout = t->send_cap - t->nsend; /* what fits; the rest waits for a completed send */
+    }
+    for (int i = 0; i < nout; i++) {
+        tb__outgoing *o = &t->outbox[i];
+        if (o->buf) {
+            MPI_Isend(o->buf, (int)o->len, MPI_BYTE, 0, TB__TAG_TILE, MPI_COMM_WORLD, &t->sreq[t->nsend]);
+            t->sbuf[t->nsend++] = o->buf;
+        } else {
+            MPI_Send(&o->index, 1, MPI_INT, 0, TB__TAG_SKIP, MPI_COMM_WORLD);
+        }
+        moved = 1;
+    }
+    memmove(t->outbox, t->outbox + nout, sizeof *t->outbox * (size_t)(t->nout - nout));
+    t->nout -= nout;
+    bool ask = !t->asked && !t->done && t->qlen < t->ahead;
+    int want = t->ahead - t->qlen; /* what the queue lacks */
+    pthread_mutex_unlock(&t->lock);
+    /* sends that completed */
+    for (int i = 0; i < t->nsend;) {
+        int flag = 0;
+        MPI_Test(&t->sreq[i], &flag, MPI_STATUS_IGNORE);
+        if (flag) {
+            free(t->sbuf[i]);
+            t->sreq[i] = t->sreq[t->nsend - 1], t->sbuf[i] = t->sbuf[t->nsend - 1];
+            t->nsend--, moved = 1;
+        } else {
+            i++;
+        }
+    }
+    if (ask) {
+        MPI_Send(&want, 1, MPI_INT, 0, TB__TAG_REQUEST, MPI_COMM_WORLD);
+        MPI_Irecv(t->grant, 2, MPI_INT, 0, TB__TAG_GRANT, MPI_COMM_WORLD, &t->greq);
+        t->asked = true, moved = 1;
+        pthread_mutex_lock(&t->lock);
+        t->bytes += sizeof want;
+        t->msgs += 2;
+        pthread_mutex_unlock(&t->lock);
+    }
+    return moved;
 }
 
 #endif
+
+/* Whatever MPI has for this rank: rank 0 answers every waiting message, a
+ * worker polls (tb__tiles_worker_poll). `block`: wait for the MPI lock,
+ * else skip if another thread holds it (it is doing the same). 1 if
+ * anything moved. */
+static int tb__tiles_service(tb__tiles *t, bool block)
+{
+    int moved = 0;
+#ifdef TB_HAVE_MPI
+    if (t->ex.ranks < 2)
+        return 0;
+    if (block)
+        pthread_mutex_lock(&t->mpi);
+    else if (pthread_mutex_trylock(&t->mpi) != 0)
+        return 0;
+    if (t->ex.rank == 0) {
+        while (tb__tiles_root_one(t))
+            moved = 1;
+    } else {
+        moved = tb__tiles_worker_poll(t);
+    }
+    pthread_mutex_unlock(&t->mpi);
+#else
+    (void)t, (void)block;
+#endif
+    return moved;
+}
+
+/* Rank 0's communication thread: answers the others while this rank's
+ * render threads are inside their tiles (they answer too, between tiles),
+ * so a worker's queue never waits for one of rank 0's tiles to end, even
+ * when the scheduler has parked rank 0's render thread. Mostly asleep:
+ * polls with growing sleeps. */
+static void *tb__tiles_root_comm(void *arg)
+{
+    tb__tiles *t = arg;
+    for (int pause = TB__TILES_POLL_MIN_US; !atomic_load(&t->comm_stop);)
+        tb__tiles_pause(&pause, tb__tiles_service(t, true));
+    return NULL;
+}
 
 static tb_status tb__tiles_begin(void *ctx, tb_film *film, int pass, tb_progress *progress, const atomic_int *cancel)
 {
@@ -300,17 +343,38 @@ static tb_status tb__tiles_begin(void *ctx, tb_film *film, int pass, tb_progress
     t->ntiles = tb_film_tile_count(film);
     t->owed = t->workers_done = 0;
     t->qhead = t->qlen = t->nout = 0;
-    t->done = t->local_done = false;
+    t->done = t->asked = false;
     t->comm_err = TB_OK;
     t->wait = 0;
     t->bytes = t->msgs = t->units = 0;
     t->t_pass = tb__dist_now();
-    t->comm_running = false;
 #ifdef TB_HAVE_MPI
+    /* the first grants go out unasked (a worker's first request is
+     * implied), so no worker waits for rank 0 to finish a tile first */
     if (t->ex.ranks > 1) {
-        if (pthread_create(&t->comm, NULL, t->ex.rank == 0 ? tb__tiles_root_comm : tb__tiles_worker_comm, t) != 0)
-            return tb_error(TB_ERR_NOMEM, "tile exchange: cannot start the communication thread");
-        t->comm_running = true;
+        pthread_mutex_lock(&t->mpi);
+        if (t->ex.rank == 0) {
+            for (int w = 1; w < t->ex.ranks; w++) {
+                int left = t->ntiles - t->next;
+                int share = left / (2 * t->ex.ranks);
+                int n = t->ahead < share ? t->ahead : share > 0 ? share : left > 0 ? 1 : 0;
+                int g[2] = {t->next, n};
+                t->next += n, t->owed += n;
+                if (n == 0)
+                    t->workers_done++;
+                t->bytes += sizeof g;
+                t->msgs++;
+                MPI_Send(g, 2, MPI_INT, w, TB__TAG_GRANT, MPI_COMM_WORLD);
+            }
+            atomic_store(&t->comm_stop, 0);
+            if (pthread_create(&t->comm, NULL, tb__tiles_root_comm, t) == 0)
+                t->comm_running = true;
+            /* else the render threads answer between their tiles alone */
+        } else {
+            MPI_Irecv(t->grant, 2, MPI_INT, 0, TB__TAG_GRANT, MPI_COMM_WORLD, &t->greq);
+            t->asked = true;
+        }
+        pthread_mutex_unlock(&t->mpi);
     }
 #endif
     return TB_OK;
@@ -320,21 +384,27 @@ static int tb__tiles_claim(void *ctx, int *index)
 {
     tb__tiles *t = ctx;
     int got = 0;
-    pthread_mutex_lock(&t->lock);
     if (t->ex.rank == 0) {
-        if (t->next < t->ntiles) {
+        /* between tiles: answer the others first */
+        tb__tiles_service(t, false);
+        pthread_mutex_lock(&t->lock);
+        if (t->next < t->ntiles && !t->comm_err) {
             *index = t->next++;
             got = 1;
         }
     } else {
+        tb__tiles_service(t, false);
+        pthread_mutex_lock(&t->lock);
         double t0 = tb__dist_now();
         bool waited = false;
-        while (t->qlen == 0 && !t->done && !t->comm_err) {
-            pthread_cond_wait(&t->moved, &t->lock);
+        for (int pause = TB__TILES_POLL_MIN_US; t->qlen == 0 && !t->done && !t->comm_err;) {
+            pthread_mutex_unlock(&t->lock);
+            tb__tiles_pause(&pause, tb__tiles_service(t, false));
             waited = true;
+            pthread_mutex_lock(&t->lock);
         }
-        if (waited)
-            t->wait += tb__dist_now() - t0;
+        if (waited) /* a rank's wait: its threads' waits over its threads */
+            t->wait += (tb__dist_now() - t0) / t->threads;
         if (t->qlen > 0) {
             *index = t->queue[t->qhead];
             t->qhead = (t->qhead + 1) % t->qcap;
@@ -381,6 +451,17 @@ static tb_status tb__tiles_finish(void *ctx, tb_film *film, int index, tb_film_t
     return TB_OK;
 }
 
+/* True once this rank's part of the pass is over: rank 0 has every tile
+ * back and every worker told, a worker has been told and sent everything. */
+static bool tb__tiles_over(tb__tiles *t)
+{
+    pthread_mutex_lock(&t->lock);
+    bool over = t->ex.rank == 0 ? t->owed == 0 && t->workers_done == t->ex.ranks - 1
+                                : t->done && t->nout == 0 && t->nsend == 0 && !t->asked;
+    pthread_mutex_unlock(&t->lock);
+    return over;
+}
+
 static tb_status tb__tiles_end(void *ctx, tb_film *film, tb_aa_stats *stats, tb_status mine)
 {
     tb__tiles *t = ctx;
@@ -388,10 +469,12 @@ static tb_status tb__tiles_end(void *ctx, tb_film *film, tb_aa_stats *stats, tb_
     char why[512];
     snprintf(why, sizeof why, "%s", mine ? tb_last_error() : "");
     double t0 = tb__dist_now();
-    pthread_mutex_lock(&t->lock);
-    t->local_done = true;
-    pthread_mutex_unlock(&t->lock);
+    /* this rank's threads are done: serve the others (rank 0) or send the
+     * last tiles (a worker) until the pass is over everywhere */
+    for (int pause = TB__TILES_POLL_MIN_US; t->ex.ranks > 1 && !tb__tiles_over(t);)
+        tb__tiles_pause(&pause, tb__tiles_service(t, !t->comm_running));
     if (t->comm_running) {
+        atomic_store(&t->comm_stop, 1);
         pthread_join(t->comm, NULL);
         t->comm_running = false;
     }
@@ -457,9 +540,11 @@ tb_tile_exchange *tb_dist_tiles_create(int threads)
         tb_error(TB_ERR_NOMEM, "out of memory for the tile exchange");
         return NULL;
     }
-    /* two tiles per thread: one rendering, one waiting, while the next
-     * grant travels */
-    t->ahead = 2 * (threads > 0 ? threads : omp_get_max_threads());
+    /* four tiles per thread: rank 0 answers a request between its own
+     * tiles, so a worker's queue must last through one of rank 0's tiles
+     * (which may take longer than the worker's) while the grant travels */
+    t->threads = threads > 0 ? threads : omp_get_max_threads();
+    t->ahead = 4 * t->threads;
     t->qcap = 2 * t->ahead + 2;
     t->queue = malloc(sizeof *t->queue * (size_t)t->qcap);
     if (!t->queue) {
@@ -468,7 +553,7 @@ tb_tile_exchange *tb_dist_tiles_create(int threads)
         return NULL;
     }
     pthread_mutex_init(&t->lock, NULL);
-    pthread_cond_init(&t->moved, NULL);
+    pthread_mutex_init(&t->mpi, NULL);
     t->ex = (tb_tile_exchange){.ctx = t, .rank = tb_dist_rank(), .ranks = tb_dist_size(),
                                .begin_pass = tb__tiles_begin, .claim = tb__tiles_claim,
                                .finish = tb__tiles_finish, .end_pass = tb__tiles_end, .agree = tb__tiles_agree,
@@ -482,10 +567,15 @@ void tb_dist_tiles_free(tb_tile_exchange *ex)
         return;
     tb__tiles *t = ex->ctx;
     pthread_mutex_destroy(&t->lock);
-    pthread_cond_destroy(&t->moved);
+    pthread_mutex_destroy(&t->mpi);
     for (int i = 0; i < t->nout; i++)
         free(t->outbox[i].buf);
     free(t->outbox);
     free(t->queue);
+    free(t->rbuf);
+#ifdef TB_HAVE_MPI
+    free(t->sreq);
+#endif
+    free(t->sbuf);
     free(t);
 }

@@ -4,9 +4,10 @@
  * order, a few at a time; each rank renders its tiles with its OpenMP
  * threads and sends them, packed (film.h), to rank 0, which merges every
  * tile into its film in tile order as the one-process render does: the
- * image is bit-identical for any number of ranks and threads. During a pass
- * a communication thread per rank makes every MPI call (requests ahead,
- * grants, tiles), so messages move while the renderer's threads work.
+ * image is bit-identical for any number of ranks and threads. The render
+ * threads make the MPI calls (requests ahead, grants, tiles) between their
+ * tiles, one thread at a time; rank 0 also has a communication thread,
+ * mostly asleep, that answers requests while its render threads are busy.
  *
  *     tb_tile_exchange *ex = tb_dist_tiles_create(threads);
  *     ro.exchange = ex;                 (every rank calls tb_render)

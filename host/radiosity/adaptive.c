@@ -15,6 +15,7 @@
  * green closure straddle two old elements). */
 #include "host/radiosity/adaptive.h"
 #include "host/radiosity/lights.h"
+#include "host/radiosity/render.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -399,8 +400,96 @@ static tb_status tb__copy_mesh(const tb_rad_mesh *m, tb_rad_mesh *out)
     return st;
 }
 
+/* The refinement's state in a checkpoint (tb_rad_persist's `extra`): u64
+ * rounds done, shots of the finished rounds, elements marked, receivers
+ * gathered; then per round u64 n and its n marked elements (u32). */
+typedef struct tb__adapt_ckpt {
+    const tb_rad_persist *pe;
+    tb_array bytes;          /* the state as saved (unsigned char) */
+    const tb_rad_adapt_stats *sts;
+} tb__adapt_ckpt;
+
+/* Rewrites the head of c->bytes from *sts. */
+static void tb__adapt_ckpt_head(tb__adapt_ckpt *c)
+{
+    uint64_t h[4] = {(uint64_t)c->sts->rounds, c->sts->shots, c->sts->marked, c->sts->gathered};
+    memcpy(c->bytes.data, h, sizeof h);
+}
+
+/* tb_rad_solver_run's report: the persist's save after every shot. */
+static tb_status tb__adapt_on_shot(void *user, const tb_rad_solver *s)
+{
+    tb__adapt_ckpt *c = user;
+    tb__adapt_ckpt_head(c);
+    return c->pe->save(c->pe->ctx, s, c->bytes.data, c->bytes.len, c->sts->shots + tb_rad_solver_shots(s), false);
+}
+
+/* Runs s to `stop`, saving as the persist decides when there is one. */
+static tb_status tb__adapt_run(tb_rad_solver *s, const tb_rad_stop *stop, tb__adapt_ckpt *c)
+{
+    if (!c->pe || !c->pe->save)
+        return tb_rad_solver_run(s, stop, NULL, NULL, 0);
+    return tb_rad_solver_run(s, stop, tb__adapt_on_shot, c, 1);
+}
+
 tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const tb_rad_stop *stop,
                              const tb_rad_adapt_options *aopt, tb_rad_solver **out, tb_rad_adapt_stats *stats)
+{
+    return tb_rad_adapt_solve_persist(mesh, opt, stop, aopt, NULL, out, stats);
+}
+
+/* Rebuilds the mesh of a saved state: replays its rounds' refinements from
+ * *cur (replaced by the refined mesh) and restores *sts; c->bytes becomes
+ * the saved state. */
+static tb_status tb__adapt_replay(tb_mesh_refiner *r, tb_rad_mesh *cur, const unsigned char *x, size_t len,
+                                  tb_rad_adapt_stats *sts, tb__adapt_ckpt *c, tb_array *map)
+{
+    uint64_t h[4];
+    if (len < sizeof h)
+        return tb_error(TB_ERR_FORMAT, "adaptive subdivision: saved state of %zu bytes", len);
+    memcpy(h, x, sizeof h);
+    if (h[0] > TB_RAD_ADAPT_MAX_LEVELS)
+        return tb_error(TB_ERR_FORMAT, "adaptive subdivision: saved state of %llu rounds", (unsigned long long)h[0]);
+    size_t at = sizeof h;
+    for (uint64_t k = 0; k < h[0]; k++) {
+        uint64_t n;
+        if (len - at < sizeof n)
+            return tb_error(TB_ERR_FORMAT, "adaptive subdivision: saved state truncated");
+        memcpy(&n, x + at, sizeof n);
+        at += sizeof n;
+        if (n > (len - at) / sizeof(uint32_t))
+            return tb_error(TB_ERR_FORMAT, "adaptive subdivision: saved state truncated");
+        uint32_t *marked = malloc(n ? n * sizeof *marked : 1);
+        if (!marked)
+            return tb_error(TB_ERR_NOMEM, "adaptive subdivision: out of memory");
+        memcpy(marked, x + at, n * sizeof *marked);
+        at += n * sizeof *marked;
+        for (uint64_t i = 0; i < n; i++)
+            if (marked[i] >= cur->nelems) {
+                free(marked);
+                return tb_error(TB_ERR_FORMAT, "adaptive subdivision: saved state marks element %u of %zu",
+                                marked[i], cur->nelems);
+            }
+        tb_status st = tb_mesh_refine(r, marked, (size_t)n, map, NULL);
+        free(marked);
+        tb_rad_mesh nm;
+        if (!st)
+            st = tb__from_refiner(r, cur, map->data, &nm);
+        if (st)
+            return st;
+        tb_rad_mesh_free(cur);
+        *cur = nm;
+    }
+    if (at != len)
+        return tb_error(TB_ERR_FORMAT, "adaptive subdivision: saved state has %zu bytes too many", len - at);
+    sts->rounds = (int)h[0], sts->shots = h[1], sts->marked = (size_t)h[2], sts->gathered = (size_t)h[3];
+    tb_array_clear(&c->bytes);
+    return tb_array_push_n(&c->bytes, x, len);
+}
+
+tb_status tb_rad_adapt_solve_persist(tb_rad_mesh *mesh, const tb_rad_options *opt, const tb_rad_stop *stop,
+                                     const tb_rad_adapt_options *aopt, const tb_rad_persist *persist,
+                                     tb_rad_solver **out, tb_rad_adapt_stats *stats)
 {
     *out = NULL;
     tb_rad_adapt_stats sts = {.elems_in = mesh->nelems};
@@ -428,10 +517,42 @@ tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const
     tb_rad_solver *s = NULL;
     tb_array marked = TB_ARRAY_INIT(uint32_t), map = TB_ARRAY_INIT(uint32_t);
     uint32_t *level = NULL;
-    st = tb_rad_solver_create(mesh, NULL, &o, &s);
+    tb__adapt_ckpt ck = {.pe = persist, .bytes = TB_ARRAY_INIT(unsigned char), .sts = &sts};
+    uint64_t zero[4] = {0, 0, 0, 0};
+    st = tb_array_push_n(&ck.bytes, zero, sizeof zero);
+    /* a saved state: the mesh of its round, the solver's state */
+    bool found = false;
+    void *extra = NULL, *saved = NULL;
+    size_t extra_len = 0, saved_len = 0;
+    tb_rad_mesh cur;
+    bool have_cur = false;
+    if (!st && persist && persist->load)
+        st = persist->load(persist->ctx, &found, &extra, &extra_len, &saved, &saved_len);
+    if (!st && found && !extra_len)
+        st = tb_error(TB_ERR_FORMAT, "the checkpoint is of a solve without adaptive subdivision");
+    if (!st && found && !(st = tb__copy_mesh(mesh, &cur))) {
+        have_cur = true;
+        st = tb__adapt_replay(r, &cur, extra, extra_len, &sts, &ck, &map);
+    }
     if (!st)
-        st = tb_rad_solver_run(s, stop, NULL, NULL, 0);
-    for (int round = 0; round < levels && !st; round++) {
+        st = tb_rad_solver_create(have_cur ? &cur : mesh, NULL, &o, &s);
+    if (have_cur)
+        tb_rad_mesh_free(&cur);
+    if (!st && found)
+        st = tb_rad_solver_unpack(s, saved, saved_len);
+    free(extra);
+    free(saved);
+    /* a round's shot limit counts the shots it made before the save */
+    tb_rad_stop first = stop ? *stop : (tb_rad_stop){0};
+    bool ran_out = false;
+    if (found && first.max_shots > 0) {
+        uint64_t done = tb_rad_solver_shots(s);
+        ran_out = done >= first.max_shots;
+        first.max_shots -= ran_out ? first.max_shots : done;
+    }
+    if (!st && !ran_out)
+        st = tb__adapt_run(s, &first, &ck);
+    for (int round = sts.rounds; round < levels && !st; round++) {
         const tb_rad_mesh *sm = tb_rad_solver_mesh(s);
         free(level);
         level = malloc(sizeof *level * (sm->nelems ? sm->nelems : 1));
@@ -445,6 +566,10 @@ tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const
         if (st || marked.len == 0)
             break;
         sts.marked += marked.len;
+        uint64_t n = marked.len;
+        if (persist && ((st = tb_array_push_n(&ck.bytes, &n, sizeof n)) ||
+                        (st = tb_array_push_n(&ck.bytes, marked.data, marked.len * sizeof(uint32_t)))))
+            break;
         st = tb_mesh_refine(r, marked.data, marked.len, &map, NULL);
         if (st)
             break;
@@ -475,8 +600,13 @@ tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const
         tb_rad_solver_free(s);
         s = ns;
         sts.rounds++;
-        st = tb_rad_solver_run(s, stop, NULL, NULL, 0);
+        st = tb__adapt_run(s, stop, &ck);
     }
+    if (!st && persist && persist->save) {
+        tb__adapt_ckpt_head(&ck);
+        st = persist->save(persist->ctx, s, ck.bytes.data, ck.bytes.len, sts.shots + tb_rad_solver_shots(s), true);
+    }
+    tb_array_free(&ck.bytes);
     free(level);
     tb_array_free(&marked);
     tb_array_free(&map);
@@ -488,6 +618,9 @@ tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const
     }
     if (st) {
         tb_rad_solver_free(s);
+        /* over several processes the others are mid-solve: stop them all */
+        if (o.exchange && o.exchange->ranks > 1 && o.exchange->fail)
+            o.exchange->fail(o.exchange->ctx, st);
         return st;
     }
     sts.shots += tb_rad_solver_shots(s);

@@ -72,4 +72,16 @@ tb_status tb_rad_adapt_mark(const tb_rad_solver *s, double threshold, double min
 tb_status tb_rad_adapt_solve(tb_rad_mesh *mesh, const tb_rad_options *opt, const tb_rad_stop *stop,
                              const tb_rad_adapt_options *aopt, tb_rad_solver **out, tb_rad_adapt_stats *stats);
 
+struct tb_rad_persist;
+
+/* tb_rad_adapt_solve with checkpoints (host/radiosity/render.h): a saved
+ * state (persist->load) is continued: the mesh is rebuilt by the saved
+ * rounds' refinements of the input mesh (each round's marked elements) and
+ * the solver takes the saved state, so the end is that of an uninterrupted
+ * solve, bit for bit; persist->save gets the rounds after every shot and
+ * after the last. persist NULL: tb_rad_adapt_solve. */
+tb_status tb_rad_adapt_solve_persist(tb_rad_mesh *mesh, const tb_rad_options *opt, const tb_rad_stop *stop,
+                                     const tb_rad_adapt_options *aopt, const struct tb_rad_persist *persist,
+                                     tb_rad_solver **out, tb_rad_adapt_stats *stats);
+
 #endif

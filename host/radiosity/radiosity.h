@@ -181,6 +181,8 @@ typedef struct tb_rad_exchange {
     /* Collective: every process's `mine` (n_mine values) concatenated in rank
      * order into all[] (counts[r] values from rank r). */
     tb_status (*allgather)(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts);
+    /* The same for floats (the several-shooters mode's form factors). */
+    tb_status (*allgatherf)(void *ctx, const float *mine, size_t n_mine, float *all, const size_t *counts);
     /* Rank 0's `flag` on every process (a stop decision that reads a clock). */
     int (*agree)(void *ctx, int flag);
     /* The lowest-ranked failure among every process's `st` (its message as
@@ -189,6 +191,11 @@ typedef struct tb_rad_exchange {
     /* After the solve, on every process: each process's share of the work
      * into the stats values. NULL: nothing. */
     tb_status (*report)(void *ctx);
+    /* A failure on this process alone during the solve (`st`, its message in
+     * tb_last_error()), where the others cannot learn of it: stops every
+     * process of the job with that message (does not return). NULL: return
+     * the failure (the others may then wait for this one forever). */
+    void (*fail)(void *ctx, tb_status st);
     /* false: the deterministic mode above. true: several shooters in flight
      * (one per process, at most TB_RAD_MAX_IN_FLIGHT): each process
      * computes one shooter's form factors whole, all are exchanged, and

@@ -104,9 +104,6 @@ static tb_status tb__rad_check(const tb_rad_render_options *o)
         return tb_error(TB_ERR_ARG, "--mesh-out '%s': unknown mesh format (.ply, .gltf, .glb)", o->mesh_path);
     if (!o->report_path != !o->reference_path)
         return tb_error(TB_ERR_ARG, "--report and --reference go together");
-    if (o->adapt.threshold > 0 && o->persist)
-        return tb_error(TB_ERR_ARG, "--checkpoint and --resume are for solves without --adapt (the adaptive "
-                                    "mesh changes between rounds; its checkpoints are not written yet)");
     if (o->adapt.threshold > 0 && o->report_path)
         return tb_error(TB_ERR_ARG, "--report compares with a reference of the same mesh: not with --adapt");
     return TB_OK;
@@ -160,7 +157,24 @@ static tb_status tb__rad_on_shot(void *user, const tb_rad_solver *s)
     if (h->rep && h->n % h->every == 0)
         st = tb__rad_report_row(h->rep, s);
     if (!st && h->persist->save)
-        st = h->persist->save(h->persist->ctx, s, false);
+        st = h->persist->save(h->persist->ctx, s, NULL, 0, tb_rad_solver_shots(s), false);
+    return st;
+}
+
+/* The saved state of a solve without adaptive subdivision into s, if
+ * there is one. */
+static tb_status tb__rad_restore(const tb_rad_persist *pe, tb_rad_solver *s)
+{
+    bool found = false;
+    void *extra = NULL, *state = NULL;
+    size_t extra_len = 0, state_len = 0;
+    tb_status st = pe->load(pe->ctx, &found, &extra, &extra_len, &state, &state_len);
+    if (!st && found && extra_len)
+        st = tb_error(TB_ERR_FORMAT, "the checkpoint is of a solve with adaptive subdivision (--adapt)");
+    if (!st && found)
+        st = tb_rad_solver_unpack(s, state, state_len);
+    free(extra);
+    free(state);
     return st;
 }
 
@@ -334,17 +348,20 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
     bool adaptive = opt->adapt.threshold > 0;
     if (adaptive) {
         /* host/radiosity/adaptive.h: the mesh becomes the refined mesh */
-        if ((st = tb_rad_adapt_solve(&r.mesh, &ro, &opt->stop, &opt->adapt, &r.solver, &as)))
+        if ((st = tb_rad_adapt_solve_persist(&r.mesh, &ro, &opt->stop, &opt->adapt, opt->persist, &r.solver, &as)))
             goto done;
         if (opt->log && root)
             fprintf(opt->log, "%sadaptive subdivision: %d rounds, %zu -> %zu elements, %llu shots in all\n",
                     opt->log_prefix ? opt->log_prefix : "", as.rounds, as.elems_in, as.elems_out,
                     (unsigned long long)as.shots);
     } else {
-        if ((st = tb_rad_solver_create(&r.mesh, NULL, &ro, &r.solver)))
+        st = tb_rad_solver_create(&r.mesh, NULL, &ro, &r.solver);
+        if (ex) /* one process short of memory stops them all */
+            st = ex->agree_status(ex->ctx, st);
+        if (st)
             goto done;
         const tb_rad_persist *pe = opt->persist;
-        if (pe && pe->restore && (st = pe->restore(pe->ctx, r.solver)))
+        if (pe && pe->load && (st = tb__rad_restore(pe, r.solver)))
             goto done;
         uint64_t every = r.mesh.nelems / 20 ? r.mesh.nelems / 20 : 1;
         if (r.rep.ref && (st = tb__rad_report_row(&r.rep, r.solver)))
@@ -356,7 +373,7 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
                 goto done;
             if (hook.rep && hook.n % every != 0 && (st = tb__rad_report_row(&r.rep, r.solver)))
                 goto done;
-            if (pe->save && (st = pe->save(pe->ctx, r.solver, true)))
+            if (pe->save && (st = pe->save(pe->ctx, r.solver, NULL, 0, tb_rad_solver_shots(r.solver), true)))
                 goto done;
         } else if ((st = tb_rad_solver_run(r.solver, &opt->stop, r.rep.ref ? tb__rad_report_row : NULL, &r.rep,
                                            every)))

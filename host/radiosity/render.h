@@ -19,17 +19,23 @@
  * kernel, whose context the caller frees after tb_rad_render returns. */
 typedef tb_status (*tb_rad_backend_fn)(void *user, const tb_rad_mesh *mesh, tb_rad_options *opt);
 
-/* Saving and restoring a solve (checkpoints, host/dist/checkpoint.h);
- * not with adaptive subdivision (its mesh changes between rounds). */
+/* Saving and restoring a solve (checkpoints, host/dist/checkpoint.h). A
+ * saved state is the solver's (tb_rad_solver_pack) and, with adaptive
+ * subdivision, the refinement's own ahead of it (`extra`: the rounds done
+ * and the elements each marked, from which the mesh is rebuilt). */
 typedef struct tb_rad_persist {
     void *ctx; /* passed to both */
-    /* After the solver is made: may replace its state (tb_rad_solver_unpack)
-     * by a saved one. NULL: a new solve. */
-    tb_status (*restore)(void *ctx, tb_rad_solver *s);
+    /* Before the solve: the saved state, if any (*found), the same on every
+     * process: *extra and *state (malloc'd, the caller frees them; *extra
+     * NULL and *extra_len 0 when there is none). NULL: always a new solve. */
+    tb_status (*load)(void *ctx, bool *found, void **extra, size_t *extra_len, void **state, size_t *state_len);
     /* After each shot (its own schedule, e.g. every N seconds) and with
-     * `last` after the final one: may save the state (tb_rad_solver_pack).
-     * NULL: never. An error stops the solve. */
-    tb_status (*save)(void *ctx, const tb_rad_solver *s, bool last);
+     * `last` after the final one: may save `extra` (extra_len bytes; may be
+     * NULL, 0) and the solver's state; `shots`: shots of the whole solve so
+     * far (all rounds). Called on every process. NULL: never. An error stops
+     * the solve. */
+    tb_status (*save)(void *ctx, const tb_rad_solver *s, const void *extra, size_t extra_len, uint64_t shots,
+                      bool last);
 } tb_rad_persist;
 
 /* What tb_rad_render does; tb_rad_render_defaults() gives the defaults. */

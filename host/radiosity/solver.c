@@ -5,6 +5,7 @@
 
 #include "host/radiosity/lights.h"
 #include "host/radiosity/radiosity.h"
+#include "util/base/fault.h"
 #include "util/base/progress.h"
 #include "util/container/pqueue.h"
 #include "util/math/float.h"
@@ -90,7 +91,7 @@ struct tb_rad_solver {
     size_t *xcounts;
     /* several shooters in flight: this process's shooter's form factors,
      * everyone's, and the counts (all equal) */
-    double *xsev, *xsevall;
+    float *xsev, *xsevall; /* the form factors are floats: sent as they are, half the bytes of doubles */
     size_t *xsevcounts;
 };
 
@@ -823,7 +824,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
 
 static void tb__near_field(tb_rad_solver *s, size_t i);
 static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0);
-static void tb__cache_store(tb_rad_solver *s, size_t k);
+static tb_status tb__cache_store(tb_rad_solver *s, size_t k);
 static tb_status tb__step_several(tb_rad_solver *s, const tb_rad_exchange *ex, bool *shot);
 static void tb__hemicube_near_patch(tb_rad_solver *s, size_t k);
 static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i, bool share);
@@ -874,25 +875,32 @@ static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k, bool share)
             s->gnear[s->near_list[k]] = NAN;
         s->nnear = 0;
     }
-    tb__cache_store(s, k);
-    return TB_OK;
+    return tb__cache_store(s, k);
 }
 
 /* Keeps s->vff and s->eff as shooter k's cached form factors, if it has
- * none yet and the cache has room (the same rule on every process). */
-static void tb__cache_store(tb_rad_solver *s, size_t k)
+ * none yet and the cache has room (the same rule on every process). Over
+ * several processes a failed allocation is an error: the caches must stay
+ * the same everywhere, since a shooter cached everywhere is shot without an
+ * exchange; in one process it only leaves the shooter uncached. */
+static tb_status tb__cache_store(tb_rad_solver *s, size_t k)
 {
     size_t nvf = s->opt.ff == TB_RAD_FF_HEMICUBE ? 0 : s->m.nverts, ne = s->m.nelems;
     size_t bytes = (nvf + ne) * sizeof(float);
     if (s->cache && !s->cache[k] && s->cache_bytes + bytes <= TB__RAD_CACHE_BYTES) {
-        float *c = malloc(bytes);
-        if (c) {
-            memcpy(c, s->vff, nvf * sizeof(float));
-            memcpy(c + nvf, s->eff, ne * sizeof(float));
-            s->cache[k] = c;
-            s->cache_bytes += bytes;
+        float *c = tb_fault("rad-cache") ? NULL : malloc(bytes);
+        if (!c) {
+            if (s->opt.exchange && s->opt.exchange->ranks > 1)
+                return tb_error(TB_ERR_NOMEM, "radiosity: out of memory caching the form factors of shooter %zu "
+                                "(%zu bytes)", k, bytes);
+            return TB_OK;
         }
+        memcpy(c, s->vff, nvf * sizeof(float));
+        memcpy(c + nvf, s->eff, ne * sizeof(float));
+        s->cache[k] = c;
+        s->cache_bytes += bytes;
     }
+    return TB_OK;
 }
 
 /* Form factors of one shot from shooter k: s->ff[r] for every receiver.
@@ -1258,16 +1266,15 @@ static tb_status tb__step_several(tb_rad_solver *s, const tb_rad_exchange *ex, b
     } else {
         memset(s->xsev, 0, per * sizeof *s->xsev);
     }
-    tb_status st = ex->allgather(ex->ctx, s->xsev, per, s->xsevall, s->xsevcounts);
+    tb_status st = ex->allgatherf(ex->ctx, s->xsev, per, s->xsevall, s->xsevcounts);
     if (st)
         return st;
     for (size_t k = 0; k < n; k++) {
-        const double *f = s->xsevall + k * per;
-        for (size_t v = 0; v < nvf; v++)
-            s->vff[v] = (float)f[v];
-        for (size_t j = 0; j < ne; j++)
-            s->eff[j] = (float)f[nvf + j];
-        tb__cache_store(s, keys[k]);
+        const float *f = s->xsevall + k * per;
+        memcpy(s->vff, f, nvf * sizeof *f);
+        memcpy(s->eff, f + nvf, ne * sizeof *f);
+        if ((st = tb__cache_store(s, keys[k])))
+            return st;
         tb__shoot(s, keys[k], k == 0 ? t0 : tb__now());
     }
     if (shot)
@@ -1348,6 +1355,11 @@ tb_status tb_rad_solver_run(tb_rad_solver *s, const tb_rad_stop *stop, tb_rad_re
         tb_progress_finish(&pr);
     if (!st && report && (every == 0 || n % every != 0))
         st = report(user, s);
+    /* over several processes a failure here is this process's alone (the
+     * others are inside an exchange, or shooting cached shooters): only
+     * stopping the job stops them */
+    if (st && s->opt.exchange && s->opt.exchange->ranks > 1 && s->opt.exchange->fail)
+        s->opt.exchange->fail(s->opt.exchange->ctx, st);
     return st;
 }
 

@@ -6,15 +6,12 @@
 # mid-render stops the job with a message naming the rank and the last
 # checkpoint, which is intact, and `--resume` over 3 ranks finishes with
 # the uninterrupted image. Radiosity: stopped and resumed solves write the
-# uninterrupted solve's patches (one process and 2 ranks); wrong jobs and
-# kinds are refused.
+# uninterrupted solve's patches (one process and 2 ranks), with adaptive
+# subdivision too; wrong jobs and kinds are refused.
 #   checkpoint.sh  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)
 set -u
 . "$(dirname "$0")/mpirun.sh"
-T="${TB_TEST_TMPDIR:-/tmp}/dist_checkpoint.$$"
-rm -rf "$T" && mkdir -p "$T"
-sed 's/resolution = \[512 512\]/resolution = [64 64]/' "$TB_SOURCE_DIR/scenes/cornell-box.mid" > "$T/box.mid"
-grep -q 'resolution = \[64 64\]' "$T/box.mid" || fail "could not shrink the Cornell box"
+test_dir dist_checkpoint
 R="$T/box.mid --spp 1 --seed 3"
 tb() { "$TESTBED" render "$@" > "$T/out" 2>&1 || { cat "$T/out"; fail "testbed render $*"; }; }
 
@@ -52,18 +49,9 @@ cmp "$T/hf.pfm" "$T/hr.pfm" || fail "hybrid: resumed render differs from the uni
 rm -f "$T/c.ckpt"
 TB_DIST_JOB=$$ $MPIRUN -np 2 "$TESTBED" render $R --passes 400 --threads 1 -o "$T/k.pfm" --checkpoint "$T/c.ckpt" \
     > "$T/kout" 2>&1 &
-job=$!
-i=0
-while [ ! -s "$T/c.ckpt" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
-[ -s "$T/c.ckpt" ] || { kill $job; cat "$T/kout"; fail "no checkpoint within a minute"; }
-victim=$(rank_pid $$ 1) || { kill $job; fail "rank 1 not found"; }
-kill -9 "$victim"
-wait $job && { cat "$T/kout"; fail "the job went on after rank 1 died"; }
-grep -q "rank 1 .*exited on signal 9" "$T/kout" || { cat "$T/kout"; fail "the dead rank is not named"; }
-grep -q "last checkpoint: $T/c.ckpt ([0-9]* passes), intact: continue with --resume" "$T/kout" ||
-    { cat "$T/kout"; fail "the last checkpoint is not named"; }
+kill_rank1 $! "$T/c.ckpt" "$T/kout" passes
+done_passes=$killed_at
 [ ! -e "$T/k.pfm" ] || fail "an image was written by the killed job"
-done_passes=$(sed -n 's/.*last checkpoint: .*(\([0-9]*\) passes).*/\1/p' "$T/kout" | head -1)
 # the checkpoint is whole (its checksum), so the job resumes from it: to 12
 # passes if it got no further, else to its own count plus 2
 want=12
@@ -74,7 +62,7 @@ tb $R --passes $want -o "$T/k1.pfm"
 cmp "$T/k1.pfm" "$T/k.pfm" || fail "killed and resumed job differs from one uninterrupted process"
 # radiosity: a solve stopped at unshot 0.05 and resumed to 0.005, in one
 # process and over 2 ranks, writes the patches of the uninterrupted solve;
-# another seed is another job; --adapt is refused
+# another seed is another job
 Q="$TB_SOURCE_DIR/scenes/cornell-box.mid --method radiosity --max-edge 120"
 tb $Q --threshold 0.005 --patches "$T/rf.csv"
 tb $Q --threshold 0.05 --patches "$T/rh.csv" --checkpoint "$T/r.ckpt"
@@ -89,9 +77,37 @@ cmp "$T/rf.csv" "$T/rr2.csv" || fail "radiosity resumed over 2 ranks differs fro
 grep -q "r.ckpt: written for another job" "$T/out" || { cat "$T/out"; fail "no message for another seed"; }
 "$TESTBED" render $Q --patches "$T/x.csv" --resume "$T/c.ckpt" > "$T/out" 2>&1 && fail "render checkpoint resumed as radiosity"
 grep -q "c.ckpt: a render checkpoint, not a radiosity one" "$T/out" || { cat "$T/out"; fail "no message for the kind"; }
-"$TESTBED" render $Q --adapt 0.1 --patches "$T/x.csv" --checkpoint "$T/y.ckpt" > "$T/out" 2>&1
-[ $? = 2 ] || { cat "$T/out"; fail "--adapt with --checkpoint is not a usage error"; }
-[ ! -e "$T/x.csv" ] || fail "patches written by a refused run"
+# adaptive subdivision: every checkpoint of a solve (snapshots of the file,
+# which each shot rewrites) resumes to the uninterrupted patches, in one
+# process and over 2 ranks; the refinement's rounds are rebuilt from the
+# checkpoint. --max-shots makes every round shoot (it is part of the job)
+A="$TB_SOURCE_DIR/scenes/cornell-box.mid --method radiosity --max-edge 120 --adapt 0.1 --threshold 0.002 --max-shots 40"
+tb $A --patches "$T/af.csv"
+"$TESTBED" render $A --threads 1 --patches "$T/ax.csv" --checkpoint "$T/a.ckpt" --checkpoint-every 0 > "$T/aout" 2>&1 &
+job=$!
+while kill -0 $job 2>/dev/null; do
+    # the rounds done (the payload's second u64) name the snapshot
+    r=$(od -An -tu8 -j56 -N8 "$T/a.ckpt" 2>/dev/null | tr -d ' ')
+    [ -n "$r" ] && [ ! -e "$T/snap.$r" ] && cp "$T/a.ckpt" "$T/snap.$r" 2>/dev/null
+    sleep 0.01
+done
+wait $job || { cat "$T/aout"; fail "adaptive solve with checkpoints"; }
+cmp "$T/af.csv" "$T/ax.csv" || fail "adaptive: writing checkpoints changed the patches"
+cp "$T/a.ckpt" "$T/snap.final"
+n=0
+for f in "$T"/snap.*; do
+    tb $A --patches "$T/ar.csv" --resume "$f"
+    cmp "$T/af.csv" "$T/ar.csv" || fail "adaptive: resumed from $(basename "$f") differs from the uninterrupted solve"
+    n=$((n + 1))
+done
+$MPIRUN -np 2 "$TESTBED" render $A --threads 1 --patches "$T/ar2.csv" --resume "$T/snap.1" > "$T/out" 2>&1 ||
+    $MPIRUN -np 2 "$TESTBED" render $A --threads 1 --patches "$T/ar2.csv" --resume "$T/snap.0" > "$T/out" 2>&1 ||
+    { cat "$T/out"; fail "adaptive resume over 2 ranks"; }
+cmp "$T/af.csv" "$T/ar2.csv" || fail "adaptive: resumed over 2 ranks differs from the uninterrupted solve"
+"$TESTBED" render $A --threshold 0.001 --patches "$T/x.csv" --resume "$T/a.ckpt" > "$T/out" 2>&1 &&
+    fail "adaptive resume with another threshold accepted"
+grep -q "a.ckpt: written for another job" "$T/out" || { cat "$T/out"; fail "no message for another adaptive threshold"; }
+snaps=$(cd "$T" && echo snap.*)
 
 rm -rf "$T"
-echo "dist checkpoint: ok (killed after $done_passes passes)"
+echo "dist checkpoint: ok (killed after $done_passes passes; adaptive: resumed from $n checkpoints: $snaps)"

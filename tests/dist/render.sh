@@ -2,7 +2,8 @@
 # `mpirun -np N testbed render` (docs/distributed.md): the ray tracer's
 # image over 2 ranks (1 and 2 threads each) and over 3 oversubscribed
 # ranks, several progressive passes, plain and adaptive, a spectral and an
-# RGB scene, and the path tracer's and the hybrid renderer's images, are
+# RGB scene, ranks of different thread counts, and the path tracer's and
+# the hybrid renderer's images, are
 # byte for byte the one-process image; the stats JSON has per-rank
 # figures; a scene with an error stops every rank with its file:line:col
 # message and no image; a scene on standard input is refused.
@@ -52,6 +53,16 @@ H="$T/cornell-box-rgb.mid --method hybrid --max-edge 100 --spp 2"
 run1 $H -o "$T/h1.pfm" --threads 2
 runN 2 $H -o "$T/h2.pfm" --threads 1
 cmp "$T/h1.pfm" "$T/h2.pfm" || fail "hybrid: 2 ranks differ from one process"
+
+# ranks of different thread counts (mpirun's MPMD form): rank 0's first
+# grant (4 threads: up to 16 tiles of 64) overflows the queue of a worker of
+# one thread, which grows
+sed 's/resolution = \[512 512\]/resolution = [128 128]/' "$TB_SOURCE_DIR/scenes/cornell-box.mid" > "$T/big.mid"
+run1 "$T/big.mid" --spp 1 -o "$T/g1.pfm"
+$MPIRUN -np 1 "$TESTBED" render "$T/big.mid" --spp 1 -o "$T/g2.pfm" --threads 4 : \
+    -np 1 "$TESTBED" render "$T/big.mid" --spp 1 -o "$T/g2.pfm" --threads 1 > "$T/out" 2>&1 ||
+    { cat "$T/out"; fail "ranks of 4 and 1 threads"; }
+cmp "$T/g1.pfm" "$T/g2.pfm" || fail "ranks of 4 and 1 threads differ from one process"
 
 # the path tracer (docs/pathtrace.md) on the spheres box: mirror and glass paths
 sed 's/resolution = \[512 512\]/resolution = [64 48]/' "$TB_SOURCE_DIR/scenes/cornell-box-spheres.mid" > "$T/spheres.mid"

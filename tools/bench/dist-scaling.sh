@@ -2,7 +2,8 @@
 # Scaling of `mpirun -np N testbed render` on this machine (docs/distributed.md,
 # docs/performance.md "Distributed"): 1 rank x 1 thread against 2 ranks x 1
 # thread for the ray tracer, the path tracer and radiosity on the Cornell
-# boxes and on a larger generated scene, the per-rank work, wait and bytes
+# boxes and on a larger generated scene (and the fixed start-up price of a
+# job, as a render of 16 x 16 pixels), the per-rank work, wait and bytes
 # from the stats, the figures the scaling model needs (compute and bytes per
 # tile and per shot), and what reading the MID file costs against parsing it
 # (every rank reads the scene itself; the alternative is rank 0 broadcasting
@@ -87,6 +88,10 @@ case_() {
         "$(awk -v a="$w1" -v b="$w2" 'BEGIN { print a / b }')" "$(awk -v a="$c2" -v b="$c1" 'BEGIN { print a / b }')" \
         "$l0" "$(load)"
 }
+# the fixed price of a job (launch, MPI start, scene load, output): a
+# render of 16 x 16 pixels; the speed-ups below include it once
+sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [16 16]/' "$box" > "$work/tiny.mid"
+case_ start-up "$work/tiny.mid" --spp 1 -o "$work/t.pfm"
 case_ raytrace-box "$box" --spp $spp --passes 2 -o "$work/a.pfm"
 case_ path-spheres "$spheres" --method path --spp $spp -o "$work/b.pfm"
 case_ radiosity-box "$box" --method radiosity --patches "$work/c.csv"

@@ -155,14 +155,15 @@ int tb_cmd_render_radiosity(int argc, char **argv)
                  "depends on the rank count; docs/distributed.md); default: each\n"
                  "shot's receivers shared, the one-process result bit for bit"},
         {"checkpoint", .type = TB_OPT_STRING, .dest = &ckpt_path, .metavar = "FILE",
-         .help = "save the solver's state (gathered and unshot radiosity, shots) to FILE,\n"
-                 "atomically, every --checkpoint-every seconds and after the last shot\n"
-                 "(not with --adapt)"},
+         .help = "save the solver's state (gathered and unshot radiosity, shots; with\n"
+                 "--adapt also the refinement rounds) to FILE, atomically, every\n"
+                 "--checkpoint-every seconds and after the last shot"},
         {"checkpoint-every", .type = TB_OPT_DOUBLE, .dest = &ckpt_every, .min = 0, .max = INFINITY,
          .metavar = "S", .help = "seconds between checkpoints (default %D; 0: after every shot)"},
         {"resume", .type = TB_OPT_STRING, .dest = &resume_path, .metavar = "FILE",
          .help = "continue the solve saved in FILE (same scene and options; --threshold\n"
-                 "may drop): the outputs equal an uninterrupted run's bit for bit"},
+                 "may drop, except with --adapt): the outputs equal an uninterrupted\n"
+                 "run's bit for bit"},
         {"stats", .type = TB_OPT_STRING, .dest = &o.stats_path, .metavar = "FILE.json",
          .help = "counters, times and provenance"},
         {0},
@@ -239,11 +240,14 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     tb_ckpt_rad ck = {.path = ckpt_path, .every = ckpt_every, .resume_path = resume_path};
     tb_rad_persist persist;
     if (ckpt_path || resume_path) {
-        if (o.adapt.threshold > 0) {
-            tb_dist_rad_exchange_free(ex);
-            return tb_cli_usage_error(&cli, "--checkpoint and --resume are for solves without --adapt");
-        }
-        if (!(ck.key = tb_cli_job_key(scene_path, argc, argv, tb_cli_free_opts))) {
+        /* with --adapt the rounds depend on where each round stops: the
+         * threshold and the shot limit are part of the job */
+        static const char *const adapt_free[] = {"-o", "--threads", "--time-budget", "--checkpoint",
+                                                 "--checkpoint-every", "--resume", "--stats", "--report",
+                                                 "--reference", "--exposure", "--backend", "--device", "--patches",
+                                                 "--mesh-out", NULL};
+        const char *const *free_opts = o.adapt.threshold > 0 ? adapt_free : tb_cli_free_opts;
+        if (!(ck.key = tb_cli_job_key(scene_path, argc, argv, free_opts))) {
             fprintf(stderr, "testbed render: %s\n", tb_last_error());
             tb_dist_rad_exchange_free(ex);
             return TB_EXIT_FAIL;
