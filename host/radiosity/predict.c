@@ -80,7 +80,6 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
     bool image = o->image_path != NULL;
     tb_predict_stats_init(f, TB_PREDICT_RADIOSITY, (double)sb.st_size, image ? scene->camera.width : 0,
                           image ? scene->camera.height : 0, scene->nchannels, o->spp, o->threads);
-    tb_predict_stats_add_scene(f);
     tb_rad_mesh_options mo = o->mesh;
     if (!o->mesh_given) {
         mo = tb_rad_default_mesh_options(scene);
@@ -88,6 +87,7 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
     }
     if ((st = tb_rad_mesh_from_scene(scene, &mo, &mesh)))
         goto done;
+    tb_predict_stats_add_scene(f); /* after meshing: its CSG probes count too */
     tb_rad_options ro = o->solver;
     ro.lights = scene->lights;
     ro.nlights = scene->nlights;

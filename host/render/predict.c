@@ -41,6 +41,8 @@ static const tb_cost_term tb__terms[] = {
     {"load.mesh", TB_PM_LOAD, TB_PF_MESHES, "s/polygons object"},
     {"load.triangle", TB_PM_LOAD, TB_PF_TRIANGLES, "s/triangle"},
     {"load.emitter_byte", TB_PM_LOAD, TB_PF_EMITTER_BYTES, "s/emitter byte"},
+    {"load.emitter_face", TB_PM_LOAD, TB_PF_EMITTER_FACES, "s/emitter face"},
+    {"load.csg_probe", TB_PM_LOAD, TB_PF_CSG_PROBES, "s/CSG probe ray"},
     {"load.fixed", TB_PM_LOAD, TB_PF_ONE, "s"},
     {"build.reference", TB_PM_BUILD, TB_PF_REFS, "s/reference"},
     {"build.reference_log", TB_PM_BUILD, TB_PF_REFS_LOG, "s/(reference log2 references)"},
@@ -64,12 +66,15 @@ static const tb_cost_term tb__terms[] = {
     {"radiosity.form_factor", TB_PM_RADIOSITY, TB_PF_RAD_FFS, "s/form factor"},
     {"radiosity.shot_element", TB_PM_RADIOSITY, TB_PF_RAD_SHOT_ELEMS, "s/(shot x element)"},
     {"radiosity.element", TB_PM_RADIOSITY, TB_PF_RAD_ELEMENTS, "s/element"},
+    {"radiosity.csg_probe", TB_PM_RADIOSITY, TB_PF_RAD_MESH_PROBES, "s/CSG probe ray"},
     {"process.raytrace", TB_PM_PROCESS, TB_PF_IS_RAYTRACE, "s"},
     {"process.path", TB_PM_PROCESS, TB_PF_IS_PATH, "s"},
     {"process.radiosity", TB_PM_PROCESS, TB_PF_IS_RADIOSITY, "s"},
     {"process.pixel", TB_PM_PROCESS, TB_PF_PIXELS, "s/pixel"},
     {"process.radiosity_pixel_ray", TB_PM_PROCESS, TB_PF_RAD_PIXEL_RAYS, "s/image ray"},
-    {"memory.base", TB_PM_MEMORY, TB_PF_ONE, "bytes"},
+    {"memory.raytrace", TB_PM_MEMORY, TB_PF_IS_RAYTRACE, "bytes"},
+    {"memory.path", TB_PM_MEMORY, TB_PF_IS_PATH, "bytes"},
+    {"memory.radiosity", TB_PM_MEMORY, TB_PF_IS_RADIOSITY, "bytes"},
     {"memory.object_byte", TB_PM_MEMORY, TB_PF_MEM_OBJECTS, "bytes/accounted byte"},
     {"memory.mesh_byte", TB_PM_MEMORY, TB_PF_MEM_MESHES, "bytes/accounted byte"},
     {"memory.emitter_byte", TB_PM_MEMORY, TB_PF_MEM_EMITTERS, "bytes/accounted byte"},
@@ -90,6 +95,19 @@ const tb_cost_term *tb_cost_terms(int *n)
 }
 
 /* ------------------------------------------------------------------ statistics */
+
+const char *tb_pfeat_name(tb_pfeat k)
+{
+    static const char *const fname[] = {
+        "bytes", "primitives", "csg_nodes", "meshes", "triangles", "emitter_bytes", "emitter_faces", "csg_probes",
+        "references",
+        "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive",
+        "tests_csg", "tests_mesh", "hits", "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements",
+        "rad_elements", "rad_vertices", "rad_pixel_rays", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
+        "mem_accel", "film_bytes", "is_raytrace", "is_path", "is_radiosity", "one"};
+    _Static_assert(sizeof fname / sizeof fname[0] == TB_PF_COUNT, "a name per statistic");
+    return (unsigned)k < TB_PF_COUNT ? fname[k] : "?";
+}
 
 /* A counter's or memory figure's total, 0 if it is not registered. */
 static double tb__stat(const char *name, tb_stat_kind kind)
@@ -151,6 +169,10 @@ void tb_predict_stats_add_scene(tb_predict_stats *f)
     f->f[TB_PF_MESHES] += meshes;
     f->f[TB_PF_TRIANGLES] += tris;
     f->f[TB_PF_REFS] += tb__count("Scene/references");
+    f->f[TB_PF_EMITTER_FACES] += tb__count("Polygonize/faces made");
+    /* radiosity makes no emitters: its CSG probes are the meshing's */
+    f->f[f->method == TB_PREDICT_RADIOSITY ? TB_PF_RAD_MESH_PROBES : TB_PF_CSG_PROBES] +=
+        tb__count("Polygonize/CSG probes");
     f->f[TB_PF_REFS_LOG] = f->f[TB_PF_REFS] * log2(f->f[TB_PF_REFS] + 1.0);
     double total = tb__stat("Scene/memory", TB_STAT_KIND_MEMORY);
     double mesh = tb__stat("Scene/memory of meshes", TB_STAT_KIND_MEMORY);
@@ -195,6 +217,14 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
         double distinct = fmax(0.0, shots - tb__count("Radiosity/shots from cached form factors"));
         f->f[TB_PF_RAD_CACHE_BYTES] = fmin((double)(512u << 20), distinct * (f->f[TB_PF_RAD_VERTICES] + elems) * 4.0);
     }
+}
+
+void tb_predict_stats_sub_work(tb_predict_stats *f, const tb_predict_stats *load)
+{
+    static const tb_pfeat work[] = {TB_PF_SAMPLES, TB_PF_RAYS, TB_PF_OCC_RAYS, TB_PF_NODES, TB_PF_TESTS_PRIM,
+                                    TB_PF_TESTS_CSG, TB_PF_TESTS_MESH, TB_PF_HITS};
+    for (size_t i = 0; i < sizeof work / sizeof work[0]; i++)
+        f->f[work[i]] = fmax(0.0, f->f[work[i]] - load->f[work[i]]);
 }
 
 /* ------------------------------------------------------------------ pilot */
@@ -674,15 +704,9 @@ void tb_prediction_write_json(FILE *out, const tb_costs *c, const tb_predict_sta
     fprintf(out, "\n  },\n  \"terms\": {");
     for (int i = 0; i < TB__NTERMS; i++)
         fprintf(out, "%s\n    \"%s\": %.6g", i ? "," : "", tb__terms[i].name, p->term[i]);
-    static const char *const fname[TB_PF_COUNT] = {
-        "bytes", "primitives", "csg_nodes", "meshes", "triangles", "emitter_bytes", "references",
-        "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive",
-        "tests_csg", "tests_mesh", "hits", "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements",
-        "rad_elements", "rad_vertices", "rad_pixel_rays", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
-        "mem_accel", "film_bytes", "is_raytrace", "is_path", "is_radiosity", "one"};
     fprintf(out, "\n  },\n  \"statistics\": {");
     for (int i = 0; i < TB_PF_COUNT; i++)
-        fprintf(out, "%s\n    \"%s\": %.6g", i ? "," : "", fname[i], f->f[i]);
+        fprintf(out, "%s\n    \"%s\": %.6g", i ? "," : "", tb_pfeat_name((tb_pfeat)i), f->f[i]);
     fprintf(out, "\n  },\n  \"threads\": %d,\n  \"pilot_seconds\": %.6g", f->threads, f->pilot_seconds);
     if (f->method == TB_PREDICT_RADIOSITY)
         fprintf(out, ",\n  \"radiosity_shots\": %.0f,\n  \"radiosity_shots_extrapolated\": %s", f->rad_shots,

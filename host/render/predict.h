@@ -19,6 +19,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "host/render/pathtrace.h"
 #include "host/render/render.h"
 #include "host/render/scene.h"
 #include "util/base/error.h"
@@ -44,6 +45,8 @@ typedef enum tb_pfeat {
     TB_PF_MESHES,          /* polygons objects */
     TB_PF_TRIANGLES,       /* mesh triangles */
     TB_PF_EMITTER_BYTES,   /* bytes of area-light emitters (tessellated curved and CSG emitters) */
+    TB_PF_EMITTER_FACES,   /* faces made tessellating emitters (Polygonize/faces made) */
+    TB_PF_CSG_PROBES,      /* probe rays classifying CSG emitter facets (Polygonize/CSG probes) */
     TB_PF_REFS,            /* acceleration references */
     TB_PF_REFS_LOG,        /* references x log2(references + 1) */
     TB_PF_SAMPLES,         /* camera samples */
@@ -61,6 +64,7 @@ typedef enum tb_pfeat {
     TB_PF_RAD_ELEMENTS,    /* radiosity: elements of the mesh */
     TB_PF_RAD_VERTICES,    /* radiosity: vertices of the mesh */
     TB_PF_RAD_PIXEL_RAYS,  /* radiosity: image rays (pixels x --spp) */
+    TB_PF_RAD_MESH_PROBES, /* radiosity: CSG probe rays of meshing (Polygonize/CSG probes after the load) */
     TB_PF_RAD_CACHE_BYTES, /* radiosity: form factors cached, (distinct shooters) x (vertices + elements) x 4,
                               at most the solver's 512 MiB */
     TB_PF_MEM_OBJECTS,     /* bytes of objects (tb_scene_memory: objects + FED files + materials + lights) */
@@ -74,6 +78,9 @@ typedef enum tb_pfeat {
     TB_PF_ONE,             /* 1 */
     TB_PF_COUNT
 } tb_pfeat;
+
+/* The statistic's name in JSON and CSV output ("triangles", "rays", ...). */
+const char *tb_pfeat_name(tb_pfeat k);
 
 /* Modules: each is fitted on its own measurement and reported on its own. */
 typedef enum tb_pmodule {
@@ -153,6 +160,11 @@ void tb_predict_stats_init(tb_predict_stats *f, tb_predict_method m, double file
  * and memory figures; reset the statistics before the load). */
 void tb_predict_stats_add_scene(tb_predict_stats *f);
 
+/* Subtracts the work counters of a scene load (the intersection tests of
+ * CSG tessellation) that f holds in `load` (filled by add_work after a
+ * load alone), so that f keeps the render's own; never below 0. */
+void tb_predict_stats_sub_work(tb_predict_stats *f, const tb_predict_stats *load);
+
 /* Adds the work counters a render left in util/stats (camera samples, BVH
  * rays, nodes, tests by kind, hits; radiosity's rays, form factors and the
  * run values elements, vertices and shots), each times `scale`. */
@@ -163,7 +175,7 @@ typedef struct tb_predict_options {
     tb_predict_method method;   /* raytrace or path (radiosity: host/radiosity/predict.h) */
     tb_render_options render;   /* the render's options (spp, passes, depth, threads, ...) */
     tb_accel_kind accel;        /* the acceleration structure */
-    const void *path_options;   /* path: a tb_pt_options (NULL: defaults) */
+    const tb_pt_options *path_options; /* path: its options (NULL: defaults) */
     int pilot_divisor;          /* pilot image: width and height / this (>= 1; 1: the whole image) */
 } tb_predict_options;
 

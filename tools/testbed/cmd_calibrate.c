@@ -20,6 +20,7 @@
 #include "host/mid/generate.h"
 #include "host/mid/mid_writer.h"
 #include "host/render/predict.h"
+#include "host/render/scene.h"
 #include "util/base/outfile.h"
 #include "util/base/progress.h"
 #include "util/stats/provenance.h"
@@ -46,8 +47,8 @@ static const tb__cal_run tb__cal_quick[] = {
     {TB_GEN_MESH, 4, 96, 72, TB_PREDICT_RAYTRACE, "", 1},
     {TB_GEN_CSG, 6, 64, 48, TB_PREDICT_PATH, "", 1},
     {TB_GEN_MESH, 2, 48, 36, TB_PREDICT_PATH, "--spp 2", 1},
-    {TB_GEN_GRID, 2, 48, 36, TB_PREDICT_RADIOSITY, "--max-shots 8 --samples 2 --spp 1", 1},
-    {TB_GEN_GRID, 3, 64, 48, TB_PREDICT_RADIOSITY, "--max-shots 12 --samples 1 --spp 2", 1},
+    {TB_GEN_GRID, 2, 48, 36, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 8 --samples 2 --spp 1", 1},
+    {TB_GEN_GRID, 3, 64, 48, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 12 --samples 1 --spp 2", 1},
 };
 
 static const tb__cal_run tb__cal_default[] = {
@@ -64,11 +65,11 @@ static const tb__cal_run tb__cal_default[] = {
     {TB_GEN_CSG, 150, 480, 360, TB_PREDICT_PATH, "", 3},
     {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2},
     {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3},
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--max-shots 60 --spp 2", 3},
-    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--max-shots 40 --samples 4", 4},
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--max-shots 40 --samples 8", 4},
-    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--max-shots 60 --samples 4 --spp 1", 3},
-    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--max-shots 150 --samples 2", 4},
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3},
+    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4},
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4},
+    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3},
+    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4},
 };
 
 static const tb__cal_run tb__cal_long[] = {
@@ -91,14 +92,14 @@ static const tb__cal_run tb__cal_long[] = {
     {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2},
     {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3},
     {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_PATH, "", 8},
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--max-shots 60 --spp 2", 3},
-    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--max-shots 40 --samples 4", 4},
-    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--max-shots 80", 12},
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--max-shots 40 --samples 8", 4},
-    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RADIOSITY, "--max-shots 100 --samples 4", 8},
-    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--max-shots 60 --samples 4 --spp 1", 3},
-    {TB_GEN_MESH, 6, 320, 240, TB_PREDICT_RADIOSITY, "--max-shots 100 --samples 8", 8},
-    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--max-shots 150 --samples 2", 4},
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3},
+    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4},
+    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80", 12},
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4},
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 4", 8},
+    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3},
+    {TB_GEN_MESH, 6, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 8", 8},
+    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4},
 };
 
 /* tb_gen_sink: writes every item, the camera with the run's resolution. */
@@ -164,6 +165,53 @@ static double tb__cal_value(const char *key)
     return v;
 }
 
+/* The work counters of loading the scene alone (CSG tessellation traces
+ * probe rays through the intersection code), measured in a process of its
+ * own so the render's peak memory stays its own. 0 if it failed. */
+static int tb__cal_load_work(const tb__cal_run *r, const char *scene, int threads, tb_predict_stats *load)
+{
+    memset(load, 0, sizeof *load);
+    int fd[2];
+    if (pipe(fd))
+        return 0;
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(fd[0]), close(fd[1]);
+        return 0;
+    }
+    if (pid == 0) {
+        close(fd[0]);
+        tb_predict_stats f;
+        memset(&f, 0, sizeof f);
+        f.method = r->method;
+        tb_stats_set_enabled(1);
+        tb_stats_reset();
+        tb_scene_options so = {.accel = TB_ACCEL_BVH, .threads = threads};
+        tb_scene *s = NULL;
+        int ok = tb_scene_load(scene, &so, &s) == TB_OK;
+        tb_predict_stats_add_work(&f, 1.0);
+        tb_scene_free(s);
+        ssize_t w = ok ? write(fd[1], &f, sizeof f) : 0;
+        _exit(w == (ssize_t)sizeof f ? 0 : 1);
+    }
+    close(fd[1]);
+    size_t got = 0;
+    ssize_t n;
+    while (got < sizeof *load && (n = read(fd[0], (char *)load + got, sizeof *load - got)) != 0) {
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0)
+            break;
+        got += (size_t)n;
+    }
+    close(fd[0]);
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
+        ;
+    return got == sizeof *load && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
 /* In the child: runs `testbed render` on the scene and measures it. */
 static void tb__cal_child(const tb__cal_run *r, const char *scene, const char *dir, int threads,
                           tb__cal_result *out)
@@ -197,6 +245,10 @@ static void tb__cal_child(const tb__cal_run *r, const char *scene, const char *d
     for (char *save = NULL, *tok = strtok_r(argbuf, " ", &save); tok && argc < 30; tok = strtok_r(NULL, " ", &save))
         argv[argc++] = tok;
     argv[argc] = NULL;
+    tb_predict_stats load;
+    memset(&load, 0, sizeof load);
+    if (r->method != TB_PREDICT_RADIOSITY && !tb__cal_load_work(r, scene, threads, &load))
+        return;
     tb_stats_set_enabled(1);
     tb_stats_reset();
     int64_t t0 = tb_stats_now_ns();
@@ -214,6 +266,7 @@ static void tb__cal_child(const tb__cal_run *r, const char *scene, const char *d
                           3, rad_spp, threads);
     tb_predict_stats_add_scene(&out->f);
     tb_predict_stats_add_work(&out->f, 1.0);
+    tb_predict_stats_sub_work(&out->f, &load);
     tb_predict_measured *y = &out->y;
     y->wall = wall;
     y->module[TB_PM_LOAD] = tb__cal_timer("Scene/load");
@@ -436,6 +489,8 @@ int tb_cmd_calibrate(int argc, char **argv)
             for (int m = 0; m < TB_PM_COUNT; m++)
                 fprintf(of.fp, ",measured_%s,fitted_%s", tb_pmodule_name((tb_pmodule)m),
                         tb_pmodule_name((tb_pmodule)m));
+            for (int k = 0; k < TB_PF_COUNT; k++)
+                fprintf(of.fp, ",%s", tb_pfeat_name((tb_pfeat)k));
             fprintf(of.fp, "\n");
             for (int i = 0; i < nruns; i++) {
                 tb_prediction p;
@@ -445,6 +500,8 @@ int tb_cmd_calibrate(int argc, char **argv)
                         y[i].wall);
                 for (int m = 0; m < TB_PM_COUNT; m++)
                     fprintf(of.fp, ",%.6g,%.6g", y[i].module[m], p.module[m]);
+                for (int k = 0; k < TB_PF_COUNT; k++)
+                    fprintf(of.fp, ",%.6g", f[i].f[k]);
                 fprintf(of.fp, "\n");
             }
             if (tb_outfile_commit(&of))
