@@ -303,6 +303,11 @@ void tb_predict_eval(const tb_costs *c, const tb_predict_stats *f, tb_prediction
     double speed = tb__eff_threads(c->threads) / tb__eff_threads(f->threads);
     for (int i = 0; i < TB__NTERMS; i++) {
         const tb_cost_term *t = &tb__terms[i];
+        /* a renderer's terms count only for its own method */
+        if ((t->module == TB_PM_RAYTRACE && f->method != TB_PREDICT_RAYTRACE) ||
+            (t->module == TB_PM_PATH && f->method != TB_PREDICT_PATH) ||
+            (t->module == TB_PM_RADIOSITY && f->method != TB_PREDICT_RADIOSITY))
+            continue;
         bool parallel = t->module == TB_PM_BUILD || t->module == TB_PM_RAYTRACE || t->module == TB_PM_PATH ||
                         t->module == TB_PM_RADIOSITY;
         double v = c->c[i] * f->f[t->feature] * (parallel ? speed : 1.0);

@@ -45,10 +45,16 @@ typedef struct tb__cal_run {
 static const tb__cal_run tb__cal_quick[] = {
     {TB_GEN_GRID, 8, 64, 48, TB_PREDICT_RAYTRACE, "", 1},
     {TB_GEN_MESH, 4, 96, 72, TB_PREDICT_RAYTRACE, "", 1},
+    {TB_GEN_CSG, 3, 200, 150, TB_PREDICT_RAYTRACE, "", 1},
+    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 1},
     {TB_GEN_CSG, 6, 64, 48, TB_PREDICT_PATH, "", 1},
     {TB_GEN_MESH, 2, 48, 36, TB_PREDICT_PATH, "--spp 2", 1},
+    {TB_GEN_MESH, 8, 320, 240, TB_PREDICT_PATH, "", 1},
+    {TB_GEN_GRID, 12, 480, 360, TB_PREDICT_PATH, "", 1},
     {TB_GEN_GRID, 2, 48, 36, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 8 --samples 2 --spp 1", 1},
     {TB_GEN_GRID, 3, 64, 48, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 12 --samples 1 --spp 2", 1},
+    {TB_GEN_MESH, 1, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 6 --samples 1", 1},
+    {TB_GEN_CSG, 2, 96, 72, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 4 --samples 1 --spp 1", 1},
 };
 
 static const tb__cal_run tb__cal_default[] = {
@@ -70,6 +76,9 @@ static const tb__cal_run tb__cal_default[] = {
     {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4},
     {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3},
     {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4},
+    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80 --samples 16", 8},
+    {TB_GEN_MESH, 4, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 8", 8},
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8},
 };
 
 static const tb__cal_run tb__cal_long[] = {
