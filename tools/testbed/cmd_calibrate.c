@@ -51,6 +51,8 @@ static const tb__cal_run tb__cal_quick[] = {
     {TB_GEN_MESH, 2, 48, 36, TB_PREDICT_PATH, "--spp 2", 1},
     {TB_GEN_MESH, 8, 320, 240, TB_PREDICT_PATH, "", 1},
     {TB_GEN_GRID, 12, 480, 360, TB_PREDICT_PATH, "", 1},
+    {TB_GEN_GRID, 4, 1024, 768, TB_PREDICT_PATH, "", 2},
+    {TB_GEN_MESH, 6, 800, 600, TB_PREDICT_RAYTRACE, "--light-samples 1", 2},
     {TB_GEN_GRID, 2, 48, 36, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 8 --samples 2 --spp 1", 1},
     {TB_GEN_GRID, 3, 64, 48, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 12 --samples 1 --spp 2", 1},
     {TB_GEN_MESH, 1, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 6 --samples 1", 1},
