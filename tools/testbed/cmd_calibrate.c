@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -176,40 +177,35 @@ static double tb__cal_value(const char *key)
     return v;
 }
 
-/* The work counters of loading the scene alone (CSG tessellation traces
- * probe rays through the intersection code), measured in a process of its
- * own so the render's peak memory stays its own. 0 if it failed. */
-static int tb__cal_load_work(const tb__cal_run *r, const char *scene, int threads, tb_predict_stats *load)
+/* Runs fn(arg, out) in a forked child and copies its `size` bytes of
+ * result back through a pipe; *ru gets the child's resource use (its peak
+ * resident memory is its own). True if the child wrote everything and
+ * exited 0; *why says otherwise. */
+static bool tb__cal_fork(void (*fn)(void *arg, void *out), void *arg, void *out, size_t size, struct rusage *ru,
+                         char *why, size_t whylen)
 {
-    memset(load, 0, sizeof *load);
     int fd[2];
-    if (pipe(fd))
-        return 0;
+    if (pipe(fd)) {
+        snprintf(why, whylen, "pipe: %s", strerror(errno));
+        return false;
+    }
     fflush(NULL);
     pid_t pid = fork();
     if (pid < 0) {
         close(fd[0]), close(fd[1]);
-        return 0;
+        snprintf(why, whylen, "fork: %s", strerror(errno));
+        return false;
     }
     if (pid == 0) {
         close(fd[0]);
-        tb_predict_stats f;
-        memset(&f, 0, sizeof f);
-        f.method = r->method;
-        tb_stats_set_enabled(1);
-        tb_stats_reset();
-        tb_scene_options so = {.accel = TB_ACCEL_BVH, .threads = threads};
-        tb_scene *s = NULL;
-        int ok = tb_scene_load(scene, &so, &s) == TB_OK;
-        tb_predict_stats_add_work(&f, 1.0);
-        tb_scene_free(s);
-        ssize_t w = ok ? write(fd[1], &f, sizeof f) : 0;
-        _exit(w == (ssize_t)sizeof f ? 0 : 1);
+        fn(arg, out);
+        ssize_t w = write(fd[1], out, size);
+        _exit(w == (ssize_t)size ? 0 : 1);
     }
     close(fd[1]);
     size_t got = 0;
     ssize_t n;
-    while (got < sizeof *load && (n = read(fd[0], (char *)load + got, sizeof *load - got)) != 0) {
+    while (got < size && (n = read(fd[0], (char *)out + got, size - got)) != 0) {
         if (n < 0 && errno == EINTR)
             continue;
         if (n < 0)
@@ -218,9 +214,51 @@ static int tb__cal_load_work(const tb__cal_run *r, const char *scene, int thread
     }
     close(fd[0]);
     int status = 0;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
+    memset(ru, 0, sizeof *ru);
+    while (wait4(pid, &status, 0, ru) < 0 && errno == EINTR)
         ;
-    return got == sizeof *load && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    if (got != size || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        snprintf(why, whylen, "the child process failed");
+        return false;
+    }
+    return true;
+}
+
+/* What the calibration children are given. */
+typedef struct tb__cal_job {
+    const tb__cal_run *r;
+    const char *scene, *dir;
+    int threads;
+} tb__cal_job;
+
+/* In a child: the work counters of loading the scene alone (CSG
+ * tessellation traces probe rays through the intersection code). The
+ * result's method is 0 if the load failed. */
+static void tb__cal_load_child(void *arg, void *out)
+{
+    const tb__cal_job *j = arg;
+    tb_predict_stats *f = out;
+    memset(f, 0, sizeof *f);
+    f->method = j->r->method;
+    tb_stats_set_enabled(1);
+    tb_stats_reset();
+    tb_scene_options so = {.accel = TB_ACCEL_BVH, .threads = j->threads};
+    tb_scene *s = NULL;
+    if (tb_scene_load(j->scene, &so, &s) == TB_OK)
+        tb_predict_stats_add_work(f, 1.0);
+    else
+        _exit(1);
+    tb_scene_free(s);
+}
+
+/* The load's work counters, measured in a process of its own so the
+ * render's peak memory stays its own. */
+static bool tb__cal_load_work(const tb__cal_run *r, const char *scene, int threads, tb_predict_stats *load)
+{
+    tb__cal_job j = {r, scene, NULL, threads};
+    struct rusage ru;
+    char why[64];
+    return tb__cal_fork(tb__cal_load_child, &j, load, sizeof *load, &ru, why, sizeof why);
 }
 
 /* In the child: runs `testbed render` on the scene and measures it. */
@@ -294,46 +332,19 @@ static void tb__cal_child(const tb__cal_run *r, const char *scene, const char *d
     out->ok = 1;
 }
 
+static void tb__cal_render_child(void *arg, void *out)
+{
+    const tb__cal_job *j = arg;
+    tb__cal_child(j->r, j->scene, j->dir, j->threads, out);
+}
+
 /* Runs r in a child; fills *res (peak memory from wait4). */
 static int tb__cal_run_one(const tb__cal_run *r, const char *scene, const char *dir, int threads,
                            tb__cal_result *res, char *why, size_t whylen)
 {
-    int fd[2];
-    if (pipe(fd)) {
-        snprintf(why, whylen, "pipe: %s", strerror(errno));
-        return 0;
-    }
-    fflush(NULL);
-    pid_t pid = fork();
-    if (pid < 0) {
-        close(fd[0]), close(fd[1]);
-        snprintf(why, whylen, "fork: %s", strerror(errno));
-        return 0;
-    }
-    if (pid == 0) {
-        close(fd[0]);
-        tb__cal_result out;
-        tb__cal_child(r, scene, dir, threads, &out);
-        ssize_t w = write(fd[1], &out, sizeof out);
-        _exit(w == (ssize_t)sizeof out ? 0 : 1);
-    }
-    close(fd[1]);
-    size_t got = 0;
-    ssize_t n;
-    while (got < sizeof *res && (n = read(fd[0], (char *)res + got, sizeof *res - got)) != 0) {
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0)
-            break;
-        got += (size_t)n;
-    }
-    close(fd[0]);
-    int status = 0;
+    tb__cal_job j = {r, scene, dir, threads};
     struct rusage ru;
-    memset(&ru, 0, sizeof ru);
-    while (wait4(pid, &status, 0, &ru) < 0 && errno == EINTR)
-        ;
-    if (got != sizeof *res || !res->ok || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    if (!tb__cal_fork(tb__cal_render_child, &j, res, sizeof *res, &ru, why, whylen) || !res->ok) {
         snprintf(why, whylen, "the render failed (see %s/render.log)", dir);
         return 0;
     }
