@@ -18,6 +18,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdio.h>
 
 #include "host/render/pathtrace.h"
 #include "host/render/render.h"
