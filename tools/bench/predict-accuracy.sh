@@ -40,6 +40,7 @@ if [ -z "$work" ]; then
 fi
 mkdir -p "$work" "$out"
 export TB_NO_PROGRESS=1
+export OMP_WAIT_POLICY=passive # spinning OpenMP waits distort timings on shared cores
 
 load_before=$(cut -d' ' -f1-3 /proc/loadavg)
 echo "predict-accuracy: calibrating (--set $set_name)" >&2
