@@ -128,8 +128,8 @@ band(x) = x
 set title "wall time"
 set xlabel "measured (s)"
 set ylabel "predicted (s)"
-set xrange [0.05:500]
-set yrange [0.05:500]
+set xrange [0.05:5000]
+set yrange [0.05:5000]
 plot band(x)*1.25 with lines lt 0 title "+-25%", band(x)*0.75 with lines lt 0 notitle, x with lines lc rgb "gray" notitle, \
      "< grep raytrace $work/time.dat" using 1:2 with points pt 7 title "raytrace", \
      "< grep path $work/time.dat" using 1:2 with points pt 5 title "path", \
