@@ -9,39 +9,28 @@
 #include <sys/stat.h>
 
 #include "host/render/camera.h"
+#include "util/container/array.h"
 #include "util/stats/stats.h"
 #include "util/stats/summary.h"
 
 /* How much longer the pilot's elements are than the render's. */
 #define TB__RAD_PILOT_COARSEN 4.0
 
-/* The unshot fraction after every pilot shot. */
-typedef struct tb__rad_decay {
-    double *u;
-    size_t n, cap;
-} tb__rad_decay;
-
+/* Records the unshot fraction after every pilot shot (a tb_array of double). */
 static tb_status tb__rad_record(void *user, const tb_rad_solver *s)
 {
-    tb__rad_decay *d = user;
-    if (d->n == d->cap) {
-        size_t cap = d->cap ? 2 * d->cap : 256;
-        double *u = realloc(d->u, cap * sizeof *u);
-        if (!u)
-            return tb_error(TB_ERR_NOMEM, "predict: out of memory for the pilot's decay");
-        d->u = u, d->cap = cap;
-    }
-    d->u[d->n++] = tb_rad_unshot_fraction(s);
-    return TB_OK;
+    double u = tb_rad_unshot_fraction(s);
+    return tb_array_push(user, &u);
 }
 
 /* Shots until the unshot fraction reaches `threshold`, along the
  * exponential decay log u = a + b k fitted over the second half of the
  * recorded decay (progressive refinement's unshot energy falls roughly
  * geometrically once the light sources have shot); NaN if it does not fall. */
-static double tb__rad_extrapolate(const tb__rad_decay *d, double threshold)
+static double tb__rad_extrapolate(const tb_array *d, double threshold)
 {
-    size_t from = d->n / 2, m = d->n - from;
+    const double *u = d->data;
+    size_t from = d->len / 2, m = d->len - from;
     if (m < 2)
         return NAN;
     double *k = malloc(2 * m * sizeof *k);
@@ -50,9 +39,9 @@ static double tb__rad_extrapolate(const tb__rad_decay *d, double threshold)
     double *lu = k + m;
     size_t used = 0;
     for (size_t i = 0; i < m; i++)
-        if (d->u[from + i] > 0.0) {
+        if (u[from + i] > 0.0) {
             k[used] = (double)(from + i + 1);
-            lu[used++] = log10(d->u[from + i]);
+            lu[used++] = log10(u[from + i]);
         }
     tb_line_fit lf;
     double shots = NAN;
@@ -82,7 +71,8 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
     tb_rad_mesh mesh;
     tb_rad_mesh_init(&mesh);
     tb_rad_solver *solver = NULL;
-    tb__rad_decay decay = {0};
+    tb_array decay;
+    tb_array_init(&decay, sizeof(double));
     tb_status st = tb_scene_load(path, &so, &scene);
     if (st)
         goto done;
@@ -167,7 +157,7 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
     f->f[TB_PF_RAD_CACHE_BYTES] =
         fmin((double)(512u << 20), f->f[TB_PF_RAD_CACHE_BYTES] / (pilot_shots > 0 ? pilot_shots : 1.0) * shots);
 done:
-    free(decay.u);
+    tb_array_free(&decay);
     tb_rad_solver_free(solver);
     tb_rad_mesh_free(&mesh);
     tb_scene_free(scene);
