@@ -2,7 +2,8 @@
  * the wall time and peak memory `testbed render` would take, from the cost
  * model that `testbed calibrate` fits (host/render/predict.h,
  * docs/predict.md). The scene is loaded once and a pilot (a low-resolution
- * render, or for radiosity a one-sample solve) counts the work. */
+ * render, or for radiosity a one-sample solve on a coarser mesh) counts the
+ * work. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -132,8 +133,9 @@ int tb_cmd_predict(int argc, char **argv)
         .intro = "Predicts the wall time and peak resident memory of `testbed render SCENE` with the same\n"
                  "options, with a per-module breakdown, from this machine's costs (testbed calibrate).\n"
                  "The scene is loaded once; a pilot counts the work: raytrace/path render the image at\n"
-                 "1/D of the resolution (--pilot), radiosity solves with one sample point per shooter\n"
-                 "(--pilot-seconds, then the shot count is extrapolated). docs/predict.md.",
+                 "1/D of the resolution (--pilot), radiosity solves on a 4x coarser mesh with one sample\n"
+                 "point per shooter to count the shots per shooter (--pilot-seconds, then the count is\n"
+                 "extrapolated). docs/predict.md.",
         .opts = opts,
         .outro = "Exit status: 0 predicted, 1 bad scene or costs, 2 usage error.",
         .pos = &scene_path,
