@@ -13,6 +13,10 @@
 #include "host/object/polygonize.h"
 #include "util/container/array.h"
 #include "util/mesh/triangulate.h"
+#include "util/stats/stats.h"
+
+/* Probe rays of CSG tessellation: the load-time cost term of testbed predict (docs/predict.md). */
+TB_STAT_COUNTER(tb__csg_probes, "Polygonize/CSG probes");
 
 /* How a point of a leaf's surface belongs to the tree's boundary. */
 enum { TB__DROP = 0, TB__KEEP = 1, TB__FLIP = 2 };
@@ -61,6 +65,7 @@ static tb_dvec3 tb__project(const tb__csg_leaf *L, tb_dvec3 p)
 static int tb__classify(const tb__csg_ctx *c, const tb_object *leaf, tb_dvec3 w, tb_dvec3 n)
 {
     double h = c->probe;
+    TB_STAT_INC(tb__csg_probes);
     tb_dvec3 o = tb_dvec3_add(w, tb_dvec3_scale(n, h));
     tb_ray ray = tb_ray_make((tb_vec3){(float)o.x, (float)o.y, (float)o.z},
                              (tb_vec3){(float)-n.x, (float)-n.y, (float)-n.z}, 0.0f, (float)(2.0 * h));

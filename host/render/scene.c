@@ -38,6 +38,7 @@ TB_STAT_COUNTER(tb__n_union, "Scene/union objects");
 TB_STAT_COUNTER(tb__n_intersection, "Scene/intersection objects");
 TB_STAT_COUNTER(tb__n_difference, "Scene/difference objects");
 TB_STAT_COUNTER(tb__n_tris, "Scene/triangle references");
+TB_STAT_COUNTER(tb__n_refs, "Scene/references");
 TB_STAT_COUNTER(tb__n_materials, "Scene/materials");
 TB_STAT_COUNTER(tb__n_lights, "Scene/lights");
 TB_STAT_COUNTER(tb__n_emissive, "Scene/emissive objects");
@@ -803,6 +804,7 @@ static tb_status tb__make_prims(tb_scene *s)
     s->nprims = n;
     s->stats.nprims = n;
     tb_stat_add(&tb__n_tris, (int64_t)s->stats.triangles);
+    tb_stat_add(&tb__n_refs, (int64_t)n);
     return TB_OK;
 }
 

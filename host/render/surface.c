@@ -12,6 +12,10 @@
 #include "host/render/sampling.h"
 #include "util/color/bands.h"
 #include "util/math/float.h"
+#include "util/stats/stats.h"
+
+/* Surface records made: the shading cost term of testbed predict (docs/predict.md). */
+TB_STAT_COUNTER(tb__surface_hits, "Surface/hits shaded");
 
 /* texture.h's TB_TEX_EWA (raytrace_texture.c checks the value against the enum). */
 #define TB__SF_TEX_EWA 3
@@ -183,6 +187,7 @@ bool tb_surface_at(const tb_surfaces *ss, const tb_ray *ray, const tb_hit *hit, 
     const tb_material *m = tb_scene_hit_material(s, hit);
     if (!m)
         return false;
+    TB_STAT_INC(tb__surface_hits);
     tb_vec3 p, perr;
     if (!tb_object_hit_point(s->objects[hit->object], ray, hit, &p, &perr)) {
         /* Fallback (should not happen): the float point with a generous bound. */

@@ -37,3 +37,16 @@ char **tb_cli_full_argv(int argc, char **argv)
     full[argc + 1] = NULL;
     return full;
 }
+
+int tb_cli_default_costs_path(char *buf, size_t len)
+{
+    const char *xdg = getenv("XDG_CACHE_HOME"), *home = getenv("HOME");
+    int n;
+    if (xdg && *xdg)
+        n = snprintf(buf, len, "%s/testbed/costs.json", xdg);
+    else if (home && *home)
+        n = snprintf(buf, len, "%s/.cache/testbed/costs.json", home);
+    else
+        return -1;
+    return n < 0 || (size_t)n >= len ? -1 : 0;
+}

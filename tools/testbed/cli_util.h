@@ -26,4 +26,9 @@ bool tb_cli_open_vulkan(const char *who, const char *path, long device, tb_scene
  * the strings are argv's). NULL when out of memory. */
 char **tb_cli_full_argv(int argc, char **argv);
 
+/* The default COSTS.json of testbed calibrate and predict (docs/predict.md):
+ * $XDG_CACHE_HOME/testbed/costs.json, else $HOME/.cache/testbed/costs.json.
+ * 0 on success; -1 if neither variable is set or the path does not fit. */
+int tb_cli_default_costs_path(char *buf, size_t len);
+
 #endif

@@ -24,6 +24,8 @@ int tb_cmd_bench_formfactor(int argc, char **argv);
 int tb_cmd_bench_gpu(int argc, char **argv);
 /* `testbed bench scale`: load and first-pixel time and peak memory of generated scenes by size (cmd_bench_scale.c; argv[0] is "scale"). */
 int tb_cmd_bench_scale(int argc, char **argv);
+/* `testbed calibrate [-o COSTS.json]`: fit the cost model of testbed predict (cmd_calibrate.c). */
+int tb_cmd_calibrate(int argc, char **argv);
 /* `testbed check SCENE.mid`: validate and summarise a MID scene (cmd_check.c). */
 int tb_cmd_check(int argc, char **argv);
 /* `testbed compare A B`: error metrics against a reference image (cmd_compare.c). */
@@ -38,6 +40,8 @@ int tb_cmd_generate(int argc, char **argv);
 int tb_cmd_help(int argc, char **argv);
 /* `testbed import MODEL -o OUT.mid`: a model to MID + FED through Assimp (cmd_import.c). */
 int tb_cmd_import(int argc, char **argv);
+/* `testbed predict SCENE [render options]`: predicted wall time and peak memory (cmd_predict.c). */
+int tb_cmd_predict(int argc, char **argv);
 /* `testbed render SCENE -o OUT`: the Whitted ray tracer (cmd_render.c). */
 int tb_cmd_render(int argc, char **argv);
 /* `testbed render SCENE --method radiosity`: progressive radiosity (cmd_render_radiosity.c; called by tb_cmd_render). */

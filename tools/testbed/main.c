@@ -8,6 +8,7 @@
 /* Add a subcommand here and in commands.h; keep the table in alphabetical order. */
 static const tb_command tb__commands[] = {
     {"bench", "benchmarks: intersect, tessellate, accel, rays (vs Embree), gpu (Vulkan kernel)", tb_cmd_bench},
+    {"calibrate", "fit this machine's per-unit render costs for testbed predict (docs/predict.md)", tb_cmd_calibrate},
     {"check", "validate a MID scene and summarise it", tb_cmd_check},
     {"compare", "error metrics (MSE, PSNR, SSIM, ...) of an image against a reference", tb_cmd_compare},
     {"convert", "convert an image between RLE, PNG, PFM and OpenEXR", tb_cmd_convert},
@@ -15,6 +16,7 @@ static const tb_command tb__commands[] = {
     {"generate", "write a procedural MID scene (grid, csg, mesh) for scaling tests", tb_cmd_generate},
     {"help", "list the subcommands, or show one's help", tb_cmd_help},
     {"import", "convert a model (OBJ, PLY, STL, glTF, ... via Assimp) to MID + FED files", tb_cmd_import},
+    {"predict", "predict a render's wall time and peak memory, per module, from the calibrated costs", tb_cmd_predict},
     {"render", "render a MID scene to an image with the Whitted ray tracer", tb_cmd_render},
     {"study", "compare renderers over budgets and seeds against a reference: tables, plots, an HTML page", tb_cmd_study},
     {"trace", "closest hits of a file of rays through a scene (a ray server for scripts)", tb_cmd_trace},

@@ -290,6 +290,19 @@ tb_status tb_stats_set_string(const char *key, const char *value)
     return tb__set_value(key, value, 0.0);
 }
 
+tb_status tb_stats_get_value(const char *key, double *out)
+{
+    pthread_mutex_lock(&tb__lock);
+    for (size_t i = 0; key && i < tb__nvalues; i++)
+        if (!tb__values[i].str && strcmp(tb__values[i].key, key) == 0) {
+            *out = tb__values[i].num;
+            pthread_mutex_unlock(&tb__lock);
+            return TB_OK;
+        }
+    pthread_mutex_unlock(&tb__lock);
+    return tb_error(TB_ERR_NOT_FOUND, "stats value '%s' is not set", key ? key : "");
+}
+
 /* ---------------------------------------------------------------- snapshots */
 
 static int tb__cmp_total(const void *a, const void *b)

@@ -234,6 +234,10 @@ tb_status tb_stats_set_value(const char *key, double value);
 /* Sets (or replaces) a top-level string in the JSON report. */
 tb_status tb_stats_set_string(const char *key, const char *value);
 
+/* The number set for `key` by tb_stats_set_value; TB_ERR_NOT_FOUND if none
+ * (or it holds a string). */
+tb_status tb_stats_get_value(const char *key, double *out);
+
 /* ---------------------------------------------------------------- snapshots */
 
 /* One statistic summed over all threads (and over same-named declarations). */

@@ -1,0 +1,245 @@
+/* host/render/predict: the per-module fit recovers known costs from
+ * synthetic runs (with a zero cost and collinear statistics), the
+ * evaluation adds terms into modules, COSTS.json round-trips exactly, and
+ * bad COSTS.json files get located errors. */
+#include "tb_test.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "host/render/predict.h"
+#include "util/math/rng.h"
+
+/* A term's index by name (the test fails if there is none). */
+static int term(const char *name)
+{
+    int n;
+    const tb_cost_term *t = tb_cost_terms(&n);
+    for (int i = 0; i < n; i++)
+        if (!strcmp(t[i].name, name))
+            return i;
+    fail_msg("no term %s", name);
+    return -1;
+}
+
+/* Known costs: every term gets a positive cost but one per module stays 0. */
+static void known_costs(tb_costs *c)
+{
+    memset(c, 0, sizeof *c);
+    int n;
+    const tb_cost_term *t = tb_cost_terms(&n);
+    for (int i = 0; i < n; i++)
+        c->c[i] = (t[i].module == TB_PM_MEMORY ? 1.0 : 1e-7) * (1.0 + 0.37 * (i % 5));
+    c->c[term("load.csg_node")] = 0.0;
+    c->c[term("raytrace.test_csg")] = 0.0;
+    c->threads = 2;
+}
+
+/* Random runs of every method; the measured modules are exactly the model's. */
+static void synthetic_runs(const tb_costs *truth, tb_predict_stats *f, tb_predict_measured *y, int n)
+{
+    tb_rng rng;
+    tb_rng_seed(&rng, 5, 0);
+    for (int r = 0; r < n; r++) {
+        tb_predict_method m = (tb_predict_method)(r % 3);
+        tb_predict_stats_init(&f[r], m, 1e5 * (1 + 20 * tb_rng_double(&rng)), 64 + r * 16, 48 + r * 8, 3, 2, 2);
+        for (int k = 0; k < TB_PF_COUNT; k++) {
+            bool fixed = k == TB_PF_ONE || k == TB_PF_IS_RAYTRACE || k == TB_PF_IS_PATH || k == TB_PF_IS_RADIOSITY ||
+                         k == TB_PF_BYTES || k == TB_PF_PIXELS || k == TB_PF_FILM_BYTES || k == TB_PF_RAD_PIXEL_RAYS;
+            if (!fixed)
+                f[r].f[k] = 1e3 * (0.05 + tb_rng_double(&rng)) * pow(10.0, 3.0 * tb_rng_double(&rng));
+        }
+        tb_prediction p;
+        tb_predict_eval(truth, &f[r], &p);
+        memset(&y[r], 0, sizeof y[r]);
+        for (int k = 0; k < TB_PM_COUNT; k++)
+            y[r].module[k] = p.module[k];
+    }
+}
+
+static void test_fit_recovers_costs(void **state)
+{
+    (void)state;
+    enum { N = 90 };
+    tb_costs truth, got;
+    known_costs(&truth);
+    tb_predict_stats *f = calloc(N, sizeof *f);
+    tb_predict_measured *y = calloc(N, sizeof *y);
+    assert_non_null(f);
+    assert_non_null(y);
+    synthetic_runs(&truth, f, y, N);
+    assert_int_equal(tb_costs_fit(f, y, N, 2, &got), TB_OK);
+    int n;
+    const tb_cost_term *t = tb_cost_terms(&n);
+    for (int i = 0; i < n; i++) {
+        /* render modules see only their method's runs: a third of N */
+        if (truth.c[i] == 0.0)
+            assert_true(got.c[i] < 1e-12);
+        else if (fabs(got.c[i] / truth.c[i] - 1.0) > 1e-5)
+            fail_msg("%s: fitted %g, true %g", t[i].name, got.c[i], truth.c[i]);
+        assert_true(isfinite(got.c[i]) && got.c[i] >= 0.0);
+    }
+    for (int m = 0; m < TB_PM_COUNT; m++) {
+        assert_true(got.fit[m].rows > 0);
+        assert_true(got.fit[m].rel_rms < 1e-6);
+    }
+    assert_int_equal(got.threads, 2);
+    /* collinear statistics (rays = 2 x samples in every run): no NaN, and
+     * the predictions still match the measurements */
+    for (int r = 0; r < N; r++) {
+        f[r].f[TB_PF_RAYS] = 2.0 * f[r].f[TB_PF_SAMPLES];
+        tb_prediction p;
+        tb_predict_eval(&truth, &f[r], &p);
+        for (int k = 0; k < TB_PM_COUNT; k++)
+            y[r].module[k] = p.module[k];
+    }
+    assert_int_equal(tb_costs_fit(f, y, N, 2, &got), TB_OK);
+    for (int i = 0; i < n; i++)
+        assert_true(isfinite(got.c[i]) && got.c[i] >= 0.0);
+    for (int r = 0; r < N; r++) {
+        tb_prediction p;
+        tb_predict_eval(&got, &f[r], &p);
+        tb_assert_near(p.seconds / (y[r].module[0] + y[r].module[1] + y[r].module[2] + y[r].module[3] +
+                                    y[r].module[4] + y[r].module[5]),
+                       1.0, 1e-5);
+    }
+    free(f);
+    free(y);
+}
+
+static void test_eval_modules(void **state)
+{
+    (void)state;
+    tb_costs c;
+    memset(&c, 0, sizeof c);
+    c.threads = 1;
+    c.c[term("load.parse_byte")] = 1e-8;
+    c.c[term("path.ray")] = 1e-6;
+    c.c[term("memory.path")] = 1e7;
+    c.c[term("memory.film_byte")] = 2.0;
+    tb_predict_stats f;
+    tb_predict_stats_init(&f, TB_PREDICT_PATH, 1e6, 100, 50, 3, 0, 1);
+    f.f[TB_PF_RAYS] = 2e6;
+    tb_prediction p;
+    tb_predict_eval(&c, &f, &p);
+    tb_assert_near(p.module[TB_PM_LOAD], 0.01, 1e-15);
+    tb_assert_near(p.module[TB_PM_PATH], 2.0, 1e-12);
+    tb_assert_near(p.seconds, 2.01, 1e-12);
+    tb_assert_near(p.peak_rss_bytes, 1e7 + 2.0 * 100 * 50 * 3 * 4, 1e-6);
+    tb_assert_near(p.term[term("path.ray")], 2.0, 1e-12);
+    assert_string_equal(tb_pmodule_name(TB_PM_PATH), "path");
+    assert_string_equal(tb_predict_method_name(TB_PREDICT_RADIOSITY), "radiosity");
+    assert_string_equal(tb_pfeat_name(TB_PF_TRIANGLES), "triangles");
+}
+
+/* A temporary file holding `text`; its path in buf. */
+static const char *write_tmp(char *buf, size_t n, const char *name, const char *text)
+{
+    const char *dir = getenv("TB_TEST_TMPDIR");
+    snprintf(buf, n, "%s/predict-model-%s", dir && *dir ? dir : "/tmp", name);
+    FILE *fp = fopen(buf, "w");
+    assert_non_null(fp);
+    fputs(text, fp);
+    fclose(fp);
+    return buf;
+}
+
+static void test_costs_round_trip(void **state)
+{
+    (void)state;
+    tb_costs c, back;
+    known_costs(&c);
+    c.c[0] = 1.0 / 3.0; /* needs all 17 digits */
+    c.c[1] = 5e-300;
+    snprintf(c.cpu, sizeof c.cpu, "CPU \"quoted\" \\ name");
+    snprintf(c.created, sizeof c.created, "2026-12-07T12:00:00Z");
+    c.fit[TB_PM_LOAD].rows = 7;
+    char path[512];
+    write_tmp(path, sizeof path, "costs.json", "");
+    assert_int_equal(tb_costs_write(path, &c), TB_OK);
+    assert_int_equal(tb_costs_read(path, &back), TB_OK);
+    int n;
+    tb_cost_terms(&n);
+    for (int i = 0; i < n; i++)
+        assert_true(back.c[i] == c.c[i]);
+    assert_int_equal(back.threads, 2);
+    assert_string_equal(back.cpu, c.cpu);
+    assert_string_equal(back.created, c.created);
+    /* writing into a missing folder fails and leaves nothing */
+    assert_int_equal(tb_costs_write("/nonexistent-dir/costs.json", &c), TB_ERR_IO);
+}
+
+/* Reads `text` as COSTS.json: expects failure with `want` in the message. */
+static void expect_bad(const char *name, const char *text, tb_status st, const char *want)
+{
+    char path[512];
+    write_tmp(path, sizeof path, name, text);
+    tb_costs c;
+    assert_int_equal(tb_costs_read(path, &c), st);
+    if (!strstr(tb_last_error(), want))
+        fail_msg("%s: message '%s' lacks '%s'", name, tb_last_error(), want);
+}
+
+static void test_costs_bad_files(void **state)
+{
+    (void)state;
+    /* a valid file to edit */
+    tb_costs c;
+    known_costs(&c);
+    char path[512];
+    write_tmp(path, sizeof path, "good.json", "");
+    assert_int_equal(tb_costs_write(path, &c), TB_OK);
+    FILE *fp = fopen(path, "r");
+    assert_non_null(fp);
+    static char good[65536];
+    size_t len = fread(good, 1, sizeof good - 1, fp);
+    good[len] = 0;
+    fclose(fp);
+    static char bad[65536];
+
+    expect_bad("empty.json", "", TB_ERR_FORMAT, "predict-model-empty.json:1:1: error: expected a JSON object");
+    expect_bad("array.json", "[1, 2]", TB_ERR_FORMAT, ":1:1: error: expected a JSON object");
+    expect_bad("trunc.json", "{\"schema\": \"testbed-costs-1\",\n  \"threads\": 2,\n  \"costs\": {\"load.fixed\": 1",
+               TB_ERR_FORMAT, ":3:28: error: expected ',' or '}'");
+    expect_bad("schema.json", "{\"schema\": \"other\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
+               ":1:12: error: schema is not \"testbed-costs-1\"");
+    expect_bad("noschema.json", "{\"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT, "no \"schema\"");
+    expect_bad("missing.json", "{\"schema\": \"testbed-costs-1\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
+               "cost term \"load.parse_byte\" is missing");
+    /* an unknown term, a negative and a non-number cost, a duplicate, text after */
+    char *p = strstr(strcpy(bad, good), "\"load.primitive\"");
+    memcpy(p, "\"load.primitiv_\"", 16);
+    expect_bad("unknown.json", bad, TB_ERR_FORMAT, "unknown cost term \"load.primitiv_\"");
+    p = strstr(strcpy(bad, good), "\"load.fixed\": ") + 14;
+    memmove(p + 1, p, strlen(p) + 1); /* a minus sign before the cost */
+    *p = '-';
+    expect_bad("negative.json", bad, TB_ERR_FORMAT, "cost \"load.fixed\" must be a finite number >= 0");
+    p = strstr(strcpy(bad, good), "\"load.fixed\": ") + 14;
+    *p = 'x';
+    expect_bad("nan.json", bad, TB_ERR_FORMAT, "error: expected a number");
+    strcpy(bad, good);
+    strcat(bad, "{}");
+    expect_bad("after.json", bad, TB_ERR_FORMAT, "text after the JSON object");
+    p = strstr(strcpy(bad, good), "\"threads\": 2") + 11;
+    *p = '0';
+    expect_bad("threads.json", bad, TB_ERR_FORMAT, "threads must be a whole number from 1 to 4096");
+    char nopath[600];
+    snprintf(nopath, sizeof nopath, "%s/predict-model-does-not-exist.json",
+             getenv("TB_TEST_TMPDIR") ? getenv("TB_TEST_TMPDIR") : "/tmp");
+    tb_costs c2;
+    assert_int_equal(tb_costs_read(nopath, &c2), TB_ERR_IO);
+    assert_non_null(strstr(tb_last_error(), "does-not-exist.json"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_fit_recovers_costs),
+        cmocka_unit_test(test_eval_modules),
+        cmocka_unit_test(test_costs_round_trip),
+        cmocka_unit_test(test_costs_bad_files),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
