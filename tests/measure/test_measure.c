@@ -210,8 +210,8 @@ static void test_methods_agree(void **state)
     tb_sensor_set ss = sensors("name,kind,x,y,z,dx,dy,dz,half_angle_deg,filter\n"
                                "floor,irradiance,420,0,120,0,1,0,,\n"
                                "ceiling,irradiance,278,548.7,100,0,-1,0,,\n"
-                               "red,radiance,278,273,280,1,0,0,5,\n"
-                               "green,radiance,278,273,280,-1,0,0,5,\n"
+                               "red,radiance,278,450,200,1,0,0,5,\n"
+                               "green,radiance,278,450,200,-1,0,0,5,\n"
                                "back,radiance,278,400,0,0,0,1,3,\n");
     tb_measure_result *p = run(s, &ss, TB_MEASURE_PATH, 16384, 0.0, 0);
     tb_measure_result *r = run(s, &ss, TB_MEASURE_RADIOSITY, 16384, 40.0, 0);
