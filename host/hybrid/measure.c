@@ -154,11 +154,11 @@ static tb_status tb__sensor_row(const char *name, const char *base_dir, const tb
                                 tb_sensor *s)
 {
     const long ln = r->line;
+    memset(s, 0, sizeof *s); /* the caller frees it whatever happens below */
     if (r->n > ncols)
         return tb_error(TB_ERR_FORMAT, "%s:%ld: error: %d columns, the header has %d", name, ln, r->n, ncols);
     if (r->n < 8)
         return tb_error(TB_ERR_FORMAT, "%s:%ld: error: missing column '%s'", name, ln, tb__sensor_cols[r->n]);
-    memset(s, 0, sizeof *s);
     s->line = ln;
     if (!*r->f[0])
         return tb_error(TB_ERR_FORMAT, "%s:%ld: error: empty sensor name", name, ln);
@@ -572,6 +572,8 @@ tb_status tb_measure(const tb_scene *s, const tb_sensor_set *set, const tb_measu
         return tb_error(TB_ERR_ARG, "measure: threads %d < 0", o.threads);
     if (o.method != TB_MEASURE_PATH && o.method != TB_MEASURE_RADIOSITY)
         return tb_error(TB_ERR_ARG, "measure: unknown method %d", (int)o.method);
+    if (set->n == 0)
+        return TB_OK;
     if (set->filtered && !s->spectral)
         return tb_error(TB_ERR_ARG, "measure: filters need a spectral scene (load it with spectral colours)");
     const int nc = s->nchannels, B = TB_MEASURE_BATCHES;
@@ -619,9 +621,7 @@ tb_status tb_measure(const tb_scene *s, const tb_sensor_set *set, const tb_measu
     c.eps = (float)(1e-5 * (isfinite(diag) && diag > 0.0 ? diag : 1.0));
     const int64_t ntasks = (int64_t)set->n * B;
     tb_progress prog;
-    tb_progress_start(&prog, "measure", ntasks, NULL, 0);
-    if (!o.progress)
-        prog.out = NULL;
+    const bool bar = o.progress && tb_progress_start(&prog, "measure", ntasks, NULL, 0) == TB_OK;
     const int nthreads = o.threads > 0 ? o.threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nthreads)
     for (int64_t t = 0; t < ntasks; t++) {
@@ -651,9 +651,10 @@ tb_status tb_measure(const tb_scene *s, const tb_sensor_set *set, const tb_measu
         const double *ti = T + (size_t)i * (size_t)nc;
         for (int k = 0; k < nc; k++)
             m[k] = acc[k] / per_batch * ti[k];
-        tb_progress_add(&prog, 1);
+        if (bar)
+            tb_progress_add(&prog, 1);
     }
-    if (o.progress)
+    if (bar)
         tb_progress_finish(&prog);
     for (int i = 0; i < set->n; i++) {
         tb_measure_result *r = &out[i];
