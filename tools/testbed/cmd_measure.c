@@ -16,7 +16,8 @@ int tb_cmd_measure(int argc, char **argv)
 {
     const char *scene_path = NULL, *sensors_path = NULL, *out_path = NULL, *measured_path = NULL;
     tb_measure_options mo = tb_measure_defaults();
-    int method = TB_MEASURE_PATH, quantity = TB_COMPARE_READING, spectral = 0;
+    int method = TB_MEASURE_PATH, quantity = TB_COMPARE_READING;
+    bool spectral = false;
     bool fail_on_disagree = false, edge_given = false;
     double coverage = 2.0;
     const tb_opt_choice methods[] = {{"path", TB_MEASURE_PATH}, {"radiosity", TB_MEASURE_RADIOSITY}, {NULL, 0}};
