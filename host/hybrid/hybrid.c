@@ -270,6 +270,8 @@ static void tb__gather_one(const tb_hybrid *h, const tb_ray *ray, int depth, dou
     }
 }
 
+void tb_hybrid_gather_ray(const tb_hybrid *h, const tb_ray *ray, double *out) { tb__gather_one(h, ray, 0, out); }
+
 tb_channels tb_hybrid_indirect(void *ctx, const tb_rt_indirect_query *q, tb_rng *rng)
 {
     const tb_hybrid *h = ctx;

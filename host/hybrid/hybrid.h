@@ -103,6 +103,13 @@ const tb_rad_locator *tb_hybrid_locator(const tb_hybrid *h);
 /* What the radiosity pass did. */
 tb_hybrid_stats tb_hybrid_get_stats(const tb_hybrid *h);
 
+/* What one ray gathers from the solution, in radiosity units (pi times
+ * radiance), out[0 .. nchannels): the reflected radiosity B - E of the
+ * element it lands on (front sides; emission left out), plus what mirrors
+ * and smooth dielectrics send along it (docs/hybrid.md, "Two modes").
+ * Zeros for a miss. */
+void tb_hybrid_gather_ray(const tb_hybrid *h, const tb_ray *ray, double *out);
+
 /* The tracer's indirect callback (tb_rt_indirect_fn) with ctx a tb_hybrid:
  * the indirect diffuse irradiance at q as the hybrid's mode computes it. */
 tb_channels tb_hybrid_indirect(void *ctx, const tb_rt_indirect_query *q, tb_rng *rng);

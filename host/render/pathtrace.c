@@ -63,6 +63,10 @@ void tb_pt_free(tb_pathtracer *pt)
 
 tb_pt_options tb_pt_get_options(const tb_pathtracer *pt) { return pt->opt; }
 
+const tb_surfaces *tb_pt_surfaces(const tb_pathtracer *pt) { return pt->surfaces; }
+
+const tb_light_set *tb_pt_lights(const tb_pathtracer *pt) { return &pt->lights; }
+
 tb_pt_path tb_pt_path_start(const tb_pathtracer *pt, const tb_ray *ray)
 {
     const int nc = pt->scene->nchannels;

@@ -28,6 +28,7 @@
 #include "host/render/render.h"
 #include "host/render/render_file.h"
 #include "host/render/scene.h"
+#include "host/render/surface.h"
 #include "util/base/error.h"
 #include "util/image/image.h"
 #include "util/math/ray.h"
@@ -73,6 +74,12 @@ void tb_pt_free(tb_pathtracer *pt);
 
 /* The options in effect (defaults filled in). */
 tb_pt_options tb_pt_get_options(const tb_pathtracer *pt);
+
+/* The path tracer's surfaces (materials made ready to shade). */
+const tb_surfaces *tb_pt_surfaces(const tb_pathtracer *pt);
+
+/* The path tracer's light set (next-event estimation and MIS densities). */
+const tb_light_set *tb_pt_lights(const tb_pathtracer *pt);
 
 /* Starts a path along `ray` (throughput 1, nothing gathered). */
 tb_pt_path tb_pt_path_start(const tb_pathtracer *pt, const tb_ray *ray);

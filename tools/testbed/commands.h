@@ -42,6 +42,8 @@ int tb_cmd_help(int argc, char **argv);
 int tb_cmd_import(int argc, char **argv);
 /* `testbed predict SCENE [render options]`: predicted wall time and peak memory (cmd_predict.c). */
 int tb_cmd_predict(int argc, char **argv);
+/* `testbed measure SCENE --sensors S.csv`: virtual irradiance and radiance meters (cmd_measure.c). */
+int tb_cmd_measure(int argc, char **argv);
 /* `testbed render SCENE -o OUT`: the Whitted ray tracer (cmd_render.c). */
 int tb_cmd_render(int argc, char **argv);
 /* `testbed render SCENE --method radiosity`: progressive radiosity (cmd_render_radiosity.c; called by tb_cmd_render). */

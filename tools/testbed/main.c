@@ -16,6 +16,7 @@ static const tb_command tb__commands[] = {
     {"generate", "write a procedural MID scene (grid, csg, mesh) for scaling tests", tb_cmd_generate},
     {"help", "list the subcommands, or show one's help", tb_cmd_help},
     {"import", "convert a model (OBJ, PLY, STL, glTF, ... via Assimp) to MID + FED files", tb_cmd_import},
+    {"measure", "virtual irradiance and radiance meters read off a scene, compared with measurements", tb_cmd_measure},
     {"predict", "predict a render's wall time and peak memory, per module, from the calibrated costs", tb_cmd_predict},
     {"render", "render a MID scene to an image with the Whitted ray tracer", tb_cmd_render},
     {"study", "compare renderers over budgets and seeds against a reference: tables, plots, an HTML page", tb_cmd_study},
