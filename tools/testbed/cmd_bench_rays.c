@@ -26,6 +26,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_embree.h"
 #include "bench_raysets.h"
 #include "commands.h"
 #include "host/object/hit.h"
@@ -33,7 +34,6 @@
 #include "host/render/lights.h"
 #include "host/render/scene.h"
 #include "util/math/rng.h"
-#include "util/math/transform.h"
 #include "util/stats/stats.h"
 
 #ifdef TB_HAVE_EMBREE
@@ -198,30 +198,8 @@ static int tb__embree_build(const tb_scene *s, tb__embree *e, bool robust, const
         rtcReleaseGeometry(g);
         (*user_objects)++;
     }
-    for (uint32_t o = 0; o < s->nobjects; o++) {
-        const tb_object *obj = s->objects[o];
-        if (!obj->mesh || obj->mesh->ntris == 0)
-            continue;
-        const tb_object_mesh *m = obj->mesh;
-        RTCGeometry g = rtcNewGeometry(e->dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-        float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                           m->nvertices);
-        unsigned *ix = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                               m->ntris);
-        if (!v || !ix) {
-            fprintf(stderr, "testbed bench rays: Embree buffer allocation failed\n");
-            rtcReleaseGeometry(g);
-            return 0;
-        }
-        for (uint32_t i = 0; i < m->nvertices; i++) {
-            tb_vec3 w = tb_transform_point(&obj->to_world, m->vertices[i]);
-            v[3 * i] = w.x, v[3 * i + 1] = w.y, v[3 * i + 2] = w.z;
-        }
-        memcpy(ix, m->tris, sizeof(unsigned) * 3 * (size_t)m->ntris);
-        rtcCommitGeometry(g);
-        rtcAttachGeometryByID(e->scene, g, o);
-        rtcReleaseGeometry(g);
-    }
+    if (!tb_bench_embree_add_meshes(e->dev, e->scene, s, RTC_BUILD_QUALITY_MEDIUM, "testbed bench rays"))
+        return 0;
     rtcCommitScene(e->scene);
     *build_seconds = tb__wall() - t0;
     enum RTCError err = rtcGetDeviceError(e->dev);
