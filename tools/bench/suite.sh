@@ -170,8 +170,8 @@ printf '%s\n' "$suite" | while IFS='|' read -r name src arg; do
     file == 3 && / agreement: / { d[$1] = $3 (robust ? "r" : ""); n[$1] = $5 }
     file == 2 && /^ours +1 / { o1 = $4 }
     file == 2 && /^embree-high +1 / { e1 = $4 }
-    file == 2 && /^build 1 threads:/ { s1 = $10; sah = $NF }
-    file == 2 && /^build 2 threads:/ { s2 = $10 }
+    file == 2 && /^build 1 threads:/ { s1 = $10; m1 = $14; sah = $NF }
+    file == 2 && /^build 2 threads:/ { s2 = $10; m2 = $14 }
     END {
         printf "%s %s", name, tris
         split("primary shadow diffuse", sets, " ")
@@ -180,8 +180,8 @@ printf '%s\n' "$suite" | while IFS='|' read -r name src arg; do
             printf " %s %s %s %s %s", (s in r1) ? r1[s] : "-", (s in r2) ? r2[s] : "-", (s in c1) ? c1[s] : "-",
                 (s in d) ? d[s] : 0, (s in n) ? n[s] : 0
         }
-        sub(/x;?$/, "", s1); sub(/x;?$/, "", s2)
-        printf " %s %s %s %s %s\n", o1, e1, s1, s2, sah
+        sub(/x;?$/, "", s1); sub(/x;?$/, "", s2); sub(/x;?$/, "", m1); sub(/x;?$/, "", m2)
+        printf " %s %s %s %s %s %s %s\n", o1, e1, s1, s2, m1, m2, sah
     }' "$dir/$name.rays.txt" "$dir/$name.accel.txt" "$agree" >>"$rows"
 done
 
@@ -190,10 +190,10 @@ awk -v load="$(cut -d' ' -f1-3 /proc/loadavg)" '
 function upd(key, v) { if (v == "-" || v == "") return; v += 0; if (!(key in mn) || v < mn[key]) { mn[key] = v; at[key] = $1 } }
 function updmax(key, v) { if (v == "-" || v == "") return; v += 0; if (!(key in mx) || v > mx[key]) { mx[key] = v; atx[key] = $1 } }
 BEGIN {
-    print "| scene | triangles | primary 1T / 2T / CPU | shadow 1T / 2T / CPU | diffuse 1T / 2T / CPU | rays that differ | build Mtri/s ours / Embree 1T | build speed 1T / 2T | SAH ours / Embree |"
-    print "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+    print "| scene | triangles | primary 1T / 2T / CPU | shadow 1T / 2T / CPU | diffuse 1T / 2T / CPU | rays that differ | build Mtri/s ours / Embree high 1T | build speed vs high 1T / 2T | vs medium 1T / 2T | SAH ours / Embree |"
+    print "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
 }
-$2 == "FAIL" { print "| " $1 " | FAILED | | | | | | | |"; bad = 1; next }
+$2 == "FAIL" { print "| " $1 " | FAILED | | | | | | | | |"; bad = 1; next }
 {
     differ = ""; total = 0
     for (k = 0; k < 3; k++) {
@@ -202,14 +202,15 @@ $2 == "FAIL" { print "| " $1 " | FAILED | | | | | | | |"; bad = 1; next }
         differ = differ (k ? " / " : "") $(b + 3)
         if ($(b + 4) > 0 && $(b + 3) + 0 > $(b + 4) / 1000) agree_bad = agree_bad " " $1
     }
-    upd("s1", $20); upd("s2", $21); updmax("sah", $22)
-    printf "| %s | %s | %s / %s / %s | %s / %s / %s | %s / %s / %s | %s | %s / %s | %s / %s | %s |\n", $1, $2,
-        $3, $4, $5, $8, $9, $10, $13, $14, $15, differ, $18, $19, $20, $21, $22
+    upd("s1", $20); upd("s2", $21); upd("m1", $22); upd("m2", $23); updmax("sah", $24)
+    printf "| %s | %s | %s / %s / %s | %s / %s / %s | %s / %s / %s | %s | %s / %s | %s / %s | %s / %s | %s |\n",
+        $1, $2, $3, $4, $5, $8, $9, $10, $13, $14, $15, differ, $18, $19, $20, $21, $22, $23, $24
 }
 END {
     print ""
     print "Ratios are ours / Embree: rays per second (1T, 2T: wall clock; CPU: per CPU second, 1 thread); build"
-    print "speed = Embree-high build time / ours; SAH: our tree / Embree rtcBuildBVH tree (lower is better)."
+    print "speed = Embree build time (high quality, medium = its default) / ours, per scene build (rtcCommitScene vs"
+    print "tb_scene_rebuild_accel); SAH: our tree / Embree rtcBuildBVH high-quality tree (lower is better)."
     print "Rays that differ (primary / shadow / diffuse) in hit/miss, object or face; r: against Embree'"'"'s robust"
     print "mode, where its default triangle test disagreed on more than 1 ray in 1000."
     print "Load average at the end: " load
@@ -224,6 +225,8 @@ END {
     }
     printf "| build speed vs Embree high 1T | %s | %s |\n", mn["s1"], at["s1"]
     printf "| build speed vs Embree high 2T | %s | %s |\n", mn["s2"], at["s2"]
+    printf "| build speed vs Embree medium 1T | %s | %s |\n", mn["m1"], at["m1"]
+    printf "| build speed vs Embree medium 2T | %s | %s |\n", mn["m2"], at["m2"]
     printf "| SAH ours / Embree (maximum) | %s | %s |\n", mx["sah"], atx["sah"]
     if (agree_bad != "") { print "suite.sh: more than 1 ray in 1000 differs from Embree on:" agree_bad > "/dev/stderr"; bad = 1 }
     exit bad

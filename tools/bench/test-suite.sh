@@ -45,7 +45,7 @@ $2 ~ /^ (bumpy|terrain|boxes|slivers|objects|mixed|human|cornell-box) $/ {
     if ($3 + 0 <= 0) { print "FAIL: no triangles: " $0; bad = 1 }
     for (k = 4; k <= 6; k++) if ($k !~ /[0-9]/ || $k ~ / - /) { print "FAIL: missing ratio: " $0; bad = 1 }
     n = split($8, b, "/"); if (n != 2 || b[1] + 0 <= 0 || b[2] + 0 <= 0) { print "FAIL: build rates: " $0; bad = 1 }
-    if ($10 + 0 < 0.75 || $10 + 0 > 1.25) { print "FAIL: SAH ratio out of [0.75, 1.25]: " $0; bad = 1 }
+    if ($11 + 0 < 0.75 || $11 + 0 > 1.25) { print "FAIL: SAH ratio out of [0.75, 1.25]: " $0; bad = 1 }
 }
 /^\| minimum over the suite/ { mins = 1 }
 /^\| SAH ours \/ Embree \(maximum\)/ { sah = 1 }

@@ -6,9 +6,11 @@
  * binary SAH tree, the 8-wide collapse, packed leaves), best of --repeat
  * builds per thread count; its SAH cost is that of the binary tree.
  * Embree, same thread count (device config threads=T):
- *   scene  rtcCommitScene of the meshes (bench_embree.h) at
- *          RTC_BUILD_QUALITY_HIGH: its triangle BVH, what rtcIntersect1
- *          traverses (its tree is internal: time only);
+ *   high   rtcCommitScene of the meshes (bench_embree.h) at
+ *          RTC_BUILD_QUALITY_HIGH (spatial splits): its triangle BVH (its
+ *          tree is internal: time only);
+ *   med    the same at RTC_BUILD_QUALITY_MEDIUM, Embree's default, the scene
+ *          `bench rays --embree` traces;
  *   bvh    rtcBuildBVH at RTC_BUILD_QUALITY_HIGH over our references' boxes
  *          (every reference, whole objects too), binary, leaves of at most 8,
  *          traversal and intersection cost 1: our builder's constants. No
@@ -58,8 +60,32 @@ static double tb__sah_ours(const tb_accel *acc)
     return sum;
 }
 
+/* A fingerprint of our tree: FNV-1a over the node array (zeros made
+ * positive: the sign of a zero bound depends on the order of a union and
+ * changes no answer) and the leaf order of the references. Equal
+ * fingerprints: the same tree. */
+static uint64_t tb__tree_hash(const tb_accel *acc)
+{
+    uint64_t h = 1469598103934665603ull;
+    size_t n, nr;
+    const tb_bvh_node *nodes = tb_accel_bvh_nodes(acc, &n);
+    const uint32_t *refs = tb_accel_bvh_refs(acc, &nr);
+    for (size_t i = 0; nodes && i < n; i++) {
+        tb_bvh_node c = nodes[i];
+        float *f = &c.bounds.lo.x;
+        for (int k = 0; k < 6; k++)
+            f[k] += 0.0f;
+        const unsigned char *p = (const unsigned char *)&c;
+        for (size_t k = 0; k < sizeof c; k++)
+            h = (h ^ p[k]) * 1099511628211ull;
+    }
+    for (size_t i = 0; refs && i < nr; i++)
+        h = (h ^ refs[i]) * 1099511628211ull;
+    return h;
+}
+
 /* Our build at `threads` threads, best of `repeat`: seconds, and the tree's SAH cost. */
-static bool tb__time_ours(tb_scene *s, int threads, int repeat, double *seconds, double *sah)
+static bool tb__time_ours(tb_scene *s, int threads, int repeat, double *seconds, double *sah, uint64_t *hash)
 {
     *seconds = INFINITY;
     tb_accel_options o = {.threads = threads};
@@ -72,6 +98,7 @@ static bool tb__time_ours(tb_scene *s, int threads, int repeat, double *seconds,
         *seconds = fmin(*seconds, tb__now() - t0);
     }
     *sah = tb__sah_ours(s->accel);
+    *hash = tb__tree_hash(s->accel);
     return true;
 }
 
@@ -143,8 +170,9 @@ static RTCDevice tb__e_device(int threads)
     return d;
 }
 
-/* Embree's high-quality triangle scene build at `threads`, best of `repeat`. */
-static bool tb__time_embree_scene(const tb_scene *s, int threads, int repeat, double *seconds)
+/* Embree's triangle scene build at `quality` and `threads`, best of `repeat`. */
+static bool tb__time_embree_scene(const tb_scene *s, enum RTCBuildQuality quality, int threads, int repeat,
+                                  double *seconds)
 {
     *seconds = INFINITY;
     RTCDevice d = tb__e_device(threads);
@@ -154,8 +182,8 @@ static bool tb__time_embree_scene(const tb_scene *s, int threads, int repeat, do
     for (int r = 0; r < repeat && ok; r++) {
         double t0 = tb__now();
         RTCScene sc = rtcNewScene(d);
-        rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_HIGH);
-        ok = tb_bench_embree_add_meshes(d, sc, s, RTC_BUILD_QUALITY_HIGH, "testbed bench accel");
+        rtcSetSceneBuildQuality(sc, quality);
+        ok = tb_bench_embree_add_meshes(d, sc, s, quality, "testbed bench accel");
         if (ok)
             rtcCommitScene(sc);
         double t = tb__now() - t0;
@@ -252,33 +280,40 @@ int tb_bench_accel_scene(const char *path, const long *threads, int nthreads, in
     }
     printf("scene %s: %llu triangles, %zu references; best of %d builds; load average %.2f\n", path,
            (unsigned long long)tris, s->nprims, repeat, load);
-    printf("ours: tb_scene_rebuild_accel (SAH of the binary tree); embree-high: rtcCommitScene at\n"
-           "RTC_BUILD_QUALITY_HIGH (time only); embree-bvh: rtcBuildBVH HIGH over the same boxes, binary,\n"
-           "leaves <= 8, costs 1/1 (SAH by the same formula); Mtri/s = references / seconds\n");
+    printf("ours: tb_scene_rebuild_accel (SAH of the binary tree); embree-high / embree-med: rtcCommitScene\n"
+           "at RTC_BUILD_QUALITY_HIGH / MEDIUM (the default; time only); embree-bvh: rtcBuildBVH HIGH over the same boxes, binary,\n"
+           "leaves <= 8, costs 1/1 (SAH by the same formula); Mtri/s = references / seconds; tree: a\n"
+           "fingerprint of our tree (nodes and leaf order: equal for every thread count)\n");
     printf("%-12s %7s %10s %10s %14s %10s\n", "builder", "threads", "seconds", "Mtri/s", "Mtri/s/thread", "SAH");
     int rc = TB_EXIT_OK;
     double mref = (double)s->nprims * 1e-6;
     for (int ti = 0; ti < nthreads && rc == TB_EXIT_OK; ti++) {
         int th = (int)threads[ti];
         double t, sah;
-        if (!tb__time_ours(s, th, repeat, &t, &sah)) {
+        uint64_t hash;
+        if (!tb__time_ours(s, th, repeat, &t, &sah, &hash)) {
             rc = TB_EXIT_FAIL;
             break;
         }
-        printf("%-12s %7d %10.4f %10.3f %14.3f %10.3f\n", "ours", th, t, mref / t, mref / t / th, sah);
+        printf("%-12s %7d %10.4f %10.3f %14.3f %10.3f  tree %016llx\n", "ours", th, t, mref / t, mref / t / th, sah,
+               (unsigned long long)hash);
         fflush(stdout);
 #ifdef TB_HAVE_EMBREE
         if (!embree)
             continue;
-        double te, tb, sahe;
-        if (!tb__time_embree_scene(s, th, repeat, &te) || !tb__time_embree_bvh(s, th, repeat, &tb, &sahe)) {
+        double te, tm, tb, sahe;
+        if (!tb__time_embree_scene(s, RTC_BUILD_QUALITY_HIGH, th, repeat, &te) ||
+            !tb__time_embree_scene(s, RTC_BUILD_QUALITY_MEDIUM, th, repeat, &tm) ||
+            !tb__time_embree_bvh(s, th, repeat, &tb, &sahe)) {
             rc = TB_EXIT_FAIL;
             break;
         }
         printf("%-12s %7d %10.4f %10.3f %14.3f %10s\n", "embree-high", th, te, mref / te, mref / te / th, "-");
+        printf("%-12s %7d %10.4f %10.3f %14.3f %10s\n", "embree-med", th, tm, mref / tm, mref / tm / th, "-");
         printf("%-12s %7d %10.4f %10.3f %14.3f %10.3f\n", "embree-bvh", th, tb, mref / tb, mref / tb / th, sahe);
-        printf("build %d threads: ours / embree-high time %.2f, speed %.2fx; SAH ours / embree-bvh %.4f\n", th,
-               t / te, te / t, sah / sahe);
+        printf("build %d threads: ours / embree-high time %.2f, speed %.2fx; speed vs embree-med %.2fx; "
+               "SAH ours / embree-bvh %.4f\n",
+               th, t / te, te / t, tm / t, sah / sahe);
         fflush(stdout);
 #else
         (void)embree;
