@@ -77,7 +77,12 @@ static inline void tb__box4_grow(tb__box4 *a, __m128 lo, __m128 hi)
     a->hi = _mm_max_ps(hi, a->hi);
 }
 static inline void tb__box4_add(tb__box4 *a, const tb__box4 *b) { tb__box4_grow(a, b->lo, b->hi); }
-static inline __m128 tb__ref_lo(const tb__bref *r) { return _mm_load_ps(r->lo); }
+/* The fourth lane of lo holds the id's bits, a denormal float for most ids:
+ * arithmetic on it (the centroid) would take a slow microcode path. Zeroed. */
+static inline __m128 tb__ref_lo(const tb__bref *r)
+{
+    return _mm_and_ps(_mm_load_ps(r->lo), _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)));
+}
 static inline __m128 tb__ref_hi(const tb__bref *r) { return _mm_load_ps(r->hi); }
 /* The centroid as tb_aabb_centroid computes it: lo / 2 + hi / 2. */
 static inline __m128 tb__ref_centroid(__m128 lo, __m128 hi)
@@ -130,10 +135,9 @@ static inline void tb__v4_store(float out[4], tb__v4 v) { memcpy(out, v.v, sizeo
 #endif
 
 /* The measure of box `b` (double: float areas of huge boxes overflow); 0
- * for an empty box. */
-static inline double tb__measure(const tb_aabb *b, int mode)
+ * for an empty box. tb__measure4 computes the same from a tb__box4. */
+static inline double tb__measure_ext(double ex, double ey, double ez, int mode)
 {
-    double ex = (double)b->hi.x - b->lo.x, ey = (double)b->hi.y - b->lo.y, ez = (double)b->hi.z - b->lo.z;
     if (!(ex >= 0.0 && ey >= 0.0 && ez >= 0.0))
         return 0.0;
     switch (mode) {
@@ -144,6 +148,25 @@ static inline double tb__measure(const tb_aabb *b, int mode)
     default:
         return 1.0;
     }
+}
+
+static inline double tb__measure(const tb_aabb *b, int mode)
+{
+    return tb__measure_ext((double)b->hi.x - b->lo.x, (double)b->hi.y - b->lo.y, (double)b->hi.z - b->lo.z, mode);
+}
+
+static inline double tb__measure4(const tb__box4 *b, int mode)
+{
+#if defined(__SSE2__)
+    __m128d e01 = _mm_sub_pd(_mm_cvtps_pd(b->hi), _mm_cvtps_pd(b->lo));
+    __m128d e2 = _mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(b->hi, b->hi)), _mm_cvtps_pd(_mm_movehl_ps(b->lo, b->lo)));
+    double e[2];
+    _mm_storeu_pd(e, e01);
+    return tb__measure_ext(e[0], e[1], _mm_cvtsd_f64(e2), mode);
+#else
+    tb_aabb a = tb__box4_aabb(b);
+    return tb__measure(&a, mode);
+#endif
 }
 
 static int tb__measure_mode(const tb_aabb *b)
@@ -199,22 +222,98 @@ static void tb__bins_clear(tb__bins *bn, int nb)
         }
 }
 
-/* Adds refs[begin, end) to the bins. */
+/* The bins of one reference's centroid on the three axes: tb__bin's
+ * arithmetic, the clamping done on t (max(t, 0), min(t, nb - 1), then
+ * truncation gives the same bin for every t). A dead axis has lo = scale =
+ * 0: bin 0, never looked at. */
+#if defined(__SSE2__)
+typedef struct tb__binner {
+    __m128d lo01, sc01, lo2, sc2, top;
+} tb__binner;
+static inline tb__binner tb__binner_make(const tb__binning *g)
+{
+    double lo[3], sc[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = g->live[a] ? g->lo[a] : 0.0;
+        sc[a] = g->live[a] ? g->scale[a] : 0.0;
+    }
+    return (tb__binner){_mm_set_pd(lo[1], lo[0]), _mm_set_pd(sc[1], sc[0]), _mm_set_sd(lo[2]), _mm_set_sd(sc[2]),
+                        _mm_set1_pd((double)(g->nb - 1))};
+}
+static inline void tb__binner_bins(const tb__binner *q, __m128 c, int k[3])
+{
+    const __m128d zero = _mm_setzero_pd();
+    __m128d t01 = _mm_mul_pd(_mm_sub_pd(_mm_cvtps_pd(c), q->lo01), q->sc01);
+    __m128d t2 = _mm_mul_sd(_mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(c, c)), q->lo2), q->sc2);
+    __m128i k01 = _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(t01, zero), q->top));
+    k[0] = _mm_cvtsi128_si32(k01);
+    k[1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(k01, 1));
+    k[2] = _mm_cvttsd_si32(_mm_min_sd(_mm_max_sd(t2, zero), q->top));
+}
+#else
+typedef struct tb__binner {
+    double lo[3], sc[3];
+    int nb;
+} tb__binner;
+static inline tb__binner tb__binner_make(const tb__binning *g)
+{
+    tb__binner q = {.nb = g->nb};
+    for (int a = 0; a < 3; a++) {
+        q.lo[a] = g->live[a] ? g->lo[a] : 0.0;
+        q.sc[a] = g->live[a] ? g->scale[a] : 0.0;
+    }
+    return q;
+}
+static inline void tb__binner_bins(const tb__binner *q, tb__f4 c, int k[3])
+{
+    for (int a = 0; a < 3; a++)
+        k[a] = tb__bin(c.v[a], q->lo[a], q->sc[a], q->nb);
+}
+#endif
+
+/* Adds reference r to the bins. */
+static inline void tb__bins_add(tb__bins *bn, const tb__binner *q, const tb__bref *r)
+{
+    tb__f4 lo = tb__ref_lo(r), hi = tb__ref_hi(r);
+    int k[3];
+    tb__binner_bins(q, tb__ref_centroid(lo, hi), k);
+    for (int a = 0; a < 3; a++) {
+        bn->cnt[a][k[a]]++;
+        tb__box4_grow(&bn->box[a][k[a]], lo, hi);
+    }
+}
+
+/* Adds the bins of `from` to `to`. */
+static void tb__bins_merge(tb__bins *to, const tb__bins *from, int nb)
+{
+    for (int a = 0; a < 3; a++)
+        for (int k = 0; k < nb; k++) {
+            to->cnt[a][k] += from->cnt[a][k];
+            tb__box4_add(&to->box[a][k], &from->box[a][k]);
+        }
+}
+
+/* Nodes with at least this many references bin every other reference into
+ * a second set of bins, merged at the end: consecutive references often
+ * fall in the same bins, and one set makes each update wait for the last. */
+#define TB__BVH_TWO_SETS_MIN 256
+
+/* Adds refs[begin, end) to the bins (cleared by the caller). */
 static void tb__bins_fill(tb__bins *bn, const tb__binning *g, const tb__bref *refs, uint32_t begin, uint32_t end)
 {
-    const int nb = g->nb;
-    for (uint32_t i = begin; i < end; i++) {
-        tb__f4 lo = tb__ref_lo(&refs[i]), hi = tb__ref_hi(&refs[i]);
-        float c[4];
-        tb__v4_store(c, tb__ref_centroid(lo, hi));
-        for (int a = 0; a < 3; a++) {
-            if (!g->live[a])
-                continue;
-            int k = tb__bin(c[a], g->lo[a], g->scale[a], nb);
-            bn->cnt[a][k]++;
-            tb__box4_grow(&bn->box[a][k], lo, hi);
+    const tb__binner q = tb__binner_make(g);
+    uint32_t i = begin;
+    if (end - begin >= TB__BVH_TWO_SETS_MIN) {
+        tb__bins second;
+        tb__bins_clear(&second, g->nb);
+        for (; i + 1 < end; i += 2) {
+            tb__bins_add(bn, &q, &refs[i]);
+            tb__bins_add(&second, &q, &refs[i + 1]);
         }
+        tb__bins_merge(bn, &second, g->nb);
     }
+    for (; i < end; i++)
+        tb__bins_add(bn, &q, &refs[i]);
 }
 
 /* Bins of a chunk of references filled by a task of a large node. */
@@ -248,11 +347,7 @@ static void tb__bins_fill_node(tb__builder *b, tb__bins *bn, const tb__binning *
     }
 #pragma omp taskwait
     for (size_t c = 0; c < nchunks; c++)
-        for (int a = 0; a < 3; a++)
-            for (int k = 0; k < g->nb; k++) {
-                bn->cnt[a][k] += part[c].cnt[a][k];
-                tb__box4_add(&bn->box[a][k], &part[c].box[a][k]);
-            }
+        tb__bins_merge(bn, &part[c], g->nb);
     free(part);
 }
 
@@ -270,6 +365,7 @@ static __attribute__((noinline)) tb__split tb__find_split(tb__builder *b, uint32
     g.nb = end - begin < (uint32_t)b->bins ? (int)(end - begin) : b->bins;
     const int nb = g.nb;
     tb__split best = {.ok = false, .cost = INFINITY};
+    double best_x = INFINITY; /* the numerator of the best cost */
 
     for (int a = 0; a < 3; a++) {
         g.lo[a] = tb_vec3_get(cbox->lo, a);
@@ -284,26 +380,38 @@ static __attribute__((noinline)) tb__split tb__find_split(tb__builder *b, uint32
         /* rmeasure[p], rcount[p]: the bins p .. nb-1 (the second child of plane p). */
         tb__box4 acc = tb__box4_empty();
         uint32_t n = 0;
+        /* An empty bin changes neither side: its measure is the last one
+         * (the union with an empty box is exact), and the plane after it
+         * has the candidate of the plane before, which cannot win. */
         for (int p = nb - 1; p >= 1; p--) {
+            rcount[p] = n += bn.cnt[a][p];
+            if (bn.cnt[a][p] == 0 && p < nb - 1) {
+                rmeasure[p] = rmeasure[p + 1];
+                continue;
+            }
             tb__box4_add(&acc, &bn.box[a][p]);
-            n += bn.cnt[a][p];
-            tb_aabb ab = tb__box4_aabb(&acc);
-            rmeasure[p] = tb__measure(&ab, mode);
-            rcount[p] = n;
+            rmeasure[p] = tb__measure4(&acc, mode);
         }
         acc = tb__box4_empty();
         n = 0;
         for (int p = 1; p < nb; p++) {
+            if (bn.cnt[a][p - 1] == 0)
+                continue;
             tb__box4_add(&acc, &bn.box[a][p - 1]);
             n += bn.cnt[a][p - 1];
-            if (n == 0 || rcount[p] == 0)
+            if (rcount[p] == 0)
                 continue;
-            tb_aabb ab = tb__box4_aabb(&acc);
-            double cost = b->cost_node + b->cost_prim * (tb__measure(&ab, mode) * n + rmeasure[p] * rcount[p]) /
-                                             node_measure;
+            /* The cost is a rounded, non-decreasing function of x, so it can
+             * only beat the best if x does: the division is made then only,
+             * and the choice is the one of comparing every cost. */
+            double x = tb__measure4(&acc, mode) * n + rmeasure[p] * rcount[p];
+            if (!(x < best_x))
+                continue;
+            double cost = b->cost_node + b->cost_prim * x / node_measure;
             /* Strict <: on equal cost the first axis and plane win. */
             if (cost < best.cost) {
                 best = (tb__split){true, a, p, cost, g.lo[a], g.scale[a], nb};
+                best_x = x;
             }
         }
     }
