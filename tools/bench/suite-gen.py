@@ -9,7 +9,7 @@ Twister, whose random() sequence for an integer seed is fixed).
     tools/bench/suite-gen.py --rest XLO YLO ZLO XHI YHI ZHI   # camera + lamp framing a box
 
 Kinds (N is the approximate triangle count; the ground quad adds 2):
-  bumpy    a displaced sphere (lat/long grid, radius 1 +- 8 %, random sines)
+  bumpy    a displaced sphere (lat/long grid, 12 random plane waves, the first 5 %)
   terrain  a fractal height field (random sines, 8 octaves) over [-2, 2]^2
   boxes    N / 12 boxes of log-uniform sizes, random positions and turns
   slivers  N long thin triangles (length 0.3-1.5, width 0.001-0.01)
