@@ -27,6 +27,7 @@
 #include <time.h>
 
 #include "bench_embree.h"
+#include "cli_util.h"
 #include "commands.h"
 #include "host/render/accel.h"
 #include "host/render/scene.h"
@@ -271,15 +272,10 @@ int tb_bench_accel_scene(const char *path, const long *threads, int nthreads, in
         return TB_EXIT_FAIL;
     }
     uint64_t tris = s->stats.triangles;
-    double load = 0.0;
-    FILE *lf = fopen("/proc/loadavg", "r");
-    if (lf) {
-        if (fscanf(lf, "%lf", &load) != 1)
-            load = 0.0;
-        fclose(lf);
-    }
+    double load[3];
+    tb_cli_load_average(load);
     printf("scene %s: %llu triangles, %zu references; best of %d builds; load average %.2f\n", path,
-           (unsigned long long)tris, s->nprims, repeat, load);
+           (unsigned long long)tris, s->nprims, repeat, load[0]);
     printf("ours: tb_scene_rebuild_accel (SAH of the binary tree); embree-high / embree-med: rtcCommitScene\n"
            "at RTC_BUILD_QUALITY_HIGH / MEDIUM (the default; time only); embree-bvh: rtcBuildBVH HIGH over the same boxes, binary,\n"
            "leaves <= 8, costs 1/1 (SAH by the same formula); Mtri/s = references / seconds; tree: a\n"

@@ -37,3 +37,14 @@ char **tb_cli_full_argv(int argc, char **argv)
     full[argc + 1] = NULL;
     return full;
 }
+
+void tb_cli_load_average(double load[3])
+{
+    load[0] = load[1] = load[2] = 0.0;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (!f)
+        return;
+    if (fscanf(f, "%lf %lf %lf", &load[0], &load[1], &load[2]) != 3)
+        load[0] = load[1] = load[2] = 0.0;
+    fclose(f);
+}

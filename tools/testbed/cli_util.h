@@ -1,6 +1,7 @@
 /* Command-line pieces shared by the testbed commands: the Vulkan set-up of
  * those that run a kernel on a scene (render, bench gpu, bench formfactor,
- * validate) and the command line the provenance records. */
+ * validate), the command line the provenance records and the load average
+ * the benchmarks print. */
 #ifndef TB_TOOLS_TESTBED_CLI_UTIL_H
 #define TB_TOOLS_TESTBED_CLI_UTIL_H
 
@@ -25,5 +26,9 @@ bool tb_cli_open_vulkan(const char *who, const char *path, long device, tb_scene
  * subcommand's argv[0 .. argc) and a NULL, in a malloc'd array (free it;
  * the strings are argv's). NULL when out of memory. */
 char **tb_cli_full_argv(int argc, char **argv);
+
+/* The 1-, 5- and 15-minute load averages (/proc/loadavg; zeros when it
+ * cannot be read), printed beside benchmark figures. */
+void tb_cli_load_average(double load[3]);
 
 #endif

@@ -28,6 +28,7 @@
 
 #include "bench_embree.h"
 #include "bench_raysets.h"
+#include "cli_util.h"
 #include "commands.h"
 #include "host/object/hit.h"
 #include "host/object/intersect.h"
@@ -531,16 +532,11 @@ static bool tb__rays_build(const tb__rays_args *a, tb__rays_run *run)
 /* The load average (rates mean little on a busy machine) and the table's head. */
 static void tb__print_table_head(void)
 {
-    double load = 0.0;
-    FILE *lf = fopen("/proc/loadavg", "r");
-    if (lf) {
-        if (fscanf(lf, "%lf", &load) != 1)
-            load = 0.0;
-        fclose(lf);
-    }
+    double load[3];
+    tb_cli_load_average(load);
     printf("load average %.2f: wall-clock rates and scaling mean something only on an idle machine; rates per\n"
            "CPU second (Mrays/CPU-s) are the steadier comparison on a shared one\n",
-           load);
+           load[0]);
     printf("%-8s %8s %6s %3s %12s %12s %7s %12s %12s %7s\n", "set", "rays", "hit%", "thr", "ours Mr/s", "Embree Mr/s",
            "ratio", "ours Mr/CPUs", "Emb Mr/CPUs", "ratio");
 }
