@@ -6,7 +6,7 @@ scene depends only on its kind, its size and --seed (Python's Mersenne
 Twister, whose random() sequence for an integer seed is fixed).
 
     tools/bench/suite-gen.py KIND [--tris N] [--seed S] > scene.mid
-    tools/bench/suite-gen.py --rest XLO YLO ZLO XHI YHI ZHI   # camera + lamp framing a box
+    tools/bench/suite-gen.py --rest [--no-camera] XLO YLO ZLO XHI YHI ZHI   # camera + lamp framing a box
 
 Kinds (N is the approximate triangle count; the ground quad adds 2):
   bumpy    a displaced sphere (lat/long grid, 12 random plane waves, the first 5 %)
@@ -17,7 +17,8 @@ Kinds (N is the approximate triangle count; the ground quad adds 2):
   mixed    a bumpy sphere among boxes on a ground plane (N / 3 in boxes)
 
 --rest prints what follows the meshes of an imported model: the camera,
-materials and lamp for a model whose world box is the one given.
+materials and lamp for a model whose world box is the one given
+(--no-camera: no camera, for a model that brings its own).
 """
 import math
 import random
@@ -56,15 +57,17 @@ def write_mesh(out, name, material, m):
     w(f'        ]\n    }}\n    rendering = {{ material = "{material}" }}\n}}\n')
 
 
-def write_frame(out, lo, hi):
-    """Camera looking at box lo..hi from the -y side and above, lamp above it, materials."""
+def write_frame(out, lo, hi, camera=True):
+    """Camera looking at box lo..hi from the -y side and above (unless camera is
+    False: the model has its own), lamp above it, materials."""
     c = [(lo[k] + hi[k]) / 2 for k in range(3)]
     r = max(1e-6, math.sqrt(sum((hi[k] - lo[k]) ** 2 for k in range(3))) / 2)
     d = 0.7 * r / math.sin(math.radians(22.5))  # the bounding sphere a little wider than the 45 degree view
     eye = (c[0], c[1] - 0.8 * d, c[2] + 0.6 * d)
-    out.write(f'camera "bench" {{\n    eye = [{eye[0]:.6g} {eye[1]:.6g} {eye[2]:.6g}]\n'
-              f"    look_at = [{c[0]:.6g} {c[1]:.6g} {c[2]:.6g}]\n    up = [0 0 1]\n"
-              "    fov = 45\n    resolution = [512 512]\n}\n")
+    if camera:
+        out.write(f'camera "bench" {{\n    eye = [{eye[0]:.6g} {eye[1]:.6g} {eye[2]:.6g}]\n'
+                  f"    look_at = [{c[0]:.6g} {c[1]:.6g} {c[2]:.6g}]\n    up = [0 0 1]\n"
+                  "    fov = 45\n    resolution = [512 512]\n}\n")
     out.write('material "ground" {\n    diffuse = 0.7\n}\n')
     out.write('material "stuff" {\n    diffuse = [0.8 0.5 0.3]\n}\n')
     out.write('material "lamp" {\n    diffuse = 0.8\n    emission = [20 20 20]\n}\n')
@@ -177,10 +180,15 @@ def main():
         return
     out = sys.stdout
     if args and args[0] == "--rest":
-        if len(args) != 7:
+        camera = "--no-camera" not in args
+        nums = [a for a in args[1:] if a != "--no-camera"]
+        if len(nums) != 6:
             usage("--rest needs six numbers: XLO YLO ZLO XHI YHI ZHI")
-        b = [float(x) for x in args[1:]]
-        write_frame(out, b[:3], b[3:])
+        try:
+            b = [float(x) for x in nums]
+        except ValueError:
+            usage("--rest needs six numbers: XLO YLO ZLO XHI YHI ZHI")
+        write_frame(out, b[:3], b[3:], camera)
         return
     kind, n, seed = None, None, 1
     i = 0

@@ -127,8 +127,11 @@ printf '%s\n' "$suite" | while IFS='|' read -r name src arg; do
         : >"$dir/none.rays"
         box=$("$TESTBED" trace "$mid" --rays "$dir/none.rays" --hits "$dir/none.hits" --verbose 2>&1 |
             sed -n 's/^bounds: \[\(.*\)\] - \[\(.*\)\]$/\1 \2/p')
-        # shellcheck disable=SC2086 # box is six numbers
-        python3 "$here/suite-gen.py" --rest $box >>"$mid"
+        # a model with a camera of its own (glTF) keeps it: MID has one camera
+        own=""
+        if grep -q '^camera ' "$mid"; then own=--no-camera; fi
+        # shellcheck disable=SC2086 # box is six numbers, own empty or one option
+        python3 "$here/suite-gen.py" --rest $own $box >>"$mid"
         ;;
     scene) cp "$root/scenes/$arg" "$mid" ;;
     esac
