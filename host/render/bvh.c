@@ -8,6 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "host/render/accel_internal.h"
 #include "util/stats/stats.h"
 
@@ -25,16 +29,27 @@ TB_STAT_MEMORY(tb__bvh_memory, "BVH/memory");
  * they depend on timing; the flattened layout does not). */
 typedef struct tb__bnode {
     tb_aabb bounds;
-    uint32_t begin, count; /* the node's references: order[begin .. begin + count) */
+    uint32_t begin, count; /* the node's references: refs[begin .. begin + count) */
     uint32_t child[2];     /* inner: ids of the children */
     uint8_t axis;          /* inner: split axis */
     bool leaf;
 } tb__bnode;
 
+/* A reference as the build moves it: its box and its position in the
+ * input, 32 bytes, partitioned in place so that every pass over a node's
+ * references reads memory in order (an index array into the references
+ * would make each of those reads a cache miss). */
+typedef struct tb__bref {
+    _Alignas(16) float lo[3];
+    uint32_t id; /* the reference: position in acc->prims */
+    float hi[3];
+    uint32_t pad;
+} tb__bref;
+
+_Static_assert(sizeof(tb__bref) == 32, "tb__bref is 32 bytes");
+
 typedef struct tb__builder {
-    const tb_accel_prim *prims; /* stored references, input order */
-    tb_vec3 *cent;              /* their box centroids */
-    uint32_t *order;            /* permutation of 0..n-1, partitioned in place */
+    tb__bref *refs;             /* the references, partitioned in place */
     tb__bnode *nodes;           /* room for 2n - 1 nodes */
     _Atomic uint32_t nnodes;
     int bins, max_leaf;
@@ -46,27 +61,83 @@ typedef struct tb__builder {
  * for a node box of zero area, the sum of its extents, or, for a point, 1. */
 enum { TB__MEASURE_AREA, TB__MEASURE_LENGTH, TB__MEASURE_ONE };
 
-/* Box union without libm's fminf/fmaxf (a call each, and the build is made
- * of unions). The boxes hold no NaN (tb_accel_build refuses them). */
-static inline void tb__grow(tb_aabb *acc, const tb_aabb *b)
+/* A box as four-lane vectors (the fourth lane is ignored). A union is
+ * MINPS(b, a) = b < a ? b : a (MAXPS likewise) lane by lane: the scalar
+ * union's test, so every bound is the value the scalar code gives. The
+ * boxes hold no NaN (tb_accel_build refuses them). */
+#if defined(__SSE2__)
+typedef __m128 tb__f4;
+typedef struct tb__box4 {
+    __m128 lo, hi;
+} tb__box4;
+static inline tb__box4 tb__box4_empty(void) { return (tb__box4){_mm_set1_ps(INFINITY), _mm_set1_ps(-INFINITY)}; }
+static inline void tb__box4_grow(tb__box4 *a, __m128 lo, __m128 hi)
 {
-    acc->lo.x = b->lo.x < acc->lo.x ? b->lo.x : acc->lo.x;
-    acc->lo.y = b->lo.y < acc->lo.y ? b->lo.y : acc->lo.y;
-    acc->lo.z = b->lo.z < acc->lo.z ? b->lo.z : acc->lo.z;
-    acc->hi.x = b->hi.x > acc->hi.x ? b->hi.x : acc->hi.x;
-    acc->hi.y = b->hi.y > acc->hi.y ? b->hi.y : acc->hi.y;
-    acc->hi.z = b->hi.z > acc->hi.z ? b->hi.z : acc->hi.z;
+    a->lo = _mm_min_ps(lo, a->lo);
+    a->hi = _mm_max_ps(hi, a->hi);
 }
-static inline void tb__grow_point(tb_aabb *acc, tb_vec3 p)
+static inline void tb__box4_add(tb__box4 *a, const tb__box4 *b) { tb__box4_grow(a, b->lo, b->hi); }
+/* The fourth lane of lo holds the id's bits, a denormal float for most ids:
+ * arithmetic on it (the centroid) would take a slow microcode path. Zeroed. */
+static inline __m128 tb__ref_lo(const tb__bref *r)
 {
-    tb__grow(acc, &(tb_aabb){p, p});
+    return _mm_and_ps(_mm_load_ps(r->lo), _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)));
 }
+static inline __m128 tb__ref_hi(const tb__bref *r) { return _mm_load_ps(r->hi); }
+/* The centroid as tb_aabb_centroid computes it: lo / 2 + hi / 2. */
+static inline __m128 tb__ref_centroid(__m128 lo, __m128 hi)
+{
+    const __m128 half = _mm_set1_ps(0.5f);
+    return _mm_add_ps(_mm_mul_ps(lo, half), _mm_mul_ps(hi, half));
+}
+static inline tb_aabb tb__box4_aabb(const tb__box4 *b)
+{
+    float lo[4], hi[4];
+    _mm_storeu_ps(lo, b->lo);
+    _mm_storeu_ps(hi, b->hi);
+    return (tb_aabb){{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+}
+static inline void tb__v4_store(float out[4], __m128 v) { _mm_storeu_ps(out, v); }
+#else
+typedef struct tb__v4 {
+    float v[4];
+} tb__v4;
+typedef struct tb__box4 {
+    tb__v4 lo, hi;
+} tb__box4;
+typedef tb__v4 tb__f4;
+static inline tb__box4 tb__box4_empty(void)
+{
+    return (tb__box4){{{INFINITY, INFINITY, INFINITY, INFINITY}}, {{-INFINITY, -INFINITY, -INFINITY, -INFINITY}}};
+}
+static inline void tb__box4_grow(tb__box4 *a, tb__v4 lo, tb__v4 hi)
+{
+    for (int k = 0; k < 4; k++) {
+        a->lo.v[k] = lo.v[k] < a->lo.v[k] ? lo.v[k] : a->lo.v[k];
+        a->hi.v[k] = hi.v[k] > a->hi.v[k] ? hi.v[k] : a->hi.v[k];
+    }
+}
+static inline void tb__box4_add(tb__box4 *a, const tb__box4 *b) { tb__box4_grow(a, b->lo, b->hi); }
+static inline tb__v4 tb__ref_lo(const tb__bref *r) { return (tb__v4){{r->lo[0], r->lo[1], r->lo[2], 0.0f}}; }
+static inline tb__v4 tb__ref_hi(const tb__bref *r) { return (tb__v4){{r->hi[0], r->hi[1], r->hi[2], 0.0f}}; }
+static inline tb__v4 tb__ref_centroid(tb__v4 lo, tb__v4 hi)
+{
+    tb__v4 c;
+    for (int k = 0; k < 4; k++)
+        c.v[k] = lo.v[k] * 0.5f + hi.v[k] * 0.5f;
+    return c;
+}
+static inline tb_aabb tb__box4_aabb(const tb__box4 *b)
+{
+    return (tb_aabb){{b->lo.v[0], b->lo.v[1], b->lo.v[2]}, {b->hi.v[0], b->hi.v[1], b->hi.v[2]}};
+}
+static inline void tb__v4_store(float out[4], tb__v4 v) { memcpy(out, v.v, sizeof v.v); }
+#endif
 
 /* The measure of box `b` (double: float areas of huge boxes overflow); 0
- * for an empty box. */
-static inline double tb__measure(const tb_aabb *b, int mode)
+ * for an empty box. tb__measure4 computes the same from a tb__box4. */
+static inline double tb__measure_ext(double ex, double ey, double ez, int mode)
 {
-    double ex = (double)b->hi.x - b->lo.x, ey = (double)b->hi.y - b->lo.y, ez = (double)b->hi.z - b->lo.z;
     if (!(ex >= 0.0 && ey >= 0.0 && ez >= 0.0))
         return 0.0;
     switch (mode) {
@@ -77,6 +148,25 @@ static inline double tb__measure(const tb_aabb *b, int mode)
     default:
         return 1.0;
     }
+}
+
+static inline double tb__measure(const tb_aabb *b, int mode)
+{
+    return tb__measure_ext((double)b->hi.x - b->lo.x, (double)b->hi.y - b->lo.y, (double)b->hi.z - b->lo.z, mode);
+}
+
+static inline double tb__measure4(const tb__box4 *b, int mode)
+{
+#if defined(__SSE2__)
+    __m128d e01 = _mm_sub_pd(_mm_cvtps_pd(b->hi), _mm_cvtps_pd(b->lo));
+    __m128d e2 = _mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(b->hi, b->hi)), _mm_cvtps_pd(_mm_movehl_ps(b->lo, b->lo)));
+    double e[2];
+    _mm_storeu_pd(e, e01);
+    return tb__measure_ext(e[0], e[1], _mm_cvtsd_f64(e2), mode);
+#else
+    tb_aabb a = tb__box4_aabb(b);
+    return tb__measure(&a, mode);
+#endif
 }
 
 static int tb__measure_mode(const tb_aabb *b)
@@ -109,78 +199,254 @@ typedef struct tb__split {
     int bins;         /* bins used at this node */
 } tb__split;
 
+/* The bins of a node: per axis, the box and the number of the references
+ * whose centroid falls in each. */
+typedef struct tb__bins {
+    tb__box4 box[3][TB__BVH_MAX_BINS];
+    uint32_t cnt[3][TB__BVH_MAX_BINS];
+} tb__bins;
+
+/* How a node's centroids map to bins. */
+typedef struct tb__binning {
+    double lo[3], scale[3];
+    bool live[3]; /* the axis has extent: worth binning */
+    int nb;       /* bins per axis */
+} tb__binning;
+
+static void tb__bins_clear(tb__bins *bn, int nb)
+{
+    for (int a = 0; a < 3; a++)
+        for (int k = 0; k < nb; k++) {
+            bn->box[a][k] = tb__box4_empty();
+            bn->cnt[a][k] = 0;
+        }
+}
+
+/* The bins of one reference's centroid on the three axes: tb__bin's
+ * arithmetic, the clamping done on t (max(t, 0), min(t, nb - 1), then
+ * truncation gives the same bin for every t). A dead axis has lo = scale =
+ * 0: bin 0, never looked at. */
+#if defined(__SSE2__)
+typedef struct tb__binner {
+    __m128d lo01, sc01, lo2, sc2, top;
+} tb__binner;
+static inline tb__binner tb__binner_make(const tb__binning *g)
+{
+    double lo[3], sc[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = g->live[a] ? g->lo[a] : 0.0;
+        sc[a] = g->live[a] ? g->scale[a] : 0.0;
+    }
+    return (tb__binner){_mm_set_pd(lo[1], lo[0]), _mm_set_pd(sc[1], sc[0]), _mm_set_sd(lo[2]), _mm_set_sd(sc[2]),
+                        _mm_set1_pd((double)(g->nb - 1))};
+}
+static inline void tb__binner_bins(const tb__binner *q, __m128 c, int k[3])
+{
+    const __m128d zero = _mm_setzero_pd();
+    __m128d t01 = _mm_mul_pd(_mm_sub_pd(_mm_cvtps_pd(c), q->lo01), q->sc01);
+    __m128d t2 = _mm_mul_sd(_mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(c, c)), q->lo2), q->sc2);
+    __m128i k01 = _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(t01, zero), q->top));
+    k[0] = _mm_cvtsi128_si32(k01);
+    k[1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(k01, 1));
+    k[2] = _mm_cvttsd_si32(_mm_min_sd(_mm_max_sd(t2, zero), q->top));
+}
+#else
+typedef struct tb__binner {
+    double lo[3], sc[3];
+    int nb;
+} tb__binner;
+static inline tb__binner tb__binner_make(const tb__binning *g)
+{
+    tb__binner q = {.nb = g->nb};
+    for (int a = 0; a < 3; a++) {
+        q.lo[a] = g->live[a] ? g->lo[a] : 0.0;
+        q.sc[a] = g->live[a] ? g->scale[a] : 0.0;
+    }
+    return q;
+}
+static inline void tb__binner_bins(const tb__binner *q, tb__f4 c, int k[3])
+{
+    for (int a = 0; a < 3; a++)
+        k[a] = tb__bin(c.v[a], q->lo[a], q->sc[a], q->nb);
+}
+#endif
+
+/* Adds reference r to the bins. */
+static inline void tb__bins_add(tb__bins *bn, const tb__binner *q, const tb__bref *r)
+{
+    tb__f4 lo = tb__ref_lo(r), hi = tb__ref_hi(r);
+    int k[3];
+    tb__binner_bins(q, tb__ref_centroid(lo, hi), k);
+    for (int a = 0; a < 3; a++) {
+        bn->cnt[a][k[a]]++;
+        tb__box4_grow(&bn->box[a][k[a]], lo, hi);
+    }
+}
+
+/* Adds the bins of `from` to `to`. */
+static void tb__bins_merge(tb__bins *to, const tb__bins *from, int nb)
+{
+    for (int a = 0; a < 3; a++)
+        for (int k = 0; k < nb; k++) {
+            to->cnt[a][k] += from->cnt[a][k];
+            tb__box4_add(&to->box[a][k], &from->box[a][k]);
+        }
+}
+
+/* Nodes with at least this many references bin every other reference into
+ * a second set of bins, merged at the end: consecutive references often
+ * fall in the same bins, and one set makes each update wait for the last. */
+#define TB__BVH_TWO_SETS_MIN 256
+
+/* Adds refs[begin, end) to the bins (cleared by the caller). */
+static void tb__bins_fill(tb__bins *bn, const tb__binning *g, const tb__bref *refs, uint32_t begin, uint32_t end)
+{
+    const tb__binner q = tb__binner_make(g);
+    uint32_t i = begin;
+    if (end - begin >= TB__BVH_TWO_SETS_MIN) {
+        tb__bins second;
+        tb__bins_clear(&second, g->nb);
+        for (; i + 1 < end; i += 2) {
+            tb__bins_add(bn, &q, &refs[i]);
+            tb__bins_add(&second, &q, &refs[i + 1]);
+        }
+        tb__bins_merge(bn, &second, g->nb);
+    }
+    for (; i < end; i++)
+        tb__bins_add(bn, &q, &refs[i]);
+}
+
+/* Bins of a chunk of references filled by a task of a large node. */
+#define TB__BVH_BIN_CHUNK 32768
+/* Nodes with at least this many references bin in parallel (in fixed
+ * chunks, merged in chunk order: the bins, so the tree, do not depend on
+ * the thread count). */
+#define TB__BVH_PAR_BIN_MIN (4 * TB__BVH_BIN_CHUNK)
+
+/* Fills `bn` with refs[begin, end): serially, or for a large node as tasks
+ * over fixed chunks whose bins are then merged. */
+static void tb__bins_fill_node(tb__builder *b, tb__bins *bn, const tb__binning *g, uint32_t begin, uint32_t end)
+{
+    tb__bins_clear(bn, g->nb);
+    uint32_t n = end - begin;
+    size_t nchunks = (n + TB__BVH_BIN_CHUNK - 1) / TB__BVH_BIN_CHUNK;
+    tb__bins *part = n >= TB__BVH_PAR_BIN_MIN && omp_in_parallel() ? malloc(nchunks * sizeof *part) : NULL;
+    if (!part) {
+        tb__bins_fill(bn, g, b->refs, begin, end);
+        return;
+    }
+    const tb__bref *refs = b->refs;
+    for (size_t c = 0; c < nchunks; c++) {
+#pragma omp task default(none) firstprivate(c, part, g, refs, begin, end)
+        {
+            uint32_t cb = begin + (uint32_t)(c * TB__BVH_BIN_CHUNK);
+            uint32_t ce = end - cb > TB__BVH_BIN_CHUNK ? cb + TB__BVH_BIN_CHUNK : end;
+            tb__bins_clear(&part[c], g->nb);
+            tb__bins_fill(&part[c], g, refs, cb, ce);
+        }
+    }
+#pragma omp taskwait
+    for (size_t c = 0; c < nchunks; c++)
+        tb__bins_merge(bn, &part[c], g->nb);
+    free(part);
+}
+
 /* Best binned SAH plane over the three axes. Kept out of line so that the
  * bin arrays live only while it runs, not in every frame of the recursion. */
-static __attribute__((noinline)) tb__split tb__find_split(const tb__builder *b, uint32_t begin, uint32_t end,
+static __attribute__((noinline)) tb__split tb__find_split(tb__builder *b, uint32_t begin, uint32_t end,
                                                           const tb_aabb *cbox, int mode, double node_measure)
 {
-    tb_aabb box[3][TB__BVH_MAX_BINS];
-    uint32_t cnt[3][TB__BVH_MAX_BINS];
+    tb__bins bn;
     double rmeasure[TB__BVH_MAX_BINS];
     uint32_t rcount[TB__BVH_MAX_BINS];
-    double lo[3], scale[3];
-    bool live[3];
+    tb__binning g;
     /* No more bins than references: the sweeps cost O(bins) per node, and
      * most nodes are small. */
-    const int nb = end - begin < (uint32_t)b->bins ? (int)(end - begin) : b->bins;
+    g.nb = end - begin < (uint32_t)b->bins ? (int)(end - begin) : b->bins;
+    const int nb = g.nb;
     tb__split best = {.ok = false, .cost = INFINITY};
+    double best_x = INFINITY; /* the numerator of the best cost */
 
     for (int a = 0; a < 3; a++) {
-        lo[a] = tb_vec3_get(cbox->lo, a);
-        double ext = (double)tb_vec3_get(cbox->hi, a) - lo[a];
-        scale[a] = (double)nb / ext;
-        live[a] = ext > 0.0 && isfinite(scale[a]) && scale[a] > 0.0;
-        for (int k = 0; k < nb; k++) {
-            box[a][k] = tb_aabb_empty();
-            cnt[a][k] = 0;
-        }
+        g.lo[a] = tb_vec3_get(cbox->lo, a);
+        double ext = (double)tb_vec3_get(cbox->hi, a) - g.lo[a];
+        g.scale[a] = (double)nb / ext;
+        g.live[a] = ext > 0.0 && isfinite(g.scale[a]) && g.scale[a] > 0.0;
     }
-    for (uint32_t i = begin; i < end; i++) {
-        uint32_t r = b->order[i];
-        tb_vec3 c = b->cent[r];
-        for (int a = 0; a < 3; a++) {
-            if (!live[a])
-                continue;
-            int k = tb__bin(tb_vec3_get(c, a), lo[a], scale[a], nb);
-            cnt[a][k]++;
-            tb__grow(&box[a][k], &b->prims[r].bounds);
-        }
-    }
+    tb__bins_fill_node(b, &bn, &g, begin, end);
     for (int a = 0; a < 3; a++) {
-        if (!live[a])
+        if (!g.live[a])
             continue;
         /* rmeasure[p], rcount[p]: the bins p .. nb-1 (the second child of plane p). */
-        tb_aabb acc = tb_aabb_empty();
+        tb__box4 acc = tb__box4_empty();
         uint32_t n = 0;
+        /* An empty bin changes neither side: its measure is the last one
+         * (the union with an empty box is exact), and the plane after it
+         * has the candidate of the plane before, which cannot win. */
         for (int p = nb - 1; p >= 1; p--) {
-            tb__grow(&acc, &box[a][p]);
-            n += cnt[a][p];
-            rmeasure[p] = tb__measure(&acc, mode);
-            rcount[p] = n;
+            rcount[p] = n += bn.cnt[a][p];
+            if (bn.cnt[a][p] == 0 && p < nb - 1) {
+                rmeasure[p] = rmeasure[p + 1];
+                continue;
+            }
+            tb__box4_add(&acc, &bn.box[a][p]);
+            rmeasure[p] = tb__measure4(&acc, mode);
         }
-        acc = tb_aabb_empty();
+        acc = tb__box4_empty();
         n = 0;
         for (int p = 1; p < nb; p++) {
-            tb__grow(&acc, &box[a][p - 1]);
-            n += cnt[a][p - 1];
-            if (n == 0 || rcount[p] == 0)
+            if (bn.cnt[a][p - 1] == 0)
                 continue;
-            double cost = b->cost_node + b->cost_prim *
-                                             (tb__measure(&acc, mode) * n + rmeasure[p] * rcount[p]) /
-                                             node_measure;
+            tb__box4_add(&acc, &bn.box[a][p - 1]);
+            n += bn.cnt[a][p - 1];
+            if (rcount[p] == 0)
+                continue;
+            /* The cost is a rounded, non-decreasing function of x, so it can
+             * only beat the best if x does: the division is made then only,
+             * and the choice is the one of comparing every cost. */
+            double x = tb__measure4(&acc, mode) * n + rmeasure[p] * rcount[p];
+            if (!(x < best_x))
+                continue;
+            double cost = b->cost_node + b->cost_prim * x / node_measure;
             /* Strict <: on equal cost the first axis and plane win. */
             if (cost < best.cost) {
-                best = (tb__split){true, a, p, cost, lo[a], scale[a], nb};
+                best = (tb__split){true, a, p, cost, g.lo[a], g.scale[a], nb};
+                best_x = x;
             }
         }
     }
     return best;
 }
 
+/* tb__find_split for a node of two references (about half of all nodes),
+ * without the bins: on an axis where their centroids differ, the lower one
+ * falls in bin 0 (t = 0) and the other in bin 1 (t = 2 rounded), so every
+ * live axis offers the same plane, the sum of the two boxes' measures, and
+ * the first live axis wins, as in the general sweep. */
+static tb__split tb__find_split2(const tb__builder *b, uint32_t begin, const tb_aabb *cbox, int mode,
+                                 double node_measure)
+{
+    for (int a = 0; a < 3; a++) {
+        double lo = tb_vec3_get(cbox->lo, a);
+        double ext = (double)tb_vec3_get(cbox->hi, a) - lo;
+        double scale = 2.0 / ext;
+        if (!(ext > 0.0 && isfinite(scale) && scale > 0.0))
+            continue;
+        const tb__bref *r = &b->refs[begin];
+        tb__box4 b0 = tb__box4_empty(), b1 = tb__box4_empty();
+        tb__box4_grow(&b0, tb__ref_lo(&r[0]), tb__ref_hi(&r[0]));
+        tb__box4_grow(&b1, tb__ref_lo(&r[1]), tb__ref_hi(&r[1]));
+        double x = tb__measure4(&b0, mode) + tb__measure4(&b1, mode);
+        return (tb__split){true, a, 1, b->cost_node + b->cost_prim * x / node_measure, lo, scale, 2};
+    }
+    return (tb__split){.ok = false, .cost = INFINITY};
+}
+
 /* A reference's position along an axis, for the median split. */
 typedef struct tb__key {
     float c;
-    uint32_t r;
+    uint32_t id;  /* the reference (ties) */
+    uint32_t pos; /* its place in the node's range */
 } tb__key;
 
 static int tb__key_cmp(const void *pa, const void *pb)
@@ -188,39 +454,57 @@ static int tb__key_cmp(const void *pa, const void *pb)
     const tb__key *a = pa, *b = pb;
     if (a->c != b->c)
         return a->c < b->c ? -1 : 1;
-    return a->r < b->r ? -1 : (a->r > b->r);
+    return a->id < b->id ? -1 : (a->id > b->id);
 }
 
-/* Orders order[begin, end) by centroid along `axis` (ties by reference), so
+/* Orders refs[begin, end) by centroid along `axis` (ties by reference), so
  * that the halves of a median split are spatially coherent. */
 static void tb__sort_by_axis(tb__builder *b, uint32_t begin, uint32_t end, int axis)
 {
     size_t n = end - begin;
     tb__key *k = malloc(n * sizeof *k);
-    if (!k) {
+    tb__bref *tmp = malloc(n * sizeof *tmp);
+    if (!k || !tmp) {
+        free(k);
+        free(tmp);
         atomic_store(&b->oom, 1);
         return;
     }
     for (size_t i = 0; i < n; i++) {
-        uint32_t r = b->order[begin + i];
-        k[i] = (tb__key){tb_vec3_get(b->cent[r], axis), r};
+        const tb__bref *r = &b->refs[begin + i];
+        float c[4];
+        tb__v4_store(c, tb__ref_centroid(tb__ref_lo(r), tb__ref_hi(r)));
+        k[i] = (tb__key){c[axis], r->id, (uint32_t)i};
     }
     qsort(k, n, sizeof *k, tb__key_cmp);
     for (size_t i = 0; i < n; i++)
-        b->order[begin + i] = k[i].r;
+        tmp[i] = b->refs[begin + k[i].pos];
+    memcpy(&b->refs[begin], tmp, n * sizeof *tmp);
     free(k);
+    free(tmp);
 }
 
-static void tb__build_node(tb__builder *b, uint32_t id, uint32_t begin, uint32_t end, int depth)
+/* The box and the centroid box of refs[begin, end). */
+static void tb__range_bounds(const tb__bref *refs, uint32_t begin, uint32_t end, tb_aabb *bounds, tb_aabb *cbox)
+{
+    tb__box4 bb = tb__box4_empty(), cb = tb__box4_empty();
+    for (uint32_t i = begin; i < end; i++) {
+        tb__f4 lo = tb__ref_lo(&refs[i]), hi = tb__ref_hi(&refs[i]);
+        tb__box4_grow(&bb, lo, hi);
+        tb__f4 c = tb__ref_centroid(lo, hi);
+        tb__box4_grow(&cb, c, c);
+    }
+    *bounds = tb__box4_aabb(&bb);
+    *cbox = tb__box4_aabb(&cb);
+}
+
+/* Builds node `id` over refs[begin, end), whose box and centroid box are
+ * `bounds` and `cbox` (the parent's partition computed them). */
+static void tb__build_node(tb__builder *b, uint32_t id, uint32_t begin, uint32_t end, int depth, tb_aabb bounds,
+                           tb_aabb cbox)
 {
     tb__bnode *node = &b->nodes[id];
     uint32_t n = end - begin;
-    tb_aabb bounds = tb_aabb_empty(), cbox = tb_aabb_empty();
-    for (uint32_t i = begin; i < end; i++) {
-        uint32_t r = b->order[i];
-        tb__grow(&bounds, &b->prims[r].bounds);
-        tb__grow_point(&cbox, b->cent[r]);
-    }
     node->bounds = bounds;
     node->begin = begin;
     node->count = n;
@@ -233,27 +517,44 @@ static void tb__build_node(tb__builder *b, uint32_t id, uint32_t begin, uint32_t
     double leaf_cost = b->cost_prim * n;
     tb__split s = {.ok = false};
     if (depth < TB__BVH_SAH_MAX_DEPTH)
-        s = tb__find_split(b, begin, end, &cbox, mode, tb__measure(&bounds, mode));
+        s = n == 2 && b->bins >= 2 ? tb__find_split2(b, begin, &cbox, mode, tb__measure(&bounds, mode))
+                                   : tb__find_split(b, begin, end, &cbox, mode, tb__measure(&bounds, mode));
     bool split = (s.ok && s.cost < leaf_cost) || n > (uint32_t)b->max_leaf;
     if (!split)
         return;
 
     uint32_t mid;
     int axis;
+    tb_aabb kb[2], kc[2];
+    bool have_bounds = false;
     if (s.ok) {
-        /* In-place partition: bins below the plane first. */
+        /* In-place partition: bins below the plane first. Every reference
+         * is looked at once, so the children's boxes are gathered here. */
         axis = s.axis;
+        tb__box4 lb = tb__box4_empty(), lc = tb__box4_empty(), rb = tb__box4_empty(), rc = tb__box4_empty();
         uint32_t i = begin, j = end;
+        tb__bref *refs = b->refs;
         while (i < j) {
-            uint32_t r = b->order[i];
-            if (tb__bin(tb_vec3_get(b->cent[r], axis), s.lo, s.scale, s.bins) < s.plane) {
+            tb__f4 lo = tb__ref_lo(&refs[i]), hi = tb__ref_hi(&refs[i]);
+            tb__f4 c4 = tb__ref_centroid(lo, hi);
+            float c[4];
+            tb__v4_store(c, c4);
+            if (tb__bin(c[axis], s.lo, s.scale, s.bins) < s.plane) {
+                tb__box4_grow(&lb, lo, hi);
+                tb__box4_grow(&lc, c4, c4);
                 i++;
             } else {
-                b->order[i] = b->order[--j];
-                b->order[j] = r;
+                tb__bref r = refs[i];
+                refs[i] = refs[--j];
+                refs[j] = r;
+                tb__box4_grow(&rb, lo, hi);
+                tb__box4_grow(&rc, c4, c4);
             }
         }
         mid = i;
+        kb[0] = tb__box4_aabb(&lb), kc[0] = tb__box4_aabb(&lc);
+        kb[1] = tb__box4_aabb(&rb), kc[1] = tb__box4_aabb(&rc);
+        have_bounds = true;
     } else {
         /* No SAH plane (all centroids in one point, or too deep): the median
          * along the longest centroid axis, or the middle of the range when the
@@ -263,8 +564,14 @@ static void tb__build_node(tb__builder *b, uint32_t id, uint32_t begin, uint32_t
             tb__sort_by_axis(b, begin, end, axis);
         mid = begin + n / 2;
     }
-    if (mid == begin || mid == end) /* cannot happen with a valid plane; keep the tree finite anyway */
+    if (mid == begin || mid == end) { /* cannot happen with a valid plane; keep the tree finite anyway */
         mid = begin + n / 2;
+        have_bounds = false;
+    }
+    if (!have_bounds) {
+        tb__range_bounds(b->refs, begin, mid, &kb[0], &kc[0]);
+        tb__range_bounds(b->refs, mid, end, &kb[1], &kc[1]);
+    }
 
     uint32_t l = atomic_fetch_add(&b->nnodes, 2);
     node->leaf = false;
@@ -272,13 +579,14 @@ static void tb__build_node(tb__builder *b, uint32_t id, uint32_t begin, uint32_t
     node->child[0] = l;
     node->child[1] = l + 1;
     if (n >= TB__BVH_TASK_MIN) {
-#pragma omp task default(none) firstprivate(b, l, begin, mid, depth)
-        tb__build_node(b, l, begin, mid, depth + 1);
-        tb__build_node(b, l + 1, mid, end, depth + 1);
+        tb_aabb b0 = kb[0], c0 = kc[0];
+#pragma omp task default(none) firstprivate(b, l, begin, mid, depth, b0, c0)
+        tb__build_node(b, l, begin, mid, depth + 1, b0, c0);
+        tb__build_node(b, l + 1, mid, end, depth + 1, kb[1], kc[1]);
 #pragma omp taskwait
     } else {
-        tb__build_node(b, l, begin, mid, depth + 1);
-        tb__build_node(b, l + 1, mid, end, depth + 1);
+        tb__build_node(b, l, begin, mid, depth + 1, kb[0], kc[0]);
+        tb__build_node(b, l + 1, mid, end, depth + 1, kb[1], kc[1]);
     }
 }
 
@@ -326,36 +634,36 @@ tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt)
     tb_timer_token timer = tb_timer_start(&tb__bvh_build_time);
     size_t n = acc->n;
     tb__builder b = {0};
-    b.prims = acc->prims;
     b.bins = opt->bvh_bins ? opt->bvh_bins : TB__BVH_DEFAULT_BINS;
     b.max_leaf = opt->bvh_max_leaf ? opt->bvh_max_leaf : TB__BVH_DEFAULT_MAX_LEAF;
     b.cost_node = opt->bvh_cost_node > 0.0f ? opt->bvh_cost_node : 1.0;
     b.cost_prim = opt->bvh_cost_prim > 0.0f ? opt->bvh_cost_prim : 1.0;
     atomic_init(&b.nnodes, 1);
     atomic_init(&b.oom, 0);
-    b.cent = malloc(n * sizeof *b.cent);
-    b.order = malloc(n * sizeof *b.order);
+    b.refs = aligned_alloc(32, n * sizeof *b.refs);
     b.nodes = malloc((2 * n - 1) * sizeof *b.nodes);
     tb_bvh_node *nodes = NULL;
     tb_accel_prim *prims = NULL;
     uint32_t *index = NULL;
     tb_status st = TB_OK;
-    if (!b.cent || !b.order || !b.nodes) {
+    if (!b.refs || !b.nodes) {
         st = tb_error(TB_ERR_NOMEM, "BVH: out of memory for %zu references", n);
         goto done;
     }
     for (size_t i = 0; i < n; i++) {
-        b.cent[i] = tb_aabb_centroid(&acc->prims[i].bounds);
-        b.order[i] = (uint32_t)i;
+        const tb_aabb *bb = &acc->prims[i].bounds;
+        b.refs[i] = (tb__bref){{bb->lo.x, bb->lo.y, bb->lo.z}, (uint32_t)i, {bb->hi.x, bb->hi.y, bb->hi.z}, 0};
     }
+    tb_aabb root, rootc;
+    tb__range_bounds(b.refs, 0, (uint32_t)n, &root, &rootc);
 
     if (n >= TB__BVH_TASK_MIN) {
         int threads = opt->threads > 0 ? opt->threads : omp_get_max_threads();
-#pragma omp parallel num_threads(threads) default(none) shared(b, n)
+#pragma omp parallel num_threads(threads) default(none) shared(b, n, root, rootc)
 #pragma omp single
-        tb__build_node(&b, 0, 0, (uint32_t)n, 0);
+        tb__build_node(&b, 0, 0, (uint32_t)n, 0, root, rootc);
     } else {
-        tb__build_node(&b, 0, 0, (uint32_t)n, 0);
+        tb__build_node(&b, 0, 0, (uint32_t)n, 0, root, rootc);
     }
     if (atomic_load(&b.oom)) {
         st = tb_error(TB_ERR_NOMEM, "BVH: out of memory while building");
@@ -377,8 +685,8 @@ tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt)
 
     /* Leaf ranges already are positions in `order`: store the references in that order. */
     for (size_t i = 0; i < n; i++) {
-        prims[i] = acc->prims[b.order[i]];
-        index[i] = acc->index[b.order[i]];
+        prims[i] = acc->prims[b.refs[i].id];
+        index[i] = acc->index[b.refs[i].id];
     }
     free(acc->prims);
     free(acc->index);
@@ -408,8 +716,7 @@ done:
     free(nodes);
     free(prims);
     free(index);
-    free(b.cent);
-    free(b.order);
+    free(b.refs);
     free(b.nodes);
     tb_timer_stop(timer);
     return st;

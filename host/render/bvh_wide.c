@@ -58,25 +58,41 @@ typedef struct tb__collapse {
     tb__cdp *dp;               /* per binary node */
 } tb__collapse;
 
-/* Appends to seq the positions in kids[] of the children below binary node
- * b, in the binary traversal's order for octant `oct`: a node that was
- * collapsed away visits its first child first unless the ray goes toward -axis. */
-static void tb__bvhw_order(const tb_bvh_node *bin, uint32_t b, const uint32_t *kids, int nk, unsigned oct,
-                           uint8_t *seq, int *len)
+/* The binary subtree that one wide node replaces, flattened: its inner
+ * nodes (at most 7) with, per side, the next inner node or a slot of kids[]. */
+typedef struct tb__bvhw_sub {
+    uint8_t axis[TB__BVHW];  /* split axis of inner node j */
+    int8_t side[TB__BVHW][2]; /* first and second child: >= 0 inner node, < 0 slot -1 - s */
+} tb__bvhw_sub;
+
+/* Adds binary node b to sub: the slot of kids[] it is, or a new inner node. */
+static int8_t tb__bvhw_sub_add(const tb_bvh_node *bin, uint32_t b, const uint32_t *kids, int nk, tb__bvhw_sub *sub,
+                               int *ninner)
 {
     for (int i = 0; i < nk; i++)
-        if (kids[i] == b) {
-            seq[(*len)++] = (uint8_t)i;
-            return;
-        }
-    uint32_t first = b + 1, second = bin[b].offset;
-    if (oct >> bin[b].axis & 1u) {
-        tb__bvhw_order(bin, second, kids, nk, oct, seq, len);
-        tb__bvhw_order(bin, first, kids, nk, oct, seq, len);
-    } else {
-        tb__bvhw_order(bin, first, kids, nk, oct, seq, len);
-        tb__bvhw_order(bin, second, kids, nk, oct, seq, len);
+        if (kids[i] == b)
+            return (int8_t)(-1 - i);
+    int j = (*ninner)++;
+    sub->axis[j] = bin[b].axis;
+    int8_t first = tb__bvhw_sub_add(bin, b + 1, kids, nk, sub, ninner);
+    int8_t second = tb__bvhw_sub_add(bin, bin[b].offset, kids, nk, sub, ninner);
+    sub->side[j][0] = first;
+    sub->side[j][1] = second;
+    return (int8_t)j;
+}
+
+/* Appends to seq the slots below entry e of sub in the binary traversal's
+ * order for octant `oct`: an inner node visits its first child first unless
+ * the ray goes toward -axis. */
+static void tb__bvhw_sub_order(const tb__bvhw_sub *sub, int8_t e, unsigned oct, uint8_t *seq, int *len)
+{
+    if (e < 0) {
+        seq[(*len)++] = (uint8_t)(-1 - e);
+        return;
     }
+    unsigned back = oct >> sub->axis[e] & 1u;
+    tb__bvhw_sub_order(sub, sub->side[e][back], oct, seq, len);
+    tb__bvhw_sub_order(sub, sub->side[e][!back], oct, seq, len);
 }
 
 /* Half surface area in double, the build's measure (only compared here). */
@@ -174,10 +190,14 @@ static uint32_t tb__bvhw_collapse(tb__collapse *c, uint32_t b)
         o->box[4][i] = bx.lo.z;
         o->box[5][i] = bx.hi.z;
     }
+    /* The subtree is walked once; each octant's order is read off it. */
+    tb__bvhw_sub sub;
+    int ninner = 0;
+    int8_t top = tb__bvhw_sub_add(bin, b, kids, nk, &sub, &ninner);
     for (unsigned oct = 0; oct < 8; oct++) {
         uint8_t seq[TB__BVHW];
         int len = 0;
-        tb__bvhw_order(bin, b, kids, nk, oct, seq, &len);
+        tb__bvhw_sub_order(&sub, top, oct, seq, &len);
         uint32_t packed = 0;
         for (int j = 0; j < len; j++) /* far to near */
             packed |= (uint32_t)seq[len - 1 - j] << (3 * j);

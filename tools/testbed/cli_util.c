@@ -50,3 +50,14 @@ int tb_cli_default_costs_path(char *buf, size_t len)
         return -1;
     return n < 0 || (size_t)n >= len ? -1 : 0;
 }
+
+void tb_cli_load_average(double load[3])
+{
+    load[0] = load[1] = load[2] = 0.0;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (!f)
+        return;
+    if (fscanf(f, "%lf %lf %lf", &load[0], &load[1], &load[2]) != 3)
+        load[0] = load[1] = load[2] = 0.0;
+    fclose(f);
+}

@@ -1,6 +1,7 @@
 /* Command-line pieces shared by the testbed commands: the Vulkan set-up of
  * those that run a kernel on a scene (render, bench gpu, bench formfactor,
- * validate) and the command line the provenance records. */
+ * validate), the command line the provenance records and the load average
+ * the benchmarks print. */
 #ifndef TB_TOOLS_TESTBED_CLI_UTIL_H
 #define TB_TOOLS_TESTBED_CLI_UTIL_H
 
@@ -30,5 +31,9 @@ char **tb_cli_full_argv(int argc, char **argv);
  * $XDG_CACHE_HOME/testbed/costs.json, else $HOME/.cache/testbed/costs.json.
  * 0 on success; -1 if neither variable is set or the path does not fit. */
 int tb_cli_default_costs_path(char *buf, size_t len);
+
+/* The 1-, 5- and 15-minute load averages (/proc/loadavg; zeros when it
+ * cannot be read), printed beside benchmark figures. */
+void tb_cli_load_average(double load[3]);
 
 #endif

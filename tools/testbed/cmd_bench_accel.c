@@ -364,7 +364,9 @@ int tb_cmd_bench_accel(int argc, char **argv)
 {
     long sizes[8] = {1000, 100000}, threads[4] = {1, 2};
     int nrays_i = 200000, seed_i = 1;
-    bool use[3] = {true, true, true}, no_stats = false;
+    bool use[3] = {true, true, true}, no_stats = false, embree = false;
+    const char *scene = NULL;
+    int repeat = 3;
     tb__blist tris = {sizes, 2, 8, 100000000}, thr = {threads, 2, 4, 1024};
     const tb_opt opts[] = {
         {"tris", .type = TB_OPT_CUSTOM, .dest = &tris, .metavar = "N,...", .parse = tb__parse_blist,
@@ -379,17 +381,30 @@ int tb_cmd_bench_accel(int argc, char **argv)
         {"seed", .type = TB_OPT_INT, .dest = &seed_i, .min = 1, .max = 2147483647, .metavar = "S",
          .help = "random seed (default %D)"},
         {"no-stats", .type = TB_OPT_FLAG, .dest = &no_stats, .help = "turn the counters off"},
+        {"scene", .type = TB_OPT_STRING, .dest = &scene, .metavar = "SCENE.mid",
+         .help = "instead of the synthetic scenes: time the build of this scene's BVH\n"
+                 "(tb_scene_rebuild_accel) at each --threads count, with its SAH cost"},
+        {"embree", .type = TB_OPT_FLAG, .dest = &embree,
+         .help = "with --scene: also Embree 3's builds at the same thread counts:\n"
+                 "rtcCommitScene at RTC_BUILD_QUALITY_HIGH (time) and rtcBuildBVH\n"
+                 "HIGH over the same boxes (time and SAH cost by the same formula)"},
+        {"repeat", .type = TB_OPT_INT, .dest = &repeat, .min = 1, .max = 1000, .metavar = "R",
+         .help = "with --scene: best of R builds each (default %D)"},
         {0},
     };
     const tb_cli cli = {
         .prog = "testbed bench accel",
         .err = "testbed bench accel: ",
-        .usage = "[--tris N,...] [--rays N] [--threads T,...] [--accel K,...] [--seed S] [--no-stats]",
+        .usage = "[--tris N,...] [--rays N] [--threads T,...] [--accel K,...] [--seed S] [--no-stats]\n"
+                 "       --scene SCENE.mid [--embree] [--threads T,...] [--repeat R] [--no-stats]",
         .intro = "\n"
                  "The BVH, the uniform grid and the plain list (host/render/accel.h) on triangle soups\n"
                  "and tessellated spheres: primary, diffuse and shadow ray sets; prints Mrays/s (wall\n"
                  "clock) and Mrays per CPU second, then checks that the structures gave the same\n"
-                 "answers (exit status 1 if not).\n",
+                 "answers (exit status 1 if not).\n"
+                 "With --scene: the build time (best of --repeat) and SAH cost of the scene's BVH at\n"
+                 "each thread count, and with --embree Embree's (docs/performance.md, \"BVH build vs\n"
+                 "Embree\").\n",
         .opts = opts,
     };
     int npos, prc = tb_cli_parse(&cli, argc, argv, &npos);
@@ -397,6 +412,15 @@ int tb_cmd_bench_accel(int argc, char **argv)
         return prc;
     if (no_stats)
         tb_stats_set_enabled(0);
+#ifndef TB_HAVE_EMBREE
+    if (embree)
+        return tb_cli_usage_error(&cli, "this testbed was built without Embree 3 (install libembree-dev and "
+                                        "reconfigure); --embree is not available");
+#endif
+    if (embree && !scene)
+        return tb_cli_usage_error(&cli, "--embree needs --scene");
+    if (scene)
+        return tb_bench_accel_scene(scene, threads, thr.n, repeat, embree);
     long nrays = nrays_i, seedv = seed_i;
     int nsizes = tris.n, nthreads = thr.n;
     printf("testbed bench accel: %ld rays per set; Mrays/s is wall-clock throughput, Mrays/CPU-s per second of\n"

@@ -26,14 +26,15 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_embree.h"
 #include "bench_raysets.h"
+#include "cli_util.h"
 #include "commands.h"
 #include "host/object/hit.h"
 #include "host/object/intersect.h"
 #include "host/render/lights.h"
 #include "host/render/scene.h"
 #include "util/math/rng.h"
-#include "util/math/transform.h"
 #include "util/stats/stats.h"
 
 #ifdef TB_HAVE_EMBREE
@@ -198,30 +199,8 @@ static int tb__embree_build(const tb_scene *s, tb__embree *e, bool robust, const
         rtcReleaseGeometry(g);
         (*user_objects)++;
     }
-    for (uint32_t o = 0; o < s->nobjects; o++) {
-        const tb_object *obj = s->objects[o];
-        if (!obj->mesh || obj->mesh->ntris == 0)
-            continue;
-        const tb_object_mesh *m = obj->mesh;
-        RTCGeometry g = rtcNewGeometry(e->dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-        float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                           m->nvertices);
-        unsigned *ix = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                               m->ntris);
-        if (!v || !ix) {
-            fprintf(stderr, "testbed bench rays: Embree buffer allocation failed\n");
-            rtcReleaseGeometry(g);
-            return 0;
-        }
-        for (uint32_t i = 0; i < m->nvertices; i++) {
-            tb_vec3 w = tb_transform_point(&obj->to_world, m->vertices[i]);
-            v[3 * i] = w.x, v[3 * i + 1] = w.y, v[3 * i + 2] = w.z;
-        }
-        memcpy(ix, m->tris, sizeof(unsigned) * 3 * (size_t)m->ntris);
-        rtcCommitGeometry(g);
-        rtcAttachGeometryByID(e->scene, g, o);
-        rtcReleaseGeometry(g);
-    }
+    if (!tb_bench_embree_add_meshes(e->dev, e->scene, s, RTC_BUILD_QUALITY_MEDIUM, "testbed bench rays"))
+        return 0;
     rtcCommitScene(e->scene);
     *build_seconds = tb__wall() - t0;
     enum RTCError err = rtcGetDeviceError(e->dev);
@@ -553,16 +532,11 @@ static bool tb__rays_build(const tb__rays_args *a, tb__rays_run *run)
 /* The load average (rates mean little on a busy machine) and the table's head. */
 static void tb__print_table_head(void)
 {
-    double load = 0.0;
-    FILE *lf = fopen("/proc/loadavg", "r");
-    if (lf) {
-        if (fscanf(lf, "%lf", &load) != 1)
-            load = 0.0;
-        fclose(lf);
-    }
+    double load[3];
+    tb_cli_load_average(load);
     printf("load average %.2f: wall-clock rates and scaling mean something only on an idle machine; rates per\n"
            "CPU second (Mrays/CPU-s) are the steadier comparison on a shared one\n",
-           load);
+           load[0]);
     printf("%-8s %8s %6s %3s %12s %12s %7s %12s %12s %7s\n", "set", "rays", "hit%", "thr", "ours Mr/s", "Embree Mr/s",
            "ratio", "ours Mr/CPUs", "Emb Mr/CPUs", "ratio");
 }

@@ -19,6 +19,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "cli_util.h"
 #include "commands.h"
 #include "host/mid/generate.h"
 #include "host/mid/mid_reader.h"
@@ -223,13 +224,8 @@ int tb_cmd_bench_scale(int argc, char **argv)
     if (cf)
         fprintf(cf, "kind,count,file_mb,parse_s,prepare_s,build_s,first_pixel_s,peak_mib,"
                     "peak_bytes_per_object,scene_bytes_per_object,scene_bytes_per_triangle,triangles\n");
-    double load[3] = {0};
-    FILE *la = fopen("/proc/loadavg", "r");
-    if (la) {
-        if (fscanf(la, "%lf %lf %lf", &load[0], &load[1], &load[2]) != 3)
-            load[0] = load[1] = load[2] = 0.0;
-        fclose(la);
-    }
+    double load[3];
+    tb_cli_load_average(load);
     printf("testbed bench scale: --kind %s, %d threads, load average %.2f %.2f %.2f at the start\n\n",
            tb_gen_kind_name(kind), threads, load[0], load[1], load[2]);
     printf("%10s %9s %8s %9s %8s %11s %9s %11s %11s %11s\n", "objects", "MID MB", "parse s", "prepare s",

@@ -3,6 +3,8 @@
 #ifndef TB_TOOLS_TESTBED_COMMANDS_H
 #define TB_TOOLS_TESTBED_COMMANDS_H
 
+#include <stdbool.h>
+
 /* One row of the subcommand table. */
 typedef struct tb_command {
     const char *name;                 /* as typed after `testbed` */
@@ -14,6 +16,9 @@ typedef struct tb_command {
 int tb_cmd_bench(int argc, char **argv);
 /* `testbed bench accel`: BVH / grid / list rays per second (cmd_bench_accel.c; argv[0] is "accel"). */
 int tb_cmd_bench_accel(int argc, char **argv);
+/* `testbed bench accel --scene`: a scene's BVH build, ours vs Embree's, at each of threads[0..nthreads),
+ * best of `repeat` (bench_build.c); returns the exit status. */
+int tb_bench_accel_scene(const char *path, const long *threads, int nthreads, int repeat, bool embree);
 /* `testbed bench tessellate`: tessellation rate per kind (cmd_bench_tessellate.c; argv[0] is "tessellate"). */
 int tb_cmd_bench_tessellate(int argc, char **argv);
 /* `testbed bench rays`: scene rays through our BVH and Embree 3 (cmd_bench_rays.c; argv[0] is "rays"). */
@@ -67,6 +72,7 @@ enum {
 };
 
 /* tb_wants_help(): options.h. */
+#include <stdbool.h>
 #include "options.h"
 
 #endif
