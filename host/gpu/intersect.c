@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "host/object/intersect.h"
+#include "host/object/intersect_internal.h"
 #include "host/object/param.h"
 #include "shaders/shared/bvh.h"
 #include "shaders/shared/hit.h"
@@ -33,7 +34,7 @@ struct tb_gpu_scene {
     tb_gpu_scene_info info;
     tb_accel *cpu_accel;     /* BVH over the routed objects' references (NULL if none) */
     tb_gpu_buffer *nodes, *tris, *placed, *refs, *rays, *hits; /* placed: spheres and cubes */
-    uint32_t nnodes, ntris, nspheres, ncubes, nquadrics;
+    uint32_t nnodes, ntris, nspheres, ncubes, nquadrics, nplanar, ntori;
     uint32_t stack;          /* traversal stack entries: the GPU BVH's depth, rounded up to a multiple of 8 */
 };
 
@@ -82,11 +83,85 @@ static tb_vec3 tb__world(const tb_object *o, tb_vec3 v)
     return (tb_vec3){(float)p.x, (float)p.y, (float)p.z};
 }
 
-/* The references tb__build_gpu encodes: triangles, and whole spheres, cubes
- * and revolved objects; a bit joins the kernel's mask with its encoding here. */
-_Static_assert(TB_GPU_INTERSECT_FEATURES == (uint32_t)(TB_OBJ_FEAT_TRIANGLES | TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE |
-                                                       TB_OBJ_FEAT_CYLINDER | TB_OBJ_FEAT_CONE | TB_OBJ_FEAT_CONIC),
+/* The references tb__build_gpu encodes: triangles, and every primitive kind
+ * as a whole placed object; a bit joins the kernel's mask with its encoding here. */
+_Static_assert(TB_GPU_INTERSECT_FEATURES ==
+                   (uint32_t)(TB_OBJ_FEAT_TRIANGLES | TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE | TB_OBJ_FEAT_CYLINDER |
+                              TB_OBJ_FEAT_CONE | TB_OBJ_FEAT_CONIC | TB_OBJ_FEAT_PYRAMID | TB_OBJ_FEAT_PRISM |
+                              TB_OBJ_FEAT_TORUS | TB_OBJ_FEAT_SQUARE_ARCH | TB_OBJ_FEAT_ROUND_ARCH),
                "tb__build_gpu encodes exactly the kinds of TB_GPU_INTERSECT_FEATURES");
+
+/* The leaf reference kind (TB_GPU_REF_*) of a placed primitive. */
+static uint32_t tb__ref_kind(tb_prim_kind k)
+{
+    switch (k) {
+    case TB_PRIM_CUBE: return TB_GPU_REF_CUBE;
+    case TB_PRIM_SPHERE: return TB_GPU_REF_SPHERE;
+    case TB_PRIM_CYLINDER:
+    case TB_PRIM_CONE:
+    case TB_PRIM_CONIC: return TB_GPU_REF_REVOLVED;
+    case TB_PRIM_TORUS: return TB_GPU_REF_TORUS;
+    default: return TB_GPU_REF_PLANAR; /* pyramid, prism, arches */
+    }
+}
+
+/* Profile vertices of a prism as the kernel tests it: the used profile, or
+ * the regular polygon's (tb__prism_vertex) for a large regular prism. */
+static int tb__prism_nv(const tb_object *o)
+{
+    return o->nprofile > 0 ? o->nprofile : o->geom.prism.sides;
+}
+
+/* Placed records of object o (shared/bvh.h). */
+static size_t tb__placed_records(const tb_object *o)
+{
+    switch (tb__ref_kind(o->kind)) {
+    case TB_GPU_REF_CUBE:
+    case TB_GPU_REF_SPHERE: return 1;
+    case TB_GPU_REF_PLANAR: return 2 + (o->kind == TB_PRIM_PRISM ? ((size_t)tb__prism_nv(o) + 7) / 8 : 0);
+    default: return 2;
+    }
+}
+
+/* Writes the shape record of planar object o (and a prism's vertex records)
+ * to e[0..); returns how many. */
+static size_t tb__planar_records(const tb_object *o, tb_gpu_placed *e)
+{
+    float f[16] = {0};
+    uint32_t sub = 0, flags = 0, nv = 0;
+    if (o->kind == TB_PRIM_PYRAMID) {
+        sub = TB_GPU_PLANAR_PYRAMID;
+        f[1] = (float)o->geom.pyramid.top;
+        flags = o->geom.pyramid.caps ? TB_GPU_PLANAR_CAPS : 0u;
+    } else if (o->kind == TB_PRIM_PRISM) {
+        sub = TB_GPU_PLANAR_PRISM;
+        nv = (uint32_t)tb__prism_nv(o);
+        flags = (o->geom.prism.caps ? TB_GPU_PLANAR_CAPS : 0u) |
+                (o->nprofile == 0 || o->profile_convex ? TB_GPU_PLANAR_CONVEX : 0u);
+        f[4] = o->nprofile > 0 ? (float)o->profile_orient : 1.0f;
+    } else {
+        sub = o->kind == TB_PRIM_ROUND_ARCH ? TB_GPU_PLANAR_ROUND_ARCH : TB_GPU_PLANAR_SQUARE_ARCH;
+        f[1] = (float)o->geom.arch.width;
+        f[2] = (float)o->geom.arch.height;
+    }
+    memcpy(&f[0], &sub, sizeof sub);
+    memcpy(&f[3], &flags, sizeof flags);
+    memcpy(&f[5], &nv, sizeof nv);
+    _Static_assert(sizeof(tb_gpu_placed) == sizeof f, "a placed record is 16 floats");
+    memcpy(&e[0], f, sizeof f);
+    for (uint32_t k = 0; k < nv; ++k) {
+        double x, y;
+        if (o->nprofile > 0) {
+            x = o->profile[2 * k];
+            y = o->profile[2 * k + 1];
+        } else {
+            tb__prism_vertex((int)nv, (int)k, &x, &y);
+        }
+        float v[2] = {(float)x, (float)y};
+        memcpy((float *)(void *)&e[1 + k / 8] + 2 * (k % 8), v, sizeof v);
+    }
+    return 1 + (nv + 7) / 8;
+}
 
 /* Builds the GPU arrays: a BVH over the triangle references and the triangles in leaf order. */
 static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const uint32_t *scene_ref, size_t n)
@@ -113,7 +188,11 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     size_t ngn = ni ? ni : 1;
     tb_gpu_bvh_node *gn = calloc(2 * ngn, sizeof *gn);
     tb_gpu_tri *gt = calloc(nr ? nr : 1, sizeof *gt);
-    tb_gpu_placed *gs = calloc(nr ? 2 * nr : 1, sizeof *gs); /* a revolved object takes two */
+    size_t nplaced = 0; /* placed records (shared/bvh.h): one to two per object, more for a prism's profile */
+    for (size_t k = 0; k < nr; ++k)
+        if (refs[k].sub == TB_SCENE_WHOLE_OBJECT)
+            nplaced += tb__placed_records(s->objects[refs[k].object]);
+    tb_gpu_placed *gs = calloc(nplaced ? nplaced : 1, sizeof *gs);
     uint32_t *gr = calloc(nr ? nr : 1, sizeof *gr);
     if (!inner || !gn || !gt || !gs || !gr) {
         free(inner), free(gn), free(gt), free(gs), free(gr), tb_accel_free(acc);
@@ -140,11 +219,12 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     }
 #undef TB__CHILD
     free(inner);
-    uint32_t nt = 0, ns = 0, nc = 0, nq = 0; /* triangles, placed records, cubes, revolved objects */
+    /* triangles, placed records, cubes, revolved objects, planar objects, tori */
+    uint32_t nt = 0, ns = 0, nc = 0, nq = 0, npl = 0, ntor = 0;
     for (size_t k = 0; k < nr; ++k) {
         const tb_accel_prim *p = &refs[order[k]];
         const tb_object *o = s->objects[p->object];
-        if (p->sub == TB_SCENE_WHOLE_OBJECT) { /* a sphere, cube or revolved object */
+        if (p->sub == TB_SCENE_WHOLE_OBJECT) { /* a placed analytic object */
             const tb_mat4 *w = &o->to_world.inv;
             tb_gpu_placed *q = &gs[ns];
             q->r0 = (tb_vec3){(float)w->m[0][0], (float)w->m[0][1], (float)w->m[0][2]};
@@ -155,12 +235,13 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
             q->w2 = (float)w->m[2][3];
             q->object = o->index;
             bool cube = o->kind == TB_PRIM_CUBE, sphere = o->kind == TB_PRIM_SPHERE;
-            q->face = o->face_base + (cube ? TB_FACE_CUBE_NEG_X : sphere ? TB_FACE_SPHERE : TB_FACE_CYLINDER_SIDE);
+            uint32_t kind = tb__ref_kind(o->kind);
+            q->face = o->face_base; /* every kind's first face is 0 */
             q->ref = scene_ref[order[k]];
             q->sign = o->flip ? -1.0f : 1.0f;
-            gr[k] = (cube ? TB_GPU_REF_CUBE : sphere ? TB_GPU_REF_SPHERE : TB_GPU_REF_REVOLVED) | ns++;
+            gr[k] = kind | ns++;
             nc += cube;
-            if (!cube && !sphere) { /* the shape record (shared/bvh.h), closed ends as C decides them */
+            if (kind == TB_GPU_REF_REVOLVED) { /* the shape record (shared/bvh.h), closed ends as C decides them */
                 const double *cc = o->conic;
                 double z0 = o->zrange[0], z1 = o->zrange[1];
                 bool caps = o->kind == TB_PRIM_CYLINDER ? o->geom.cylinder.caps
@@ -178,7 +259,14 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
                 memcpy(&f1, &flags, sizeof f1);
                 e->r1 = (tb_vec3){(float)z1, f1, 0.0f};
                 ++nq;
+            } else if (kind == TB_GPU_REF_TORUS) {
+                gs[ns++].r0 = (tb_vec3){(float)o->geom.torus.major, (float)o->geom.torus.minor, 0.0f};
+                ++ntor;
+            } else if (kind == TB_GPU_REF_PLANAR) {
+                ns += tb__planar_records(o, &gs[ns]);
+                ++npl;
             }
+            (void)sphere;
             continue;
         }
         const tb_object_mesh *m = o->mesh;
@@ -196,8 +284,9 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
         gr[k] = nt++;
     }
     /* Each leaf lists its references by kind (stable): triangles, cubes,
-     * spheres, revolved objects (the kind bits' order), so the kernel tests
-     * each kind in a loop of its own (lib/bvh_traverse.glsl). */
+     * spheres, planar objects, revolved objects, tori (the kind bits'
+     * order), so the kernel tests each kind in a loop of its own
+     * (lib/bvh_traverse.glsl). */
     for (size_t i = 0; i < nn; ++i) {
         const tb_bvh_node *c = &nodes[i];
         if (c->count < 2)
@@ -208,9 +297,9 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
             return tb_error(TB_ERR_NOMEM, "out of memory for the GPU scene");
         }
         uint32_t m = 0;
-        for (uint32_t kind = 0; kind < 4; ++kind)
+        for (uint32_t kind = 0; kind < 8; ++kind)
             for (uint32_t j = 0; j < c->count; ++j)
-                if (gr[c->offset + j] >> 30 == kind)
+                if (gr[c->offset + j] >> 29 == kind)
                     buf[m++] = gr[c->offset + j];
         memcpy(&gr[c->offset], buf, c->count * sizeof *buf);
         if (buf != tmp)
@@ -218,9 +307,13 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     }
     g->nnodes = nn ? (uint32_t)ngn : 0u;
     g->ntris = nt;
-    g->nspheres = ns - nc - 2 * nq;
+    g->nspheres = 0;
+    for (size_t k = 0; k < nr; ++k)
+        g->nspheres += (gr[k] & TB_GPU_REF_KIND) == TB_GPU_REF_SPHERE;
     g->ncubes = nc;
     g->nquadrics = nq;
+    g->nplanar = npl;
+    g->ntori = ntor;
     g->info.gpu_nodes = nn ? ngn : 0;
     g->info.gpu_bytes = 2 * ngn * sizeof *gn + nt * sizeof *gt + ns * sizeof *gs + nr * sizeof *gr;
     g->nodes = tb_gpu_buffer_create(g->dev, 2 * ngn * sizeof *gn);
@@ -247,14 +340,11 @@ tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene)
 
 uint32_t tb_gpu_intersect_supported(const tb_gpu_device *dev, tb_gpu_quadrics quadrics)
 {
-    /* On lavapipe the kernel runs 8 lanes in lockstep and executes both sides
-     * of every branch, and the revolved test (a scaled quadratic, two
-     * intervals, a slab clip) costs more there than the C path's double code
-     * does on the same core: measured slower on the showcase
-     * (docs/performance.md, "Vulkan intersect kernel"), so quadrics stay on the CPU there. */
-    bool on_gpu = quadrics == TB_GPU_QUADRICS_GPU ||
-                  (quadrics == TB_GPU_QUADRICS_AUTO && tb_gpu_device_info_of(dev)->type != TB_GPU_DEVICE_CPU);
-    return on_gpu ? TB_GPU_INTERSECT_FEATURES : TB_GPU_INTERSECT_FEATURES & ~TB_GPU_QUADRIC_FEATURES;
+    /* Every device runs every kind in the kernel (the same code on lavapipe
+     * and on a GPU); TB_GPU_QUADRICS_CPU routes quadrics for comparisons. */
+    (void)dev;
+    return quadrics == TB_GPU_QUADRICS_CPU ? TB_GPU_INTERSECT_FEATURES & ~TB_GPU_QUADRIC_FEATURES
+                                           : TB_GPU_INTERSECT_FEATURES;
 }
 
 const char *tb_gpu_object_route_reason(uint32_t features, uint32_t supported)
@@ -265,11 +355,11 @@ const char *tb_gpu_object_route_reason(uint32_t features, uint32_t supported)
     case 0:
         return NULL;
     case TB_OBJ_FEAT_CYLINDER:
-        return "cylinder (quadrics on the CPU path: a CPU device, or TB_GPU_QUADRICS_CPU)";
+        return "cylinder (quadrics on the CPU path: TB_GPU_QUADRICS_CPU)";
     case TB_OBJ_FEAT_CONE:
-        return "cone (quadrics on the CPU path: a CPU device, or TB_GPU_QUADRICS_CPU)";
+        return "cone (quadrics on the CPU path: TB_GPU_QUADRICS_CPU)";
     case TB_OBJ_FEAT_CONIC:
-        return "conic (quadrics on the CPU path: a CPU device, or TB_GPU_QUADRICS_CPU)";
+        return "conic (quadrics on the CPU path: TB_GPU_QUADRICS_CPU)";
     default:
         return tb_object_feature_name(f);
     }
@@ -323,6 +413,8 @@ tb_gpu_scene *tb_gpu_scene_create_ex(tb_gpu_device *dev, const tb_scene *scene, 
     g->info.gpu_spheres = g->nspheres;
     g->info.gpu_cubes = g->ncubes;
     g->info.gpu_quadrics = g->nquadrics;
+    g->info.gpu_planar = g->nplanar;
+    g->info.gpu_tori = g->ntori;
     if (!st && nc) {
         tb_accel_callbacks cb = {tb__cpu_isect, tb__cpu_occl, (void *)scene, NULL};
         st = tb_accel_build(TB_ACCEL_BVH, cref, nc, &cb, NULL, &g->cpu_accel);
@@ -361,8 +453,9 @@ void tb_gpu_scene_get_info(const tb_gpu_scene *g, tb_gpu_scene_info *out) { *out
 
 void tb_gpu_scene_get_bindings(const tb_gpu_scene *g, tb_gpu_scene_bindings *out)
 {
-    *out = (tb_gpu_scene_bindings){g->nodes,  g->tris,       g->placed,       g->refs,      g->nnodes,
-                                   g->stack, g->ntris > 0, g->nspheres > 0, g->ncubes > 0, g->nquadrics > 0};
+    *out = (tb_gpu_scene_bindings){g->nodes,          g->tris,          g->placed,        g->refs,
+                                   g->nnodes,         g->stack,         g->ntris > 0,     g->nspheres > 0,
+                                   g->ncubes > 0,     g->nquadrics > 0, g->nplanar > 0,   g->ntori > 0};
 }
 
 bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object)
@@ -379,14 +472,16 @@ const char *tb_gpu_scene_object_route(const tb_gpu_scene *g, uint32_t object)
 static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t any_hit, tb_hit *hits,
                          double *kernel_seconds)
 {
-    if (g->ntris == 0 && g->nspheres == 0 && g->ncubes == 0 && g->nquadrics == 0) {
+    if (g->ntris == 0 && g->nspheres == 0 && g->ncubes == 0 && g->nquadrics == 0 && g->nplanar == 0 &&
+        g->ntori == 0) {
         for (size_t i = 0; i < n; ++i)
             hits[i] = (tb_hit){INFINITY, TB_GPU_NO_HIT, TB_GPU_NO_HIT, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}};
         return TB_OK;
     }
     /* Only the kinds the scene has are compiled in. */
-    tb_gpu_spec_constant spec[5] = {
-        {1, g->ntris > 0}, {2, g->stack}, {3, g->nspheres > 0}, {4, g->ncubes > 0}, {5, g->nquadrics > 0}};
+    tb_gpu_spec_constant spec[7] = {{1, g->ntris > 0},    {2, g->stack},        {3, g->nspheres > 0},
+                                    {4, g->ncubes > 0},   {5, g->nquadrics > 0}, {6, g->nplanar > 0},
+                                    {7, g->ntori > 0}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("intersect"),
                                                                         .buffers = 6,
                                                                         .kinds = {0, TB_GPU_BIND_TEXELS_RGBA32UI,
@@ -394,7 +489,7 @@ static tb_status tb__run(tb_gpu_scene *g, const tb_ray *rays, size_t n, uint32_t
                                                                                   TB_GPU_BIND_TEXELS_R32UI},
                                                                         .push_size = 16,
                                                                         .spec = spec,
-                                                                        .spec_count = 5});
+                                                                        .spec_count = 7});
     if (!k)
         return TB_ERR_DEVICE;
     for (size_t at = 0; at < n; at += TB__GPU_CHUNK) {

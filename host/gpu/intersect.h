@@ -41,6 +41,8 @@ typedef struct tb_gpu_scene_info {
     uint32_t gpu_spheres;   /* sphere objects */
     uint32_t gpu_cubes;     /* cube objects */
     uint32_t gpu_quadrics;  /* cylinder, cone and conic objects */
+    uint32_t gpu_planar;    /* pyramid, prism and arch objects */
+    uint32_t gpu_tori;      /* torus objects */
     uint32_t cpu_objects;   /* objects routed to the CPU path (every other kind, CSG) */
     size_t gpu_nodes;       /* BVH nodes uploaded */
     size_t gpu_bytes;       /* bytes of nodes and triangles uploaded */
@@ -55,7 +57,7 @@ typedef struct tb_gpu_intersect_timing {
 
 /* Where cylinders, cones and conics are intersected (tb_gpu_scene_desc). */
 typedef enum tb_gpu_quadrics {
-    TB_GPU_QUADRICS_AUTO = 0, /* in the kernel, except on a CPU driver (lavapipe), where the C path is faster */
+    TB_GPU_QUADRICS_AUTO = 0, /* in the kernel (every device) */
     TB_GPU_QUADRICS_GPU,      /* in the kernel (lib/revolved.glsl) */
     TB_GPU_QUADRICS_CPU,      /* routed to the CPU path per object */
 } tb_gpu_quadrics;
@@ -68,12 +70,13 @@ typedef enum tb_gpu_quadrics {
  * other is routed to the CPU path (a new primitive kind's bit is outside it
  * until the kernel intersects the kind). */
 #define TB_GPU_INTERSECT_FEATURES                                                                              \
-    ((uint32_t)(TB_OBJ_FEAT_TRIANGLES | TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE | TB_GPU_QUADRIC_FEATURES))
+    ((uint32_t)(TB_OBJ_FEAT_TRIANGLES | TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE | TB_GPU_QUADRIC_FEATURES |        \
+                TB_OBJ_FEAT_PYRAMID | TB_OBJ_FEAT_PRISM | TB_OBJ_FEAT_TORUS | TB_OBJ_FEAT_SQUARE_ARCH |         \
+                TB_OBJ_FEAT_ROUND_ARCH))
 
 /* The object features a scene on `dev` with quadrics mode `quadrics` has
  * intersected by the kernel: TB_GPU_INTERSECT_FEATURES, without
- * TB_GPU_QUADRIC_FEATURES for TB_GPU_QUADRICS_CPU, and for
- * TB_GPU_QUADRICS_AUTO on a CPU device. */
+ * TB_GPU_QUADRIC_FEATURES for TB_GPU_QUADRICS_CPU (the same on every device). */
 uint32_t tb_gpu_intersect_supported(const tb_gpu_device *dev, tb_gpu_quadrics quadrics);
 
 /* Why an object with features `features` is not intersected by a kernel
@@ -111,6 +114,7 @@ typedef struct tb_gpu_scene_bindings {
     uint32_t nnodes;                             /* 0: nothing on the GPU */
     uint32_t stack;                              /* traversal stack entries enough for this BVH */
     bool has_triangles, has_spheres, has_cubes, has_quadrics; /* kinds present (quadrics: cylinders, cones, conics) */
+    bool has_planar, has_tori;                                /* pyramids, prisms, arches; tori */
 } tb_gpu_scene_bindings;
 
 /* Fills `out` with the scene's device buffers (owned by the scene: valid until

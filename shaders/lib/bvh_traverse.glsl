@@ -37,7 +37,8 @@
 // Optional, to compile out kinds the scene lacks (e.g. from specialization
 // constants the host sets from tb_gpu_scene_bindings): TB_BVH_HAS_TRIANGLES,
 // TB_BVH_HAS_SPHERES, TB_BVH_HAS_CUBES, TB_BVH_HAS_QUADRICS (cylinders,
-// cones, conics) (each defaults to true: correct for
+// cones, conics), TB_BVH_HAS_PLANAR (pyramids, prisms, arches),
+// TB_BVH_HAS_TORI (each defaults to true: correct for
 // every scene, only slower), and TB_BVH_STACK, the traversal stack entries
 // (defaults to 96; the scene's depth, tb_gpu_scene_bindings.stack, is enough).
 // Kinds added later get their own TB_BVH_HAS_* defaulting to true, so an
@@ -61,6 +62,7 @@
 #include "cube.glsl"
 #include "revolved.glsl"
 #include "sphere.glsl"
+#include "torus.glsl"
 #include "triangle.glsl"
 
 #if (!defined(TB_BVH_NODES) && !defined(TB_BVH_NODE_TEXELS)) || (!defined(TB_BVH_TRIS) && !defined(TB_BVH_TRI_TEXELS)) || \
@@ -78,6 +80,12 @@
 #endif
 #ifndef TB_BVH_HAS_QUADRICS
 #define TB_BVH_HAS_QUADRICS true
+#endif
+#ifndef TB_BVH_HAS_PLANAR
+#define TB_BVH_HAS_PLANAR true
+#endif
+#ifndef TB_BVH_HAS_TORI
+#define TB_BVH_HAS_TORI true
 #endif
 #ifndef TB_BVH_STACK
 #define TB_BVH_STACK 96
@@ -182,6 +190,80 @@ tb_revolved tb_bvh_revolved(uint idx)
     q.closed0 = (flags & TB_GPU_REVOLVED_CLOSED0) != 0u;
     q.closed1 = (flags & TB_GPU_REVOLVED_CLOSED1) != 0u;
     return q;
+}
+
+// Profile vertex k of the prism whose vertices start at placed record
+// `base` (8 per record, shared/bvh.h); declared by lib/planar.glsl.
+vec2 tb_prism_vertex(uint base, uint k)
+{
+    tb_gpu_placed p = TB_BVH_PLACED[base + (k >> 3)];
+    uint j = k & 7u;
+    vec4 row = j < 2u ? vec4(p.r0, p.w0)
+                      : (j < 4u ? vec4(p.r1, p.w1)
+                                : (j < 6u ? vec4(p.r2, p.w2)
+                                          : vec4(uintBitsToFloat(p.object), uintBitsToFloat(p.face),
+                                                 uintBitsToFloat(p.ref), p.sign)));
+    return (j & 1u) == 0u ? row.xy : row.zw;
+}
+
+// The first surface crossing with tmin <= t <= tmax of the object-space
+// line so + t sd with the planar object whose placed record is idx: t and
+// the face within the object. False if none.
+bool tb_bvh_planar_hit(uint idx, vec3 so, vec3 sd, float tmin, float tmax, out float t, out uint face)
+{
+    tb_gpu_placed s = TB_BVH_PLACED[idx + 1u];
+    uint sub = floatBitsToUint(s.r0.x), flags = floatBitsToUint(s.w0);
+    bool caps = (flags & TB_GPU_PLANAR_CAPS) != 0u;
+    tb_line l = tb_line_near(so, sd);
+    tb_xl x;
+    x.n = 0;
+    if (sub == TB_GPU_PLANAR_PYRAMID) {
+        tb_xings_pyramid(l, s.r0.y, caps, x);
+    } else if (sub == TB_GPU_PLANAR_PRISM) {
+        uint nv = floatBitsToUint(s.r1.y);
+        if ((flags & TB_GPU_PLANAR_CONVEX) == 0u)
+            return tb_prism_profile_hit(l, idx + 2u, nv, caps, tmin, tmax, t, face);
+        tb_xings_prism_convex(l, idx + 2u, nv, s.r1.x, caps, x);
+    } else {
+        tb_xings_arch(l, s.r0.y, s.r0.z, sub == TB_GPU_PLANAR_ROUND_ARCH, x);
+    }
+    return tb_xl_first(x, tmin, tmax, t, face);
+}
+
+// The same for the torus whose placed record is idx.
+bool tb_bvh_torus_hit(uint idx, vec3 so, vec3 sd, float tmin, float tmax, out float t, out uint face)
+{
+    tb_gpu_placed s = TB_BVH_PLACED[idx + 1u];
+    tb_xl x;
+    x.n = 0;
+    tb_xings_torus(so, sd, s.r0.x, s.r0.y, x);
+    return tb_xl_first(x, tmin, tmax, t, face);
+}
+
+// Object-space outward normal (not unit length) of face f of the planar
+// object whose placed record is idx, at the object-space point p.
+vec3 tb_bvh_planar_normal(uint idx, uint f, vec3 p)
+{
+    tb_gpu_placed s = TB_BVH_PLACED[idx + 1u];
+    uint sub = floatBitsToUint(s.r0.x);
+    if (sub == TB_GPU_PLANAR_PYRAMID) {
+        if (f >= TB_PYRAMID_BOTTOM)
+            return vec3(0.0, 0.0, f == TB_PYRAMID_BOTTOM ? -1.0 : 1.0);
+        vec3 n = vec3(0.0, 0.0, -0.5 * (s.r0.y - 1.0));
+        n[f >> 1] = (f & 1u) != 0u ? 1.0 : -1.0;
+        return n;
+    }
+    if (sub == TB_GPU_PLANAR_PRISM) {
+        if (f < TB_PRISM_SIDE0)
+            return vec3(0.0, 0.0, f == TB_PRISM_BOTTOM ? -1.0 : 1.0);
+        uint nv = floatBitsToUint(s.r1.y), k = f - TB_PRISM_SIDE0;
+        vec3 n;
+        float c;
+        tb_prism_side(tb_prism_vertex(idx + 2u, k), tb_prism_vertex(idx + 2u, k + 1u < nv ? k + 1u : 0u), s.r1.x, n,
+                      c);
+        return n;
+    }
+    return tb_arch_normal(f, p, s.r0.y, s.r0.z, sub == TB_GPU_PLANAR_ROUND_ARCH);
 }
 
 // The tmin with which a placed object is tested: r.tmin raised by a bound on
@@ -290,7 +372,9 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
     bool have = false;
     float bt = r.tmax;
     uint bo = TB_GPU_NO_HIT, bf = 0u, br = 0u, bref = 0u;
-    if ((TB_BVH_HAS_TRIANGLES || TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES || TB_BVH_HAS_QUADRICS) && nnodes > 0u &&
+    if ((TB_BVH_HAS_TRIANGLES || TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES || TB_BVH_HAS_QUADRICS ||
+         TB_BVH_HAS_PLANAR || TB_BVH_HAS_TORI) &&
+        nnodes > 0u &&
         tb_bvh_ray_valid(r)) {
         vec3 inv = tb_ray_inv_dir(r.d);
         tb_wray w = tb_wray_init(r.o, r.d);
@@ -305,7 +389,7 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
         // other pushed. A popped child is tested again against the best t so
         // far. The lane's child is (cur_off, cur_count): cur_count 0 an
         // inner node. Leaves list their references by kind (triangles,
-        // cubes, spheres, revolved objects), so each kind's code runs in its
+        // cubes, spheres, planar, revolved objects, tori), so each kind's code runs in its
         // own loop.
         uint stack[TB_BVH_STACK];
         int sp = 0;
@@ -354,16 +438,20 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     TB_BVH_TAKE(t, keys.x, keys.y, keys.z)
                 }
             }
-            // Placed objects, one loop per kind (each leaf lists cubes, then
-            // spheres, then revolved objects): a kind's code runs only while
+            // Placed objects, one loop per kind (each leaf lists cubes,
+            // spheres, planar objects, revolved objects, tori in that order): a kind's code runs only while
             // some lane has that kind left.
             if (TB_BVH_HAS_CUBES && !stop)
                 TB_BVH_PLACED_RUN(TB_GPU_REF_CUBE, tb_cube_hit(so, sd, tlo, r.tmax, t, cf))
             if (TB_BVH_HAS_SPHERES && !stop)
                 TB_BVH_PLACED_RUN(TB_GPU_REF_SPHERE, tb_sphere_intersect(so, sd, 1.0, tlo, r.tmax, t))
+            if (TB_BVH_HAS_PLANAR && !stop)
+                TB_BVH_PLACED_RUN(TB_GPU_REF_PLANAR, tb_bvh_planar_hit(idx, so, sd, tlo, r.tmax, t, cf))
             if (TB_BVH_HAS_QUADRICS && !stop)
                 TB_BVH_PLACED_RUN(TB_GPU_REF_REVOLVED,
                                   tb_revolved_hit(so, sd, tb_bvh_revolved(idx), tlo, r.tmax, t, cf, nobj))
+            if (TB_BVH_HAS_TORI && !stop)
+                TB_BVH_PLACED_RUN(TB_GPU_REF_TORUS, tb_bvh_torus_hit(idx, so, sd, tlo, r.tmax, t, cf))
             if (stop)
                 break;
             // Leaf done: back to the stack.
@@ -407,7 +495,8 @@ vec3 tb_bvh_normal(tb_gpu_ray r, tb_bvh_hit h)
         vec3 n = (f >> 1) == 0u ? sp.r0 : ((f >> 1) == 1u ? sp.r1 : sp.r2);
         return sp.sign * normalize(sg * n);
     }
-    if ((TB_BVH_HAS_SPHERES && kind == TB_GPU_REF_SPHERE) || (TB_BVH_HAS_QUADRICS && kind == TB_GPU_REF_REVOLVED)) {
+    if ((TB_BVH_HAS_SPHERES && kind == TB_GPU_REF_SPHERE) || (TB_BVH_HAS_QUADRICS && kind == TB_GPU_REF_REVOLVED) ||
+        (TB_BVH_HAS_PLANAR && kind == TB_GPU_REF_PLANAR) || (TB_BVH_HAS_TORI && kind == TB_GPU_REF_TORUS)) {
         // Object-space normal at the point -> world by the inverse transpose.
         tb_gpu_placed sp = TB_BVH_PLACED[idx];
         vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
@@ -418,6 +507,10 @@ vec3 tb_bvh_normal(tb_gpu_ray r, tb_bvh_hit h)
             uint f = h.face - sp.face;
             n = f == TB_REVOLVED_SIDE ? tb_revolved_side_normal(q.c, p, 0.5 * (q.z0 + q.z1))
                                       : vec3(0.0, 0.0, f == TB_REVOLVED_TOP ? 1.0 : -1.0);
+        } else if (kind == TB_GPU_REF_PLANAR) {
+            n = tb_bvh_planar_normal(idx, h.face - sp.face, p);
+        } else if (kind == TB_GPU_REF_TORUS) {
+            n = tb_torus_normal(p, TB_BVH_PLACED[idx + 1u].r0.x);
         }
         return sp.sign * normalize(sp.r0 * n.x + sp.r1 * n.y + sp.r2 * n.z);
     }
