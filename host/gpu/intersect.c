@@ -116,8 +116,6 @@ static int tb__prism_nv(const tb_object *o)
 static size_t tb__placed_records(const tb_object *o)
 {
     switch (tb__ref_kind(o->kind)) {
-    case TB_GPU_REF_CUBE:
-    case TB_GPU_REF_SPHERE: return 1;
     case TB_GPU_REF_PLANAR: return 2 + (o->kind == TB_PRIM_PRISM ? ((size_t)tb__prism_nv(o) + 7) / 8 : 0);
     default: return 2;
     }
@@ -225,14 +223,24 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
         const tb_accel_prim *p = &refs[order[k]];
         const tb_object *o = s->objects[p->object];
         if (p->sub == TB_SCENE_WHOLE_OBJECT) { /* a placed analytic object */
+            /* The map applied to (p - c), c the object's origin in world
+             * space rounded to float: for an origin near the object the
+             * subtraction is exact and no large translation cancels, so far
+             * from the world origin the object-space ray keeps its digits. */
             const tb_mat4 *w = &o->to_world.inv;
-            tb_gpu_placed *q = &gs[ns];
+            const tb_mat4 *m = &o->to_world.m;
+            const uint32_t qi = ns;
+            tb_gpu_placed *q = &gs[qi];
+            float c[3] = {(float)m->m[0][3], (float)m->m[1][3], (float)m->m[2][3]};
+            float wc[3];
+            for (int i = 0; i < 3; ++i)
+                wc[i] = (float)(w->m[i][0] * c[0] + w->m[i][1] * c[1] + w->m[i][2] * c[2] + w->m[i][3]);
             q->r0 = (tb_vec3){(float)w->m[0][0], (float)w->m[0][1], (float)w->m[0][2]};
             q->r1 = (tb_vec3){(float)w->m[1][0], (float)w->m[1][1], (float)w->m[1][2]};
             q->r2 = (tb_vec3){(float)w->m[2][0], (float)w->m[2][1], (float)w->m[2][2]};
-            q->w0 = (float)w->m[0][3];
-            q->w1 = (float)w->m[1][3];
-            q->w2 = (float)w->m[2][3];
+            q->w0 = wc[0];
+            q->w1 = wc[1];
+            q->w2 = wc[2];
             q->object = o->index;
             bool cube = o->kind == TB_PRIM_CUBE, sphere = o->kind == TB_PRIM_SPHERE;
             uint32_t kind = tb__ref_kind(o->kind);
@@ -266,7 +274,9 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
                 ns += tb__planar_records(o, &gs[ns]);
                 ++npl;
             }
-            (void)sphere;
+            if (cube || sphere)
+                ns++; /* the second record holds only the centre */
+            gs[qi + 1].r2 = (tb_vec3){c[0], c[1], c[2]};
             continue;
         }
         const tb_object_mesh *m = o->mesh;

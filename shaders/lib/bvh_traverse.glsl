@@ -274,9 +274,9 @@ vec3 tb_bvh_planar_normal(uint idx, uint f, vec3 p)
 // that surface again at t ~ 0 in float (measured: 1 % of diffuse rays off a
 // sphere); crossings this close to the origin are not resolvable in float,
 // as pbrt's conservative t bounds reject them.
-float tb_bvh_placed_tmin(tb_gpu_placed sp, tb_gpu_ray r, vec3 so, vec3 sd)
+float tb_bvh_placed_tmin(tb_gpu_placed sp, tb_gpu_ray r, vec3 ro, vec3 so, vec3 sd)
 {
-    vec3 ao = abs(r.o);
+    vec3 ao = abs(ro);
     float e = dot(abs(sp.r0), ao) + abs(sp.w0) + dot(abs(sp.r1), ao) + abs(sp.w1) + dot(abs(sp.r2), ao) +
               abs(sp.w2) + abs(so.x) + abs(so.y) + abs(so.z);
     float len = sqrt(dot(sd, sd));
@@ -352,10 +352,11 @@ bool tb_bvh_ray_valid(tb_gpu_ray r)
         if ((ref & TB_GPU_REF_KIND) != KIND)                                                                          \
             break;                                                                                                    \
         tb_gpu_placed sp = TB_BVH_PLACED[idx];                                                                        \
-        precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);           \
+        precise vec3 ro = r.o - TB_BVH_PLACED[idx + 1u].r2;                                                           \
+        precise vec3 so = vec3(dot(sp.r0, ro) + sp.w0, dot(sp.r1, ro) + sp.w1, dot(sp.r2, ro) + sp.w2);              \
         precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));                                   \
         float t;                                                                                                      \
-        float tlo = tb_bvh_placed_tmin(sp, r, so, sd);                                                                \
+        float tlo = tb_bvh_placed_tmin(sp, r, ro, so, sd);                                                                \
         uint cf = 0u;                                                                                                 \
         vec3 nobj;                                                                                                    \
         if (!(HIT))                                                                                                   \
@@ -499,7 +500,8 @@ vec3 tb_bvh_normal(tb_gpu_ray r, tb_bvh_hit h)
         (TB_BVH_HAS_PLANAR && kind == TB_GPU_REF_PLANAR) || (TB_BVH_HAS_TORI && kind == TB_GPU_REF_TORUS)) {
         // Object-space normal at the point -> world by the inverse transpose.
         tb_gpu_placed sp = TB_BVH_PLACED[idx];
-        vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+        precise vec3 ro = r.o - TB_BVH_PLACED[idx + 1u].r2;
+        precise vec3 so = vec3(dot(sp.r0, ro) + sp.w0, dot(sp.r1, ro) + sp.w1, dot(sp.r2, ro) + sp.w2);
         vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
         vec3 p = so + h.t * sd, n = p;
         if (kind == TB_GPU_REF_REVOLVED) {

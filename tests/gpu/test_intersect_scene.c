@@ -1,7 +1,7 @@
 /* The Vulkan intersect kernel (host/gpu/intersect.h) against the CPU path
  * (tb_scene_intersect / tb_scene_occluded) on scenes mixing triangles and a
- * sphere and a cube (on the GPU) with a torus and a prism (routed to the
- * CPU per object), cylinders, cones and conics, a lone cube (the BVH's root a leaf) and a deep BVH with
+ * sphere, a cube, a torus and a prism (placed objects on the GPU),
+ * cylinders, cones and conics, a lone cube (the BVH's root a leaf) and a deep BVH with
  * kinds mixed in its leaves.
  * Runs with the validation layer and fails on any message. */
 #include "gpu_test.h"
@@ -26,7 +26,7 @@ static const char *tb__mixed =
     "sphere \"ball\" { transform = [scale(0.5) translate([3 3 0.5])] }\n"
     "cube \"box\" { transform = [scale([0.25 0.5 0.25]) translate([-3 3 0.25])] }\n";
 
-/* Only routed kinds: the kernel has nothing to do. */
+/* Only a torus and a prism: no triangles. */
 static const char *tb__analytic =
     "mid 1\n"
     "torus \"ring\" { transform = [translate([0 0 2])] geometry = { major = 1 minor = 0.25 } }\n"
@@ -121,14 +121,13 @@ static void test_exact_grid(void **state)
     assert_non_null(g);
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    assert_int_equal(info.gpu_objects, 4);
-    assert_int_equal(info.cpu_objects, 1);
+    assert_int_equal(info.gpu_objects, 5);
+    assert_int_equal(info.cpu_objects, 0);
     assert_int_equal(info.gpu_triangles, 3);
     assert_int_equal(info.gpu_spheres, 1);
     assert_int_equal(info.gpu_cubes, 1);
-    assert_true(tb_gpu_scene_object_on_gpu(g, 0) && tb_gpu_scene_object_on_gpu(g, 1) &&
-                tb_gpu_scene_object_on_gpu(g, 3) && tb_gpu_scene_object_on_gpu(g, 4));
-    assert_false(tb_gpu_scene_object_on_gpu(g, 2));
+    for (uint32_t i = 0; i < 5; ++i)
+        assert_true(tb_gpu_scene_object_on_gpu(g, i));
 
     enum { N = 32 * 32 };
     tb_ray rays[N];
@@ -141,12 +140,14 @@ static void test_exact_grid(void **state)
     int on[5] = {0};
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
-        if (c.object == 3 && hits[i].object == 3) { /* the sphere off its centre: sqrt, not exact */
+        /* the sphere off its centre (sqrt) and the torus (bisection): not exact */
+        if ((c.object == 3 || c.object == 2) && hits[i].object == c.object) {
+            assert_int_equal(hits[i].face, c.face);
             tb_assert_near(hits[i].t, c.t, 1e-5 * c.t);
             tb_assert_near(hits[i].ng.x, c.ng.x, 1e-4);
             tb_assert_near(hits[i].ng.y, c.ng.y, 1e-4);
             tb_assert_near(hits[i].ng.z, c.ng.z, 1e-4);
-            on[3]++;
+            on[c.object]++;
             continue;
         }
         if (!tb__same(&c, &hits[i], 0.0))
@@ -192,8 +193,8 @@ static void test_exact_grid(void **state)
     tb__finish(&e, g, s);
 }
 
-/* Random rays through the mixed scene: hits on the routed torus are the CPU's
- * records exactly; triangle, sphere and cube hits agree within float tolerance; hit/miss and
+/* Random rays through the mixed scene: torus, triangle, sphere and cube hits
+ * agree within float tolerance; hit/miss and
  * object may differ only for rays within float error of an edge (none
  * expected among a few thousand random rays; allowed: 1 in 1000). */
 static void test_random_mixed(void **state)
@@ -231,15 +232,12 @@ static void test_random_mixed(void **state)
         }
         if (c.object == UINT32_MAX)
             continue;
-        if (c.object == 3 || c.object == 4) { /* the sphere and the cube, on the GPU in float */
+        if (c.object >= 2) { /* the torus, the sphere and the cube, placed objects in float */
             ++tri;
             tb_assert_near(hits[i].t, c.t, 1e-5 * fabs(c.t));
             assert_true(fabs((double)hits[i].ng.x - c.ng.x) + fabs((double)hits[i].ng.y - c.ng.y) +
                             fabs((double)hits[i].ng.z - c.ng.z) <= 1e-3);
-        } else if (c.object == 2) {
-            ++routed;
-            if (!tb__same(&c, &hits[i], 0.0))
-                fail_msg("ray %d: routed object %u: records differ", i, c.object);
+            routed += c.object == 2;
         } else {
             ++tri;
             tb_assert_near(hits[i].t, c.t, 1e-5 * fabs(c.t));
@@ -248,13 +246,14 @@ static void test_random_mixed(void **state)
             tb_assert_near(hits[i].v, c.v, 1e-4);
         }
     }
-    print_message("[ info     ] %d routed-object hits, %d triangle, sphere and cube hits, %d differ, %d occlusion differ\n", routed,
+    print_message("[ info     ] %d torus hits, %d triangle, sphere and cube hits, %d differ, %d occlusion differ\n", routed,
                   tri, differ, occ_differ);
     assert_true(routed > 20 && tri > 50);
     tb__finish_batch(&e, g, s, &b, differ, occ_differ);
 }
 
-/* A scene with no triangles: no dispatch, every object routed, CPU records. */
+/* A scene with no triangles, only a torus and a prism: both in the kernel,
+ * within float tolerance of the CPU's records. */
 static void test_all_routed(void **state)
 {
     (void)state;
@@ -265,8 +264,10 @@ static void test_all_routed(void **state)
     assert_non_null(g);
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    assert_int_equal(info.gpu_objects, 0);
-    assert_int_equal(info.cpu_objects, 2);
+    assert_int_equal(info.gpu_objects, 2);
+    assert_int_equal(info.cpu_objects, 0);
+    assert_int_equal(info.gpu_tori, 1);
+    assert_int_equal(info.gpu_planar, 1);
     enum { N = 64 };
     tb_ray rays[N];
     tb_hit hits[N];
@@ -276,8 +277,17 @@ static void test_all_routed(void **state)
     int hit = 0;
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
-        assert_true(tb__same(&c, &hits[i], 0.0));
-        hit += c.object != UINT32_MAX;
+        assert_int_equal(c.object, hits[i].object);
+        assert_int_equal(c.face, hits[i].face);
+        if (c.object == UINT32_MAX)
+            continue;
+        tb_assert_near(hits[i].t, c.t, 1e-5 * c.t);
+        tb_assert_near(hits[i].ng.x, c.ng.x, 1e-4);
+        tb_assert_near(hits[i].ng.y, c.ng.y, 1e-4);
+        tb_assert_near(hits[i].ng.z, c.ng.z, 1e-4);
+        tb_assert_near(hits[i].u, c.u, 1e-4);
+        tb_assert_near(hits[i].v, c.v, 1e-4);
+        ++hit;
     }
     assert_true(hit > 0);
     tb__finish(&e, g, s);
@@ -435,14 +445,13 @@ static void test_revolved(void **state)
     gpu_test_env e;
     gpu_test_open(&e, NULL);
     tb_scene *s = tb__load(text);
-    /* By default a CPU driver routes them to the CPU (faster there), a GPU runs them. */
+    /* By default every device runs them in the kernel. */
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
     assert_non_null(g);
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    bool cpu_driver = tb_gpu_device_info_of(e.dev)->type == TB_GPU_DEVICE_CPU;
-    assert_int_equal(info.gpu_quadrics, cpu_driver ? 0 : 7);
-    assert_int_equal(info.cpu_objects, cpu_driver ? 7 : 0);
+    assert_int_equal(info.gpu_quadrics, 7);
+    assert_int_equal(info.cpu_objects, 0);
     tb_gpu_scene_destroy(g);
     /* The kernel's path, forced. */
     g = tb_gpu_scene_create_ex(e.dev, s, &(tb_gpu_scene_desc){TB_GPU_QUADRICS_GPU});
