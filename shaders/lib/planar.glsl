@@ -35,18 +35,6 @@ const uint TB_PLANAR_PRISM = 1u;
 const uint TB_PLANAR_SQUARE_ARCH = 2u;
 const uint TB_PLANAR_ROUND_ARCH = 3u;
 
-// The cube [-1,1]^3 clipped on [a, b]; faces -x +x -y +y -z +z = 0..5.
-bool tb_clip_block(tb_line l, inout tb_end a, inout tb_end b)
-{
-    for (uint f = 0u; f < 6u; ++f) {
-        vec3 n = vec3(0.0);
-        n[f >> 1] = (f & 1u) != 0u ? 1.0 : -1.0;
-        if (!tb_clip(l, n, 1.0, f, a, b))
-            return false;
-    }
-    return true;
-}
-
 // Pyramid (tb__xings_pyramid): the base square [-1,1]^2 at z = -1, the top
 // square of half-side `top` at z = 1 (0: a point).
 void tb_xings_pyramid(tb_line l, float top, bool caps, inout tb_xl x)
@@ -76,12 +64,20 @@ void tb_prism_side(vec2 p, vec2 q, float orient, out vec3 n, out float c)
     c = cc;
 }
 
+// The z slab of a prism: false if the line misses it.
+bool tb_prism_slab(tb_line l, out tb_end za, out tb_end zb)
+{
+    za = tb_end_lo();
+    zb = tb_end_hi();
+    return tb_clip(l, vec3(0.0, 0.0, -1.0), 1.0, TB_PRISM_BOTTOM, za, zb) &&
+           tb_clip(l, vec3(0.0, 0.0, 1.0), 1.0, TB_PRISM_TOP, za, zb);
+}
+
 // Convex prism (the profile's nv vertices at `base`): the z slab, then every side.
 void tb_xings_prism_convex(tb_line l, uint base, uint nv, float orient, bool caps, inout tb_xl x)
 {
-    tb_end a = tb_end_lo(), b = tb_end_hi();
-    if (!tb_clip(l, vec3(0.0, 0.0, -1.0), 1.0, TB_PRISM_BOTTOM, a, b) ||
-        !tb_clip(l, vec3(0.0, 0.0, 1.0), 1.0, TB_PRISM_TOP, a, b))
+    tb_end a, b;
+    if (!tb_prism_slab(l, a, b))
         return;
     vec2 p = tb_prism_vertex(base, 0u), first = p;
     for (uint k = 0u; k < nv; ++k) {
@@ -169,6 +165,30 @@ bool tb_profile_inside(tb_line l, uint base, uint nv)
     return inside;
 }
 
+// The next interval of a non-convex prism after the crossing (sp, ep) (start
+// with (-inf, uint max)): the next two profile crossings in order, clipped
+// by the z slab [za, zb], in x (emptied first; it stays empty when the
+// clipped interval is). False when the crossings have run out. Walking
+// them in order needs no storage: profiles of any size.
+bool tb_prism_profile_pair(tb_line l, uint base, uint nv, bool caps, tb_end za, tb_end zb, inout float sp,
+                           inout uint ep, inout tb_xl x)
+{
+    x.n = 0;
+    float s0, s1;
+    uint e0, e1;
+    if (!tb_profile_next(l, base, nv, sp, ep, s0, e0) || !tb_profile_next(l, base, nv, s0, e0, s1, e1))
+        return false;
+    sp = s1;
+    ep = e1;
+    tb_end a = tb_end(s0, TB_PRISM_SIDE0 + e0), b = tb_end(s1, TB_PRISM_SIDE0 + e1);
+    if (za.s > a.s)
+        a = za;
+    if (zb.s < b.s)
+        b = zb;
+    tb_xl_interval(x, l, a, b, caps || a.f >= TB_PRISM_SIDE0, caps || b.f >= TB_PRISM_SIDE0);
+    return true;
+}
+
 // Non-convex prism: the first surface crossing with tmin <= t <= tmax,
 // walking the profile's crossings in order and pairing them into intervals,
 // each clipped by the z slab (tb__xings_profile). False if none.
@@ -177,9 +197,8 @@ bool tb_prism_profile_hit(tb_line l, uint base, uint nv, bool caps, float tmin, 
 {
     t = 0.0;
     face = 0u;
-    tb_end za = tb_end_lo(), zb = tb_end_hi();
-    if (!tb_clip(l, vec3(0.0, 0.0, -1.0), 1.0, TB_PRISM_BOTTOM, za, zb) ||
-        !tb_clip(l, vec3(0.0, 0.0, 1.0), 1.0, TB_PRISM_TOP, za, zb))
+    tb_end za, zb;
+    if (!tb_prism_slab(l, za, zb))
         return false;
     tb_xl x;
     x.n = 0;
@@ -191,24 +210,10 @@ bool tb_prism_profile_hit(tb_line l, uint base, uint nv, bool caps, float tmin, 
     // At most nv crossings: nv / 2 intervals.
     float sp = -tb_inf();
     uint ep = 0xffffffffu;
-    for (uint i = 0u; i < nv; i += 2u) {
-        float s0, s1;
-        uint e0, e1;
-        if (!tb_profile_next(l, base, nv, sp, ep, s0, e0) || !tb_profile_next(l, base, nv, s0, e0, s1, e1))
-            break;
-        sp = s1;
-        ep = e1;
-        tb_end a = tb_end(s0, TB_PRISM_SIDE0 + e0), b = tb_end(s1, TB_PRISM_SIDE0 + e1);
-        if (za.s > a.s)
-            a = za;
-        if (zb.s < b.s)
-            b = zb;
-        x.n = 0;
-        tb_xl_interval(x, l, a, b, caps || a.f >= TB_PRISM_SIDE0, caps || b.f >= TB_PRISM_SIDE0);
+    for (uint i = 0u; i < nv && tb_prism_profile_pair(l, base, nv, caps, za, zb, sp, ep, x); i += 2u) {
         if (tb_xl_first(x, tmin, tmax, t, face))
             return true;
-        precise float ts0 = s0 + l.t0;
-        if (ts0 > tmax)
+        if (x.n > 0 && x.t[0] > tmax)
             break; // later intervals start later still
     }
     return false;

@@ -94,4 +94,25 @@ bool tb_xl_first(tb_xl x, float tmin, float tmax, out float t, out uint face)
     return false;
 }
 
+// The cube [-1,1]^3 clipped on [a, b]; faces -x +x -y +y -z +z = 0..5.
+bool tb_clip_block(tb_line l, inout tb_end a, inout tb_end b)
+{
+    for (uint f = 0u; f < 6u; ++f) {
+        vec3 n = vec3(0.0);
+        n[f >> 1] = (f & 1u) != 0u ? 1.0 : -1.0;
+        if (!tb_clip(l, n, 1.0, f, a, b))
+            return false;
+    }
+    return true;
+}
+
+// The cube [-1,1]^3 (tb__xings_cube).
+void tb_xings_cube(vec3 o, vec3 d, inout tb_xl x)
+{
+    tb_line l = tb_line_near(o, d);
+    tb_end a = tb_end_lo(), b = tb_end_hi();
+    if (tb_clip_block(l, a, b))
+        tb_xl_interval(x, l, a, b, true, true);
+}
+
 #endif
