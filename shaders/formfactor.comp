@@ -55,6 +55,7 @@ layout(push_constant) uniform Push { tb_gpu_ff_push pc; };
 #define TB_BVH_HAS_QUADRICS false
 #define TB_BVH_HAS_PLANAR false
 #define TB_BVH_HAS_TORI false
+#define TB_BVH_HAS_CSG false
 #define TB_BVH_STACK TB_STACK
 #include "lib/bvh_traverse.glsl"
 

@@ -25,6 +25,7 @@ layout(constant_id = 4) const bool TB_HAS_CUBES = false;
 layout(constant_id = 5) const bool TB_HAS_QUADRICS = false; // cylinders, cones, conics
 layout(constant_id = 6) const bool TB_HAS_PLANAR = false;   // pyramids, prisms, arches
 layout(constant_id = 7) const bool TB_HAS_TORI = false;
+layout(constant_id = 8) const bool TB_HAS_CSG = false;
 // Traversal stack entries: the host sets the BVH's depth (rounded up to a
 // multiple of 8); one entry per level is enough, since every inner node
 // pushes one child and continues with the other. The CPU BVH's depth is
@@ -58,6 +59,7 @@ layout(push_constant) uniform Push {
 #define TB_BVH_HAS_QUADRICS TB_HAS_QUADRICS
 #define TB_BVH_HAS_PLANAR TB_HAS_PLANAR
 #define TB_BVH_HAS_TORI TB_HAS_TORI
+#define TB_BVH_HAS_CSG TB_HAS_CSG
 #define TB_BVH_STACK TB_STACK
 #include "lib/bvh_traverse.glsl"
 

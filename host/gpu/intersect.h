@@ -43,6 +43,7 @@ typedef struct tb_gpu_scene_info {
     uint32_t gpu_quadrics;  /* cylinder, cone and conic objects */
     uint32_t gpu_planar;    /* pyramid, prism and arch objects */
     uint32_t gpu_tori;      /* torus objects */
+    uint32_t gpu_csg;       /* CSG trees (lib/csg.glsl) */
     uint32_t cpu_objects;   /* objects routed to the CPU path (every other kind, CSG) */
     size_t gpu_nodes;       /* BVH nodes uploaded */
     size_t gpu_bytes;       /* bytes of nodes and triangles uploaded */
@@ -72,7 +73,8 @@ typedef enum tb_gpu_quadrics {
 #define TB_GPU_INTERSECT_FEATURES                                                                              \
     ((uint32_t)(TB_OBJ_FEAT_TRIANGLES | TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE | TB_GPU_QUADRIC_FEATURES |        \
                 TB_OBJ_FEAT_PYRAMID | TB_OBJ_FEAT_PRISM | TB_OBJ_FEAT_TORUS | TB_OBJ_FEAT_SQUARE_ARCH |         \
-                TB_OBJ_FEAT_ROUND_ARCH))
+                TB_OBJ_FEAT_ROUND_ARCH | TB_OBJ_FEAT_CSG_UNION | TB_OBJ_FEAT_CSG_INTERSECTION |                 \
+                TB_OBJ_FEAT_CSG_DIFFERENCE))
 
 /* The object features a scene on `dev` with quadrics mode `quadrics` has
  * intersected by the kernel: TB_GPU_INTERSECT_FEATURES, without
