@@ -202,15 +202,13 @@ static void test_object_features(void **state)
     assert_int_equal(seen, TB_OBJ_FEAT_ALL & ~(uint32_t)TB_OBJ_FEAT_POLYGONS_UNMESHED);
     assert_null(tb_object_feature_name(0));
     assert_null(tb_object_feature_name(TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE));
-    /* the kernel's mask: triangles and every primitive kind; CSG trees routed */
+    /* the kernel's mask: every primitive kind and CSG tree */
     const uint32_t gpu = TB_GPU_INTERSECT_FEATURES, cpu_quadrics = gpu & ~TB_GPU_QUADRIC_FEATURES;
     for (int i = 0; i < TB__NOBJ; i++)
-        assert_int_equal(tb_gpu_object_route_reason(f[i], gpu) == NULL, i <= 10);
-    /* a CSG tree is named by an operation, whatever its leaves (the first
-     * in list order: the intersection holding a union says "CSG union") */
-    assert_string_equal(tb_gpu_object_route_reason(f[11], gpu), "CSG union");
-    assert_string_equal(tb_gpu_object_route_reason(f[12], gpu), "CSG difference");
-    assert_string_equal(tb_gpu_object_route_reason(f[13], gpu), "CSG union");
+        assert_null(tb_gpu_object_route_reason(f[i], gpu));
+    /* unmeshed polygons stay outside the mask, named */
+    assert_string_equal(tb_gpu_object_route_reason(TB_OBJ_FEAT_POLYGONS_UNMESHED, gpu),
+                        "polygons without a triangle mesh");
     /* quadrics off the mask: routed, saying why */
     assert_non_null(strstr(tb_gpu_object_route_reason(f[3], cpu_quadrics), "quadrics on the CPU path"));
     assert_non_null(strstr(tb_gpu_object_route_reason(f[5], cpu_quadrics), "conic"));
@@ -248,7 +246,7 @@ static void tb__check_scene(gpu_test_env *e, const tb_scene *s, tb_gpu_quadrics 
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
     assert_int_equal(info.gpu_objects, ngpu);
-    assert_int_equal(info.gpu_objects, quadrics ? 11 : 8);
+    assert_int_equal(info.gpu_objects, quadrics ? 14 : 10); /* the die's cylinder routes it with the quadrics */
     assert_int_equal(info.cpu_objects, TB__NOBJ - ngpu);
     assert_int_equal(info.gpu_triangles, 2);
     assert_int_equal(info.gpu_spheres, 1);
@@ -256,6 +254,7 @@ static void tb__check_scene(gpu_test_env *e, const tb_scene *s, tb_gpu_quadrics 
     assert_int_equal(info.gpu_quadrics, quadrics ? 3 : 0);
     assert_int_equal(info.gpu_planar, 4);
     assert_int_equal(info.gpu_tori, 1);
+    assert_int_equal(info.gpu_csg, quadrics ? 3 : 2);
     tb_ray rays[TB__NOBJ];
     tb_hit hits[TB__NOBJ];
     for (int i = 0; i < TB__NOBJ; i++)

@@ -9,6 +9,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "host/gpu/intersect.h"
 #include "host/object/hit.h"
@@ -254,7 +255,7 @@ static void test_random_mixed(void **state)
 
 /* A scene with no triangles, only a torus and a prism: both in the kernel,
  * within float tolerance of the CPU's records. */
-static void test_all_routed(void **state)
+static void test_no_triangles(void **state)
 {
     (void)state;
     gpu_test_env e;
@@ -599,12 +600,86 @@ static void test_spawned(void **state)
     tb__finish_batch(&e, g, s, &b, differ, occ_differ);
 }
 
+/* CSG trees beyond the kernel's per-ray bounds are refused when the GPU
+ * scene is made, with a message naming the object and the bound; a tree
+ * within them is taken. */
+static void test_csg_bounds(void **state)
+{
+    (void)state;
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
+    char text[8192];
+    /* 33 children: beyond TB_GPU_CSG_CHILDREN */
+    int len = snprintf(text, sizeof text, "mid 1\nunion \"wide\" {");
+    for (int i = 0; i < 33; ++i)
+        len += snprintf(text + len, sizeof text - (size_t)len, " sphere { transform = [translate([%d 0 0])] }", i);
+    snprintf(text + len, sizeof text - (size_t)len, " }\n");
+    tb_scene *s = tb__load(text);
+    assert_null(tb_gpu_scene_create(e.dev, s));
+    assert_non_null(strstr(tb_last_error(), "object 0 (\"wide\"): CSG tree beyond the Vulkan intersect kernel"));
+    assert_non_null(strstr(tb_last_error(), "33 children"));
+    tb_scene_free(s);
+    /* three unions of 12 tori: 144 crossings pending, beyond TB_GPU_CSG_POOL */
+    len = snprintf(text, sizeof text, "mid 1\nsphere { }\nunion \"many\" {");
+    for (int u = 0; u < 3; ++u) {
+        len += snprintf(text + len, sizeof text - (size_t)len, " union {");
+        for (int i = 0; i < 12; ++i)
+            len += snprintf(text + len, sizeof text - (size_t)len,
+                            " torus { transform = [translate([%d %d 0])] geometry = { major = 1 minor = 0.2 } }", i, u);
+        len += snprintf(text + len, sizeof text - (size_t)len, " }");
+    }
+    snprintf(text + len, sizeof text - (size_t)len, " }\n");
+    s = tb__load(text);
+    assert_null(tb_gpu_scene_create(e.dev, s));
+    assert_non_null(strstr(tb_last_error(), "object 1 (\"many\")"));
+    assert_non_null(strstr(tb_last_error(), "up to 144 crossings"));
+    tb_scene_free(s);
+    /* two unions of 12: 96, taken */
+    len = snprintf(text, sizeof text, "mid 1\nunion \"fits\" {");
+    for (int u = 0; u < 2; ++u) {
+        len += snprintf(text + len, sizeof text - (size_t)len, " union {");
+        for (int i = 0; i < 12; ++i)
+            len += snprintf(text + len, sizeof text - (size_t)len,
+                            " torus { transform = [translate([%d %d 0])] geometry = { major = 1 minor = 0.2 } }", i, 3 * u);
+        len += snprintf(text + len, sizeof text - (size_t)len, " }");
+    }
+    snprintf(text + len, sizeof text - (size_t)len, " }\n");
+    s = tb__load(text);
+    tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
+    assert_non_null(g);
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    assert_int_equal(info.gpu_csg, 1);
+    assert_int_equal(info.cpu_objects, 0);
+    /* rays down onto the tori agree with the CPU */
+    enum { N = 256 };
+    tb_ray rays[N];
+    tb_hit hits[N];
+    int hit = 0;
+    for (int i = 0; i < N; ++i)
+        rays[i] = (tb_ray){{-1.0f + 0.05f * (float)(i % 64), -0.6f + 1.05f * (float)(i / 64), 5.0f}, 0.0f,
+                           {0.01f, 0.0f, -1.0f}, INFINITY};
+    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
+    for (int i = 0; i < N; ++i) {
+        tb_hit c = tb__cpu(s, &rays[i]);
+        assert_int_equal(c.object, hits[i].object);
+        if (c.object == UINT32_MAX)
+            continue;
+        assert_int_equal(c.face, hits[i].face);
+        tb_assert_near(hits[i].t, c.t, 1e-5 * c.t);
+        ++hit;
+    }
+    assert_true(hit > 20);
+    tb__finish(&e, g, s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exact_grid),
         cmocka_unit_test(test_random_mixed),
-        cmocka_unit_test(test_all_routed),
+        cmocka_unit_test(test_no_triangles),
+        cmocka_unit_test(test_csg_bounds),
         cmocka_unit_test(test_lone_cube),
         cmocka_unit_test(test_deep_mixed),
         cmocka_unit_test(test_revolved),
