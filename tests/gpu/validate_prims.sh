@@ -30,7 +30,7 @@ n=0
 for tr in "scale(1)" "scale(0.01) translate([1000 0 0])" "scale(0.001) translate([10000 0 0])" \
     "scale(1000) translate([0 0 -5000])" "scale([1 1 0.1]) rotate([1 1 0] 30)"; do
     prims "$tr" >"$t/prims.mid"
-    validate_scene "$t/out" "$t/prims.mid" --rays 20000 --seed 5
+    validate_scene "$t/out" "$t/prims.mid" --rays 10000 --seed 5
     grep -q "routing: 10 objects on the GPU, 0 routed" "$t/out" || { echo "routed: $tr"; cat "$t/out"; exit 1; }
     n=$((n + 1))
 done
@@ -48,13 +48,13 @@ difference "shared" { transform = [translate([3 0 0])] cube { } cube { transform
 difference "arches" { transform = [translate([-3 0 0])] round_arch { geometry = { width = 1 height = 1.5 } } prism { geometry = { profile = [[0 0] [1 0] [1 0.3] [0.3 0.3] [0.3 1] [0 1]] caps = true } } }
 union "far" { transform = [scale(0.01) translate([1000 0 0])] cone { } pyramid { geometry = { top = 0.3 caps = true } } square_arch { geometry = { width = 1 height = 1 } } }
 MID
-validate_scene "$t/out" "$t/csg.mid" --rays 20000 --seed 5
+validate_scene "$t/out" "$t/csg.mid" --rays 10000 --seed 5
 grep -q "routing: 9 objects on the GPU, 0 routed" "$t/out" || { echo "csg routed"; cat "$t/out"; exit 1; }
-"$TESTBED" generate csg --count 200 --seed 3 -o "$t/gcsg.mid"
-validate_scene "$t/out" "$t/gcsg.mid" --rays 20000 --seed 3
-grep -q "routing: 200 objects on the GPU, 0 routed" "$t/out" || { echo "generated csg routed"; cat "$t/out"; exit 1; }
+"$TESTBED" generate csg --count 100 --seed 3 -o "$t/gcsg.mid"
+validate_scene "$t/out" "$t/gcsg.mid" --rays 10000 --seed 3
+grep -q "routing: 100 objects on the GPU, 0 routed" "$t/out" || { echo "generated csg routed"; cat "$t/out"; exit 1; }
 # Every kind with random parameters and transforms: nothing routed.
-"$TESTBED" generate grid --count 200 --seed 7 -o "$t/grid.mid"
-validate_scene "$t/out" "$t/grid.mid" --rays 20000 --seed 7
-grep -q "routing: 200 objects on the GPU, 0 routed" "$t/out" || { echo "grid routed"; cat "$t/out"; exit 1; }
+"$TESTBED" generate grid --count 100 --seed 7 -o "$t/grid.mid"
+validate_scene "$t/out" "$t/grid.mid" --rays 10000 --seed 7
+grep -q "routing: 100 objects on the GPU, 0 routed" "$t/out" || { echo "grid routed"; cat "$t/out"; exit 1; }
 echo "validated $n primitive scenes, CSG trees and generated grid and csg scenes"
