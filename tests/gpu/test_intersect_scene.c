@@ -600,6 +600,31 @@ static void test_spawned(void **state)
     tb__finish_batch(&e, g, s, &b, differ, occ_differ);
 }
 
+/* Writes `head`, then n unions of 12 tori (rows `dy` apart), then the closing brace. */
+static void tb__tori_unions(char *text, size_t size, const char *head, int n, int dy)
+{
+    int len = snprintf(text, size, "%s", head);
+    for (int u = 0; u < n; ++u) {
+        len += snprintf(text + len, size - (size_t)len, " union {");
+        for (int i = 0; i < 12; ++i)
+            len += snprintf(text + len, size - (size_t)len,
+                            " torus { transform = [translate([%d %d 0])] geometry = { major = 1 minor = 0.2 } }", i,
+                            dy * u);
+        len += snprintf(text + len, size - (size_t)len, " }");
+    }
+    snprintf(text + len, size - (size_t)len, " }\n");
+}
+
+/* The scene `text` is refused by tb_gpu_scene_create with a message holding both phrases. */
+static void tb__refused(gpu_test_env *e, const char *text, const char *phrase1, const char *phrase2)
+{
+    tb_scene *s = tb__load(text);
+    assert_null(tb_gpu_scene_create(e->dev, s));
+    if (!strstr(tb_last_error(), phrase1) || !strstr(tb_last_error(), phrase2))
+        fail_msg("refusal message: %s", tb_last_error());
+    tb_scene_free(s);
+}
+
 /* CSG trees beyond the kernel's per-ray bounds are refused when the GPU
  * scene is made, with a message naming the object and the bound; a tree
  * within them is taken. */
@@ -614,37 +639,13 @@ static void test_csg_bounds(void **state)
     for (int i = 0; i < 33; ++i)
         len += snprintf(text + len, sizeof text - (size_t)len, " sphere { transform = [translate([%d 0 0])] }", i);
     snprintf(text + len, sizeof text - (size_t)len, " }\n");
-    tb_scene *s = tb__load(text);
-    assert_null(tb_gpu_scene_create(e.dev, s));
-    assert_non_null(strstr(tb_last_error(), "object 0 (\"wide\"): CSG tree beyond the Vulkan intersect kernel"));
-    assert_non_null(strstr(tb_last_error(), "33 children"));
-    tb_scene_free(s);
+    tb__refused(&e, text, "object 0 (\"wide\"): CSG tree beyond the Vulkan intersect kernel", "33 children");
     /* three unions of 12 tori: 144 crossings pending, beyond TB_GPU_CSG_POOL */
-    len = snprintf(text, sizeof text, "mid 1\nsphere { }\nunion \"many\" {");
-    for (int u = 0; u < 3; ++u) {
-        len += snprintf(text + len, sizeof text - (size_t)len, " union {");
-        for (int i = 0; i < 12; ++i)
-            len += snprintf(text + len, sizeof text - (size_t)len,
-                            " torus { transform = [translate([%d %d 0])] geometry = { major = 1 minor = 0.2 } }", i, u);
-        len += snprintf(text + len, sizeof text - (size_t)len, " }");
-    }
-    snprintf(text + len, sizeof text - (size_t)len, " }\n");
-    s = tb__load(text);
-    assert_null(tb_gpu_scene_create(e.dev, s));
-    assert_non_null(strstr(tb_last_error(), "object 1 (\"many\")"));
-    assert_non_null(strstr(tb_last_error(), "up to 144 crossings"));
-    tb_scene_free(s);
+    tb__tori_unions(text, sizeof text, "mid 1\nsphere { }\nunion \"many\" {", 3, 1);
+    tb__refused(&e, text, "object 1 (\"many\")", "up to 144 crossings");
     /* two unions of 12: 96, taken */
-    len = snprintf(text, sizeof text, "mid 1\nunion \"fits\" {");
-    for (int u = 0; u < 2; ++u) {
-        len += snprintf(text + len, sizeof text - (size_t)len, " union {");
-        for (int i = 0; i < 12; ++i)
-            len += snprintf(text + len, sizeof text - (size_t)len,
-                            " torus { transform = [translate([%d %d 0])] geometry = { major = 1 minor = 0.2 } }", i, 3 * u);
-        len += snprintf(text + len, sizeof text - (size_t)len, " }");
-    }
-    snprintf(text + len, sizeof text - (size_t)len, " }\n");
-    s = tb__load(text);
+    tb__tori_unions(text, sizeof text, "mid 1\nunion \"fits\" {", 2, 3);
+    tb_scene *s = tb__load(text);
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
     assert_non_null(g);
     tb_gpu_scene_info info;

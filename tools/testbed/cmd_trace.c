@@ -111,8 +111,9 @@ int tb_cmd_trace(int argc, char **argv)
          .help = "cpu (the reference path), vulkan or auto (default: %D).\n"
                  "vulkan runs the Vulkan intersect kernel (host/gpu/intersect.h) on any\n"
                  "device, lavapipe included (fails if there is none); auto uses it only on\n"
-                 "a real GPU. Triangles run on the GPU, every other kind on the CPU path\n"
-                 "(routed per object: -v and --stats say which). Hits agree with cpu within\n"
+                 "a real GPU. Every primitive kind and CSG tree runs on the device (-v and\n"
+                 "--stats report the objects on the GPU and any routed to the CPU path; a\n"
+                 "CSG tree beyond the kernel's bounds is refused). Hits agree with cpu within\n"
                  "docs/accuracy.md's float tolerances, not byte for byte."},
         {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels, .metavar = "A",
          .help = "bvh (default), grid, or list (every reference tested: slow, for checks);\n"
