@@ -3,15 +3,17 @@
  * GPU layout (shaders/shared/bvh.h), closest-hit and any-hit queries for
  * arrays of rays, giving the records the CPU path gives (tb_scene_intersect).
  *
- * Kinds on the GPU: triangles of polygons objects, (top-level) spheres, cubes,
- * cylinders, cones and conics: the kernel declares them as the object
- * features (host/render/features.h) it implements, TB_GPU_INTERSECT_FEATURES.
- * Every object with another feature (other analytic primitives, CSG) is
- * **routed to the CPU path per object**: after
- * the kernel, the host tests those objects (through a CPU BVH over them
- * alone) with tmax = the GPU hit's t and keeps the better hit by the tie rule
- * (docs/accel.md). tb_gpu_scene_object_on_gpu says where each object runs,
- * tb_gpu_scene_object_route why one is routed.
+ * Kinds on the GPU: triangles of polygons objects, every analytic primitive
+ * and CSG trees of them (lib/csg.glsl): the kernel declares them as the
+ * object features (host/render/features.h) it implements,
+ * TB_GPU_INTERSECT_FEATURES. A CSG tree beyond the kernel's per-ray bounds
+ * (TB_GPU_CSG_*, shaders/shared/bvh.h) makes tb_gpu_scene_create fail with a
+ * message naming it. An object with a feature outside the mask (unmeshed
+ * polygons; quadrics under TB_GPU_QUADRICS_CPU) is **routed to the CPU path
+ * per object**: after the kernel, the host tests those objects (through a
+ * CPU BVH over them alone) with tmax = the GPU hit's t and keeps the better
+ * hit by the tie rule (docs/accel.md). tb_gpu_scene_object_on_gpu says where
+ * each object runs, tb_gpu_scene_object_route why one is routed.
  *
  *     tb_gpu_scene *g = tb_gpu_scene_create(dev, scene);
  *     tb_gpu_intersect(g, rays, n, hits, NULL);
@@ -36,7 +38,7 @@ typedef struct tb_gpu_scene tb_gpu_scene;
 
 /* Where the work of a scene runs. */
 typedef struct tb_gpu_scene_info {
-    uint32_t gpu_objects;   /* objects intersected by the kernel (polygons, spheres, cubes, revolved quadrics) */
+    uint32_t gpu_objects;   /* objects intersected by the kernel (every kind, CSG trees) */
     uint64_t gpu_triangles; /* triangles of the polygons objects */
     uint32_t gpu_spheres;   /* sphere objects */
     uint32_t gpu_cubes;     /* cube objects */
@@ -44,7 +46,7 @@ typedef struct tb_gpu_scene_info {
     uint32_t gpu_planar;    /* pyramid, prism and arch objects */
     uint32_t gpu_tori;      /* torus objects */
     uint32_t gpu_csg;       /* CSG trees (lib/csg.glsl) */
-    uint32_t cpu_objects;   /* objects routed to the CPU path (every other kind, CSG) */
+    uint32_t cpu_objects;   /* objects routed to the CPU path (features outside the kernel's mask) */
     size_t gpu_nodes;       /* BVH nodes uploaded */
     size_t gpu_bytes;       /* bytes of nodes and triangles uploaded */
 } tb_gpu_scene_info;
@@ -93,7 +95,8 @@ typedef struct tb_gpu_scene_desc {
 
 /* Uploads the scene's geometry to `dev` (the scene must have been loaded with
  * an acceleration structure, and outlive the result). NULL with a status on
- * failure (TB_ERR_DEVICE from the device, TB_ERR_NOMEM). */
+ * failure (TB_ERR_DEVICE from the device, TB_ERR_NOMEM; TB_ERR_ARG for a CSG tree beyond
+ * the kernel's bounds, named in the message). */
 tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene);
 
 /* tb_gpu_scene_create with options (`desc` may be NULL: the defaults). */

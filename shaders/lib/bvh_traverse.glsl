@@ -1,7 +1,7 @@
 // Closest-hit and any-hit (occlusion) traversal of the GPU scene that
 // host/gpu/intersect.c uploads (shaders/shared/bvh.h): a BVH converted from
-// the CPU BVH over world-space triangles and placed analytic objects
-// (spheres, cubes), usable by any kernel that binds those buffers
+// the CPU BVH over world-space triangles, placed analytic objects of every
+// kind and CSG trees of them (lib/csg.glsl), usable by any kernel that binds those buffers
 // (tb_gpu_scene_bindings in host/gpu/intersect.h).
 //
 // GLSL has no buffer parameters, so the includer names its buffers by macros
