@@ -53,6 +53,9 @@ layout(push_constant) uniform Push { tb_gpu_ff_push pc; };
 #define TB_BVH_HAS_SPHERES false
 #define TB_BVH_HAS_CUBES false
 #define TB_BVH_HAS_QUADRICS false
+#define TB_BVH_HAS_PLANAR false
+#define TB_BVH_HAS_TORI false
+#define TB_BVH_HAS_CSG false
 #define TB_BVH_STACK TB_STACK
 #include "lib/bvh_traverse.glsl"
 

@@ -2,15 +2,13 @@
 // GPU-resident geometry: one invocation per ray, the traversal of
 // lib/bvh_traverse.glsl over the buffers host/gpu/intersect.c uploads (a BVH
 // converted from the CPU BVH, shared/bvh.h, over world-space triangles and
-// placed sphere, cube, cylinder, cone and conic objects). Objects of kinds this kernel does not
-// implement are not in its BVH: host/gpu/intersect.c tests them on the CPU
-// afterwards with tmax = this kernel's t and merges by the tie rule
-// (docs/gpu.md, "Intersect kernel").
+// placed objects of every other MID primitive kind; docs/gpu.md,
+// "Intersect kernel").
 //
 // Triangles: lib/triangle.glsl (the CPU's watertight test in float, world
-// space). Spheres, cubes and revolved quadrics: the ray mapped to object
-// space by the float world-to-object map, then lib/sphere.glsl,
-// lib/cube.glsl, lib/revolved.glsl. Hit records are
+// space). Placed objects: the ray mapped to object space by the float
+// world-to-object map, then lib/sphere.glsl, lib/cube.glsl, lib/revolved.glsl,
+// lib/planar.glsl (pyramid, prism, arches), lib/torus.glsl. Hit records are
 // tb_gpu_hit (shared/hit.h); (u, v) are left 0 and filled by the host.
 #version 450
 #extension GL_GOOGLE_include_directive : require
@@ -25,6 +23,9 @@ layout(constant_id = 1) const bool TB_HAS_TRIANGLES = true;
 layout(constant_id = 3) const bool TB_HAS_SPHERES = false;
 layout(constant_id = 4) const bool TB_HAS_CUBES = false;
 layout(constant_id = 5) const bool TB_HAS_QUADRICS = false; // cylinders, cones, conics
+layout(constant_id = 6) const bool TB_HAS_PLANAR = false;   // pyramids, prisms, arches
+layout(constant_id = 7) const bool TB_HAS_TORI = false;
+layout(constant_id = 8) const bool TB_HAS_CSG = false;
 // Traversal stack entries: the host sets the BVH's depth (rounded up to a
 // multiple of 8); one entry per level is enough, since every inner node
 // pushes one child and continues with the other. The CPU BVH's depth is
@@ -56,6 +57,9 @@ layout(push_constant) uniform Push {
 #define TB_BVH_HAS_SPHERES TB_HAS_SPHERES
 #define TB_BVH_HAS_CUBES TB_HAS_CUBES
 #define TB_BVH_HAS_QUADRICS TB_HAS_QUADRICS
+#define TB_BVH_HAS_PLANAR TB_HAS_PLANAR
+#define TB_BVH_HAS_TORI TB_HAS_TORI
+#define TB_BVH_HAS_CSG TB_HAS_CSG
 #define TB_BVH_STACK TB_STACK
 #include "lib/bvh_traverse.glsl"
 

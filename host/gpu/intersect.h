@@ -3,15 +3,17 @@
  * GPU layout (shaders/shared/bvh.h), closest-hit and any-hit queries for
  * arrays of rays, giving the records the CPU path gives (tb_scene_intersect).
  *
- * Kinds on the GPU: triangles of polygons objects, (top-level) spheres, cubes,
- * cylinders, cones and conics: the kernel declares them as the object
- * features (host/render/features.h) it implements, TB_GPU_INTERSECT_FEATURES.
- * Every object with another feature (other analytic primitives, CSG) is
- * **routed to the CPU path per object**: after
- * the kernel, the host tests those objects (through a CPU BVH over them
- * alone) with tmax = the GPU hit's t and keeps the better hit by the tie rule
- * (docs/accel.md). tb_gpu_scene_object_on_gpu says where each object runs,
- * tb_gpu_scene_object_route why one is routed.
+ * Kinds on the GPU: triangles of polygons objects, every analytic primitive
+ * and CSG trees of them (lib/csg.glsl): the kernel declares them as the
+ * object features (host/render/features.h) it implements,
+ * TB_GPU_INTERSECT_FEATURES. A CSG tree beyond the kernel's per-ray bounds
+ * (TB_GPU_CSG_*, shaders/shared/bvh.h) makes tb_gpu_scene_create fail with a
+ * message naming it. An object with a feature outside the mask (unmeshed
+ * polygons; quadrics under TB_GPU_QUADRICS_CPU) is **routed to the CPU path
+ * per object**: after the kernel, the host tests those objects (through a
+ * CPU BVH over them alone) with tmax = the GPU hit's t and keeps the better
+ * hit by the tie rule (docs/accel.md). tb_gpu_scene_object_on_gpu says where
+ * each object runs, tb_gpu_scene_object_route why one is routed.
  *
  *     tb_gpu_scene *g = tb_gpu_scene_create(dev, scene);
  *     tb_gpu_intersect(g, rays, n, hits, NULL);
@@ -36,12 +38,15 @@ typedef struct tb_gpu_scene tb_gpu_scene;
 
 /* Where the work of a scene runs. */
 typedef struct tb_gpu_scene_info {
-    uint32_t gpu_objects;   /* objects intersected by the kernel (polygons, spheres, cubes, revolved quadrics) */
+    uint32_t gpu_objects;   /* objects intersected by the kernel (every kind, CSG trees) */
     uint64_t gpu_triangles; /* triangles of the polygons objects */
     uint32_t gpu_spheres;   /* sphere objects */
     uint32_t gpu_cubes;     /* cube objects */
     uint32_t gpu_quadrics;  /* cylinder, cone and conic objects */
-    uint32_t cpu_objects;   /* objects routed to the CPU path (every other kind, CSG) */
+    uint32_t gpu_planar;    /* pyramid, prism and arch objects */
+    uint32_t gpu_tori;      /* torus objects */
+    uint32_t gpu_csg;       /* CSG trees (lib/csg.glsl) */
+    uint32_t cpu_objects;   /* objects routed to the CPU path (features outside the kernel's mask) */
     size_t gpu_nodes;       /* BVH nodes uploaded */
     size_t gpu_bytes;       /* bytes of nodes and triangles uploaded */
 } tb_gpu_scene_info;
@@ -55,7 +60,7 @@ typedef struct tb_gpu_intersect_timing {
 
 /* Where cylinders, cones and conics are intersected (tb_gpu_scene_desc). */
 typedef enum tb_gpu_quadrics {
-    TB_GPU_QUADRICS_AUTO = 0, /* in the kernel, except on a CPU driver (lavapipe), where the C path is faster */
+    TB_GPU_QUADRICS_AUTO = 0, /* in the kernel (every device) */
     TB_GPU_QUADRICS_GPU,      /* in the kernel (lib/revolved.glsl) */
     TB_GPU_QUADRICS_CPU,      /* routed to the CPU path per object */
 } tb_gpu_quadrics;
@@ -68,12 +73,14 @@ typedef enum tb_gpu_quadrics {
  * other is routed to the CPU path (a new primitive kind's bit is outside it
  * until the kernel intersects the kind). */
 #define TB_GPU_INTERSECT_FEATURES                                                                              \
-    ((uint32_t)(TB_OBJ_FEAT_TRIANGLES | TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE | TB_GPU_QUADRIC_FEATURES))
+    ((uint32_t)(TB_OBJ_FEAT_TRIANGLES | TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE | TB_GPU_QUADRIC_FEATURES |        \
+                TB_OBJ_FEAT_PYRAMID | TB_OBJ_FEAT_PRISM | TB_OBJ_FEAT_TORUS | TB_OBJ_FEAT_SQUARE_ARCH |         \
+                TB_OBJ_FEAT_ROUND_ARCH | TB_OBJ_FEAT_CSG_UNION | TB_OBJ_FEAT_CSG_INTERSECTION |                 \
+                TB_OBJ_FEAT_CSG_DIFFERENCE))
 
 /* The object features a scene on `dev` with quadrics mode `quadrics` has
  * intersected by the kernel: TB_GPU_INTERSECT_FEATURES, without
- * TB_GPU_QUADRIC_FEATURES for TB_GPU_QUADRICS_CPU, and for
- * TB_GPU_QUADRICS_AUTO on a CPU device. */
+ * TB_GPU_QUADRIC_FEATURES for TB_GPU_QUADRICS_CPU (the same on every device). */
 uint32_t tb_gpu_intersect_supported(const tb_gpu_device *dev, tb_gpu_quadrics quadrics);
 
 /* Why an object with features `features` is not intersected by a kernel
@@ -88,7 +95,8 @@ typedef struct tb_gpu_scene_desc {
 
 /* Uploads the scene's geometry to `dev` (the scene must have been loaded with
  * an acceleration structure, and outlive the result). NULL with a status on
- * failure (TB_ERR_DEVICE from the device, TB_ERR_NOMEM). */
+ * failure (TB_ERR_DEVICE from the device, TB_ERR_NOMEM; TB_ERR_ARG for a CSG tree beyond
+ * the kernel's bounds, named in the message). */
 tb_gpu_scene *tb_gpu_scene_create(tb_gpu_device *dev, const tb_scene *scene);
 
 /* tb_gpu_scene_create with options (`desc` may be NULL: the defaults). */
@@ -111,6 +119,7 @@ typedef struct tb_gpu_scene_bindings {
     uint32_t nnodes;                             /* 0: nothing on the GPU */
     uint32_t stack;                              /* traversal stack entries enough for this BVH */
     bool has_triangles, has_spheres, has_cubes, has_quadrics; /* kinds present (quadrics: cylinders, cones, conics) */
+    bool has_planar, has_tori;                                /* pyramids, prisms, arches; tori */
 } tb_gpu_scene_bindings;
 
 /* Fills `out` with the scene's device buffers (owned by the scene: valid until

@@ -1,7 +1,7 @@
 // Closest-hit and any-hit (occlusion) traversal of the GPU scene that
 // host/gpu/intersect.c uploads (shaders/shared/bvh.h): a BVH converted from
-// the CPU BVH over world-space triangles and placed analytic objects
-// (spheres, cubes), usable by any kernel that binds those buffers
+// the CPU BVH over world-space triangles, placed analytic objects of every
+// kind and CSG trees of them (lib/csg.glsl), usable by any kernel that binds those buffers
 // (tb_gpu_scene_bindings in host/gpu/intersect.h).
 //
 // GLSL has no buffer parameters, so the includer names its buffers by macros
@@ -37,7 +37,8 @@
 // Optional, to compile out kinds the scene lacks (e.g. from specialization
 // constants the host sets from tb_gpu_scene_bindings): TB_BVH_HAS_TRIANGLES,
 // TB_BVH_HAS_SPHERES, TB_BVH_HAS_CUBES, TB_BVH_HAS_QUADRICS (cylinders,
-// cones, conics) (each defaults to true: correct for
+// cones, conics), TB_BVH_HAS_PLANAR (pyramids, prisms, arches),
+// TB_BVH_HAS_TORI, TB_BVH_HAS_CSG (each defaults to true: correct for
 // every scene, only slower), and TB_BVH_STACK, the traversal stack entries
 // (defaults to 96; the scene's depth, tb_gpu_scene_bindings.stack, is enough).
 // Kinds added later get their own TB_BVH_HAS_* defaulting to true, so an
@@ -58,9 +59,11 @@
 #include "shared/hit.h"
 #include "shared/ray.h"
 #include "aabb.glsl"
+#include "csg.glsl"
 #include "cube.glsl"
 #include "revolved.glsl"
 #include "sphere.glsl"
+#include "torus.glsl"
 #include "triangle.glsl"
 
 #if (!defined(TB_BVH_NODES) && !defined(TB_BVH_NODE_TEXELS)) || (!defined(TB_BVH_TRIS) && !defined(TB_BVH_TRI_TEXELS)) || \
@@ -78,6 +81,15 @@
 #endif
 #ifndef TB_BVH_HAS_QUADRICS
 #define TB_BVH_HAS_QUADRICS true
+#endif
+#ifndef TB_BVH_HAS_PLANAR
+#define TB_BVH_HAS_PLANAR true
+#endif
+#ifndef TB_BVH_HAS_TORI
+#define TB_BVH_HAS_TORI true
+#endif
+#ifndef TB_BVH_HAS_CSG
+#define TB_BVH_HAS_CSG true
 #endif
 #ifndef TB_BVH_STACK
 #define TB_BVH_STACK 96
@@ -184,6 +196,97 @@ tb_revolved tb_bvh_revolved(uint idx)
     return q;
 }
 
+// Word j (0..15, member order) of placed record `rec`: the payload of shape
+// and program records (shared/bvh.h).
+uint tb_bvh_placed_word(uint rec, uint j)
+{
+    tb_gpu_placed p = TB_BVH_PLACED[rec];
+    uint q = j >> 2;
+    uvec4 row = q == 0u ? floatBitsToUint(vec4(p.r0, p.w0))
+                        : (q == 1u ? floatBitsToUint(vec4(p.r1, p.w1))
+                                   : (q == 2u ? floatBitsToUint(vec4(p.r2, p.w2))
+                                              : uvec4(p.object, p.face, p.ref, floatBitsToUint(p.sign))));
+    return row[j & 3u];
+}
+
+// Profile vertex k of the prism whose vertices start at placed record
+// `base` (8 per record, shared/bvh.h); declared by lib/planar.glsl.
+vec2 tb_prism_vertex(uint base, uint k)
+{
+    uint rec = base + (k >> 3), j = 2u * (k & 7u);
+    return uintBitsToFloat(uvec2(tb_bvh_placed_word(rec, j), tb_bvh_placed_word(rec, j + 1u)));
+}
+
+// The crossings of the whole object-space line so + t sd with the planar
+// object whose placed record is idx, appended to x; false (x untouched) for
+// a non-convex prism, whose crossings are walked instead (tb_prism_profile_pair).
+bool tb_bvh_planar_xings(uint idx, tb_line l, inout tb_xl x)
+{
+    tb_gpu_placed s = TB_BVH_PLACED[idx + 1u];
+    uint sub = floatBitsToUint(s.r0.x), flags = floatBitsToUint(s.w0);
+    bool caps = (flags & TB_GPU_PLANAR_CAPS) != 0u;
+    if (sub == TB_GPU_PLANAR_PYRAMID)
+        tb_xings_pyramid(l, s.r0.y, caps, x);
+    else if (sub == TB_GPU_PLANAR_PRISM && (flags & TB_GPU_PLANAR_CONVEX) == 0u)
+        return false;
+    else if (sub == TB_GPU_PLANAR_PRISM)
+        tb_xings_prism_convex(l, idx + 2u, floatBitsToUint(s.r1.y), s.r1.x, caps, x);
+    else
+        tb_xings_arch(l, s.r0.y, s.r0.z, sub == TB_GPU_PLANAR_ROUND_ARCH, x);
+    return true;
+}
+
+// The first surface crossing with tmin <= t <= tmax of the object-space
+// line so + t sd with the planar object whose placed record is idx: t and
+// the face within the object. False if none.
+bool tb_bvh_planar_hit(uint idx, vec3 so, vec3 sd, float tmin, float tmax, out float t, out uint face)
+{
+    tb_line l = tb_line_near(so, sd);
+    tb_xl x;
+    x.n = 0;
+    if (tb_bvh_planar_xings(idx, l, x))
+        return tb_xl_first(x, tmin, tmax, t, face);
+    tb_gpu_placed s = TB_BVH_PLACED[idx + 1u];
+    bool caps = (floatBitsToUint(s.w0) & TB_GPU_PLANAR_CAPS) != 0u;
+    return tb_prism_profile_hit(l, idx + 2u, floatBitsToUint(s.r1.y), caps, tmin, tmax, t, face);
+}
+
+// The same for the torus whose placed record is idx.
+bool tb_bvh_torus_hit(uint idx, vec3 so, vec3 sd, float tmin, float tmax, out float t, out uint face)
+{
+    tb_gpu_placed s = TB_BVH_PLACED[idx + 1u];
+    tb_xl x;
+    x.n = 0;
+    tb_xings_torus(so, sd, s.r0.x, s.r0.y, x);
+    return tb_xl_first(x, tmin, tmax, t, face);
+}
+
+// Object-space outward normal (not unit length) of face f of the planar
+// object whose placed record is idx, at the object-space point p.
+vec3 tb_bvh_planar_normal(uint idx, uint f, vec3 p)
+{
+    tb_gpu_placed s = TB_BVH_PLACED[idx + 1u];
+    uint sub = floatBitsToUint(s.r0.x);
+    if (sub == TB_GPU_PLANAR_PYRAMID) {
+        if (f >= TB_PYRAMID_BOTTOM)
+            return vec3(0.0, 0.0, f == TB_PYRAMID_BOTTOM ? -1.0 : 1.0);
+        vec3 n = vec3(0.0, 0.0, -0.5 * (s.r0.y - 1.0));
+        n[f >> 1] = (f & 1u) != 0u ? 1.0 : -1.0;
+        return n;
+    }
+    if (sub == TB_GPU_PLANAR_PRISM) {
+        if (f < TB_PRISM_SIDE0)
+            return vec3(0.0, 0.0, f == TB_PRISM_BOTTOM ? -1.0 : 1.0);
+        uint nv = floatBitsToUint(s.r1.y), k = f - TB_PRISM_SIDE0;
+        vec3 n;
+        float c;
+        tb_prism_side(tb_prism_vertex(idx + 2u, k), tb_prism_vertex(idx + 2u, k + 1u < nv ? k + 1u : 0u), s.r1.x, n,
+                      c);
+        return n;
+    }
+    return tb_arch_normal(f, p, s.r0.y, s.r0.z, sub == TB_GPU_PLANAR_ROUND_ARCH);
+}
+
 // The tmin with which a placed object is tested: r.tmin raised by a bound on
 // the float error of a crossing's t near the origin (32 u times the size of
 // the object-space origin and of the float world-to-object map's terms, in
@@ -192,14 +295,164 @@ tb_revolved tb_bvh_revolved(uint idx)
 // that surface again at t ~ 0 in float (measured: 1 % of diffuse rays off a
 // sphere); crossings this close to the origin are not resolvable in float,
 // as pbrt's conservative t bounds reject them.
-float tb_bvh_placed_tmin(tb_gpu_placed sp, tb_gpu_ray r, vec3 so, vec3 sd)
+float tb_bvh_placed_tmin(tb_gpu_placed sp, tb_gpu_ray r, vec3 ro, vec3 so, vec3 sd)
 {
-    vec3 ao = abs(r.o);
+    vec3 ao = abs(ro);
     float e = dot(abs(sp.r0), ao) + abs(sp.w0) + dot(abs(sp.r1), ao) + abs(sp.w1) + dot(abs(sp.r2), ao) +
               abs(sp.w2) + abs(so.x) + abs(so.y) + abs(so.z);
     float len = sqrt(dot(sd, sd));
     float eps = len > 0.0 ? 32.0 * 5.9604644775390625e-8 * e / len : 0.0;
     return r.tmin + (tb_isfinite(eps) ? eps : 0.0);
+}
+
+// Ray r in the frame of the placed object at record idx: the map applied to
+// (o - c), c the object's world origin (shared/bvh.h), so nothing large
+// cancels far from the world origin; tlo as tb_bvh_placed_tmin.
+void tb_bvh_object_ray(uint idx, tb_gpu_ray r, out tb_gpu_placed sp, out vec3 so, out vec3 sd, out float tlo)
+{
+    sp = TB_BVH_PLACED[idx];
+    precise vec3 ro = r.o - TB_BVH_PLACED[idx + 1u].r2;
+    precise vec3 o = vec3(dot(sp.r0, ro) + sp.w0, dot(sp.r1, ro) + sp.w1, dot(sp.r2, ro) + sp.w2);
+    precise vec3 d = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
+    so = o;
+    sd = d;
+    tlo = tb_bvh_placed_tmin(sp, r, ro, so, sd);
+}
+
+// Appends the crossings of r's whole line with the closed polygons leaf
+// whose record is idx (tb__xings_mesh): every triangle crossed (the float
+// watertight test, world space), in order of (t, triangle), reduced by the
+// winding number to the intervals where it is positive. A crossing's leaf
+// is its triangle's index (kind bits 0), for the face and the normal.
+void tb_bvh_mesh_xings(uint idx, tb_gpu_ray r)
+{
+    tb_gpu_placed hd = TB_BVH_PLACED[idx];
+    uint first = floatBitsToUint(hd.r0.x), n = floatBitsToUint(hd.r0.y);
+    tb_wray w = tb_wray_init(r.o, r.d);
+    int start = tb_cs_n;
+    for (uint i = 0u; i < n; ++i) {
+        vec3 v0, v1, v2;
+        float t;
+        tb_bvh_fetch_tri(first + i, v0, v1, v2);
+        if (!tb_tri_hit(w, v0, v1, v2, t))
+            continue;
+        precise vec3 e1 = v1 - v0;
+        precise vec3 e2 = v2 - v0;
+        precise vec3 nn = cross(e1, e2);
+        bool enter = dot(nn, r.d) < 0.0;
+        tb_csg_push(t, first + i, (t < r.tmin ? 2u : 0u) | (enter ? 1u : 0u));
+    }
+    for (int i = start + 1; i < tb_cs_n; ++i) { // insertion sort by (t, triangle)
+        float t = tb_cs_t[i];
+        uint l = tb_cs_leaf[i], fd = tb_cs_fd[i];
+        int j = i;
+        while (j > start && (tb_cs_t[j - 1] > t || (tb_cs_t[j - 1] == t && tb_cs_leaf[j - 1] > l))) {
+            tb_cs_t[j] = tb_cs_t[j - 1];
+            tb_cs_leaf[j] = tb_cs_leaf[j - 1];
+            tb_cs_fd[j] = tb_cs_fd[j - 1];
+            --j;
+        }
+        tb_cs_t[j] = t;
+        tb_cs_leaf[j] = l;
+        tb_cs_fd[j] = fd;
+    }
+    int wnd = 0, nout = start;
+    for (int i = start; i < tb_cs_n; ++i) {
+        int next = wnd + ((tb_cs_fd[i] & 1u) != 0u ? 1 : -1);
+        if ((wnd <= 0 && next > 0) || (wnd > 0 && next <= 0)) {
+            tb_cs_t[nout] = tb_cs_t[i];
+            tb_cs_leaf[nout] = tb_cs_leaf[i];
+            tb_cs_fd[nout++] = (tb_cs_fd[i] & ~1u) | (next > 0 ? 1u : 0u);
+        }
+        wnd = next;
+    }
+    if (wnd > 0 && (nout - start) % 2 == 1) { // a lost crossing: close the interval, as C
+        tb_cs_t[nout] = tb_cs_t[nout - 1];
+        tb_cs_leaf[nout] = tb_cs_leaf[nout - 1];
+        tb_cs_fd[nout] = tb_cs_fd[nout - 1] & ~1u;
+        ++nout;
+    }
+    tb_cs_n = nout;
+}
+
+// Appends the crossings of r's whole line with CSG leaf `ref` (a placed
+// object's reference) to the CSG pool (lib/csg.glsl).
+void tb_bvh_leaf_xings(uint ref, tb_gpu_ray r)
+{
+    uint idx = ref & TB_GPU_REF_INDEX, kind = ref & TB_GPU_REF_KIND;
+    if (kind == TB_GPU_REF_MESH) {
+        tb_bvh_mesh_xings(idx, r);
+        return;
+    }
+    tb_gpu_placed sp;
+    vec3 so, sd;
+    float tlo;
+    tb_bvh_object_ray(idx, r, sp, so, sd, tlo);
+    tb_xl x;
+    x.n = 0;
+    if (kind == TB_GPU_REF_CUBE) {
+        tb_xings_cube(so, sd, x);
+    } else if (kind == TB_GPU_REF_SPHERE) {
+        tb_xings_sphere(so, sd, 1.0, x);
+    } else if (kind == TB_GPU_REF_REVOLVED) {
+        tb_xings_revolved(so, sd, tb_bvh_revolved(idx), x);
+    } else if (kind == TB_GPU_REF_TORUS) {
+        vec3 rr = TB_BVH_PLACED[idx + 1u].r0;
+        tb_xings_torus(so, sd, rr.x, rr.y, x);
+    } else {
+        tb_line l = tb_line_near(so, sd);
+        if (!tb_bvh_planar_xings(idx, l, x)) { // a non-convex prism: every interval in turn
+            tb_gpu_placed s = TB_BVH_PLACED[idx + 1u];
+            uint nv = floatBitsToUint(s.r1.y);
+            tb_end za, zb;
+            if (!tb_prism_slab(l, za, zb))
+                return;
+            if (l.d.x == 0.0 && l.d.y == 0.0) {
+                if (tb_profile_inside(l, idx + 2u, nv))
+                    tb_xl_interval(x, l, za, zb, true, true);
+            } else {
+                float sp0 = -tb_inf();
+                uint ep0 = 0xffffffffu;
+                for (uint i = 0u; i < nv && tb_prism_profile_pair(l, idx + 2u, nv, true, za, zb, sp0, ep0, x); i += 2u)
+                    tb_csg_push_xl(x, ref, tlo);
+                return;
+            }
+        }
+    }
+    tb_csg_push_xl(x, ref, tlo);
+}
+
+// The first crossing with r.tmin <= t <= tmax of r with the CSG tree whose
+// header is placed record idx: t, the face ID (the leaf's face base plus the
+// face within the leaf) and the leaf's reference (for tb_bvh_normal).
+bool tb_bvh_csg_hit(uint idx, tb_gpu_ray r, float tmax, out float t, out uint face, out uint leaf)
+{
+    t = 0.0;
+    face = 0u;
+    leaf = 0u;
+    uint nops = floatBitsToUint(TB_BVH_PLACED[idx].r0.x);
+    vec3 ao = abs(r.o), ad = abs(r.d);
+    float scale = max(max(ao.x, ao.y), ao.z) / max(max(ad.x, ad.y), ad.z);
+    tb_cs_n = 0;
+    tb_nls = 0;
+    for (uint i = 0u; i < nops; ++i) {
+        uint w = tb_bvh_placed_word(idx + 1u + (i >> 4), i & 15u);
+        if ((w & TB_GPU_REF_KIND) != 0u) {
+            tb_csg_open_list();
+            tb_bvh_leaf_xings(w, r);
+        } else {
+            tb_csg_merge(w >> 8, int(w & 0xffu), scale);
+        }
+    }
+    for (int i = 0; i < tb_cs_n; ++i)
+        if ((tb_cs_fd[i] & 2u) == 0u && tb_cs_t[i] >= r.tmin && tb_cs_t[i] <= tmax) {
+            t = tb_cs_t[i];
+            leaf = tb_cs_leaf[i];
+            face = (leaf & TB_GPU_REF_KIND) == 0u ? tb_bvh_fetch_tri_keys(leaf).y // a polygons leaf's triangle
+                                                  : TB_BVH_PLACED[leaf & TB_GPU_REF_INDEX].face + (tb_cs_fd[i] >> 2);
+            return true;
+        }
+    return false;
 }
 
 // True if (t, object, face, ref) precedes the best so far (the CPU tie rule,
@@ -260,7 +513,7 @@ bool tb_bvh_ray_valid(tb_gpu_ray r)
     done = !found;
 
 // The leaf's run of placed objects of kind KIND from entry k on (each leaf
-// lists cubes, then spheres, then revolved objects): the ray in the object's
+// lists them by kind, shared/bvh.h): the ray in the object's
 // frame (so, sd), its lower bound tlo, then HIT, which sets t and the face
 // offset cf (left 0 by kinds of one face).
 #define TB_BVH_PLACED_RUN(KIND, HIT)                                                                                  \
@@ -269,11 +522,10 @@ bool tb_bvh_ray_valid(tb_gpu_ray r)
         uint idx = ref & TB_GPU_REF_INDEX;                                                                            \
         if ((ref & TB_GPU_REF_KIND) != KIND)                                                                          \
             break;                                                                                                    \
-        tb_gpu_placed sp = TB_BVH_PLACED[idx];                                                                        \
-        precise vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);           \
-        precise vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));                                   \
-        float t;                                                                                                      \
-        float tlo = tb_bvh_placed_tmin(sp, r, so, sd);                                                                \
+        tb_gpu_placed sp;                                                                                             \
+        vec3 so, sd;                                                                                                  \
+        float t, tlo;                                                                                                 \
+        tb_bvh_object_ray(idx, r, sp, so, sd, tlo);                                                                   \
         uint cf = 0u;                                                                                                 \
         vec3 nobj;                                                                                                    \
         if (!(HIT))                                                                                                   \
@@ -290,7 +542,9 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
     bool have = false;
     float bt = r.tmax;
     uint bo = TB_GPU_NO_HIT, bf = 0u, br = 0u, bref = 0u;
-    if ((TB_BVH_HAS_TRIANGLES || TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES || TB_BVH_HAS_QUADRICS) && nnodes > 0u &&
+    if ((TB_BVH_HAS_TRIANGLES || TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES || TB_BVH_HAS_QUADRICS ||
+         TB_BVH_HAS_PLANAR || TB_BVH_HAS_TORI || TB_BVH_HAS_CSG) &&
+        nnodes > 0u &&
         tb_bvh_ray_valid(r)) {
         vec3 inv = tb_ray_inv_dir(r.d);
         tb_wray w = tb_wray_init(r.o, r.d);
@@ -305,7 +559,7 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
         // other pushed. A popped child is tested again against the best t so
         // far. The lane's child is (cur_off, cur_count): cur_count 0 an
         // inner node. Leaves list their references by kind (triangles,
-        // cubes, spheres, revolved objects), so each kind's code runs in its
+        // cubes, spheres, planar, revolved objects, tori), so each kind's code runs in its
         // own loop.
         uint stack[TB_BVH_STACK];
         int sp = 0;
@@ -354,16 +608,35 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
                     TB_BVH_TAKE(t, keys.x, keys.y, keys.z)
                 }
             }
-            // Placed objects, one loop per kind (each leaf lists cubes, then
-            // spheres, then revolved objects): a kind's code runs only while
+            // CSG trees (listed after the triangles): the leaf's reference
+            // stands for the tree in bref, so tb_bvh_normal finds the leaf.
+            if (TB_BVH_HAS_CSG && !stop) {
+                for (; k < end; ++k) {
+                    uint cref = tb_bvh_fetch_ref(k);
+                    if ((cref & TB_GPU_REF_KIND) != TB_GPU_REF_CSG)
+                        break;
+                    uint cidx = cref & TB_GPU_REF_INDEX, face, ref;
+                    float t;
+                    if (!tb_bvh_csg_hit(cidx, r, r.tmax, t, face, ref))
+                        continue;
+                    tb_gpu_placed hd = TB_BVH_PLACED[cidx];
+                    TB_BVH_TAKE(t, hd.object, face, hd.ref)
+                }
+            }
+            // Placed objects, one loop per kind (each leaf lists cubes,
+            // spheres, planar objects, revolved objects, tori in that order): a kind's code runs only while
             // some lane has that kind left.
             if (TB_BVH_HAS_CUBES && !stop)
                 TB_BVH_PLACED_RUN(TB_GPU_REF_CUBE, tb_cube_hit(so, sd, tlo, r.tmax, t, cf))
             if (TB_BVH_HAS_SPHERES && !stop)
                 TB_BVH_PLACED_RUN(TB_GPU_REF_SPHERE, tb_sphere_intersect(so, sd, 1.0, tlo, r.tmax, t))
+            if (TB_BVH_HAS_PLANAR && !stop)
+                TB_BVH_PLACED_RUN(TB_GPU_REF_PLANAR, tb_bvh_planar_hit(idx, so, sd, tlo, r.tmax, t, cf))
             if (TB_BVH_HAS_QUADRICS && !stop)
                 TB_BVH_PLACED_RUN(TB_GPU_REF_REVOLVED,
                                   tb_revolved_hit(so, sd, tb_bvh_revolved(idx), tlo, r.tmax, t, cf, nobj))
+            if (TB_BVH_HAS_TORI && !stop)
+                TB_BVH_PLACED_RUN(TB_GPU_REF_TORUS, tb_bvh_torus_hit(idx, so, sd, tlo, r.tmax, t, cf))
             if (stop)
                 break;
             // Leaf done: back to the stack.
@@ -399,7 +672,8 @@ bool tb_bvh_occluded(tb_gpu_ray r, uint nnodes)
 vec3 tb_bvh_normal(tb_gpu_ray r, tb_bvh_hit h)
 {
     uint kind = h.leaf & TB_GPU_REF_KIND, idx = h.leaf & TB_GPU_REF_INDEX;
-    if (TB_BVH_HAS_CUBES && kind == TB_GPU_REF_CUBE) {
+    // CSG leaves are placed objects of these kinds without their TB_BVH_HAS_*.
+    if ((TB_BVH_HAS_CUBES || TB_BVH_HAS_CSG) && kind == TB_GPU_REF_CUBE) {
         // The face's object-space normal -> world by the inverse transpose.
         tb_gpu_placed sp = TB_BVH_PLACED[idx];
         uint f = h.face - sp.face;
@@ -407,10 +681,14 @@ vec3 tb_bvh_normal(tb_gpu_ray r, tb_bvh_hit h)
         vec3 n = (f >> 1) == 0u ? sp.r0 : ((f >> 1) == 1u ? sp.r1 : sp.r2);
         return sp.sign * normalize(sg * n);
     }
-    if ((TB_BVH_HAS_SPHERES && kind == TB_GPU_REF_SPHERE) || (TB_BVH_HAS_QUADRICS && kind == TB_GPU_REF_REVOLVED)) {
+    if (((TB_BVH_HAS_SPHERES || TB_BVH_HAS_CSG) && kind == TB_GPU_REF_SPHERE) ||
+        ((TB_BVH_HAS_QUADRICS || TB_BVH_HAS_CSG) && kind == TB_GPU_REF_REVOLVED) ||
+        ((TB_BVH_HAS_PLANAR || TB_BVH_HAS_CSG) && kind == TB_GPU_REF_PLANAR) ||
+        ((TB_BVH_HAS_TORI || TB_BVH_HAS_CSG) && kind == TB_GPU_REF_TORUS)) {
         // Object-space normal at the point -> world by the inverse transpose.
         tb_gpu_placed sp = TB_BVH_PLACED[idx];
-        vec3 so = vec3(dot(sp.r0, r.o) + sp.w0, dot(sp.r1, r.o) + sp.w1, dot(sp.r2, r.o) + sp.w2);
+        precise vec3 ro = r.o - TB_BVH_PLACED[idx + 1u].r2;
+        precise vec3 so = vec3(dot(sp.r0, ro) + sp.w0, dot(sp.r1, ro) + sp.w1, dot(sp.r2, ro) + sp.w2);
         vec3 sd = vec3(dot(sp.r0, r.d), dot(sp.r1, r.d), dot(sp.r2, r.d));
         vec3 p = so + h.t * sd, n = p;
         if (kind == TB_GPU_REF_REVOLVED) {
@@ -418,6 +696,10 @@ vec3 tb_bvh_normal(tb_gpu_ray r, tb_bvh_hit h)
             uint f = h.face - sp.face;
             n = f == TB_REVOLVED_SIDE ? tb_revolved_side_normal(q.c, p, 0.5 * (q.z0 + q.z1))
                                       : vec3(0.0, 0.0, f == TB_REVOLVED_TOP ? 1.0 : -1.0);
+        } else if (kind == TB_GPU_REF_PLANAR) {
+            n = tb_bvh_planar_normal(idx, h.face - sp.face, p);
+        } else if (kind == TB_GPU_REF_TORUS) {
+            n = tb_torus_normal(p, TB_BVH_PLACED[idx + 1u].r0.x);
         }
         return sp.sign * normalize(sp.r0 * n.x + sp.r1 * n.y + sp.r2 * n.z);
     }

@@ -13,6 +13,7 @@
 #define TB_LIB_REVOLVED_GLSL
 
 #include "quadratic.glsl"
+#include "xings.glsl"
 
 // Face numbers of cylinder, cone and conic (host/object/param.h).
 const uint TB_REVOLVED_SIDE = 0u;
@@ -38,14 +39,11 @@ vec3 tb_revolved_side_normal(vec3 c, vec3 p, float zmid)
     return n;
 }
 
-// The first crossing with tmin <= t <= tmax of o + t d with the solid's
-// surface: t, the face (TB_REVOLVED_*) and the object-space outward normal
-// (not unit length). False if none.
-bool tb_revolved_hit(vec3 o, vec3 d, tb_revolved q, float tmin, float tmax, out float t, out uint face, out vec3 n)
+// The crossings of the whole line o + t d with the solid (up to two
+// intervals, in order of t), appended to x: ends on a missing cap (an open
+// tube) are marked TB_XING_OPEN.
+void tb_xings_revolved(vec3 o, vec3 d, tb_revolved q, inout tb_xl x)
 {
-    t = 0.0;
-    face = 0u;
-    n = vec3(0.0);
     vec3 c = q.c;
     precise float zc = 0.5 * (q.z0 + q.z1);
     precise float dd = d.x * d.x + d.y * d.y + d.z * d.z;
@@ -93,20 +91,17 @@ bool tb_revolved_hit(vec3 o, vec3 d, tb_revolved q, float tmin, float tmax, out 
         nq = 1;
     }
     if (nq == 0)
-        return false;
+        return;
     // The slab: its entry (sa) and exit (sb) ends.
     float sat, sbt;
     uint saf, sbf;
-    vec3 san, sbn;
     if (d.z == 0.0) {
         if (!(p0.z >= q.z0 && p0.z <= q.z1))
-            return false;
+            return;
         sat = -inf;
         saf = TB_REVOLVED_BOTTOM;
-        san = vec3(0.0, 0.0, -1.0);
         sbt = inf;
         sbf = TB_REVOLVED_TOP;
-        sbn = vec3(0.0, 0.0, 1.0);
     } else {
         precise float bt = (q.z0 - p0.z) / d.z;
         precise float tt = (q.z1 - p0.z) / d.z;
@@ -115,53 +110,39 @@ bool tb_revolved_hit(vec3 o, vec3 d, tb_revolved q, float tmin, float tmax, out 
         bool up = d.z > 0.0;
         sat = up ? bt : tt;
         saf = up ? bf : tf;
-        san = up ? vec3(0.0, 0.0, -1.0) : vec3(0.0, 0.0, 1.0);
         sbt = up ? tt : bt;
         sbf = up ? tf : bf;
-        sbn = up ? vec3(0.0, 0.0, 1.0) : vec3(0.0, 0.0, -1.0);
     }
     for (int i = 0; i < nq; ++i) {
         float qa = i == 0 ? qa0 : qa1, qb = i == 0 ? qb0 : qb1;
-        float at, btt;
-        uint af, bf;
-        vec3 an, bn;
-        if (qa >= sat) {
-            at = qa;
-            af = TB_REVOLVED_SIDE;
-            an = tb_revolved_side_normal(c, vec3(p0.x + qa * d.x, p0.y + qa * d.y, p0.z + qa * d.z), zc);
-        } else {
-            at = sat;
-            af = saf;
-            an = san;
-        }
-        if (qb <= sbt) {
-            btt = qb;
-            bf = TB_REVOLVED_SIDE;
-            bn = tb_revolved_side_normal(c, vec3(p0.x + qb * d.x, p0.y + qb * d.y, p0.z + qb * d.z), zc);
-        } else {
-            btt = sbt;
-            bf = sbf;
-            bn = sbn;
-        }
-        if (!(at <= btt) || !tb_isfinite(at) || !tb_isfinite(btt))
+        float at = qa >= sat ? qa : sat, btt = qb <= sbt ? qb : sbt;
+        uint af = qa >= sat ? TB_REVOLVED_SIDE : saf, bf = qb <= sbt ? TB_REVOLVED_SIDE : sbf;
+        if (!(at <= btt) || !tb_isfinite(at) || !tb_isfinite(btt) || x.n > 2)
             continue;
         precise float ta = at + t0;
         precise float tb = btt + t0;
         // Without caps the surface is open: ends on the missing discs are not surface.
-        if ((q.caps || af == TB_REVOLVED_SIDE) && ta >= tmin && ta <= tmax) {
-            t = ta;
-            face = af;
-            n = an;
-            return true;
-        }
-        if ((q.caps || bf == TB_REVOLVED_SIDE) && tb >= tmin && tb <= tmax) {
-            t = tb;
-            face = bf;
-            n = bn;
-            return true;
-        }
+        x.t[x.n] = ta;
+        x.f[x.n++] = af | (q.caps || af == TB_REVOLVED_SIDE ? 0u : TB_XING_OPEN);
+        x.t[x.n] = tb;
+        x.f[x.n++] = bf | (q.caps || bf == TB_REVOLVED_SIDE ? 0u : TB_XING_OPEN);
     }
-    return false;
+}
+
+// The first crossing with tmin <= t <= tmax of o + t d with the solid's
+// surface: t, the face (TB_REVOLVED_*) and the object-space outward normal
+// (not unit length). False if none.
+bool tb_revolved_hit(vec3 o, vec3 d, tb_revolved q, float tmin, float tmax, out float t, out uint face, out vec3 n)
+{
+    tb_xl x;
+    x.n = 0;
+    tb_xings_revolved(o, d, q, x);
+    n = vec3(0.0);
+    if (!tb_xl_first(x, tmin, tmax, t, face))
+        return false;
+    n = face == TB_REVOLVED_SIDE ? tb_revolved_side_normal(q.c, o + t * d, 0.5 * (q.z0 + q.z1))
+                                 : vec3(0.0, 0.0, face == TB_REVOLVED_TOP ? 1.0 : -1.0);
+    return true;
 }
 
 #endif

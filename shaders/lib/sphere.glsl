@@ -14,10 +14,11 @@
 #define TB_LIB_SPHERE_GLSL
 
 #include "quadratic.glsl"
+#include "xings.glsl"
 
-// The smallest t with tmin <= t <= tmax (closed range) where o + t d lies on
-// the sphere; false if there is none. A ray starting inside hits on its way out.
-bool tb_sphere_intersect(vec3 o, vec3 d, float radius, float tmin, float tmax, out float t)
+// The crossings of the whole line o + t d with the sphere (one interval,
+// face 0), appended to x.
+void tb_xings_sphere(vec3 o, vec3 d, float radius, inout tb_xl x)
 {
     precise float dd = d.x * d.x + d.y * d.y + d.z * d.z;
     precise float od = o.x * d.x + o.y * d.y + o.z * d.z;
@@ -29,22 +30,27 @@ bool tb_sphere_intersect(vec3 o, vec3 d, float radius, float tmin, float tmax, o
     precise float c = pp - radius * radius;
     float s0, s1;
     int n = tb_quadratic(dd, b, c, s0, s1);
-    t = 0.0;
-    if (n == 0)
-        return false;
+    if (n == 0 || x.n > 2)
+        return;
     if (n == 1)
         s1 = s0;
     precise float ta = t0 + s0;
     precise float tb = t0 + s1;
-    if (ta >= tmin && ta <= tmax) {
-        t = ta;
-        return true;
-    }
-    if (tb >= tmin && tb <= tmax) {
-        t = tb;
-        return true;
-    }
-    return false;
+    x.t[x.n] = ta;
+    x.f[x.n++] = 0u;
+    x.t[x.n] = tb;
+    x.f[x.n++] = 0u;
+}
+
+// The smallest t with tmin <= t <= tmax (closed range) where o + t d lies on
+// the sphere; false if there is none. A ray starting inside hits on its way out.
+bool tb_sphere_intersect(vec3 o, vec3 d, float radius, float tmin, float tmax, out float t)
+{
+    tb_xl x;
+    x.n = 0;
+    tb_xings_sphere(o, d, radius, x);
+    uint face;
+    return tb_xl_first(x, tmin, tmax, t, face);
 }
 
 #endif

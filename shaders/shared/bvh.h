@@ -1,7 +1,7 @@
 /* The scene as the intersect kernel (shaders/intersect.comp) reads it: BVH
  * nodes converted from the CPU BVH (host/render/accel.h, tb_bvh_node), leaf
  * references (TB_GPU_REF_*), world-space triangles and placed analytic
- * objects (spheres, cubes, cylinders, cones, conics). Built by
+ * objects (every MID primitive kind). Built by
  * host/gpu/intersect.c. See shared/types.h for the layout rules. */
 #ifndef TB_SHADERS_SHARED_BVH_H
 #define TB_SHADERS_SHARED_BVH_H
@@ -15,17 +15,59 @@ typedef struct tb_gpu_placed tb_gpu_placed;
 #endif
 
 /* A leaf reference (one uint): a triangle index (kind bits 0), or a kind
- * (TB_GPU_REF_CUBE, _SPHERE, _REVOLVED: the two top bits, compare
- * ref & TB_GPU_REF_KIND with them) | an index into the placed-primitive
- * array. A revolved object (cylinder, cone, conic) takes two placed records:
- * its tb_gpu_placed, then its shape in the same 64 bytes: r0 = (c0, c1, c2)
- * of r^2 = c0 + c1 z + c2 z^2, w0 = z0, r1.x = z1, r1.y = the bits of a uint
- * TB_GPU_REVOLVED_* flags, the rest 0. */
+ * (TB_GPU_REF_*: the three top bits, compare ref & TB_GPU_REF_KIND with
+ * them) | an index into the placed-primitive array. Leaves list their
+ * references in ascending kind order (triangles, cubes, spheres, planar,
+ * revolved, tori), which is the order the traversal tests them in.
+ * A revolved object (cylinder, cone, conic) takes two placed records: its
+ * tb_gpu_placed, then its shape in the same 64 bytes: r0 = (c0, c1, c2) of
+ * r^2 = c0 + c1 z + c2 z^2, w0 = z0, r1.x = z1, r1.y = the bits of a uint
+ * TB_GPU_REVOLVED_* flags, the rest 0. A torus takes two: then r0 = (R, r, 0).
+ * A planar object (pyramid, prism, arch) takes two, plus for a prism one
+ * record per 8 profile vertices: r0.x = the bits of its TB_GPU_PLANAR_*
+ * subtype, r0.y = the pyramid's top or the arch's width, r0.z = the arch's
+ * height, w0 = the bits of TB_GPU_PLANAR_* flags, r1.x = the prism
+ * profile's orientation (+1 counter-clockwise, -1), r1.y = the bits of its
+ * vertex count; then the vertices as (x, y) float pairs, 16 floats per
+ * record in member order (r0.x r0.y r0.z w0 r1.x ... sign).
+ * Every placed object's second record has in r2 the object's origin in
+ * world space, c, rounded to float; the first record's map is then applied
+ * to (p - c) (its w0 w1 w2 are the map of c, about 0), so that no large
+ * translation cancels in float far from the world origin.
+ * A CSG tree (TB_GPU_REF_CSG) is a header record (r0.x = the bits of the
+ * op count; object, face = its first face ID, ref as a placed object's),
+ * then its post-order program, 16 uint words per record (member order): a
+ * leaf's reference (kind bits non-zero: the leaf is a placed object of its
+ * own, whose record holds the tree's object and reference index, the
+ * leaf's face base and flip sign; a polygons leaf, TB_GPU_REF_MESH, is one
+ * record: r0.x, r0.y = the bits of its first triangle's index and its
+ * triangle count in the triangle array), or a node: TB_GPU_CSG_* << 8 | its
+ * child count (<= TB_GPU_CSG_CHILDREN). lib/csg.glsl evaluates it with a
+ * pool of TB_GPU_CSG_POOL crossings in at most TB_GPU_CSG_LISTS lists;
+ * the host refuses a tree that could need more. */
+#define TB_GPU_REF_CSG 0x20000000u
 #define TB_GPU_REF_CUBE 0x40000000u
+#define TB_GPU_REF_MESH 0x60000000u /* a CSG tree's polygons leaf only (never in a BVH leaf) */
 #define TB_GPU_REF_SPHERE 0x80000000u
+#define TB_GPU_REF_PLANAR 0xa0000000u
 #define TB_GPU_REF_REVOLVED 0xc0000000u
-#define TB_GPU_REF_KIND 0xc0000000u
-#define TB_GPU_REF_INDEX 0x3fffffffu
+#define TB_GPU_REF_TORUS 0xe0000000u
+#define TB_GPU_REF_KIND 0xe0000000u
+#define TB_GPU_REF_INDEX 0x1fffffffu
+/* CSG node operations and the kernel's per-ray bounds. */
+#define TB_GPU_CSG_UNION 1u
+#define TB_GPU_CSG_INTERSECTION 2u
+#define TB_GPU_CSG_DIFFERENCE 3u
+#define TB_GPU_CSG_POOL 128    /* crossings of all pending lists of one ray */
+#define TB_GPU_CSG_LISTS 16    /* pending lists (children evaluated, not yet merged) */
+#define TB_GPU_CSG_CHILDREN 32 /* children of one node */
+/* Subtypes and flags of a planar shape record. */
+#define TB_GPU_PLANAR_PYRAMID 0u
+#define TB_GPU_PLANAR_PRISM 1u
+#define TB_GPU_PLANAR_SQUARE_ARCH 2u
+#define TB_GPU_PLANAR_ROUND_ARCH 3u
+#define TB_GPU_PLANAR_CAPS 1u   /* closed by its end faces */
+#define TB_GPU_PLANAR_CONVEX 2u /* prism: a convex profile (clipped by its sides, else crossings are paired) */
 /* Flags of a revolved object's shape record. */
 #define TB_GPU_REVOLVED_CAPS 1u    /* closed by discs at z0 and z1 */
 #define TB_GPU_REVOLVED_CLOSED0 2u /* radius 0 at z0 (an apex): crossings there are the side's */

@@ -202,16 +202,13 @@ static void test_object_features(void **state)
     assert_int_equal(seen, TB_OBJ_FEAT_ALL & ~(uint32_t)TB_OBJ_FEAT_POLYGONS_UNMESHED);
     assert_null(tb_object_feature_name(0));
     assert_null(tb_object_feature_name(TB_OBJ_FEAT_SPHERE | TB_OBJ_FEAT_CUBE));
-    /* the kernel's mask: triangles, spheres, cubes and quadrics, nothing else */
+    /* the kernel's mask: every primitive kind and CSG tree */
     const uint32_t gpu = TB_GPU_INTERSECT_FEATURES, cpu_quadrics = gpu & ~TB_GPU_QUADRIC_FEATURES;
     for (int i = 0; i < TB__NOBJ; i++)
-        assert_int_equal(tb_gpu_object_route_reason(f[i], gpu) == NULL, i <= 5);
-    assert_string_equal(tb_gpu_object_route_reason(f[8], gpu), "torus");
-    /* a CSG tree is named by an operation, whatever its leaves (the first
-     * in list order: the intersection holding a union says "CSG union") */
-    assert_string_equal(tb_gpu_object_route_reason(f[11], gpu), "CSG union");
-    assert_string_equal(tb_gpu_object_route_reason(f[12], gpu), "CSG difference");
-    assert_string_equal(tb_gpu_object_route_reason(f[13], gpu), "CSG union");
+        assert_null(tb_gpu_object_route_reason(f[i], gpu));
+    /* unmeshed polygons stay outside the mask, named */
+    assert_string_equal(tb_gpu_object_route_reason(TB_OBJ_FEAT_POLYGONS_UNMESHED, gpu),
+                        "polygons without a triangle mesh");
     /* quadrics off the mask: routed, saying why */
     assert_non_null(strstr(tb_gpu_object_route_reason(f[3], cpu_quadrics), "quadrics on the CPU path"));
     assert_non_null(strstr(tb_gpu_object_route_reason(f[5], cpu_quadrics), "conic"));
@@ -249,12 +246,15 @@ static void tb__check_scene(gpu_test_env *e, const tb_scene *s, tb_gpu_quadrics 
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
     assert_int_equal(info.gpu_objects, ngpu);
-    assert_int_equal(info.gpu_objects, quadrics ? 6 : 3);
+    assert_int_equal(info.gpu_objects, quadrics ? 14 : 10); /* the die's cylinder routes it with the quadrics */
     assert_int_equal(info.cpu_objects, TB__NOBJ - ngpu);
     assert_int_equal(info.gpu_triangles, 2);
     assert_int_equal(info.gpu_spheres, 1);
     assert_int_equal(info.gpu_cubes, 1);
     assert_int_equal(info.gpu_quadrics, quadrics ? 3 : 0);
+    assert_int_equal(info.gpu_planar, 4);
+    assert_int_equal(info.gpu_tori, 1);
+    assert_int_equal(info.gpu_csg, quadrics ? 3 : 2);
     tb_ray rays[TB__NOBJ];
     tb_hit hits[TB__NOBJ];
     for (int i = 0; i < TB__NOBJ; i++)
@@ -272,9 +272,9 @@ static void tb__check_scene(gpu_test_env *e, const tb_scene *s, tb_gpu_quadrics 
     tb_gpu_scene_destroy(g);
 }
 
-/* tb_gpu_scene_create_ex routes what the mask routes: quadrics to the CPU
- * under AUTO on a CPU device (lavapipe) and under CPU, into the kernel when
- * forced (and under AUTO on a GPU). */
+/* tb_gpu_scene_create_ex routes what the mask routes: quadrics into the
+ * kernel under AUTO on every device (lavapipe included) and when forced, to
+ * the CPU under CPU. */
 static void test_objects_route(void **state)
 {
     (void)state;
@@ -282,8 +282,7 @@ static void test_objects_route(void **state)
     gpu_test_open(&e, NULL);
     tb_scene *s = gpu_test_load(tb__objects, "objects.mid", NULL);
     const uint32_t all = TB_GPU_INTERSECT_FEATURES, no_quadrics = all & ~TB_GPU_QUADRIC_FEATURES;
-    const bool cpu_device = tb_gpu_device_info_of(e.dev)->type == TB_GPU_DEVICE_CPU;
-    tb__check_scene(&e, s, TB_GPU_QUADRICS_AUTO, cpu_device ? no_quadrics : all);
+    tb__check_scene(&e, s, TB_GPU_QUADRICS_AUTO, all);
     tb__check_scene(&e, s, TB_GPU_QUADRICS_GPU, all);
     tb__check_scene(&e, s, TB_GPU_QUADRICS_CPU, no_quadrics);
     tb_scene_free(s);

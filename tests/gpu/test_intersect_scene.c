@@ -1,7 +1,7 @@
 /* The Vulkan intersect kernel (host/gpu/intersect.h) against the CPU path
  * (tb_scene_intersect / tb_scene_occluded) on scenes mixing triangles and a
- * sphere and a cube (on the GPU) with a torus and a prism (routed to the
- * CPU per object), cylinders, cones and conics, a lone cube (the BVH's root a leaf) and a deep BVH with
+ * sphere, a cube, a torus and a prism (placed objects on the GPU),
+ * cylinders, cones and conics, a lone cube (the BVH's root a leaf) and a deep BVH with
  * kinds mixed in its leaves.
  * Runs with the validation layer and fails on any message. */
 #include "gpu_test.h"
@@ -9,6 +9,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "host/gpu/intersect.h"
 #include "host/object/hit.h"
@@ -26,7 +27,7 @@ static const char *tb__mixed =
     "sphere \"ball\" { transform = [scale(0.5) translate([3 3 0.5])] }\n"
     "cube \"box\" { transform = [scale([0.25 0.5 0.25]) translate([-3 3 0.25])] }\n";
 
-/* Only routed kinds: the kernel has nothing to do. */
+/* Only a torus and a prism: no triangles. */
 static const char *tb__analytic =
     "mid 1\n"
     "torus \"ring\" { transform = [translate([0 0 2])] geometry = { major = 1 minor = 0.25 } }\n"
@@ -121,14 +122,13 @@ static void test_exact_grid(void **state)
     assert_non_null(g);
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    assert_int_equal(info.gpu_objects, 4);
-    assert_int_equal(info.cpu_objects, 1);
+    assert_int_equal(info.gpu_objects, 5);
+    assert_int_equal(info.cpu_objects, 0);
     assert_int_equal(info.gpu_triangles, 3);
     assert_int_equal(info.gpu_spheres, 1);
     assert_int_equal(info.gpu_cubes, 1);
-    assert_true(tb_gpu_scene_object_on_gpu(g, 0) && tb_gpu_scene_object_on_gpu(g, 1) &&
-                tb_gpu_scene_object_on_gpu(g, 3) && tb_gpu_scene_object_on_gpu(g, 4));
-    assert_false(tb_gpu_scene_object_on_gpu(g, 2));
+    for (uint32_t i = 0; i < 5; ++i)
+        assert_true(tb_gpu_scene_object_on_gpu(g, i));
 
     enum { N = 32 * 32 };
     tb_ray rays[N];
@@ -141,12 +141,14 @@ static void test_exact_grid(void **state)
     int on[5] = {0};
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
-        if (c.object == 3 && hits[i].object == 3) { /* the sphere off its centre: sqrt, not exact */
+        /* the sphere off its centre (sqrt) and the torus (bisection): not exact */
+        if ((c.object == 3 || c.object == 2) && hits[i].object == c.object) {
+            assert_int_equal(hits[i].face, c.face);
             tb_assert_near(hits[i].t, c.t, 1e-5 * c.t);
             tb_assert_near(hits[i].ng.x, c.ng.x, 1e-4);
             tb_assert_near(hits[i].ng.y, c.ng.y, 1e-4);
             tb_assert_near(hits[i].ng.z, c.ng.z, 1e-4);
-            on[3]++;
+            on[c.object]++;
             continue;
         }
         if (!tb__same(&c, &hits[i], 0.0))
@@ -192,8 +194,8 @@ static void test_exact_grid(void **state)
     tb__finish(&e, g, s);
 }
 
-/* Random rays through the mixed scene: hits on the routed torus are the CPU's
- * records exactly; triangle, sphere and cube hits agree within float tolerance; hit/miss and
+/* Random rays through the mixed scene: torus, triangle, sphere and cube hits
+ * agree within float tolerance; hit/miss and
  * object may differ only for rays within float error of an edge (none
  * expected among a few thousand random rays; allowed: 1 in 1000). */
 static void test_random_mixed(void **state)
@@ -231,15 +233,12 @@ static void test_random_mixed(void **state)
         }
         if (c.object == UINT32_MAX)
             continue;
-        if (c.object == 3 || c.object == 4) { /* the sphere and the cube, on the GPU in float */
+        if (c.object >= 2) { /* the torus, the sphere and the cube, placed objects in float */
             ++tri;
             tb_assert_near(hits[i].t, c.t, 1e-5 * fabs(c.t));
             assert_true(fabs((double)hits[i].ng.x - c.ng.x) + fabs((double)hits[i].ng.y - c.ng.y) +
                             fabs((double)hits[i].ng.z - c.ng.z) <= 1e-3);
-        } else if (c.object == 2) {
-            ++routed;
-            if (!tb__same(&c, &hits[i], 0.0))
-                fail_msg("ray %d: routed object %u: records differ", i, c.object);
+            routed += c.object == 2;
         } else {
             ++tri;
             tb_assert_near(hits[i].t, c.t, 1e-5 * fabs(c.t));
@@ -248,14 +247,15 @@ static void test_random_mixed(void **state)
             tb_assert_near(hits[i].v, c.v, 1e-4);
         }
     }
-    print_message("[ info     ] %d routed-object hits, %d triangle, sphere and cube hits, %d differ, %d occlusion differ\n", routed,
+    print_message("[ info     ] %d torus hits, %d triangle, sphere and cube hits, %d differ, %d occlusion differ\n", routed,
                   tri, differ, occ_differ);
     assert_true(routed > 20 && tri > 50);
     tb__finish_batch(&e, g, s, &b, differ, occ_differ);
 }
 
-/* A scene with no triangles: no dispatch, every object routed, CPU records. */
-static void test_all_routed(void **state)
+/* A scene with no triangles, only a torus and a prism: both in the kernel,
+ * within float tolerance of the CPU's records. */
+static void test_no_triangles(void **state)
 {
     (void)state;
     gpu_test_env e;
@@ -265,8 +265,10 @@ static void test_all_routed(void **state)
     assert_non_null(g);
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    assert_int_equal(info.gpu_objects, 0);
-    assert_int_equal(info.cpu_objects, 2);
+    assert_int_equal(info.gpu_objects, 2);
+    assert_int_equal(info.cpu_objects, 0);
+    assert_int_equal(info.gpu_tori, 1);
+    assert_int_equal(info.gpu_planar, 1);
     enum { N = 64 };
     tb_ray rays[N];
     tb_hit hits[N];
@@ -276,8 +278,17 @@ static void test_all_routed(void **state)
     int hit = 0;
     for (int i = 0; i < N; ++i) {
         tb_hit c = tb__cpu(s, &rays[i]);
-        assert_true(tb__same(&c, &hits[i], 0.0));
-        hit += c.object != UINT32_MAX;
+        assert_int_equal(c.object, hits[i].object);
+        assert_int_equal(c.face, hits[i].face);
+        if (c.object == UINT32_MAX)
+            continue;
+        tb_assert_near(hits[i].t, c.t, 1e-5 * c.t);
+        tb_assert_near(hits[i].ng.x, c.ng.x, 1e-4);
+        tb_assert_near(hits[i].ng.y, c.ng.y, 1e-4);
+        tb_assert_near(hits[i].ng.z, c.ng.z, 1e-4);
+        tb_assert_near(hits[i].u, c.u, 1e-4);
+        tb_assert_near(hits[i].v, c.v, 1e-4);
+        ++hit;
     }
     assert_true(hit > 0);
     tb__finish(&e, g, s);
@@ -435,14 +446,13 @@ static void test_revolved(void **state)
     gpu_test_env e;
     gpu_test_open(&e, NULL);
     tb_scene *s = tb__load(text);
-    /* By default a CPU driver routes them to the CPU (faster there), a GPU runs them. */
+    /* By default every device runs them in the kernel. */
     tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
     assert_non_null(g);
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    bool cpu_driver = tb_gpu_device_info_of(e.dev)->type == TB_GPU_DEVICE_CPU;
-    assert_int_equal(info.gpu_quadrics, cpu_driver ? 0 : 7);
-    assert_int_equal(info.cpu_objects, cpu_driver ? 7 : 0);
+    assert_int_equal(info.gpu_quadrics, 7);
+    assert_int_equal(info.cpu_objects, 0);
     tb_gpu_scene_destroy(g);
     /* The kernel's path, forced. */
     g = tb_gpu_scene_create_ex(e.dev, s, &(tb_gpu_scene_desc){TB_GPU_QUADRICS_GPU});
@@ -590,12 +600,87 @@ static void test_spawned(void **state)
     tb__finish_batch(&e, g, s, &b, differ, occ_differ);
 }
 
+/* Writes `head`, then n unions of 12 tori (rows `dy` apart), then the closing brace. */
+static void tb__tori_unions(char *text, size_t size, const char *head, int n, int dy)
+{
+    int len = snprintf(text, size, "%s", head);
+    for (int u = 0; u < n; ++u) {
+        len += snprintf(text + len, size - (size_t)len, " union {");
+        for (int i = 0; i < 12; ++i)
+            len += snprintf(text + len, size - (size_t)len,
+                            " torus { transform = [translate([%d %d 0])] geometry = { major = 1 minor = 0.2 } }", i,
+                            dy * u);
+        len += snprintf(text + len, size - (size_t)len, " }");
+    }
+    snprintf(text + len, size - (size_t)len, " }\n");
+}
+
+/* The scene `text` is refused by tb_gpu_scene_create with a message holding both phrases. */
+static void tb__refused(gpu_test_env *e, const char *text, const char *phrase1, const char *phrase2)
+{
+    tb_scene *s = tb__load(text);
+    assert_null(tb_gpu_scene_create(e->dev, s));
+    if (!strstr(tb_last_error(), phrase1) || !strstr(tb_last_error(), phrase2))
+        fail_msg("refusal message: %s", tb_last_error());
+    tb_scene_free(s);
+}
+
+/* CSG trees beyond the kernel's per-ray bounds are refused when the GPU
+ * scene is made, with a message naming the object and the bound; a tree
+ * within them is taken. */
+static void test_csg_bounds(void **state)
+{
+    (void)state;
+    gpu_test_env e;
+    gpu_test_open(&e, NULL);
+    char text[8192];
+    /* 33 children: beyond TB_GPU_CSG_CHILDREN */
+    int len = snprintf(text, sizeof text, "mid 1\nunion \"wide\" {");
+    for (int i = 0; i < 33; ++i)
+        len += snprintf(text + len, sizeof text - (size_t)len, " sphere { transform = [translate([%d 0 0])] }", i);
+    snprintf(text + len, sizeof text - (size_t)len, " }\n");
+    tb__refused(&e, text, "object 0 (\"wide\"): CSG tree beyond the Vulkan intersect kernel", "33 children");
+    /* three unions of 12 tori: 144 crossings pending, beyond TB_GPU_CSG_POOL */
+    tb__tori_unions(text, sizeof text, "mid 1\nsphere { }\nunion \"many\" {", 3, 1);
+    tb__refused(&e, text, "object 1 (\"many\")", "up to 144 crossings");
+    /* two unions of 12: 96, taken */
+    tb__tori_unions(text, sizeof text, "mid 1\nunion \"fits\" {", 2, 3);
+    tb_scene *s = tb__load(text);
+    tb_gpu_scene *g = tb_gpu_scene_create(e.dev, s);
+    assert_non_null(g);
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(g, &info);
+    assert_int_equal(info.gpu_csg, 1);
+    assert_int_equal(info.cpu_objects, 0);
+    /* rays down onto the tori agree with the CPU */
+    enum { N = 256 };
+    tb_ray rays[N];
+    tb_hit hits[N];
+    int hit = 0;
+    for (int i = 0; i < N; ++i)
+        rays[i] = (tb_ray){{-1.0f + 0.05f * (float)(i % 64), -0.6f + 1.05f * (float)(i / 64), 5.0f}, 0.0f,
+                           {0.01f, 0.0f, -1.0f}, INFINITY};
+    assert_int_equal(tb_gpu_intersect(g, rays, N, hits, NULL), TB_OK);
+    for (int i = 0; i < N; ++i) {
+        tb_hit c = tb__cpu(s, &rays[i]);
+        assert_int_equal(c.object, hits[i].object);
+        if (c.object == UINT32_MAX)
+            continue;
+        assert_int_equal(c.face, hits[i].face);
+        tb_assert_near(hits[i].t, c.t, 1e-5 * c.t);
+        ++hit;
+    }
+    assert_true(hit > 20);
+    tb__finish(&e, g, s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exact_grid),
         cmocka_unit_test(test_random_mixed),
-        cmocka_unit_test(test_all_routed),
+        cmocka_unit_test(test_no_triangles),
+        cmocka_unit_test(test_csg_bounds),
         cmocka_unit_test(test_lone_cube),
         cmocka_unit_test(test_deep_mixed),
         cmocka_unit_test(test_revolved),

@@ -111,8 +111,9 @@ int tb_cmd_trace(int argc, char **argv)
          .help = "cpu (the reference path), vulkan or auto (default: %D).\n"
                  "vulkan runs the Vulkan intersect kernel (host/gpu/intersect.h) on any\n"
                  "device, lavapipe included (fails if there is none); auto uses it only on\n"
-                 "a real GPU. Triangles run on the GPU, every other kind on the CPU path\n"
-                 "(routed per object: -v and --stats say which). Hits agree with cpu within\n"
+                 "a real GPU. Every primitive kind and CSG tree runs on the device (-v and\n"
+                 "--stats report the objects on the GPU and any routed to the CPU path; a\n"
+                 "CSG tree beyond the kernel's bounds is refused). Hits agree with cpu within\n"
                  "docs/accuracy.md's float tolerances, not byte for byte."},
         {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels, .metavar = "A",
          .help = "bvh (default), grid, or list (every reference tested: slow, for checks);\n"
@@ -224,8 +225,12 @@ int tb_cmd_trace(int argc, char **argv)
         tb_gpu_scene_info gi;
         tb_gpu_scene_get_info(gscene, &gi);
         if (verbose)
-            fprintf(stderr, "vulkan: %u objects on the GPU (%llu triangles), %u routed to the CPU path: [%s]\n",
-                    gi.gpu_objects, (unsigned long long)gi.gpu_triangles, gi.cpu_objects, routed);
+            fprintf(stderr,
+                    "vulkan: %u objects on the GPU, %u routed (%llu triangles, %u spheres, %u cubes, %u "
+                    "cylinders/cones/conics, %u pyramids/prisms/arches, %u tori)%s%s%s\n",
+                    gi.gpu_objects, gi.cpu_objects, (unsigned long long)gi.gpu_triangles, gi.gpu_spheres,
+                    gi.gpu_cubes, gi.gpu_quadrics, gi.gpu_planar, gi.gpu_tori, gi.cpu_objects ? ": [" : "", routed,
+                    gi.cpu_objects ? "]" : "");
         /* Why, per routed object (the first feature the kernel lacks); a
          * few are enough to see what a scene needs. */
         for (uint32_t i = 0, shown = 0; verbose && i < scene->nobjects; ++i) {
@@ -328,6 +333,13 @@ int tb_cmd_trace(int argc, char **argv)
                 st = tb_stats_set_string("backend", tb_gpu_backend_name(gsess.backend));
             if (!st && gscene) /* which objects the kernel did not run (routed to the CPU path) */
                 st = tb_stats_set_string("routed_objects", routed);
+            if (!st && gscene) {
+                tb_gpu_scene_info gi;
+                tb_gpu_scene_get_info(gscene, &gi);
+                st = tb_stats_set_value("gpu_objects", (double)gi.gpu_objects);
+                if (!st)
+                    st = tb_stats_set_value("routed_object_count", (double)gi.cpu_objects);
+            }
             if (!st)
                 st = tb_stats_set_string("accel", tb_accel_kind_name(kind));
             if (!st)

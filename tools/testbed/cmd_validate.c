@@ -162,10 +162,11 @@ int tb_cmd_validate(int argc, char **argv)
            tb_gpu_validation_enabled(sess.instance) ? ", validation layer on" : "");
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    printf("scene: %s: %u objects; on the GPU: %llu triangles, %u spheres, %u cubes\n", scene_path, s->nobjects,
-           (unsigned long long)info.gpu_triangles, info.gpu_spheres, info.gpu_cubes);
-    printf("routing: %u objects on the GPU (triangles, spheres, cubes), %u routed to the CPU path\n", info.gpu_objects,
-           info.cpu_objects);
+    printf("scene: %s: %u objects; on the GPU: %llu triangles, %u spheres, %u cubes, %u cylinders/cones/conics, "
+           "%u pyramids/prisms/arches, %u tori\n",
+           scene_path, s->nobjects, (unsigned long long)info.gpu_triangles, info.gpu_spheres, info.gpu_cubes,
+           info.gpu_quadrics, info.gpu_planar, info.gpu_tori);
+    printf("routing: %u objects on the GPU, %u routed to the CPU path\n", info.gpu_objects, info.cpu_objects);
     for (uint32_t i = 0; i < s->nobjects; ++i)
         printf("  object %u (%s): %s\n", i, tb_prim_kind_name(s->objects[i]->kind),
                tb_gpu_scene_object_on_gpu(g, i) ? "gpu" : "cpu (routed)");
