@@ -30,6 +30,7 @@ TB_STAT_COUNTER(tb__rad_shots, "Radiosity/shots");
 TB_STAT_COUNTER(tb__rad_ffs, "Radiosity/form factors");
 TB_STAT_COUNTER(tb__rad_rays, "Radiosity/rays (receivers x samples)");
 TB_STAT_COUNTER(tb__rad_cached, "Radiosity/shots from cached form factors");
+TB_STAT_COUNTER(tb__rad_split_shots, "Radiosity/shots with the update split over ranks");
 TB_STAT_COUNTER(tb__rad_facing_none, "Radiosity/receiver clusters facing no sample");
 TB_STAT_TIMER(tb__rad_ff_time, "Radiosity/form factor time");
 TB_STAT_TIMER(tb__rad_update_time, "Radiosity/update time");
@@ -1194,8 +1195,11 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
     if (st)
         return st;
     tb__shoot(s, i, t0);
-    if (s->split && (st = tb__select(s)))
-        return st;
+    if (s->split) {
+        tb_stat_add(&tb__rad_split_shots, 1);
+        if ((st = tb__select(s)))
+            return st;
+    }
     if (shot)
         *shot = true;
     return TB_OK;
