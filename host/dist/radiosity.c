@@ -13,6 +13,11 @@
 #include <mpi.h>
 #endif
 
+/* Seconds a rank polls the per-shot selection before it sleeps: the ranks
+ * arrive within microseconds of each other (each updates its share of the
+ * elements), and a sleep would cost tens of microseconds per shot. */
+#define TB__RADX_SELECT_SPIN 30e-6
+
 /* An exchange and its accounts. */
 typedef struct tb__radx {
     tb_rad_exchange ex;  /* handed to the solver (ex.ctx == this) */
@@ -27,13 +32,17 @@ typedef struct tb__radx {
 } tb__radx;
 
 #ifdef TB_HAVE_MPI
-/* Waits for req, polled with short sleeps: a rank that is done early
- * leaves the core to one still casting rays (Open MPI's blocking
- * collectives spin, which on shared or oversubscribed cores slows the very
- * rank everyone waits for). Then the accounts: work since the previous
- * exchange, the wait, `bytes` sent and `units` (receivers) computed. */
-static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, uint64_t bytes, uint64_t units)
+/* Waits for req: first polled without a pause for `spin` seconds (an
+ * exchange after balanced work: the shortest sleep lasts about 50 us of
+ * timer slack, more than the exchange), then with short sleeps: a rank
+ * that is done early leaves the core to one still casting rays (Open MPI's
+ * blocking collectives spin, which on shared or oversubscribed cores slows
+ * the very rank everyone waits for). Then the accounts: work since the
+ * previous exchange, the wait, `bytes` sent and `units` (receivers). */
+static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, double spin, uint64_t bytes, uint64_t units)
 {
+    for (int done = 0; !done && tb__dist_now() - t0 < spin;)
+        MPI_Test(req, &done, MPI_STATUS_IGNORE);
     for (long us = 5;;) {
         int done = 0;
         MPI_Test(req, &done, MPI_STATUS_IGNORE);
@@ -69,7 +78,7 @@ static tb_status tb__radx_gather(tb__radx *x, const void *mine, size_t n_mine, v
         MPI_SUCCESS)
         return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallgatherv failed");
     /* bytes: this rank's values, delivered to every other rank */
-    tb__radx_wait(x, &req, t0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), units ? n_mine : 0);
+    tb__radx_wait(x, &req, t0, 0.0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), units ? n_mine : 0);
     return TB_OK;
 }
 
@@ -140,7 +149,7 @@ static tb_status tb__radx_select(void *ctx, double *buf, size_t n)
     if (MPI_Iallreduce(MPI_IN_PLACE, buf, 1, x->type, x->op, MPI_COMM_WORLD, &req) != MPI_SUCCESS)
         return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallreduce failed");
     /* bytes: a reduction sends about its buffer once per rank */
-    tb__radx_wait(x, &req, t0, (uint64_t)(n * sizeof *buf), 0);
+    tb__radx_wait(x, &req, t0, TB__RADX_SELECT_SPIN, (uint64_t)(n * sizeof *buf), 0);
     return TB_OK;
 #else
     (void)ctx, (void)buf, (void)n;
