@@ -104,25 +104,27 @@ static void tb__radx_pick(void *in, void *inout, int *len, MPI_Datatype *type)
 }
 #endif
 
-static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts)
+/* Doubles gathered (tb__radx_gather); `units`: count them as receivers. */
+static tb_status tb__radx_gatherd(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts,
+                                  bool units)
 {
 #ifdef TB_HAVE_MPI
-    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_DOUBLE, sizeof *mine, true);
+    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_DOUBLE, sizeof *mine, units);
 #else
-    (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts;
+    (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts, (void)units;
     return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
 #endif
+}
+
+static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts)
+{
+    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, true);
 }
 
 static tb_status tb__radx_allgather_state(void *ctx, const double *mine, size_t n_mine, double *all,
                                           const size_t *counts)
 {
-#ifdef TB_HAVE_MPI
-    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_DOUBLE, sizeof *mine, false);
-#else
-    (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts;
-    return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
-#endif
+    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, false);
 }
 
 static tb_status tb__radx_select(void *ctx, double *buf, size_t n)

@@ -217,6 +217,20 @@ static inline void tb__queue_elem(tb_rad_solver *s, size_t j)
         s->sdirty[s->pof[j]] = 1;
 }
 
+/* Every shooter's priority from its elements' unshot powers. The queue is
+ * a function of them (ties go to the lower key), so a rebuilt queue gives
+ * the original's order. */
+static void tb__queue_rebuild(tb_rad_solver *s)
+{
+    for (size_t k = 0; k < s->nsh; k++) {
+        double pw = tb__shooter_power(s, k);
+        if (pw > 0.0)
+            tb_pqueue_set(&s->q, (uint32_t)k, pw);
+        else
+            tb_pqueue_remove(&s->q, (uint32_t)k);
+    }
+}
+
 /* Two levels: the patches whose elements changed get their new sums. */
 static void tb__queue_flush(tb_rad_solver *s)
 {
@@ -1288,13 +1302,7 @@ static tb_status tb__split_end(tb_rad_solver *s)
         memcpy(s->Hv + va * nc, all + at, (vb - va) * nc * sizeof *all), at += (vb - va) * nc;
     }
     s->split = false;
-    for (size_t k = 0; k < s->nsh; k++) {
-        double pw = tb__shooter_power(s, k);
-        if (pw > 0.0)
-            tb_pqueue_set(&s->q, (uint32_t)k, pw);
-        else
-            tb_pqueue_remove(&s->q, (uint32_t)k);
-    }
+    tb__queue_rebuild(s);
     if (s->cache) {
         for (size_t k = 0; k < s->nsh; k++)
             free(s->cache[k]), s->cache[k] = NULL;
@@ -1836,14 +1844,6 @@ tb_status tb_rad_solver_unpack(tb_rad_solver *s, const void *buf, size_t len)
     memcpy(s->erec, p, ne * sizeof(double)), p += ne * sizeof(double);
     if (s->opt.nlights > 0)
         memcpy(s->lshot, p, (size_t)s->opt.nlights);
-    /* the queue is a function of the unshot powers (ties go to the lower
-     * key), so rebuilding it gives the original's order */
-    for (size_t k = 0; k < s->nsh; k++) {
-        double pw = tb__shooter_power(s, k);
-        if (pw > 0.0)
-            tb_pqueue_set(&s->q, (uint32_t)k, pw);
-        else
-            tb_pqueue_remove(&s->q, (uint32_t)k);
-    }
+    tb__queue_rebuild(s);
     return TB_OK;
 }
