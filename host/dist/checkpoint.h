@@ -23,7 +23,7 @@
 #include "util/base/error.h"
 
 /* Version of the file layout; a reader refuses others. */
-#define TB_CKPT_VERSION 2u
+#define TB_CKPT_VERSION 3u
 
 /* What a checkpoint holds. */
 enum {

@@ -13,61 +13,148 @@
 #include <mpi.h>
 #endif
 
+/* Seconds a rank polls the per-shot selection before it sleeps: the ranks
+ * arrive within microseconds of each other (each updates its share of the
+ * elements), and a sleep would cost tens of microseconds per shot. */
+#define TB__RADX_SELECT_SPIN 30e-6
+
 /* An exchange and its accounts. */
 typedef struct tb__radx {
     tb_rad_exchange ex;  /* handed to the solver (ex.ctx == this) */
     int *counts, *displs; /* MPI's int counts and offsets per rank */
     double last;          /* clock when the previous gather returned (work runs from there) */
+#ifdef TB_HAVE_MPI
+    MPI_Datatype type;    /* select: type_n contiguous doubles (type_n 0: none made) */
+    size_t type_n;
+    MPI_Op op;            /* select: tb__radx_pick, when op_made */
+    bool op_made;
+#endif
 } tb__radx;
 
 #ifdef TB_HAVE_MPI
-/* Every rank's `n_mine` values of `type` (`size` bytes each) into all[], in
- * rank order (counts[r] from rank r). */
-static tb_status tb__radx_gather(tb__radx *x, const void *mine, size_t n_mine, void *all, const size_t *counts,
-                                 MPI_Datatype type, size_t size)
+/* Waits for req: first polled without a pause for `spin` seconds (an
+ * exchange after balanced work: the shortest sleep lasts about 50 us of
+ * timer slack, more than the exchange), then with short sleeps: a rank
+ * that is done early leaves the core to one still casting rays (Open MPI's
+ * blocking collectives spin, which on shared or oversubscribed cores slows
+ * the very rank everyone waits for). Then the accounts: work since the
+ * previous exchange, the wait, `bytes` sent and `units` (receivers). */
+static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, double spin, uint64_t bytes, uint64_t units)
 {
-    double t0 = tb__dist_now();
-    int R = x->ex.ranks, off = 0;
-    for (int r = 0; r < R; r++) {
-        if (counts[r] > (size_t)INT_MAX - (size_t)off)
-            return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange: more than %d receivers", INT_MAX);
-        x->counts[r] = (int)counts[r];
-        x->displs[r] = off;
-        off += (int)counts[r];
-    }
-    /* non-blocking, polled with short sleeps: a rank that is done early
-     * leaves the core to one still casting rays (Open MPI's blocking
-     * collectives spin, which on shared or oversubscribed cores slows the
-     * very rank everyone waits for) */
-    MPI_Request req;
-    if (MPI_Iallgatherv(mine, (int)n_mine, type, all, x->counts, x->displs, type, MPI_COMM_WORLD, &req) !=
-        MPI_SUCCESS)
-        return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallgatherv failed");
+    for (int done = 0; !done && tb__dist_now() - t0 < spin;)
+        MPI_Test(req, &done, MPI_STATUS_IGNORE);
     for (long us = 5;;) {
         int done = 0;
-        MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+        MPI_Test(req, &done, MPI_STATUS_IGNORE);
         if (done)
             break;
-        /* 5 us doubling to 200 us: a gather of a few kilobytes is answered
-         * within microseconds when both ranks are there */
+        /* 5 us doubling to 200 us: an exchange of a few kilobytes is
+         * answered within microseconds when both ranks are there */
         struct timespec ts = {0, us * 1000L};
         nanosleep(&ts, NULL);
         us = us * 2 < 200 ? us * 2 : 200;
     }
     double t1 = tb__dist_now();
-    /* bytes: this rank's values, delivered to every other rank */
-    tb__dist_account(t0 - x->last, t1 - t0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), 1, n_mine);
+    tb__dist_account(t0 - x->last, t1 - t0, bytes, 1, units);
     x->last = t1;
+}
+
+/* Every rank's `n_mine` values of `type` (`size` bytes each) into all[], in
+ * rank order (counts[r] from rank r); `units`: count them as receivers. */
+static tb_status tb__radx_gather(tb__radx *x, const void *mine, size_t n_mine, void *all, const size_t *counts,
+                                 MPI_Datatype type, size_t size, bool units)
+{
+    double t0 = tb__dist_now();
+    int R = x->ex.ranks, off = 0;
+    for (int r = 0; r < R; r++) {
+        if (counts[r] > (size_t)INT_MAX - (size_t)off)
+            return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange: more than %d values", INT_MAX);
+        x->counts[r] = (int)counts[r];
+        x->displs[r] = off;
+        off += (int)counts[r];
+    }
+    MPI_Request req;
+    if (MPI_Iallgatherv(mine, (int)n_mine, type, all, x->counts, x->displs, type, MPI_COMM_WORLD, &req) !=
+        MPI_SUCCESS)
+        return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallgatherv failed");
+    /* bytes: this rank's values, delivered to every other rank */
+    tb__radx_wait(x, &req, t0, 0.0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), units ? n_mine : 0);
     return TB_OK;
+}
+
+/* The reduction of tb_rad_exchange.select on one buffer (an MPI datatype of
+ * n contiguous doubles): the larger candidate (ties: the lower key) and the
+ * sums of the tails. Commutative: the candidates are ordered strictly (keys
+ * differ) and each tail value is nonzero on one rank at most. */
+static void tb__radx_pick(void *in, void *inout, int *len, MPI_Datatype *type)
+{
+    int bytes = 0;
+    MPI_Type_size(*type, &bytes);
+    size_t n = (size_t)bytes / sizeof(double);
+    for (int e = 0; e < *len; e++) {
+        const double *a = (const double *)in + (size_t)e * n;
+        double *b = (double *)inout + (size_t)e * n;
+        size_t h = (size_t)a[0];
+        if (a[1] > b[1] || (a[1] == b[1] && a[2] < b[2]))
+            for (size_t k = 1; k < h && k < n; k++)
+                b[k] = a[k];
+        for (size_t k = h; k < n; k++)
+            b[k] += a[k];
+    }
 }
 #endif
 
-static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts)
+/* Doubles gathered (tb__radx_gather); `units`: count them as receivers. */
+static tb_status tb__radx_gatherd(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts,
+                                  bool units)
 {
 #ifdef TB_HAVE_MPI
-    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_DOUBLE, sizeof *mine);
+    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_DOUBLE, sizeof *mine, units);
 #else
-    (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts;
+    (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts, (void)units;
+    return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
+#endif
+}
+
+static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts)
+{
+    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, true);
+}
+
+static tb_status tb__radx_allgather_state(void *ctx, const double *mine, size_t n_mine, double *all,
+                                          const size_t *counts)
+{
+    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, false);
+}
+
+static tb_status tb__radx_select(void *ctx, double *buf, size_t n)
+{
+#ifdef TB_HAVE_MPI
+    tb__radx *x = ctx;
+    double t0 = tb__dist_now();
+    if (n > (size_t)INT_MAX)
+        return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange: more than %d values", INT_MAX);
+    if (x->type_n != n) { /* one datatype per buffer length (the same all solve long) */
+        if (x->type_n)
+            MPI_Type_free(&x->type);
+        x->type_n = 0;
+        if (MPI_Type_contiguous((int)n, MPI_DOUBLE, &x->type) != MPI_SUCCESS || MPI_Type_commit(&x->type) != MPI_SUCCESS)
+            return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Type_contiguous failed");
+        x->type_n = n;
+    }
+    if (!x->op_made) {
+        if (MPI_Op_create(tb__radx_pick, 1, &x->op) != MPI_SUCCESS)
+            return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Op_create failed");
+        x->op_made = true;
+    }
+    MPI_Request req;
+    if (MPI_Iallreduce(MPI_IN_PLACE, buf, 1, x->type, x->op, MPI_COMM_WORLD, &req) != MPI_SUCCESS)
+        return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallreduce failed");
+    /* bytes: a reduction sends about its buffer once per rank */
+    tb__radx_wait(x, &req, t0, TB__RADX_SELECT_SPIN, (uint64_t)(n * sizeof *buf), 0);
+    return TB_OK;
+#else
+    (void)ctx, (void)buf, (void)n;
     return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
 #endif
 }
@@ -75,7 +162,7 @@ static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine
 static tb_status tb__radx_allgatherf(void *ctx, const float *mine, size_t n_mine, float *all, const size_t *counts)
 {
 #ifdef TB_HAVE_MPI
-    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_FLOAT, sizeof *mine);
+    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_FLOAT, sizeof *mine, true);
 #else
     (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts;
     return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
@@ -125,6 +212,7 @@ tb_rad_exchange *tb_dist_rad_exchange_create(void)
     x->last = tb__dist_now();
     x->ex = (tb_rad_exchange){.ctx = x, .rank = tb_dist_rank(), .ranks = R, .allgather = tb__radx_allgather,
                               .allgatherf = tb__radx_allgatherf,
+                              .allgather_state = tb__radx_allgather_state, .select = tb__radx_select,
                               .agree = tb__radx_agree, .agree_status = tb__radx_agree_status,
                               .report = tb__radx_report, .fail = tb__radx_fail};
     return &x->ex;
@@ -135,6 +223,12 @@ void tb_dist_rad_exchange_free(tb_rad_exchange *ex)
     if (!ex)
         return;
     tb__radx *x = ex->ctx;
+#ifdef TB_HAVE_MPI
+    if (x->type_n)
+        MPI_Type_free(&x->type);
+    if (x->op_made)
+        MPI_Op_free(&x->op);
+#endif
     free(x->counts);
     free(x->displs);
     free(x);

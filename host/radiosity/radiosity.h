@@ -183,6 +183,17 @@ typedef struct tb_rad_exchange {
     tb_status (*allgather)(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts);
     /* The same for floats (the several-shooters mode's form factors). */
     tb_status (*allgatherf)(void *ctx, const float *mine, size_t n_mine, float *all, const size_t *counts);
+    /* Collective, the update split over processes by shooter (docs/distributed.md):
+     * buf holds n doubles, every process's own: buf[0] = h (the same everywhere),
+     * buf[1..h) a candidate (buf[1] its unshot power, buf[2] its shooter's key,
+     * then its payload), buf[h..n) values only one process has nonzero. On return
+     * every process has the candidate of the largest power (ties: the lower key)
+     * and the element-wise sums of the rest (exact: one term is nonzero).
+     * NULL: no split. */
+    tb_status (*select)(void *ctx, double *buf, size_t n);
+    /* As allgather, for the solver's state (gathered when a split solve ends:
+     * not counted as receivers). */
+    tb_status (*allgather_state)(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts);
     /* Rank 0's `flag` on every process (a stop decision that reads a clock). */
     int (*agree)(void *ctx, int flag);
     /* The lowest-ranked failure among every process's `st` (its message as

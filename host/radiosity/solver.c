@@ -17,6 +17,11 @@
 
 static inline int tb__elem_size(const tb_rad_element *e) { return e->v[3] == TB_RAD_NONE ? 3 : 4; }
 
+/* Blocks of shooters the unshot sum adds apart (then the blocks in order):
+ * fixed, so the sum is the same however the shooters are split over
+ * processes (each adds its blocks; tb_rad_exchange.select shares them). */
+#define TB__RAD_UNSHOT_BLOCKS 64
+
 /* Receivers within this many shooter radii (centroid to farthest corner)
  * get the near-field form factor (tb__near_field). */
 #define TB__RAD_NEAR 4.0
@@ -25,6 +30,7 @@ TB_STAT_COUNTER(tb__rad_shots, "Radiosity/shots");
 TB_STAT_COUNTER(tb__rad_ffs, "Radiosity/form factors");
 TB_STAT_COUNTER(tb__rad_rays, "Radiosity/rays (receivers x samples)");
 TB_STAT_COUNTER(tb__rad_cached, "Radiosity/shots from cached form factors");
+TB_STAT_COUNTER(tb__rad_split_shots, "Radiosity/shots with the update split over ranks");
 TB_STAT_COUNTER(tb__rad_facing_none, "Radiosity/receiver clusters facing no sample");
 TB_STAT_TIMER(tb__rad_ff_time, "Radiosity/form factor time");
 TB_STAT_TIMER(tb__rad_update_time, "Radiosity/update time");
@@ -72,7 +78,12 @@ struct tb_rad_solver {
     size_t cache_bytes;     /* held by `cache` */
     uint64_t shots;
     double seconds;
-    double emitted, absorbed, escaped;
+    double emitted;
+    double absorbed, escaped; /* at create (a continued solution's absorbed); the shots' add eabs, erec below */
+    double *eabs, *erec;    /* nelems: power each element absorbed and received over the shots; the totals
+                               sum them in element order when asked, so they do not depend on how the
+                               elements are split over processes */
+    double shot_total;      /* power shot (elements' and lights') */
     double total_area;
     double *rho_mean;       /* nc: area-weighted mean reflectance */
     uint32_t *rrow;         /* nelems: which of the distinct reflectance rows the element has, or NULL when
@@ -93,6 +104,15 @@ struct tb_rad_solver {
      * everyone's, and the counts (all equal) */
     float *xsev, *xsevall; /* the form factors are floats: sent as they are, half the bytes of doubles */
     size_t *xsevcounts;
+    /* The update split over processes (tb__split_begin; docs/distributed.md):
+     * this process updates its shooters' elements and its vertices; the
+     * processes agree on the next shooter and the unshot sum each shot. */
+    bool split;             /* inside a split tb_rad_solver_run */
+    size_t k0, k1, v0, v1;  /* this process's shooters and vertices */
+    size_t nblk;            /* blocks of shooters whose unshot powers are summed apart (fixed: min(nsh, 64)) */
+    double *sel;            /* 3 + nc + nblk: tb_rad_exchange.select's buffer: count, power, key, dBi, blocks */
+    double *xst;            /* state gathered at the end of a split solve */
+    size_t *xstcounts;      /* values per process */
 };
 
 static tb_status tb__lights_init(tb_rad_solver *s, const tb_rad_state *state);
@@ -151,6 +171,42 @@ static double tb__shooter_power(const tb_rad_solver *s, size_t k)
     return p;
 }
 
+/* The first shooter of block b of the unshot sum (b = nblk: nsh). */
+static size_t tb__block_start(const tb_rad_solver *s, size_t b) { return b * s->nsh / s->nblk; }
+
+/* Block b's unshot power: its shooters' elements' (pel order). */
+static double tb__block_unshot(const tb_rad_solver *s, size_t b)
+{
+    double p = 0.0;
+    for (uint32_t q = s->pstart[tb__block_start(s, b)]; q < s->pstart[tb__block_start(s, b + 1)]; q++)
+        p += s->up[s->pel[q]];
+    return p;
+}
+
+/* Shooter k's unshot radiosity per channel, the density it shoots: its
+ * elements' unshot power over its area (one element: its unshot radiosity). */
+static void tb__shooter_dbi(const tb_rad_solver *s, size_t k, double *dBi)
+{
+    size_t nc = (size_t)s->nc;
+    uint32_t pa = s->pstart[k], pb = s->pstart[k + 1];
+    for (size_t c = 0; c < nc; c++) {
+        double p = 0.0;
+        for (uint32_t q = pa; q < pb; q++) {
+            size_t x = s->pel[q] * nc + c;
+            p += pb - pa == 1 ? s->dB[x] : s->dB[x] * s->m.elems[s->pel[q]].area;
+        }
+        dBi[c] = pb - pa == 1 ? p : p / s->sarea[k];
+    }
+}
+
+/* The elements this process updates, as a range of pel: all of them, or
+ * in a split solve its shooters'. */
+static void tb__owned(const tb_rad_solver *s, uint32_t *qa, uint32_t *qb)
+{
+    *qa = s->split ? s->pstart[s->k0] : 0;
+    *qb = s->split ? s->pstart[s->k1] : (uint32_t)s->m.nelems;
+}
+
 /* Element j's unshot power changed: its shooter's priority follows (on two
  * levels at tb__queue_flush, once per shot). */
 static inline void tb__queue_elem(tb_rad_solver *s, size_t j)
@@ -159,6 +215,20 @@ static inline void tb__queue_elem(tb_rad_solver *s, size_t j)
         tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
     else
         s->sdirty[s->pof[j]] = 1;
+}
+
+/* Every shooter's priority from its elements' unshot powers. The queue is
+ * a function of them (ties go to the lower key), so a rebuilt queue gives
+ * the original's order. */
+static void tb__queue_rebuild(tb_rad_solver *s)
+{
+    for (size_t k = 0; k < s->nsh; k++) {
+        double pw = tb__shooter_power(s, k);
+        if (pw > 0.0)
+            tb_pqueue_set(&s->q, (uint32_t)k, pw);
+        else
+            tb_pqueue_remove(&s->q, (uint32_t)k);
+    }
 }
 
 /* Two levels: the patches whose elements changed get their new sums. */
@@ -262,6 +332,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     tb_rad_lights_free(s->lights);
     free(s->xmine), free(s->xall), free(s->xcounts);
     free(s->xsev), free(s->xsevall), free(s->xsevcounts);
+    free(s->eabs), free(s->erec), free(s->sel), free(s->xst), free(s->xstcounts);
     free(s->lshot);
     free(s->lpower);
     free(s);
@@ -560,6 +631,25 @@ static tb_status tb__exchange_init(tb_rad_solver *s, const tb_rad_exchange *ex)
         size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
         s->xcounts[c % R] += q1 - c * TB__RAD_CLUSTER;
     }
+    /* the split update: blocks of shooters and a range of vertices per process */
+    if (!ex->select || !ex->allgather_state || ex->several)
+        return TB_OK;
+    size_t nc = (size_t)s->nc;
+    s->sel = malloc((3 + nc + s->nblk) * sizeof *s->sel);
+    s->xstcounts = malloc(R * sizeof *s->xstcounts);
+    size_t most = 0;
+    for (size_t r = 0; r < R; r++) {
+        size_t ka = tb__block_start(s, r * s->nblk / R), kb = tb__block_start(s, (r + 1) * s->nblk / R);
+        size_t els = s->pstart[kb] - s->pstart[ka], va = r * nv / R, vb = (r + 1) * nv / R;
+        if (r == (size_t)ex->rank)
+            s->k0 = ka, s->k1 = kb, s->v0 = va, s->v1 = vb;
+        if (s->xstcounts)
+            s->xstcounts[r] = els * (2 * nc + 3) + (vb - va) * nc;
+        most += els * (2 * nc + 3) + (vb - va) * nc;
+    }
+    s->xst = malloc((most ? most : 1) * sizeof *s->xst);
+    if (!s->sel || !s->xstcounts || !s->xst)
+        return tb_error(TB_ERR_NOMEM, "radiosity: out of memory for the exchange");
     return TB_OK;
 }
 
@@ -635,10 +725,13 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     s->Hv = tb__calloc(nv * (size_t)nc, sizeof *s->Hv, &ok);
     s->dB = tb__calloc(ne * (size_t)nc, sizeof *s->dB, &ok);
     s->up = tb__calloc(ne, sizeof *s->up, &ok);
+    s->eabs = tb__calloc(ne, sizeof *s->eabs, &ok);
+    s->erec = tb__calloc(ne, sizeof *s->erec, &ok);
     s->ff = tb__calloc(s->nrecv, sizeof *s->ff, &ok);
     s->vff = tb__calloc(nv, sizeof *s->vff, &ok);
     s->eff = tb__calloc(ne, sizeof *s->eff, &ok);
     s->nsh = mesh->npatches > 0 ? mesh->npatches : ne;
+    s->nblk = s->nsh < TB__RAD_UNSHOT_BLOCKS ? s->nsh : TB__RAD_UNSHOT_BLOCKS;
     if (!o.no_cache)
         s->cache = tb__calloc(s->nsh, sizeof *s->cache, &ok);
     s->pof = tb__calloc(ne, sizeof *s->pof, &ok);
@@ -828,6 +921,7 @@ static tb_status tb__cache_store(tb_rad_solver *s, size_t k);
 static tb_status tb__step_several(tb_rad_solver *s, const tb_rad_exchange *ex, bool *shot);
 static void tb__hemicube_near_patch(tb_rad_solver *s, size_t k);
 static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t i, bool share);
+static tb_status tb__select(tb_rad_solver *s);
 
 /* Most bytes of form factors kept for shooters shot again. */
 #define TB__RAD_CACHE_BYTES ((size_t)512 << 20)
@@ -858,7 +952,10 @@ static tb_status tb__shooter_ff(tb_rad_solver *s, size_t k, bool share)
     } else {
         for (size_t v = 0; v < nv; v++)
             s->vff[v] = (float)s->ff[v];
-        for (size_t j = 0; j < ne; j++) {
+        uint32_t qa, qb; /* a split solve: this process's elements only (the others' are not read) */
+        tb__owned(s, &qa, &qb);
+        for (uint32_t q = qa; q < qb; q++) {
+            size_t j = s->pel[q];
             double g = s->gnear[j];
             if (isnan(g)) {
                 /* F_ji: the element's mean of its corners' point form factors */
@@ -1052,7 +1149,10 @@ static void tb__near_field(tb_rad_solver *s, size_t sk)
         s->ff[v] = exact * vis;
     }
     s->nnear = 0;
-    for (size_t j = 0; j < s->m.nelems; j++) {
+    uint32_t qa, qb; /* a split solve: this process's elements only */
+    tb__owned(s, &qa, &qb);
+    for (uint32_t q = qa; q < qb; q++) {
+        size_t j = s->pel[q];
         if (s->pof[j] == sk || !tb__near_element(s, j, cen, rad))
             continue;
         const tb_rad_element *ej = &s->m.elems[j];
@@ -1098,15 +1198,116 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
         return tb__step_several(s, ex, shot);
     uint32_t i; /* the shooter: a patch, or an element on one level */
     double pri;
-    if (!tb_pqueue_peek(&s->q, &i, &pri) || !(pri > 0.0))
+    if (s->split) /* the processes agreed on it after the last shot */
+        i = (uint32_t)s->sel[2], pri = s->sel[1];
+    else if (!tb_pqueue_peek(&s->q, &i, &pri))
+        return TB_OK;
+    if (!(pri > 0.0))
         return TB_OK;
     double t0 = tb__now();
     tb_status st = tb__shooter_ff(s, i, true);
     if (st)
         return st;
     tb__shoot(s, i, t0);
+    if (s->split) {
+        tb_stat_add(&tb__rad_split_shots, 1);
+        if ((st = tb__select(s)))
+            return st;
+    }
     if (shot)
         *shot = true;
+    return TB_OK;
+}
+
+/* A split solve: every process offers its best shooter (its unshot
+ * radiosity per channel with it) and its blocks' unshot sums; all get the
+ * best of all (ties: the lower key, as one queue would) and every block's
+ * sum. Collective. */
+static tb_status tb__select(tb_rad_solver *s)
+{
+    const tb_rad_exchange *ex = s->opt.exchange;
+    size_t nc = (size_t)s->nc, h = 3 + nc, n = h + s->nblk;
+    double *b = s->sel;
+    memset(b, 0, n * sizeof *b);
+    b[0] = (double)h;
+    uint32_t k;
+    double pri;
+    if (tb_pqueue_peek(&s->q, &k, &pri)) {
+        b[1] = pri, b[2] = (double)k;
+        tb__shooter_dbi(s, k, b + 3);
+    } else {
+        b[1] = -INFINITY, b[2] = (double)UINT32_MAX; /* none: loses to any shooter */
+    }
+    size_t R = (size_t)ex->ranks, r = (size_t)ex->rank;
+    for (size_t blk = r * s->nblk / R; blk < (r + 1) * s->nblk / R; blk++)
+        b[h + blk] = tb__block_unshot(s, blk);
+    return ex->select(ex->ctx, b, n);
+}
+
+/* Whether a run splits the update over the processes: ray cast over the
+ * shared clusters in the deterministic mode, no lights (shot whole, on
+ * every process), and nothing that reads the whole state between shots
+ * (a report: checkpoints and --report rows keep the replicated update). */
+static bool tb__can_split(const tb_rad_solver *s, bool report)
+{
+    const tb_rad_exchange *ex = s->opt.exchange;
+    return ex && ex->ranks > 1 && !ex->several && s->sel && s->xcounts && !s->lights && !report;
+}
+
+/* Starts a split run (collective): the queue keeps this process's shooters
+ * only, and the processes agree on the first shooter. */
+static tb_status tb__split_begin(tb_rad_solver *s)
+{
+    for (size_t k = 0; k < s->nsh; k++)
+        if (k < s->k0 || k >= s->k1)
+            tb_pqueue_remove(&s->q, (uint32_t)k);
+    s->split = true;
+    return tb__select(s);
+}
+
+/* Ends a split run (collective): every process gets every element's and
+ * vertex's state, the whole queue, and an empty cache (this run's entries
+ * hold this process's elements only). */
+static tb_status tb__split_end(tb_rad_solver *s)
+{
+    const tb_rad_exchange *ex = s->opt.exchange;
+    size_t nc = (size_t)s->nc, R = (size_t)ex->ranks, nv = s->m.nverts;
+    size_t nmine = s->xstcounts[ex->rank];
+    double *mine = malloc((nmine ? nmine : 1) * sizeof *mine);
+    if (!mine)
+        return tb_error(TB_ERR_NOMEM, "radiosity: out of memory gathering the state");
+    /* this process's part: per element (pel order) He, dB, up, eabs, erec; its vertices' Hv */
+    size_t n = 0;
+    for (uint32_t q = s->pstart[s->k0]; q < s->pstart[s->k1]; q++) {
+        size_t j = s->pel[q];
+        memcpy(mine + n, s->He + j * nc, nc * sizeof *mine), n += nc;
+        memcpy(mine + n, s->dB + j * nc, nc * sizeof *mine), n += nc;
+        mine[n++] = s->up[j], mine[n++] = s->eabs[j], mine[n++] = s->erec[j];
+    }
+    memcpy(mine + n, s->Hv + s->v0 * nc, (s->v1 - s->v0) * nc * sizeof *mine), n += (s->v1 - s->v0) * nc;
+    tb_status st = ex->allgather_state(ex->ctx, mine, n, s->xst, s->xstcounts);
+    free(mine);
+    if (st)
+        return st;
+    const double *all = s->xst;
+    for (size_t r = 0, at = 0; r < R; r++) {
+        size_t ka = tb__block_start(s, r * s->nblk / R), kb = tb__block_start(s, (r + 1) * s->nblk / R);
+        for (uint32_t q = s->pstart[ka]; q < s->pstart[kb]; q++) {
+            size_t j = s->pel[q];
+            memcpy(s->He + j * nc, all + at, nc * sizeof *all), at += nc;
+            memcpy(s->dB + j * nc, all + at, nc * sizeof *all), at += nc;
+            s->up[j] = all[at++], s->eabs[j] = all[at++], s->erec[j] = all[at++];
+        }
+        size_t va = r * nv / R, vb = (r + 1) * nv / R;
+        memcpy(s->Hv + va * nc, all + at, (vb - va) * nc * sizeof *all), at += (vb - va) * nc;
+    }
+    s->split = false;
+    tb__queue_rebuild(s);
+    if (s->cache) {
+        for (size_t k = 0; k < s->nsh; k++)
+            free(s->cache[k]), s->cache[k] = NULL;
+        s->cache_bytes = 0;
+    }
     return TB_OK;
 }
 
@@ -1118,20 +1319,20 @@ static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0)
     int nc = s->nc;
     tb_timer_token tt = tb_timer_start(&tb__rad_update_time);
     /* the patch shoots its elements' unshot power as one density over its area */
+    /* (a split solve: as its owner computed it for the selection) */
     double dBi[TB_CHANNELS_MAX];
     uint32_t pa = s->pstart[i], pb = s->pstart[i + 1];
-    for (int c = 0; c < nc; c++) {
-        double p = 0.0;
-        for (uint32_t q = pa; q < pb; q++) {
-            size_t x = s->pel[q] * (size_t)nc + (size_t)c;
-            p += pb - pa == 1 ? s->dB[x] : s->dB[x] * s->m.elems[s->pel[q]].area;
-            s->dB[x] = 0.0;
-        }
-        dBi[c] = pb - pa == 1 ? p : p / s->sarea[i];
-    }
-    double shot_power = 0.0, received_all = 0.0;
+    if (s->split)
+        memcpy(dBi, s->sel + 3, (size_t)nc * sizeof *dBi);
+    else
+        tb__shooter_dbi(s, i, dBi);
+    for (uint32_t q = pa; q < pb; q++)
+        for (int c = 0; c < nc; c++)
+            s->dB[s->pel[q] * (size_t)nc + (size_t)c] = 0.0;
+    double shot_power = 0.0;
     for (int c = 0; c < nc; c++)
         shot_power += dBi[c] * s->sarea[i];
+    s->shot_total += shot_power;
     /* receivers gather */
     if (s->opt.ff == TB_RAD_FF_HEMICUBE) {
         for (size_t j = 0; j < s->m.nelems; j++) {
@@ -1149,8 +1350,8 @@ static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0)
                 for (int k = 0; k < tb__elem_size(ej); k++)
                     s->Hv[ej->v[k] * (size_t)nc + (size_t)c] += dh * ej->area / s->vert_area[ej->v[k]];
             }
-            received_all += rec;
-            s->absorbed += abs_;
+            s->erec[j] += rec;
+            s->eabs[j] += abs_;
             s->up[j] = tb__unshot_power(s, j);
             tb__queue_elem(s, j);
         }
@@ -1167,13 +1368,17 @@ static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0)
         if (s->rrow)
             for (size_t k = 0; k < s->nrows; k++)
                 s->row_dot[k] = tb__dot(rhos + (size_t)s->row_elem[k] * ncs, dBi, ncs);
-        for (size_t v = 0; v < s->m.nverts; v++) {
+        size_t va = s->split ? s->v0 : 0, vb = s->split ? s->v1 : s->m.nverts;
+        for (size_t v = va; v < vb; v++) {
             double f = s->vff[v];
             if (f != 0.0)
                 for (size_t c = 0; c < ncs; c++)
                     Hv[v * ncs + c] += dBi[c] * f;
         }
-        for (size_t j = 0; j < s->m.nelems; j++) {
+        uint32_t qa, qb; /* each element's update is its own: any split gives the same values */
+        tb__owned(s, &qa, &qb);
+        for (uint32_t q = qa; q < qb; q++) {
+            size_t j = s->pel[q];
             double g = s->eff[j];
             if (s->pof[j] == i || !(g > 0.0)) /* the shooting patch's own elements get nothing */
                 continue;
@@ -1187,8 +1392,8 @@ static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0)
              * power): sum_c rho dBi g aj, per distinct reflectance row */
             double rec = sum_dbi * g * aj;
             double refl = (s->rrow ? s->row_dot[s->rrow[j]] : tb__dot(rhos + j * ncs, dBi, ncs)) * g * aj;
-            received_all += rec;
-            s->absorbed += rec - refl;
+            s->erec[j] += rec;
+            s->eabs[j] += rec - refl;
             s->up[j] += refl; /* = tb__unshot_power(s, j) up to rounding */
             tb__queue_elem(s, j);
         }
@@ -1197,7 +1402,6 @@ static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0)
     tb_pqueue_remove(&s->q, i);
     for (uint32_t q = pa; q < pb; q++)
         s->up[s->pel[q]] = 0.0; /* = tb__unshot_power: its dB is 0 */
-    s->escaped += shot_power - received_all;
     (void)tb_timer_stop(tt);
     s->shots++;
     tb_stat_add(&tb__rad_shots, 1);
@@ -1290,17 +1494,23 @@ double tb_rad_unshot_fraction(const tb_rad_solver *s)
 {
     if (!(s->emitted > 0.0))
         return 0.0;
+    /* by blocks (a split solve: the sums the processes shared at its last shot) */
     double u = s->lpending;
-    for (size_t i = 0; i < s->m.nelems; i++)
-        u += s->up[i];
+    for (size_t b = 0; b < s->nblk; b++)
+        u += s->split ? s->sel[3 + (size_t)s->nc + b] : tb__block_unshot(s, b);
     return u / s->emitted;
 }
 
 tb_rad_energy tb_rad_solver_energy(const tb_rad_solver *s)
 {
-    tb_rad_energy e = {.emitted = s->emitted, .absorbed = s->absorbed, .escaped = s->escaped, .unshot = s->lpending};
-    for (size_t i = 0; i < s->m.nelems; i++)
+    tb_rad_energy e = {.emitted = s->emitted, .absorbed = s->absorbed, .unshot = s->lpending};
+    double rec = 0.0;
+    for (size_t i = 0; i < s->m.nelems; i++) {
         e.unshot += tb__unshot_power(s, i);
+        e.absorbed += s->eabs[i];
+        rec += s->erec[i];
+    }
+    e.escaped = s->escaped + (s->shot_total - rec);
     return e;
 }
 
@@ -1323,6 +1533,12 @@ tb_status tb_rad_solver_run(tb_rad_solver *s, const tb_rad_stop *stop, tb_rad_re
     double t0 = tb__now();
     tb_status st = TB_OK;
     uint64_t n = 0;
+    bool split = tb__can_split(s, report != NULL);
+    if (split && (st = tb__split_begin(s))) {
+        if (s->opt.exchange->fail)
+            s->opt.exchange->fail(s->opt.exchange->ctx, st);
+        return st;
+    }
     double frac = tb_rad_unshot_fraction(s);
     while (frac >= thr) {
         if (sp.max_shots > 0 && n >= sp.max_shots)
@@ -1353,6 +1569,8 @@ tb_status tb_rad_solver_run(tb_rad_solver *s, const tb_rad_stop *stop, tb_rad_re
     }
     if (draw)
         tb_progress_finish(&pr);
+    if (!st && split)
+        st = tb__split_end(s);
     if (!st && report && (every == 0 || n % every != 0))
         st = report(user, s);
     /* over several processes a failure here is this process's alone (the
@@ -1524,7 +1742,6 @@ static tb_status tb__lights_step(tb_rad_solver *s, bool *shot)
     }
     tt = tb_timer_start(&tb__rad_update_time);
     bool hemi = s->opt.ff == TB_RAD_FF_HEMICUBE;
-    double received = 0.0;
     for (size_t j = 0; j < ne; j++) {
         const tb_rad_element *ej = &s->m.elems[j];
         double rec = 0.0, abs_ = 0.0, aj = ej->area;
@@ -1543,8 +1760,8 @@ static tb_status tb__lights_step(tb_rad_solver *s, bool *shot)
         }
         if (!(rec > 0.0))
             continue;
-        received += rec;
-        s->absorbed += abs_;
+        s->erec[j] += rec;
+        s->eabs[j] += abs_;
         s->up[j] = tb__unshot_power(s, j);
         tb__queue_elem(s, j);
     }
@@ -1558,7 +1775,7 @@ static tb_status tb__lights_step(tb_rad_solver *s, bool *shot)
     for (int q = 0; q < n; q++)
         if (!s->lshot[q])
             s->lpending += s->lpower[q];
-    s->escaped += s->lpower[k] - received;
+    s->shot_total += s->lpower[k];
     (void)tb_timer_stop(tt);
     s->shots++;
     tb_stat_add(&tb__rad_shots, 1);
@@ -1570,14 +1787,14 @@ static tb_status tb__lights_step(tb_rad_solver *s, bool *shot)
 /* ---------------------------------------------------------------- packing */
 
 /* Header: u64 nelems, nverts, nchannels, nlights, shooters, shots; f64
- * absorbed, escaped, lpending, seconds. Then He, Hv, dB, up (doubles),
- * lshot (bytes). */
-#define TB__RAD_PACK_HEAD (6 * sizeof(uint64_t) + 4 * sizeof(double))
+ * absorbed, escaped (at create), lpending, seconds, power shot. Then He,
+ * Hv, dB, up, eabs, erec (doubles), lshot (bytes). */
+#define TB__RAD_PACK_HEAD (6 * sizeof(uint64_t) + 5 * sizeof(double))
 
 size_t tb_rad_solver_packed_size(const tb_rad_solver *s)
 {
     size_t ne = s->m.nelems, nv = s->m.nverts, nc = (size_t)s->nc;
-    return TB__RAD_PACK_HEAD + (ne * nc + nv * nc + ne * nc + ne) * sizeof(double) + (size_t)s->opt.nlights;
+    return TB__RAD_PACK_HEAD + (ne * nc + nv * nc + ne * nc + 3 * ne) * sizeof(double) + (size_t)s->opt.nlights;
 }
 
 void tb_rad_solver_pack(const tb_rad_solver *s, void *buf)
@@ -1585,13 +1802,15 @@ void tb_rad_solver_pack(const tb_rad_solver *s, void *buf)
     size_t ne = s->m.nelems, nv = s->m.nverts, nc = (size_t)s->nc;
     unsigned char *p = buf;
     uint64_t h[6] = {ne, nv, nc, (uint64_t)s->opt.nlights, s->nsh, s->shots};
-    double d[4] = {s->absorbed, s->escaped, s->lpending, s->seconds};
+    double d[5] = {s->absorbed, s->escaped, s->lpending, s->seconds, s->shot_total};
     memcpy(p, h, sizeof h), p += sizeof h;
     memcpy(p, d, sizeof d), p += sizeof d;
     memcpy(p, s->He, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
     memcpy(p, s->Hv, nv * nc * sizeof(double)), p += nv * nc * sizeof(double);
     memcpy(p, s->dB, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
     memcpy(p, s->up, ne * sizeof(double)), p += ne * sizeof(double);
+    memcpy(p, s->eabs, ne * sizeof(double)), p += ne * sizeof(double);
+    memcpy(p, s->erec, ne * sizeof(double)), p += ne * sizeof(double);
     if (s->opt.nlights > 0)
         memcpy(p, s->lshot, (size_t)s->opt.nlights);
 }
@@ -1600,7 +1819,7 @@ tb_status tb_rad_solver_unpack(tb_rad_solver *s, const void *buf, size_t len)
 {
     size_t ne = s->m.nelems, nv = s->m.nverts, nc = (size_t)s->nc;
     uint64_t h[6];
-    double d[4];
+    double d[5];
     if (len < TB__RAD_PACK_HEAD)
         return tb_error(TB_ERR_FORMAT, "radiosity: packed state of %zu bytes is shorter than its header", len);
     const unsigned char *p = buf;
@@ -1616,21 +1835,15 @@ tb_status tb_rad_solver_unpack(tb_rad_solver *s, const void *buf, size_t len)
         return tb_error(TB_ERR_FORMAT, "radiosity: packed state has %zu bytes, expected %zu", len,
                         tb_rad_solver_packed_size(s));
     s->shots = h[5];
-    s->absorbed = d[0], s->escaped = d[1], s->lpending = d[2], s->seconds = d[3];
+    s->absorbed = d[0], s->escaped = d[1], s->lpending = d[2], s->seconds = d[3], s->shot_total = d[4];
     memcpy(s->He, p, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
     memcpy(s->Hv, p, nv * nc * sizeof(double)), p += nv * nc * sizeof(double);
     memcpy(s->dB, p, ne * nc * sizeof(double)), p += ne * nc * sizeof(double);
     memcpy(s->up, p, ne * sizeof(double)), p += ne * sizeof(double);
+    memcpy(s->eabs, p, ne * sizeof(double)), p += ne * sizeof(double);
+    memcpy(s->erec, p, ne * sizeof(double)), p += ne * sizeof(double);
     if (s->opt.nlights > 0)
         memcpy(s->lshot, p, (size_t)s->opt.nlights);
-    /* the queue is a function of the unshot powers (ties go to the lower
-     * key), so rebuilding it gives the original's order */
-    for (size_t k = 0; k < s->nsh; k++) {
-        double pw = tb__shooter_power(s, k);
-        if (pw > 0.0)
-            tb_pqueue_set(&s->q, (uint32_t)k, pw);
-        else
-            tb_pqueue_remove(&s->q, (uint32_t)k);
-    }
+    tb__queue_rebuild(s);
     return TB_OK;
 }

@@ -3,6 +3,8 @@
 # "Radiosity"): each shot's receivers shared over 2 and over 3 ranks give
 # the one-process `--patches` CSV byte for byte, also with adaptive
 # subdivision and two levels (patches and elements), and any thread count;
+# the update is split over the ranks (every shot, also with 3 ranks whose
+# shooter ranges differ in size) and the energy sums equal one process's;
 # the stats have per-rank figures; --several-shooters gives a result that
 # does not depend on the thread count and stays within 1 % (relative RMS) of
 # the deterministic one; a bad scene stops every rank with its
@@ -17,16 +19,23 @@ R="--method radiosity --max-edge 120 --threshold 0.02"
 rad1() { "$TESTBED" render "$S" $R "$@" > "$T/out" 2>&1 || { cat "$T/out"; fail "one process: $*"; }; }
 radN() { n=$1; shift; $MPIRUN -np "$n" "$TESTBED" render "$S" $R "$@" > "$T/out" 2>&1 || { cat "$T/out"; fail "$n ranks: $*"; }; }
 
-rad1 --patches "$T/p1.csv" --threads 2
+rad1 --patches "$T/p1.csv" --threads 2 --stats "$T/s1.json"
 rad1 --patches "$T/a1.csv" --adapt 0.2 --adapt-levels 2
 rad1 --patches "$T/t1.csv" --patch-edge 300 --seed 5
 for n in 2 3; do
     radN $n --patches "$T/p$n.csv" --threads 1 --stats "$T/s$n.json"
     cmp "$T/p1.csv" "$T/p$n.csv" || fail "$n ranks: patches differ from one process"
     grep -q "rank $((n - 1)): [0-9]* receivers, work" "$T/out" || { cat "$T/out"; fail "no per-rank line"; }
-    python3 - "$T/s$n.json" "$n" <<'PY' || fail "per-rank stats of $n ranks"
+    python3 - "$T/s$n.json" "$n" "$T/s1.json" <<'PY' || fail "per-rank stats of $n ranks"
 import json, sys
-j = json.load(open(sys.argv[1])); n = int(sys.argv[2])
+j = json.load(open(sys.argv[1])); n = int(sys.argv[2]); one = json.load(open(sys.argv[3]))
+# every shot made with the update split over the ranks (not the replicated path)
+split = j['counters']['Radiosity/shots with the update split over ranks']
+assert split == j['shots'] > 0, (split, j['shots'])
+assert one['counters']['Radiosity/shots with the update split over ranks'] == 0
+# the energy bookkeeping is summed in one order whatever the split
+for k in ('power_emitted', 'power_absorbed', 'power_unshot', 'power_escaped'):
+    assert j[k] == one[k], (k, j[k], one[k])
 assert j['ranks'] == n, j.get('ranks')
 got = [j['rank%d_receivers' % r] for r in range(n)]
 assert all(g > 0 for g in got), got
@@ -36,8 +45,10 @@ PY
     radN $n --patches "$T/a$n.csv" --adapt 0.2 --adapt-levels 2 --threads 2
     cmp "$T/a1.csv" "$T/a$n.csv" || fail "$n ranks: adaptive patches differ from one process"
 done
-radN 2 --patches "$T/t2.csv" --patch-edge 300 --seed 5
-cmp "$T/t1.csv" "$T/t2.csv" || fail "2 ranks, two levels: patches differ from one process"
+for n in 2 3; do
+    radN $n --patches "$T/t$n.csv" --patch-edge 300 --seed 5
+    cmp "$T/t1.csv" "$T/t$n.csv" || fail "$n ranks, two levels: patches differ from one process"
+done
 
 # several shooters in flight: the same result for any thread count, close
 # to (not equal to) the deterministic one; one rank: no change
