@@ -94,6 +94,16 @@
 #ifndef TB_BVH_STACK
 #define TB_BVH_STACK 96
 #endif
+// Leaves whose placed objects wait for testing (tb_bvh_traverse): a longer
+// list runs that code in fewer passes but prunes with a later best t (8 was
+// 1.5x slower than 1 on a scene of primitives and CSG trees on lavapipe).
+#ifndef TB_BVH_DEFER
+#define TB_BVH_DEFER 1
+#endif
+// Any kind besides triangles present (their tests are deferred).
+#define TB_BVH_HAS_PLACED_KINDS                                                                                      \
+    (TB_BVH_HAS_SPHERES || TB_BVH_HAS_CUBES || TB_BVH_HAS_QUADRICS || TB_BVH_HAS_PLANAR || TB_BVH_HAS_TORI ||        \
+     TB_BVH_HAS_CSG)
 
 // Traversal slack of the CPU BVH (TB__ACCEL_T_TOL = 2^-16): boxes are pruned
 // with [tmin, best t] widened by this relative amount on each side.
@@ -563,88 +573,112 @@ bool tb_bvh_traverse(tb_gpu_ray r, uint nnodes, bool any_hit, out tb_bvh_hit h)
         // own loop.
         uint stack[TB_BVH_STACK];
         int sp = 0;
-        bool done = false;
+        bool done = false, stop = false;
         uint cur_off = 0u, cur_count = 0u;
+        // Leaves' placed objects are not tested inside the walk's loop but
+        // deferred (their leaf's entry range, up to TB_BVH_DEFER leaves):
+        // the walk stops when the list is full or it ends, the deferred
+        // objects are tested, and the walk resumes from its stack. lavapipe (Mesa
+        // 22) runs every branch under a mask, with no jump over a branch no
+        // lane takes, and every loop body at least once: the placed kinds'
+        // code (CSG sweeps, tori, prisms) inside the walk's loop cost its
+        // full length at every leaf visit, even where no lane held such an
+        // object (docs/gpu.md, "Speed"). Deferred, it runs once per round.
+        uint dq_k[TB_BVH_DEFER], dq_end[TB_BVH_DEFER];
+        int nd = 0;
         for (;;) {
-            // Inner nodes until a leaf (or the end).
-            while (!done && cur_count == 0u) {
-                vec3 lo0, hi0, lo1, hi1;
-                uint off0, cnt0, off1, cnt1;
-                tb_bvh_fetch_node(2u * cur_off, lo0, hi0, off0, cnt0);
-                tb_bvh_fetch_node(2u * cur_off + 1u, lo1, hi1, off1, cnt1);
+            for (;;) {
+                // Inner nodes until a leaf (or the end).
+                while (!done && cur_count == 0u) {
+                    vec3 lo0, hi0, lo1, hi1;
+                    uint off0, cnt0, off1, cnt1;
+                    tb_bvh_fetch_node(2u * cur_off, lo0, hi0, off0, cnt0);
+                    tb_bvh_fetch_node(2u * cur_off + 1u, lo1, hi1, off1, cnt1);
+                    float hi_t = bt + abs(bt) * TB_T_TOL;
+                    float t0, t1;
+                    bool h0 = tb_aabb_slab(lo0, hi0, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+                    bool h1 = tb_aabb_slab(lo1, hi1, r.o, r.d, inv, lo_t, hi_t, t0, t1);
+                    bool swap = r.d[cnt0 >> 16] < 0.0; // the second child first
+                    bool hn = swap ? h1 : h0, hf = swap ? h0 : h1;
+                    if (hn || hf) {
+                        if (hn && hf && sp < TB_BVH_STACK)
+                            stack[sp++] = 2u * cur_off + (swap ? 0u : 1u);
+                        bool take1 = hn ? swap : !swap;
+                        cur_off = take1 ? off1 : off0;
+                        cur_count = (take1 ? cnt1 : cnt0) & 0xffffu;
+                    } else {
+                        // Pop children until one is still within reach.
+                        TB_BVH_POP()
+                    }
+                }
+                if (done)
+                    break;
+                // The leaf: triangles now, placed objects deferred.
+                uint k = cur_off, end = cur_off + cur_count;
+                if (TB_BVH_HAS_TRIANGLES) {
+                    for (; k < end; ++k) {
+                        uint ref = tb_bvh_fetch_ref(k);
+                        if ((ref & TB_GPU_REF_KIND) != 0u)
+                            break;
+                        vec3 v0, v1, v2;
+                        float t;
+                        tb_bvh_fetch_tri(ref, v0, v1, v2);
+                        if (!tb_tri_hit(w, v0, v1, v2, t) || t < r.tmin || t > r.tmax)
+                            continue;
+                        uvec3 keys = tb_bvh_fetch_tri_keys(ref);
+                        TB_BVH_TAKE(t, keys.x, keys.y, keys.z)
+                    }
+                }
+                if (stop)
+                    break;
+                if (TB_BVH_HAS_PLACED_KINDS && k < end) {
+                    dq_k[nd] = k;
+                    dq_end[nd] = end;
+                    ++nd;
+                }
+                // Leaf done: back to the stack.
+                cur_count = 0u;
                 float hi_t = bt + abs(bt) * TB_T_TOL;
                 float t0, t1;
-                bool h0 = tb_aabb_slab(lo0, hi0, r.o, r.d, inv, lo_t, hi_t, t0, t1);
-                bool h1 = tb_aabb_slab(lo1, hi1, r.o, r.d, inv, lo_t, hi_t, t0, t1);
-                bool swap = r.d[cnt0 >> 16] < 0.0; // the second child first
-                bool hn = swap ? h1 : h0, hf = swap ? h0 : h1;
-                if (hn || hf) {
-                    if (hn && hf && sp < TB_BVH_STACK)
-                        stack[sp++] = 2u * cur_off + (swap ? 0u : 1u);
-                    bool take1 = hn ? swap : !swap;
-                    cur_off = take1 ? off1 : off0;
-                    cur_count = (take1 ? cnt1 : cnt0) & 0xffffu;
-                } else {
-                    // Pop children until one is still within reach.
-                    TB_BVH_POP()
-                }
+                TB_BVH_POP()
+                if (done || nd == TB_BVH_DEFER)
+                    break;
             }
-            if (done)
-                break;
-            // The leaf: triangles, then placed objects.
-            uint k = cur_off, end = cur_off + cur_count;
-            bool stop = false;
-            if (TB_BVH_HAS_TRIANGLES) {
-                for (; k < end; ++k) {
-                    uint ref = tb_bvh_fetch_ref(k);
-                    if ((ref & TB_GPU_REF_KIND) != 0u)
-                        break;
-                    vec3 v0, v1, v2;
-                    float t;
-                    tb_bvh_fetch_tri(ref, v0, v1, v2);
-                    if (!tb_tri_hit(w, v0, v1, v2, t) || t < r.tmin || t > r.tmax)
-                        continue;
-                    uvec3 keys = tb_bvh_fetch_tri_keys(ref);
-                    TB_BVH_TAKE(t, keys.x, keys.y, keys.z)
+            // The deferred leaves' placed objects.
+            for (int q = 0; TB_BVH_HAS_PLACED_KINDS && q < nd && !stop; ++q) {
+                uint k = dq_k[q], end = dq_end[q];
+                // CSG trees (listed after the triangles): the leaf's reference
+                // stands for the tree in bref, so tb_bvh_normal finds the leaf.
+                if (TB_BVH_HAS_CSG) {
+                    for (; k < end; ++k) {
+                        uint cref = tb_bvh_fetch_ref(k);
+                        if ((cref & TB_GPU_REF_KIND) != TB_GPU_REF_CSG)
+                            break;
+                        uint cidx = cref & TB_GPU_REF_INDEX, face, ref;
+                        float t;
+                        if (!tb_bvh_csg_hit(cidx, r, r.tmax, t, face, ref))
+                            continue;
+                        tb_gpu_placed hd = TB_BVH_PLACED[cidx];
+                        TB_BVH_TAKE(t, hd.object, face, hd.ref)
+                    }
                 }
+                // One loop per kind (each leaf lists cubes, spheres, planar
+                // objects, revolved objects, tori in that order): a kind's
+                // code runs only while some lane has that kind left.
+                if (TB_BVH_HAS_CUBES && !stop)
+                    TB_BVH_PLACED_RUN(TB_GPU_REF_CUBE, tb_cube_hit(so, sd, tlo, r.tmax, t, cf))
+                if (TB_BVH_HAS_SPHERES && !stop)
+                    TB_BVH_PLACED_RUN(TB_GPU_REF_SPHERE, tb_sphere_intersect(so, sd, 1.0, tlo, r.tmax, t))
+                if (TB_BVH_HAS_PLANAR && !stop)
+                    TB_BVH_PLACED_RUN(TB_GPU_REF_PLANAR, tb_bvh_planar_hit(idx, so, sd, tlo, r.tmax, t, cf))
+                if (TB_BVH_HAS_QUADRICS && !stop)
+                    TB_BVH_PLACED_RUN(TB_GPU_REF_REVOLVED,
+                                      tb_revolved_hit(so, sd, tb_bvh_revolved(idx), tlo, r.tmax, t, cf, nobj))
+                if (TB_BVH_HAS_TORI && !stop)
+                    TB_BVH_PLACED_RUN(TB_GPU_REF_TORUS, tb_bvh_torus_hit(idx, so, sd, tlo, r.tmax, t, cf))
             }
-            // CSG trees (listed after the triangles): the leaf's reference
-            // stands for the tree in bref, so tb_bvh_normal finds the leaf.
-            if (TB_BVH_HAS_CSG && !stop) {
-                for (; k < end; ++k) {
-                    uint cref = tb_bvh_fetch_ref(k);
-                    if ((cref & TB_GPU_REF_KIND) != TB_GPU_REF_CSG)
-                        break;
-                    uint cidx = cref & TB_GPU_REF_INDEX, face, ref;
-                    float t;
-                    if (!tb_bvh_csg_hit(cidx, r, r.tmax, t, face, ref))
-                        continue;
-                    tb_gpu_placed hd = TB_BVH_PLACED[cidx];
-                    TB_BVH_TAKE(t, hd.object, face, hd.ref)
-                }
-            }
-            // Placed objects, one loop per kind (each leaf lists cubes,
-            // spheres, planar objects, revolved objects, tori in that order): a kind's code runs only while
-            // some lane has that kind left.
-            if (TB_BVH_HAS_CUBES && !stop)
-                TB_BVH_PLACED_RUN(TB_GPU_REF_CUBE, tb_cube_hit(so, sd, tlo, r.tmax, t, cf))
-            if (TB_BVH_HAS_SPHERES && !stop)
-                TB_BVH_PLACED_RUN(TB_GPU_REF_SPHERE, tb_sphere_intersect(so, sd, 1.0, tlo, r.tmax, t))
-            if (TB_BVH_HAS_PLANAR && !stop)
-                TB_BVH_PLACED_RUN(TB_GPU_REF_PLANAR, tb_bvh_planar_hit(idx, so, sd, tlo, r.tmax, t, cf))
-            if (TB_BVH_HAS_QUADRICS && !stop)
-                TB_BVH_PLACED_RUN(TB_GPU_REF_REVOLVED,
-                                  tb_revolved_hit(so, sd, tb_bvh_revolved(idx), tlo, r.tmax, t, cf, nobj))
-            if (TB_BVH_HAS_TORI && !stop)
-                TB_BVH_PLACED_RUN(TB_GPU_REF_TORUS, tb_bvh_torus_hit(idx, so, sd, tlo, r.tmax, t, cf))
-            if (stop)
-                break;
-            // Leaf done: back to the stack.
-            cur_count = 0u;
-            float hi_t = bt + abs(bt) * TB_T_TOL;
-            float t0, t1;
-            TB_BVH_POP()
-            if (done)
+            nd = 0;
+            if (done || stop)
                 break;
         }
     }

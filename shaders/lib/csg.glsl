@@ -43,12 +43,10 @@ int tb_cs_n;
 // the next starts (the last at tb_cs_n).
 int tb_ls[TB_CSG_LISTS];
 int tb_nls;
-// A node's output, before it replaces its children's lists.
-float tb_co_t[TB_CSG_POOL];
-uint tb_co_leaf[TB_CSG_POOL];
-uint tb_co_fd[TB_CSG_POOL];
-// Sort order and child of the entries being merged.
-int tb_cs_ord[TB_CSG_POOL];
+// The child of each entry being merged (tb_csg_merge sorts the entries in
+// place and writes the node's list over them, so no second pool is kept:
+// the private arrays' size is the kernel's cost on lavapipe, docs/gpu.md
+// "Speed").
 uint tb_cs_child[TB_CSG_POOL];
 
 // Appends a crossing to the pool (the host's bound keeps it within).
@@ -81,16 +79,6 @@ bool tb_csg_member(uint op, int nin, int k, bool first_in)
     return first_in && nin == 1;
 }
 
-// True if pool entry a precedes b: (t, child, position).
-bool tb_csg_before(int a, int b)
-{
-    if (tb_cs_t[a] != tb_cs_t[b])
-        return tb_cs_t[a] < tb_cs_t[b];
-    if (tb_cs_child[a] != tb_cs_child[b])
-        return tb_cs_child[a] < tb_cs_child[b];
-    return a < b;
-}
-
 // Starts a list (a leaf's crossings follow with tb_csg_push).
 void tb_csg_open_list()
 {
@@ -105,32 +93,43 @@ void tb_csg_merge(uint op, int k, float scale)
     if (k < 1 || k > tb_nls)
         return; // not a program the host writes
     int first = tb_nls - k, base = tb_ls[first];
-    int m = tb_cs_n - base;
     for (int c = 0; c < k; ++c) {
         int e = c + 1 < k ? tb_ls[first + c + 1] : tb_cs_n;
         for (int i = tb_ls[first + c]; i < e; ++i)
             tb_cs_child[i] = uint(c);
     }
-    // Insertion sort of the entries (nearly sorted: children's sorted lists in turn).
-    for (int i = 0; i < m; ++i) {
-        int e = base + i, j = i;
-        while (j > 0 && tb_csg_before(e, tb_cs_ord[j - 1])) {
-            tb_cs_ord[j] = tb_cs_ord[j - 1];
+    // Stable insertion sort of the entries by (t, child), in place (nearly
+    // sorted: the children's sorted lists in turn), so ties keep their
+    // position as the third key.
+    for (int i = base + 1; i < tb_cs_n; ++i) {
+        float t = tb_cs_t[i];
+        uint l = tb_cs_leaf[i], fd = tb_cs_fd[i], c = tb_cs_child[i];
+        int j = i;
+        while (j > base && (tb_cs_t[j - 1] > t || (tb_cs_t[j - 1] == t && tb_cs_child[j - 1] > c))) {
+            tb_cs_t[j] = tb_cs_t[j - 1];
+            tb_cs_leaf[j] = tb_cs_leaf[j - 1];
+            tb_cs_fd[j] = tb_cs_fd[j - 1];
+            tb_cs_child[j] = tb_cs_child[j - 1];
             --j;
         }
-        tb_cs_ord[j] = e;
+        tb_cs_t[j] = t;
+        tb_cs_leaf[j] = l;
+        tb_cs_fd[j] = fd;
+        tb_cs_child[j] = c;
     }
+    // The sweep: the node's list is written over the entries already swept
+    // (each batch of ends gives at most one, so entry base + nout is never
+    // one still to be read).
     uint state = 0u; // bit c: inside child c
     int nin = 0, nout = 0;
     bool in_node = false;
-    for (int i = 0; i < m;) {
-        float ti = tb_cs_t[tb_cs_ord[i]];
+    for (int i = base; i < tb_cs_n;) {
+        float ti = tb_cs_t[i];
         float tend = ti + TB_CSG_TOL * (scale + abs(ti));
         int j = i;
-        for (; j < m && tb_cs_t[tb_cs_ord[j]] <= tend; ++j) {
-            int q = tb_cs_ord[j];
-            uint bit = 1u << tb_cs_child[q];
-            bool now = (tb_cs_fd[q] & 1u) != 0u;
+        for (; j < tb_cs_n && tb_cs_t[j] <= tend; ++j) {
+            uint bit = 1u << tb_cs_child[j];
+            bool now = (tb_cs_fd[j] & 1u) != 0u;
             if (now != ((state & bit) != 0u)) {
                 nin += now ? 1 : -1;
                 state ^= bit;
@@ -141,32 +140,27 @@ void tb_csg_merge(uint op, int k, float scale)
             bool want = after; // an entry of the node
             int best = -1;
             for (int q = i; q < j; ++q) {
-                int e = tb_cs_ord[q];
-                bool eff = (tb_cs_fd[e] & 1u) != 0u;
-                if (op == TB_GPU_CSG_DIFFERENCE && tb_cs_child[e] > 0u)
+                bool eff = (tb_cs_fd[q] & 1u) != 0u;
+                if (op == TB_GPU_CSG_DIFFERENCE && tb_cs_child[q] > 0u)
                     eff = !eff;
-                if (eff == want && (best < 0 || tb_cs_child[e] < tb_cs_child[best]))
-                    best = e;
+                if (eff == want && (best < 0 || tb_cs_child[q] < tb_cs_child[best]))
+                    best = q;
             }
-            if (best >= 0 && nout < TB_CSG_POOL) {
-                tb_co_t[nout] = tb_cs_t[best];
-                tb_co_leaf[nout] = tb_cs_leaf[best];
-                tb_co_fd[nout++] = (tb_cs_fd[best] & ~1u) | (want ? 1u : 0u);
+            if (best >= 0 && base + nout < TB_CSG_POOL) {
+                int o = base + nout++;
+                tb_cs_t[o] = tb_cs_t[best];
+                tb_cs_leaf[o] = tb_cs_leaf[best];
+                tb_cs_fd[o] = (tb_cs_fd[best] & ~1u) | (want ? 1u : 0u);
                 in_node = after;
             }
         }
         i = j;
     }
-    if (in_node && nout > 0 && nout < TB_CSG_POOL) { // close a dangling interval, as C
-        tb_co_t[nout] = tb_co_t[nout - 1];
-        tb_co_leaf[nout] = tb_co_leaf[nout - 1];
-        tb_co_fd[nout] = tb_co_fd[nout - 1] & ~1u;
-        ++nout;
-    }
-    for (int i = 0; i < nout; ++i) {
-        tb_cs_t[base + i] = tb_co_t[i];
-        tb_cs_leaf[base + i] = tb_co_leaf[i];
-        tb_cs_fd[base + i] = tb_co_fd[i];
+    if (in_node && nout > 0 && base + nout < TB_CSG_POOL) { // close a dangling interval, as C
+        int o = base + nout++;
+        tb_cs_t[o] = tb_cs_t[o - 1];
+        tb_cs_leaf[o] = tb_cs_leaf[o - 1];
+        tb_cs_fd[o] = tb_cs_fd[o - 1] & ~1u;
     }
     tb_cs_n = base + nout;
     tb_nls = first + 1;
