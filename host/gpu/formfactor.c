@@ -27,9 +27,8 @@ struct tb_gpu_ff_scene {
     uint32_t *zeros;                    /* vis_cap zero words: the visibility bits' initial value */
 };
 
-/* Workgroup width, and most invocations per receiver (shaders/formfactor.comp,
- * TB_FF_LANES) when the device does not say its subgroup size. */
-#define TB__FF_WORKGROUP 64u
+/* Most invocations per receiver (shaders/formfactor.comp, TB_FF_LANES) when
+ * the device does not say its subgroup size. */
 #define TB__FF_DEFAULT_LANES 8u
 
 /* tb_accel_build wants an intersect callback; this BVH is converted for the
@@ -275,6 +274,11 @@ tb_status tb_gpu_ff_raycast(tb_gpu_ff_scene *g, const tb_vec3 *pts, int npts, tb
     uint32_t lanes = 1;
     while (lanes < (uint32_t)npts && lanes < max_lanes)
         lanes *= 2;
+    /* The device's default width in whole receivers (lanes divide it: both
+     * are powers of two or the width is a multiple of the subgroup); one
+     * float of shared memory per invocation, far below Vulkan's 16 KiB minimum. */
+    uint32_t wg = tb_gpu_default_workgroup(tb_gpu_device_info_of(g->dev));
+    wg = wg >= lanes ? wg / lanes * lanes : lanes;
     tb_gpu_spec_constant spec[4] = {{1, g->stack}, {2, occl}, {3, visible != NULL}, {4, lanes}};
     tb_gpu_kernel *k = tb_gpu_kernel_get(g->dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("formfactor"),
                                                                         .buffers = 8,
@@ -283,7 +287,7 @@ tb_status tb_gpu_ff_raycast(tb_gpu_ff_scene *g, const tb_vec3 *pts, int npts, tb
                                                                                   TB_GPU_BIND_TEXELS_R32UI, 0, 0},
                                                                         .push_size = sizeof(tb_gpu_ff_push),
                                                                         .spec = spec,
-                                                                        .workgroup_size = TB__FF_WORKGROUP,
+                                                                        .workgroup_size = wg,
                                                                         .spec_count = 4});
     if (!k)
         return TB_ERR_DEVICE;

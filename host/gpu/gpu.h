@@ -207,6 +207,23 @@ bool tb_gpu_device_is_lost(const tb_gpu_device *dev);
 /* True if buffers are host-visible (unified memory and no force_staging). */
 bool tb_gpu_device_uses_mapped_buffers(const tb_gpu_device *dev);
 
+/* Most invocations of a workgroup along x (maxComputeWorkGroupSize[0] and
+ * maxComputeWorkGroupInvocations). */
+uint32_t tb_gpu_workgroup_limit(const tb_gpu_device_info *info);
+
+/* The workgroup width kernels get by default on this device: 64 rounded up
+ * to whole subgroups, at most tb_gpu_workgroup_limit (docs/gpu.md). */
+uint32_t tb_gpu_default_workgroup(const tb_gpu_device_info *info);
+
+/* One line of the limits the kernels depend on (subgroup, workgroup,
+ * shared memory, storage buffer, timestamps), snprintf's return value. */
+int tb_gpu_limits_describe(const tb_gpu_device *dev, char *buf, size_t n);
+
+/* The same as --stats fields: gpu_device, gpu_subgroup_size,
+ * gpu_workgroup_size, gpu_max_workgroup_invocations, gpu_max_shared_memory,
+ * gpu_timestamp_period_ns (null without timestamps). */
+tb_status tb_gpu_limits_to_stats(const tb_gpu_device *dev);
+
 /* ---------------------------------------------------------------- buffers */
 
 /* A storage buffer in device memory. */
@@ -234,7 +251,9 @@ tb_status tb_gpu_buffer_download(tb_gpu_buffer *buf, size_t offset, void *dst, s
 #define TB_GPU_MAX_BUFFERS 12
 /* Most specialization constants per kernel besides the workgroup size. */
 #define TB_GPU_MAX_SPEC 24
-/* Workgroup width when the kernel description leaves it 0. */
+/* Preferred workgroup width; the width used when a kernel description
+ * leaves it 0 is tb_gpu_default_workgroup (this, in whole subgroups, within
+ * the device's limits). */
 #define TB_GPU_DEFAULT_WORKGROUP 64
 
 /* How a kernel declares binding b (tb_gpu_kernel_desc.kinds[b]). A texel

@@ -142,11 +142,10 @@ static tb_status tb__check_desc(const tb_gpu_device *dev, const tb_gpu_kernel_de
             if (d->spec[j].id == d->spec[i].id)
                 return tb_error(TB_ERR_ARG, "kernel %s: constant_id %u given twice", name, d->spec[i].id);
     }
-    uint32_t limit = info->max_workgroup_size[0] < info->max_workgroup_invocations
-                         ? info->max_workgroup_size[0] : info->max_workgroup_invocations;
+    uint32_t limit = tb_gpu_workgroup_limit(info);
     *wg = d->workgroup_size;
     if (*wg == 0)
-        *wg = TB_GPU_DEFAULT_WORKGROUP < limit ? TB_GPU_DEFAULT_WORKGROUP : limit;
+        *wg = tb_gpu_default_workgroup(info);
     if (*wg > limit)
         return tb_error(TB_ERR_ARG, "kernel %s: workgroup of %u exceeds the limit of %u on device %d (%s)",
                         name, *wg, limit, dev->index, info->name);

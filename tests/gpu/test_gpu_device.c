@@ -78,6 +78,29 @@ static void test_pick_cpu_drivers(void **state)
     assert_non_null(strstr(why, "no Vulkan devices"));
 }
 
+/* The default workgroup width from synthetic limits: 64 in whole subgroups,
+ * within the device's limit, never an assumption about lavapipe's 8. */
+static void test_default_workgroup(void **state)
+{
+    (void)state;
+    static const struct {
+        uint32_t sg, size_x, invocations, want;
+    } c[] = {
+        {8, 1024, 1024, 64},  {16, 1024, 1024, 64}, {32, 1024, 1024, 64}, {64, 1024, 1024, 64},
+        {128, 1024, 1024, 128}, {0, 1024, 1024, 64}, {48, 1024, 1024, 96},  {32, 1024, 48, 32},
+        {64, 40, 1024, 40},   {1, 128, 128, 64},
+    };
+    for (size_t i = 0; i < sizeof c / sizeof c[0]; ++i) {
+        tb_gpu_device_info d = {.subgroup_size = c[i].sg,
+                                .max_workgroup_size = {c[i].size_x, 1, 1},
+                                .max_workgroup_invocations = c[i].invocations};
+        if (tb_gpu_default_workgroup(&d) != c[i].want)
+            fail_msg("subgroup %u, limits %u/%u: width %u, want %u", c[i].sg, c[i].size_x, c[i].invocations,
+                     tb_gpu_default_workgroup(&d), c[i].want);
+        assert_true(tb_gpu_default_workgroup(&d) <= tb_gpu_workgroup_limit(&d));
+    }
+}
+
 static void test_pick_errors(void **state)
 {
     (void)state;
@@ -605,6 +628,7 @@ int main(void)
         cmocka_unit_test(test_pick_order),
         cmocka_unit_test(test_pick_cpu_drivers),
         cmocka_unit_test(test_pick_errors),
+        cmocka_unit_test(test_default_workgroup),
         cmocka_unit_test(test_mode_names),
         cmocka_unit_test(test_instance_reports),
         cmocka_unit_test(test_device_errors),

@@ -224,6 +224,11 @@ int tb_cmd_trace(int argc, char **argv)
                 len += (uint32_t)snprintf(routed + len, sizeof routed - len, "%s%u", len ? "," : "", i);
         tb_gpu_scene_info gi;
         tb_gpu_scene_get_info(gscene, &gi);
+        if (verbose) {
+            char lim[512];
+            tb_gpu_limits_describe(gsess.device, lim, sizeof lim);
+            fprintf(stderr, "vulkan: device %s\n", lim);
+        }
         if (verbose)
             fprintf(stderr,
                     "vulkan: %u objects on the GPU, %u routed (%llu triangles, %u spheres, %u cubes, %u "
@@ -339,6 +344,8 @@ int tb_cmd_trace(int argc, char **argv)
                 st = tb_stats_set_value("gpu_objects", (double)gi.gpu_objects);
                 if (!st)
                     st = tb_stats_set_value("routed_object_count", (double)gi.cpu_objects);
+                if (!st)
+                    st = tb_gpu_limits_to_stats(gsess.device);
             }
             if (!st)
                 st = tb_stats_set_string("accel", tb_accel_kind_name(kind));
