@@ -1,8 +1,10 @@
 /* `testbed bench gpu SCENE.mid [--rays N] [--repeat R] [--seed S] [--device N]`:
  * the intersect kernel (host/gpu/intersect.h) against the CPU path on the
  * three ray sets of `testbed bench rays` (primary, shadow, diffuse), in
- * Mrays/s per set, with the kernel's device time apart (docs/performance.md,
- * "Vulkan"). On a real GPU this is the entry that reports its Mrays/s. */
+ * Mrays/s per set, with the kernel's device time apart: per-dispatch
+ * timestamps of each kernel (docs/gpu.md, "Measuring on a GPU";
+ * docs/performance.md, "Vulkan"). On a real GPU this is the entry that
+ * reports its Mrays/s. */
 #include <errno.h>
 #include <math.h>
 #include <omp.h>
@@ -74,6 +76,43 @@ static double tb__gmedian(double *v, int n)
 {
     qsort(v, (size_t)n, sizeof *v, tb__gcmp);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* The kernels the intersect path dispatches, whose timestamps are reported. */
+static const char *const tb__gkernels[] = {"intersect"};
+enum { TB__GKERNELS = sizeof tb__gkernels / sizeof tb__gkernels[0] };
+
+/* Dispatch count and device nanoseconds (sum, min, max) recorded so far for
+ * kernel k ("GPU/kernel <name> (ns)", host/gpu/kernel.c); zeros if none. */
+static tb_stat_total tb__gkernel_total(int k)
+{
+    char name[96];
+    snprintf(name, sizeof name, "GPU/kernel %s (ns)", tb__gkernels[k]);
+    tb_stat_total t = {0};
+    if (tb_stats_get(name, TB_STAT_KIND_DISTRIBUTION, &t))
+        memset(&t, 0, sizeof t);
+    return t;
+}
+
+/* Lists the Vulkan devices, marking the one measured, and its limits. */
+static void tb__glist_devices(const tb_gpu_session *sess)
+{
+    int n = tb_gpu_device_count(sess->instance);
+    printf("devices (testbed devices; --device N):\n");
+    for (int i = 0; i < n; ++i) {
+        const tb_gpu_device_info *d = tb_gpu_device_info_at(sess->instance, i);
+        printf("  %c %d  %s (%s)%s%s\n", i == sess->device_index ? '*' : ' ', i, d->name,
+               tb_gpu_device_type_name(d->type), d->usable ? "" : ": unusable: ", d->usable ? "" : d->unusable_reason);
+    }
+    char lim[512];
+    tb_gpu_limits_describe(sess->device, lim, sizeof lim);
+    printf("device: %s\n", lim);
+    const tb_gpu_device_info *d = tb_gpu_device_info_of(sess->device);
+    if (!d->timestamps)
+        printf("kernel timestamps: not available (compute queue: timestampValidBits %u, timestampPeriod %g%s): "
+               "the kernel columns are nan; wall-clock figures only\n",
+               d->timestamp_valid_bits, (double)d->timestamp_period,
+               getenv("TB_GPU_NO_TIMESTAMPS") ? "; turned off by TB_GPU_NO_TIMESTAMPS" : "");
 }
 
 /* One timed pass of set k through the CPU path; wall seconds (CPU seconds in *cs). */
@@ -151,7 +190,11 @@ int tb_cmd_bench_gpu(int argc, char **argv)
                  "machine this ratio is steadier than the wall-clock one. Pipeline creation is\n"
                  "excluded (one untimed call first). The Vulkan path includes the upload, download and the\n"
                  "host's part (routed CPU objects, (u, v)). Rays on which the two paths disagree (object,\n"
-                 "or occlusion) are counted as a sanity check; `testbed validate` gives the full figures.\n",
+                 "or occlusion) are counted as a sanity check; `testbed validate` gives the full figures.\n"
+                 "First lists the Vulkan devices (* the one measured) and its limits; under each set, per\n"
+                 "kernel: dispatches, device time per run and per dispatch (timestamp queries) and the\n"
+                 "Mrays/s that time gives. Without timestamps (the device's compute queue has none) the\n"
+                 "kernel figures are nan and say so. docs/gpu.md, \"Measuring on a GPU\".\n",
         .opts = opts,
         .pos = &path,
         .max_pos = 1,
@@ -184,9 +227,10 @@ int tb_cmd_bench_gpu(int argc, char **argv)
     }
     tb_gpu_scene_info info;
     tb_gpu_scene_get_info(g, &info);
-    printf("device: %s\nscene: %s: %u objects (%u on the GPU, %u routed), %llu triangles, %u spheres, %u cubes, "
+    tb__glist_devices(&sess);
+    printf("scene: %s: %u objects (%u on the GPU, %u routed), %llu triangles, %u spheres, %u cubes, "
            "%u cylinders/cones/conics\n",
-           tb_gpu_device_info_of(sess.device)->name, path, s->nobjects, info.gpu_objects, info.cpu_objects,
+           path, s->nobjects, info.gpu_objects, info.cpu_objects,
            (unsigned long long)info.gpu_triangles, info.gpu_spheres, info.gpu_cubes, info.gpu_quadrics);
     printf("threads: %d, runs per figure: %ld (median)\n", omp_get_max_threads(), repeat);
     printf("%-8s %9s %12s %12s %14s %7s %14s %7s %9s\n", "set", "rays", "cpu Mrays/s", "vk Mrays/s",
@@ -211,6 +255,9 @@ int tb_cmd_bench_gpu(int argc, char **argv)
             rc = TB_EXIT_FAIL;
             break;
         }
+        tb_stat_total before[TB__GKERNELS];
+        for (int q = 0; q < TB__GKERNELS; ++q)
+            before[q] = tb__gkernel_total(q);
         for (long r = 0; r < repeat; ++r) {
             tc[r] = tb__gcpu(s, k, sets[k], m, ch, co, &cc[r]);
             tg[r] = tb__ggpu(g, k, sets[k], m, gh, go, &tk[r], &cg[r]);
@@ -230,6 +277,21 @@ int tb_cmd_bench_gpu(int argc, char **argv)
         printf("%-8s %9zu %12.3f %12.3f %14.3f %7.3f %6.3f/%-7.3f %7.3f %9zu\n", tb__gset_names[k], m,
                1e-6 * (double)m / c, 1e-6 * (double)m / v, kk > 0.0 && isfinite(kk) ? 1e-6 * (double)m / kk : NAN,
                c / v, 1e-6 * (double)m / xc, 1e-6 * (double)m / xg, xc / xg, bad);
+        /* Per kernel: the timestamps of its dispatches in the R timed runs. */
+        for (int q = 0; q < TB__GKERNELS; ++q) {
+            tb_stat_total a = tb__gkernel_total(q);
+            int64_t nd = a.v[0] - before[q].v[0], ns = a.v[1] - before[q].v[1];
+            if (nd <= 0) {
+                printf("  kernel %-10s no timestamps recorded\n", tb__gkernels[q]);
+                continue;
+            }
+            double per_run = (double)ns * 1e-9 / (double)repeat;
+            printf("  kernel %-10s %lld dispatches per run, device time %.3f ms per run (%.1f%% of the Vulkan "
+                   "wall time), %.3f ms per dispatch (min %.3f, max %.3f in this process), %.3f Mrays/s\n",
+                   tb__gkernels[q], (long long)(nd / repeat), 1e3 * per_run, 100.0 * per_run / v,
+                   1e-6 * (double)ns / (double)nd, 1e-6 * (double)a.v[2], 1e-6 * (double)a.v[3],
+                   1e-6 * (double)m / per_run);
+        }
     }
     free(tc), free(tg), free(tk), free(cc), free(cg);
 done:
