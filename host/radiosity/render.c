@@ -246,8 +246,31 @@ static tb_status tb__rad_provenance(tb__rad_run *r, const char *scene_path, cons
     return tb_provenance_set_options(&r->prov, opts);
 }
 
+/* Where each step of the solve runs: a form-factor backend (opt->backend)
+ * replaces the sampled form factors and their visibility only; the other
+ * steps are CPU code on every backend. Reported in the log and in --stats so
+ * that no step runs elsewhere unsaid (docs/radiosity.md, "Where each step runs"). */
+typedef struct tb__rad_where {
+    const char *formfactors; /* sampled shooter-to-vertex form factors with visibility (the batch) */
+    const char *near_field;  /* exact point-to-polygon form factors near the shooter */
+    const char *light_shots; /* point, spot and directional lights: irradiance and shadow segments */
+    const char *image;       /* the Gouraud display (-o) */
+} tb__rad_where;
+
+static tb__rad_where tb__rad_where_of(const tb_rad_render_options *o, const tb_rad_options *ro, int nlights)
+{
+    bool hemi = ro->ff == TB_RAD_FF_HEMICUBE;
+    const char *batch = ro->batch ? (o->backend_name ? o->backend_name : "batch") : "cpu";
+    return (tb__rad_where){
+        .formfactors = hemi ? "cpu (hemicube)" : batch,
+        .near_field = hemi ? "cpu (hemicube)" : "cpu",
+        .light_shots = nlights > 0 ? "cpu" : "none",
+        .image = o->image_path ? "cpu" : "none",
+    };
+}
+
 static tb_status tb__rad_stats(const tb__rad_run *r, const char *path, double t_mesh, int nthreads,
-                               const tb_rad_adapt_stats *as)
+                               const tb_rad_adapt_stats *as, const tb__rad_where *w)
 {
     const tb_rad_solver *s = r->solver;
     tb_rad_energy en = tb_rad_solver_energy(s);
@@ -272,6 +295,12 @@ static tb_status tb__rad_stats(const tb__rad_run *r, const char *path, double t_
     tb_status st = TB_OK;
     for (size_t k = 0; k < sizeof kv / sizeof kv[0] && !st; k++)
         st = tb_stats_set_value(kv[k].k, kv[k].v);
+    const char *steps[][2] = {{"backend_formfactors", w->formfactors},
+                              {"backend_near_field", w->near_field},
+                              {"backend_light_shots", w->light_shots},
+                              {"backend_image", w->image}};
+    for (size_t k = 0; k < sizeof steps / sizeof steps[0] && !st; k++)
+        st = tb_stats_set_string(steps[k][0], steps[k][1]);
     return st ? st : tb_stats_write_json_file(path, &r->prov);
 }
 
@@ -298,6 +327,9 @@ static void tb__rad_log_mesh(const tb_rad_render_options *o, const char *scene_p
     if (r->scene->nlights > 0)
         fprintf(log, "%s%d point, spot or directional light%s shot directly (docs/radiosity.md)\n", p,
                 r->scene->nlights, r->scene->nlights == 1 ? "" : "s");
+    tb__rad_where w = tb__rad_where_of(o, ro, r->scene->nlights);
+    fprintf(log, "%ssteps: form factors %s, near-shooter form factors %s, light shots %s, image %s\n", p,
+            w.formfactors, w.near_field, w.light_shots, w.image);
 }
 
 tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt, tb_rad_render_result *out)
@@ -393,7 +425,8 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
             (st = tb_provenance_to_attrs(&r.prov, r.img)))
             goto done;
     }
-    if (opt->stats_path && (st = tb__rad_stats(&r, opt->stats_path, t_mesh, nthreads, &as)))
+    tb__rad_where where = tb__rad_where_of(opt, &ro, r.scene->nlights);
+    if (opt->stats_path && (st = tb__rad_stats(&r, opt->stats_path, t_mesh, nthreads, &as, &where)))
         goto done;
 
     /* outputs, each all-or-nothing */
