@@ -68,7 +68,8 @@ static const char *const tb__set_names[TB__NSETS] = {"near", "far 1", "far 2", "
 enum { TB__PER_OBJECT = 60 }; /* rays per object and set */
 
 typedef struct tb__figures {
-    int rays, hits, hit_differ, face_differ, occ_differ;
+    int rays, hits, hit_differ, occ_differ;
+    int face_differ; /* object, face or crossing (t beyond its bound, or normals > 90 degrees apart) */
     double dt, dt_over_bound, angle, angle_over_bound;
     double delta; /* the set's float resolution at its ray distance (tb__delta) */
 } tb__figures;
@@ -225,12 +226,26 @@ static void tb__compare(const tb_scene *s, const tb__placement *pl, const double
                          (double)rays[i].d.z * rays[i].d.z);
         double sn = fmax(1e-6, fabs(cos(tb__angle(rays[i].d, c.ng))));
         double dt = fabs((double)gh[i].t - c.t) * dl, tbound = fmax(1e-4 * c.t * dl, TB__K * delta * smax / sn);
+        double a = tb__angle(gh[i].ng, c.ng), rho = tb__rho_unit((int)c.object);
+        if (dt > tbound || a > 0.5 * TB_PI) {
+            /* Another crossing of the same surface (a tangent crossing one
+             * path finds, the inside of an open surface near its rim): a
+             * disagreement like a hit/miss one, counted with object/face. */
+            f->face_differ++;
+            continue;
+        }
         f->dt = fmax(f->dt, dt / (c.t * dl));
         f->dt_over_bound = fmax(f->dt_over_bound, dt / tbound);
-        double a = tb__angle(gh[i].ng, c.ng), rho = tb__rho_unit((int)c.object);
         double abound = rho > 0.0 ? fmax(1e-3, TB__K * (smax / smin) * delta / (rho * sn)) : 1e-3;
         f->angle = fmax(f->angle, a);
         f->angle_over_bound = fmax(f->angle_over_bound, a / abound);
+        if (a > abound)
+            print_message("[ beyond   ] object %u face %u: o (%.9g %.9g %.9g) d (%.9g %.9g %.9g) tmin %g: "
+                          "cpu t %.9g n (%.4g %.4g %.4g), gpu t %.9g n (%.4g %.4g %.4g); s %.3g delta %.3g\n",
+                          c.object, c.face, (double)rays[i].o.x, (double)rays[i].o.y, (double)rays[i].o.z,
+                          (double)rays[i].d.x, (double)rays[i].d.y, (double)rays[i].d.z, (double)rays[i].tmin,
+                          (double)c.t, (double)c.ng.x, (double)c.ng.y, (double)c.ng.z, (double)gh[i].t,
+                          (double)gh[i].ng.x, (double)gh[i].ng.y, (double)gh[i].ng.z, sn, delta);
     }
 }
 
