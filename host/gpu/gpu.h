@@ -217,12 +217,12 @@ uint32_t tb_gpu_default_workgroup(const tb_gpu_device_info *info);
 
 /* One line of the limits the kernels depend on (subgroup, workgroup,
  * shared memory, storage buffer, timestamps), snprintf's return value. */
-int tb_gpu_limits_describe(const tb_gpu_device *dev, char *buf, size_t n);
+int tb_gpu_limits_describe(const tb_gpu_device_info *info, char *buf, size_t n);
 
 /* The same as --stats fields: gpu_device, gpu_subgroup_size,
  * gpu_workgroup_size, gpu_max_workgroup_invocations, gpu_max_shared_memory,
  * gpu_timestamp_period_ns (null without timestamps). */
-tb_status tb_gpu_limits_to_stats(const tb_gpu_device *dev);
+tb_status tb_gpu_limits_to_stats(const tb_gpu_device_info *info);
 
 /* ---------------------------------------------------------------- buffers */
 

@@ -25,9 +25,8 @@ uint32_t tb_gpu_default_workgroup(const tb_gpu_device_info *info)
     return w ? w : 1;
 }
 
-int tb_gpu_limits_describe(const tb_gpu_device *dev, char *buf, size_t n)
+int tb_gpu_limits_describe(const tb_gpu_device_info *i, char *buf, size_t n)
 {
-    const tb_gpu_device_info *i = tb_gpu_device_info_of(dev);
     char ts[96];
     if (i->timestamps)
         snprintf(ts, sizeof ts, "timestamps %u bits, %.3g ns per tick", i->timestamp_valid_bits,
@@ -46,9 +45,8 @@ int tb_gpu_limits_describe(const tb_gpu_device *dev, char *buf, size_t n)
                     (double)i->max_storage_buffer_range / 1048576.0, ts);
 }
 
-tb_status tb_gpu_limits_to_stats(const tb_gpu_device *dev)
+tb_status tb_gpu_limits_to_stats(const tb_gpu_device_info *i)
 {
-    const tb_gpu_device_info *i = tb_gpu_device_info_of(dev);
     tb_status st = tb_stats_set_string("gpu_device", i->name);
     if (!st)
         st = tb_stats_set_value("gpu_subgroup_size", i->subgroup_size ? (double)i->subgroup_size : NAN);

@@ -26,6 +26,7 @@ for name in cornell-box cornell-box-rgb materials; do
     grep -q "vulkan: [1-9][0-9]* hits shaded by the kernel, 0 routed to the CPU path" "$t/shade.out" ||
         fail "the kernel should shade every hit of $name"
     grep -q '"gpu_shaded_hits"' "$t/$name.json" || fail "no gpu_shaded_hits in --stats ($name)"
+    grep -q '"gpu_workgroup_size": [1-9]' "$t/$name.json" || fail "no device limits in --stats ($name)"
     e=$(nmse "$t/$name-vk.pfm" "$t/$name-cpu.pfm")
     echo "$name 48x48 4 spp: vulkan vs cpu NMSE $e"
     python3 -c "import sys; sys.exit(0 if $e <= 1e-4 else 1)" || fail "$name: NMSE $e > 1e-4"

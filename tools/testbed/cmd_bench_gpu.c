@@ -105,7 +105,7 @@ static void tb__glist_devices(const tb_gpu_session *sess)
                tb_gpu_device_type_name(d->type), d->usable ? "" : ": unusable: ", d->usable ? "" : d->unusable_reason);
     }
     char lim[512];
-    tb_gpu_limits_describe(sess->device, lim, sizeof lim);
+    tb_gpu_limits_describe(tb_gpu_device_info_of(sess->device), lim, sizeof lim);
     printf("device: %s\n", lim);
     const tb_gpu_device_info *d = tb_gpu_device_info_of(sess->device);
     if (!d->timestamps)

@@ -74,6 +74,7 @@ typedef struct tb__render_cmd {
     tb_gpu_mode mode;          /* --backend */
     int device;                /* --device, or -1 */
     tb_gpu_render_stats gs;    /* what the wavefront did, when it made the image */
+    tb_gpu_device_info info;   /* the device's limits, for --stats (when Vulkan ran) */
 } tb__render_cmd;
 
 /* tb_render_hook_fn: Ctrl-C writes the partial image while the render runs. */
@@ -105,8 +106,10 @@ static tb_status tb__render_gpu(void *user, const tb_scene *scene, const tb_rend
     if (st)
         return st;
     fprintf(stderr, "testbed render: backend %s: %s\n", tb_gpu_backend_name(gsess.backend), gsess.reason);
-    if (gsess.backend == TB_GPU_BACKEND_VULKAN)
+    if (gsess.backend == TB_GPU_BACKEND_VULKAN) {
+        c->info = *tb_gpu_device_info_of(gsess.device);
         st = tb_gpu_render_raytrace(gsess.device, scene, ro, out, rs, &c->gs);
+    }
     tb_gpu_session_close(&gsess);
     if (st && c->mode == TB_GPU_MODE_AUTO && c->device < 0) {
         fprintf(stderr, "testbed render: the Vulkan renderer failed (%s); using the CPU path\n", tb_last_error());
@@ -131,6 +134,8 @@ static tb_status tb__render_gpu_stats(void *user)
         st = tb_stats_set_value("waves", (double)gs->waves);
     if (!st)
         st = tb_stats_set_value("shade_kernel_seconds", gs->shade_seconds);
+    if (!st && c->info.name[0])
+        st = tb_gpu_limits_to_stats(&c->info);
     return st;
 }
 

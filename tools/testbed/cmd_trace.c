@@ -226,7 +226,7 @@ int tb_cmd_trace(int argc, char **argv)
         tb_gpu_scene_get_info(gscene, &gi);
         if (verbose) {
             char lim[512];
-            tb_gpu_limits_describe(gsess.device, lim, sizeof lim);
+            tb_gpu_limits_describe(tb_gpu_device_info_of(gsess.device), lim, sizeof lim);
             fprintf(stderr, "vulkan: device %s\n", lim);
         }
         if (verbose)
@@ -345,7 +345,7 @@ int tb_cmd_trace(int argc, char **argv)
                 if (!st)
                     st = tb_stats_set_value("routed_object_count", (double)gi.cpu_objects);
                 if (!st)
-                    st = tb_gpu_limits_to_stats(gsess.device);
+                    st = tb_gpu_limits_to_stats(tb_gpu_device_info_of(gsess.device));
             }
             if (!st)
                 st = tb_stats_set_string("accel", tb_accel_kind_name(kind));
