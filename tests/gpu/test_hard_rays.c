@@ -59,7 +59,19 @@ typedef struct tb__placement {
     double size;       /* the objects' world size (largest axis) */
     double x0, y0, z0; /* TR's translation */
     double far1, far2; /* distances of the far ray sets, in world units */
+    double sc[3];      /* TR's scale per axis */
+    uint64_t seed;     /* default seed (TB_TEST_SEED overrides) */
 } tb__placement;
+
+static const tb__placement tb__placements[] = {
+    {"unit", "scale(1)", 1.0, 0.0, 0.0, 0.0, 1e4, 1e6, {1.0, 1.0, 1.0}, 11},
+    /* 10^-4 scale; "far" is 10^4 and 10^6 sizes away (1 and 100 units). */
+    {"tiny", "scale(0.0001) translate([0.5 -0.25 0.125])", 1e-4, 0.5, -0.25, 0.125, 1.0, 100.0, {1e-4, 1e-4, 1e-4}, 12},
+    /* Unit objects 10^4 from the origin, rays from 10^4 and 10^5 away. */
+    {"far", "translate([10000 10000 0])", 1.0, 1e4, 1e4, 0.0, 1e4, 1e5, {1.0, 1.0, 1.0}, 13},
+    {"flat 10:1", "scale([1 1 0.1])", 1.0, 0.0, 0.0, 0.0, 1e4, 1e6, {1.0, 1.0, 0.1}, 14},
+    {"flat 100:1", "scale([1 1 0.01])", 1.0, 0.0, 0.0, 0.0, 1e4, 1e6, {1.0, 1.0, 0.01}, 15},
+};
 
 /* The ray sets. */
 enum { TB__NEAR, TB__FAR1, TB__FAR2, TB__GRAZING, TB__SURFACE, TB__NSETS };
@@ -326,49 +338,15 @@ static void tb__check(const tb__figures f[TB__NSETS])
     }
 }
 
-static void tb__placement_test(const tb__placement *pl, const double sc[3], const char *name, uint64_t seed)
+/* One placement (its tb__placements entry is the test's state). */
+static void test_placement(void **state)
 {
+    const tb__placement *pl = *state;
+    char name[64];
+    snprintf(name, sizeof name, "test_placement %s", pl->name);
     tb__figures f[TB__NSETS];
-    tb__run_placement(pl, sc, tb_test_seed(name, seed), f);
+    tb__run_placement(pl, pl->sc, tb_test_seed(name, pl->seed), f);
     tb__check(f);
-}
-
-static void test_unit(void **state)
-{
-    (void)state;
-    static const tb__placement pl = {"unit", "scale(1)", 1.0, 0.0, 0.0, 0.0, 1e4, 1e6};
-    tb__placement_test(&pl, (const double[3]){1.0, 1.0, 1.0}, "test_unit", 11);
-}
-
-static void test_tiny(void **state)
-{
-    (void)state;
-    /* 10^-4 scale; "far" is 10^4 and 10^6 sizes away (1 and 100 units). */
-    static const tb__placement pl = {"tiny", "scale(0.0001) translate([0.5 -0.25 0.125])", 1e-4, 0.5, -0.25, 0.125,
-                                     1.0,    100.0};
-    tb__placement_test(&pl, (const double[3]){1e-4, 1e-4, 1e-4}, "test_tiny", 12);
-}
-
-static void test_far_objects(void **state)
-{
-    (void)state;
-    /* Unit objects 10^4 from the origin, rays from 10^4 and 10^5 away. */
-    static const tb__placement pl = {"far", "translate([10000 10000 0])", 1.0, 1e4, 1e4, 0.0, 1e4, 1e5};
-    tb__placement_test(&pl, (const double[3]){1.0, 1.0, 1.0}, "test_far_objects", 13);
-}
-
-static void test_flattened_10(void **state)
-{
-    (void)state;
-    static const tb__placement pl = {"flat 10:1", "scale([1 1 0.1])", 1.0, 0.0, 0.0, 0.0, 1e4, 1e6};
-    tb__placement_test(&pl, (const double[3]){1.0, 1.0, 0.1}, "test_flattened_10", 14);
-}
-
-static void test_flattened_100(void **state)
-{
-    (void)state;
-    static const tb__placement pl = {"flat 100:1", "scale([1 1 0.01])", 1.0, 0.0, 0.0, 0.0, 1e4, 1e6};
-    tb__placement_test(&pl, (const double[3]){1.0, 1.0, 0.01}, "test_flattened_100", 15);
 }
 
 /* Non-finite and degenerate rays: a miss and no occlusion on the GPU, as on
@@ -440,9 +418,12 @@ static int teardown(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_non_finite),  cmocka_unit_test(test_unit),         cmocka_unit_test(test_tiny),
-        cmocka_unit_test(test_far_objects), cmocka_unit_test(test_flattened_10), cmocka_unit_test(test_flattened_100),
-    };
+    struct CMUnitTest tests[1 + sizeof tb__placements / sizeof tb__placements[0]] = {
+        cmocka_unit_test(test_non_finite)};
+    static char names[sizeof tb__placements / sizeof tb__placements[0]][48];
+    for (size_t i = 0; i < sizeof tb__placements / sizeof tb__placements[0]; ++i) {
+        snprintf(names[i], sizeof names[i], "test_placement %s", tb__placements[i].name);
+        tests[i + 1] = (struct CMUnitTest){names[i], test_placement, NULL, NULL, (void *)&tb__placements[i]};
+    }
     return cmocka_run_group_tests(tests, setup, teardown);
 }
