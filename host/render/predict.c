@@ -54,6 +54,9 @@ static const tb_cost_term tb__terms[] = {
     {"raytrace.test_csg", TB_PM_RAYTRACE, TB_PF_TESTS_CSG, "s/test"},
     {"raytrace.test_mesh", TB_PM_RAYTRACE, TB_PF_TESTS_MESH, "s/test"},
     {"raytrace.hit", TB_PM_RAYTRACE, TB_PF_HITS, "s/hit shaded"},
+    {"raytrace.leaf_test", TB_PM_RAYTRACE, TB_PF_LEAF_TESTS, "s/reference tested"},
+    {"raytrace.sample_channel", TB_PM_RAYTRACE, TB_PF_SAMPLE_CHANNELS, "s/(camera sample x channel)"},
+    {"raytrace.hit_channel", TB_PM_RAYTRACE, TB_PF_HIT_CHANNELS, "s/(hit x channel)"},
     {"path.sample", TB_PM_PATH, TB_PF_SAMPLES, "s/camera sample"},
     {"path.ray", TB_PM_PATH, TB_PF_RAYS, "s/ray"},
     {"path.occlusion_ray", TB_PM_PATH, TB_PF_OCC_RAYS, "s/occlusion ray"},
@@ -62,15 +65,21 @@ static const tb_cost_term tb__terms[] = {
     {"path.test_csg", TB_PM_PATH, TB_PF_TESTS_CSG, "s/test"},
     {"path.test_mesh", TB_PM_PATH, TB_PF_TESTS_MESH, "s/test"},
     {"path.hit", TB_PM_PATH, TB_PF_HITS, "s/hit shaded"},
+    {"path.leaf_test", TB_PM_PATH, TB_PF_LEAF_TESTS, "s/reference tested"},
+    {"path.sample_channel", TB_PM_PATH, TB_PF_SAMPLE_CHANNELS, "s/(camera sample x channel)"},
+    {"path.hit_channel", TB_PM_PATH, TB_PF_HIT_CHANNELS, "s/(hit x channel)"},
     {"radiosity.ray", TB_PM_RADIOSITY, TB_PF_RAD_RAYS, "s/form-factor ray"},
     {"radiosity.form_factor", TB_PM_RADIOSITY, TB_PF_RAD_FFS, "s/form factor"},
     {"radiosity.shot_element", TB_PM_RADIOSITY, TB_PF_RAD_SHOT_ELEMS, "s/(shot x element)"},
     {"radiosity.element", TB_PM_RADIOSITY, TB_PF_RAD_ELEMENTS, "s/element"},
+    {"radiosity.occlusion_ray", TB_PM_RADIOSITY, TB_PF_RAD_OCC_RAYS, "s/form-factor ray through the BVH"},
+    {"radiosity.shaft_test", TB_PM_RADIOSITY, TB_PF_RAD_SHAFT_TESTS, "s/(ray x shaft occluder)"},
     {"radiosity.csg_probe", TB_PM_RADIOSITY, TB_PF_RAD_MESH_PROBES, "s/CSG probe ray"},
     {"process.raytrace", TB_PM_PROCESS, TB_PF_IS_RAYTRACE, "s"},
     {"process.path", TB_PM_PROCESS, TB_PF_IS_PATH, "s"},
     {"process.radiosity", TB_PM_PROCESS, TB_PF_IS_RADIOSITY, "s"},
     {"process.pixel", TB_PM_PROCESS, TB_PF_PIXELS, "s/pixel"},
+    {"process.pixel_channel", TB_PM_PROCESS, TB_PF_PIXEL_CHANNELS, "s/(pixel x channel)"},
     {"process.radiosity_pixel_ray", TB_PM_PROCESS, TB_PF_RAD_PIXEL_RAYS, "s/image ray"},
     {"memory.raytrace", TB_PM_MEMORY, TB_PF_IS_RAYTRACE, "bytes"},
     {"memory.path", TB_PM_MEMORY, TB_PF_IS_PATH, "bytes"},
@@ -102,8 +111,9 @@ const char *tb_pfeat_name(tb_pfeat k)
         "bytes", "primitives", "csg_nodes", "meshes", "triangles", "emitter_bytes", "emitter_faces", "csg_probes",
         "references",
         "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive",
-        "tests_csg", "tests_mesh", "hits", "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements",
-        "rad_elements", "rad_vertices", "rad_pixel_rays", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
+        "tests_csg", "tests_mesh", "hits", "leaf_tests", "sample_channels", "hit_channels", "pixel_channels",
+        "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays",
+        "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
         "mem_accel", "film_bytes", "is_raytrace", "is_path", "is_radiosity", "one"};
     _Static_assert(sizeof fname / sizeof fname[0] == TB_PF_COUNT, "a name per statistic");
     return (unsigned)k < TB_PF_COUNT ? fname[k] : "?";
@@ -147,6 +157,8 @@ void tb_predict_stats_init(tb_predict_stats *f, tb_predict_method m, double file
     double px = (double)width * (double)height;
     f->f[TB_PF_PIXELS] = px;
     f->f[TB_PF_FILM_BYTES] = px * (double)nchannels * 4.0;
+    f->f[TB_PF_PIXEL_CHANNELS] = px * (double)nchannels;
+    f->channels = nchannels;
     f->f[TB_PF_RAD_PIXEL_RAYS] = m == TB_PREDICT_RADIOSITY ? px * (double)rad_spp : 0.0;
     f->f[TB_PF_IS_RAYTRACE] = m == TB_PREDICT_RAYTRACE;
     f->f[TB_PF_IS_PATH] = m == TB_PREDICT_PATH;
@@ -202,11 +214,22 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
     }
     f->f[TB_PF_TESTS_MESH] += scale * tb__count("Intersect/polygons");
     f->f[TB_PF_HITS] += scale * tb__count("Surface/hits shaded");
+    f->f[TB_PF_LEAF_TESTS] += scale * tb__count("BVH/primitives tested");
+    double ch = f->channels > 0 ? f->channels : 3.0;
+    f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_SAMPLES] * ch;
+    f->f[TB_PF_HIT_CHANNELS] = f->f[TB_PF_HITS] * ch;
     if (f->method == TB_PREDICT_RADIOSITY) {
-        /* the radiosity image's rays are a term of their own (process) */
+        /* the radiosity image's rays are a term of their own (process); the
+         * form factors trace occlusion rays only, the image closest-hit rays */
+        f->f[TB_PF_RAD_OCC_RAYS] += scale * tb__count("BVH/occlusion rays");
         f->f[TB_PF_SAMPLES] = f->f[TB_PF_RAYS] = f->f[TB_PF_OCC_RAYS] = f->f[TB_PF_NODES] = 0.0;
         f->f[TB_PF_TESTS_PRIM] = f->f[TB_PF_TESTS_CSG] = f->f[TB_PF_TESTS_MESH] = f->f[TB_PF_HITS] = 0.0;
-        f->f[TB_PF_RAD_RAYS] += scale * tb__count("Radiosity/rays (receivers x samples)");
+        f->f[TB_PF_LEAF_TESTS] = f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_HIT_CHANNELS] = 0.0;
+        double rays = scale * tb__count("Radiosity/rays (receivers x samples)");
+        double shafts = tb__count("Form factors/shafts");
+        f->f[TB_PF_RAD_RAYS] += rays;
+        if (shafts > 0)
+            f->f[TB_PF_RAD_SHAFT_TESTS] += rays * tb__count("Form factors/occluders listed in shafts") / shafts;
         f->f[TB_PF_RAD_FFS] += scale * tb__count("Radiosity/form factors");
         double shots = tb__value("shots"), elems = tb__value("elements");
         f->rad_shots = shots;
@@ -221,10 +244,13 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
 
 void tb_predict_stats_sub_work(tb_predict_stats *f, const tb_predict_stats *load)
 {
-    static const tb_pfeat work[] = {TB_PF_SAMPLES, TB_PF_RAYS, TB_PF_OCC_RAYS, TB_PF_NODES, TB_PF_TESTS_PRIM,
-                                    TB_PF_TESTS_CSG, TB_PF_TESTS_MESH, TB_PF_HITS};
+    static const tb_pfeat work[] = {TB_PF_SAMPLES,    TB_PF_RAYS,      TB_PF_OCC_RAYS, TB_PF_NODES,
+                                    TB_PF_TESTS_PRIM, TB_PF_TESTS_CSG, TB_PF_TESTS_MESH, TB_PF_HITS, TB_PF_LEAF_TESTS};
     for (size_t i = 0; i < sizeof work / sizeof work[0]; i++)
         f->f[work[i]] = fmax(0.0, f->f[work[i]] - load->f[work[i]]);
+    double ch = f->channels > 0 ? f->channels : 3.0;
+    f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_SAMPLES] * ch;
+    f->f[TB_PF_HIT_CHANNELS] = f->f[TB_PF_HITS] * ch;
 }
 
 /* ------------------------------------------------------------------ pilot */
@@ -379,7 +405,7 @@ tb_status tb_costs_write(const char *path, const tb_costs *c)
     if (st)
         return st;
     FILE *fp = of.fp;
-    fprintf(fp, "{\n  \"schema\": \"testbed-costs-1\",\n  \"cpu\": ");
+    fprintf(fp, "{\n  \"schema\": \"" TB_COSTS_SCHEMA "\",\n  \"cpu\": ");
     tb_json_write_string(fp, c->cpu);
     fprintf(fp, ",\n  \"created_utc\": ");
     tb_json_write_string(fp, c->created);
@@ -647,9 +673,10 @@ tb_status tb_costs_read(const char *path, tb_costs *c)
             tb__jws(&j);
             const char *at = j.p;
             if (!strcmp(key, "schema")) {
-                if (!(st = tb__jstring(&j, sval, sizeof sval)) && strcmp(sval, "testbed-costs-1")) {
+                if (!(st = tb__jstring(&j, sval, sizeof sval)) && strcmp(sval, TB_COSTS_SCHEMA)) {
                     j.p = at;
-                    st = tb__jerr(&j, "schema is not \"testbed-costs-1\"");
+                    st = tb__jerr(&j, "schema is not \"" TB_COSTS_SCHEMA
+                                      "\" (a COSTS.json of another version: re-run testbed calibrate)");
                 }
                 schema = true;
             } else if (!strcmp(key, "threads")) {
@@ -688,7 +715,7 @@ tb_status tb_costs_read(const char *path, tb_costs *c)
             st = tb__jerr(&j, "text after the JSON object");
     }
     if (!st && !schema)
-        st = tb_error(TB_ERR_FORMAT, "%s:1:1: error: no \"schema\": \"testbed-costs-1\"", path);
+        st = tb_error(TB_ERR_FORMAT, "%s:1:1: error: no \"schema\": \"" TB_COSTS_SCHEMA "\"", path);
     if (!st && !threads)
         st = tb_error(TB_ERR_FORMAT, "%s:1:1: error: no \"threads\"", path);
     for (int i = 0; !st && i < TB__NTERMS; i++)
