@@ -35,7 +35,8 @@ typedef struct tb__cal_run {
     tb_predict_method method;
     const char *args;    /* extra render options, space separated */
     double weight;       /* rough relative cost, for the progress bar's ETA */
-    int env;             /* what surrounds the grid: 0 nothing (the sky), 1 a floor, 2 a closed room */
+    int env;             /* what surrounds the grid: 0 nothing (the sky), 1 a floor, 2 a closed room, 3 a closed
+                            room lit only by an emitting ceiling panel (no point or directional light) */
     bool spectral;       /* the floor / room is spectral, so the scene renders 31 bands */
 } tb__cal_run;
 
@@ -57,7 +58,7 @@ static const tb__cal_run tb__cal_quick[] = {
     {TB_GEN_GRID, 4, 1024, 768, TB_PREDICT_PATH, "", 2, 0, false},
     {TB_GEN_MESH, 6, 800, 600, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 0, false},
     {TB_GEN_GRID, 6, 64, 48, TB_PREDICT_RAYTRACE, "", 1, 2, true},
-    {TB_GEN_GRID, 6, 64, 48, TB_PREDICT_PATH, "", 1, 2, false},
+    {TB_GEN_GRID, 6, 64, 48, TB_PREDICT_PATH, "", 1, 3, false},
     {TB_GEN_GRID, 2, 48, 36, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 8 --samples 2 --spp 1", 1, 0, false},
     {TB_GEN_GRID, 3, 64, 48, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 12 --samples 1 --spp 2", 1, 0, false},
     {TB_GEN_MESH, 1, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 6 --samples 1", 1, 0, false},
@@ -80,6 +81,9 @@ static const tb__cal_run tb__cal_default[] = {
     {TB_GEN_MESH, 50, 320, 240, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 2, false},
     {TB_GEN_MESH, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true},
     {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 1, false},
+    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 3, false},
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true},
+    {TB_GEN_CSG, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false},
     /* path */
     {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false},
     {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false},
@@ -95,6 +99,10 @@ static const tb__cal_run tb__cal_default[] = {
     {TB_GEN_MESH, 50, 240, 180, TB_PREDICT_PATH, "", 3, 2, false},
     {TB_GEN_MESH, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true},
     {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3, 1, false},
+    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false},
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, true},
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false},
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 3, true},
     /* radiosity */
     {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3, 0, false},
     {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4, 0, false},
@@ -106,6 +114,7 @@ static const tb__cal_run tb__cal_default[] = {
     {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8, 0, false},
     {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false},
     {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false},
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false},
 };
 
 static const tb__cal_run tb__cal_long[] = {
@@ -124,6 +133,9 @@ static const tb__cal_run tb__cal_long[] = {
     {TB_GEN_MESH, 50, 320, 240, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 2, false},
     {TB_GEN_MESH, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true},
     {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 1, false},
+    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 3, false},
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true},
+    {TB_GEN_CSG, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false},
     /* path */
     {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false},
     {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false},
@@ -139,6 +151,10 @@ static const tb__cal_run tb__cal_long[] = {
     {TB_GEN_MESH, 50, 240, 180, TB_PREDICT_PATH, "", 3, 2, false},
     {TB_GEN_MESH, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true},
     {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3, 1, false},
+    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false},
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, true},
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false},
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 3, true},
     /* radiosity */
     {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3, 0, false},
     {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4, 0, false},
@@ -150,6 +166,8 @@ static const tb__cal_run tb__cal_long[] = {
     {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8, 0, false},
     {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false},
     {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false},
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false},
+    /* larger scenes */
     {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_RAYTRACE, "", 8, 0, false},
     {TB_GEN_GRID, 400, 480, 360, TB_PREDICT_RAYTRACE, "", 6, 2, true},
     {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_RAYTRACE, "", 8, 2, false},
@@ -167,11 +185,14 @@ static const tb__cal_run tb__cal_long[] = {
 typedef struct tb__cal_writer {
     FILE *fp;
     int width, height;
+    bool no_lights; /* leave the generator's lights out */
 } tb__cal_writer;
 
 static tb_status tb__cal_sink(void *user, const tb_mid_item *item)
 {
     tb__cal_writer *w = user;
+    if (item->type == TB_MID_ITEM_LIGHT && w->no_lights)
+        return TB_OK;
     if (item->type != TB_MID_ITEM_CAMERA)
         return tb_mid_write_item(w->fp, item);
     tb_mid_camera cam = *item->camera;
@@ -205,6 +226,15 @@ static void tb__cal_room(FILE *fp, const tb__cal_run *r)
     if (r->env >= 2)
         fprintf(fp, " [4 7 6 5] [0 4 5 1] [3 2 6 7] [0 3 7 4] [1 5 6 2]");
     fprintf(fp, "]\n    }\n    rendering = {\n        material = \"%s\"\n    }\n}\n", mat);
+    if (r->env == 3) {
+        /* the panel just under the ceiling, facing down: area-light sampling as in the Cornell boxes */
+        double a = c - 0.25 * h, b = c + 0.25 * h, z = z1 - 0.01;
+        fprintf(fp,
+                "polygons \"calibration panel\" {\n    geometry = {\n        vertices = [[%.6g %.6g %.6g] [%.6g %.6g %.6g] "
+                "[%.6g %.6g %.6g] [%.6g %.6g %.6g]]\n        faces = [[0 1 2 3]]\n    }\n    rendering = {\n"
+                "        material = \"lamp\"\n    }\n}\n",
+                a, a, z, a, b, z, b, b, z, b, a, z);
+    }
 }
 
 /* Writes run r's scene to path. */
@@ -214,7 +244,7 @@ static tb_status tb__cal_scene(const tb__cal_run *r, const char *path)
     tb_status st = tb_outfile_open(&of, path);
     if (st)
         return st;
-    tb__cal_writer w = {of.fp, r->width, r->height};
+    tb__cal_writer w = {of.fp, r->width, r->height, r->env == 3};
     tb_gen_options go = {.kind = r->kind, .count = r->count, .seed = 1};
     st = tb_mid_write_header(of.fp);
     if (!st)
