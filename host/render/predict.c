@@ -348,6 +348,15 @@ void tb_predict_eval(const tb_costs *c, const tb_predict_stats *f, tb_prediction
 
 /* ------------------------------------------------------------------ fit */
 
+/* Relative errors beyond this many robust standard deviations are down-weighted (Huber's k). */
+#define TB__HUBER 2.0
+
+static int tb__cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
 tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, int n, int threads, tb_costs *out)
 {
     if (n < 1)
@@ -355,9 +364,9 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
     memset(out, 0, sizeof *out);
     out->threads = threads;
     double *A = malloc(sizeof *A * (size_t)n * TB_COST_MAX_TERMS), *b = malloc(sizeof *b * (size_t)n);
-    double *w = malloc(sizeof *w * (size_t)n);
-    if (!A || !b || !w) {
-        free(A), free(b), free(w);
+    double *w = malloc(sizeof *w * (size_t)n), *w0 = malloc(sizeof *w0 * (size_t)n);
+    if (!A || !b || !w || !w0) {
+        free(A), free(b), free(w), free(w0);
         return tb_error(TB_ERR_NOMEM, "calibrate: out of memory");
     }
     tb_status st = TB_OK;
@@ -378,7 +387,7 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
             for (int j = 0; j < k; j++)
                 A[(size_t)rows * (size_t)k + (size_t)j] = f[r].f[tb__terms[idx[j]].feature];
             b[rows] = yv;
-            w[rows] = 1.0 / yv; /* relative errors: small and large runs count alike */
+            w[rows] = w0[rows] = 1.0 / yv; /* relative errors: small and large runs count alike */
             rows++;
         }
         if (!rows)
@@ -387,12 +396,51 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
         tb_lsq_info info;
         if ((st = tb_lsq_fit(A, b, w, rows, k, TB_LSQ_NONNEG, x, &info)))
             break;
+        /* Huber reweighting: a run slowed by other jobs on a shared
+         * machine (2-5 times its time) would pull every cost of its module;
+         * runs whose relative error is beyond TB__HUBER x the robust scale
+         * (1.4826 x the median absolute relative error) count less, in
+         * proportion, and the fit is redone (a few rounds). */
+        for (int round = 0; round < 4 && rows > k; round++) {
+            double *res = malloc(sizeof *res * (size_t)rows * 2);
+            if (!res) {
+                st = tb_error(TB_ERR_NOMEM, "calibrate: out of memory");
+                break;
+            }
+            for (int r = 0; r < rows; r++) {
+                double fit = 0.0;
+                for (int j = 0; j < k; j++)
+                    fit += A[(size_t)r * (size_t)k + (size_t)j] * x[j];
+                res[r] = (fit - b[r]) / b[r];
+                res[rows + r] = fabs(res[r]);
+            }
+            qsort(res + rows, (size_t)rows, sizeof *res, tb__cmp_double);
+            double scale = 1.4826 * res[rows + rows / 2], lim = TB__HUBER * fmax(scale, 0.02);
+            bool changed = false;
+            for (int r = 0; r < rows; r++) {
+                double wr = fabs(res[r]) > lim ? lim / fabs(res[r]) : 1.0;
+                changed |= fabs(wr * w0[r] - w[r]) > 1e-3 * w0[r];
+                w[r] = wr * w0[r];
+            }
+            free(res);
+            if (!changed || (st = tb_lsq_fit(A, b, w, rows, k, TB_LSQ_NONNEG, x, &info)))
+                break;
+        }
+        if (st)
+            break;
+        double ss = 0.0; /* the relative RMS error over every run, down-weighted or not */
+        for (int r = 0; r < rows; r++) {
+            double fit = 0.0;
+            for (int j = 0; j < k; j++)
+                fit += A[(size_t)r * (size_t)k + (size_t)j] * x[j];
+            ss += (fit - b[r]) * (fit - b[r]) / (b[r] * b[r]);
+        }
         for (int j = 0; j < k; j++)
             out->c[idx[j]] = x[j];
         out->fit[m].rows = rows;
-        out->fit[m].rel_rms = info.rms;
+        out->fit[m].rel_rms = sqrt(ss / rows);
     }
-    free(A), free(b), free(w);
+    free(A), free(b), free(w), free(w0);
     return st;
 }
 

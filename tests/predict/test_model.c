@@ -171,6 +171,54 @@ static void test_fit_channels(void **state)
                    28.0 * (2e-8 * g.f[TB_PF_SAMPLES] + 6e-8 * g.f[TB_PF_HITS]), 1e-6 * spec.module[TB_PM_PATH]);
 }
 
+/* Runs slowed by other jobs (a few measured 3 times their true time, as on
+ * a shared machine) barely move the costs: the fit down-weights them. */
+static void test_fit_outliers(void **state)
+{
+    (void)state;
+    enum { N = 40 };
+    tb_costs truth, got;
+    memset(&truth, 0, sizeof truth);
+    truth.threads = 1;
+    truth.c[term("raytrace.sample")] = 3e-7;
+    truth.c[term("raytrace.ray")] = 5e-7;
+    truth.c[term("raytrace.node")] = 4e-8;
+    truth.c[term("raytrace.hit")] = 8e-7;
+    tb_predict_stats f[N];
+    tb_predict_measured y[N];
+    tb_rng rng;
+    tb_rng_seed(&rng, 3, 0);
+    for (int r = 0; r < N; r++) {
+        tb_predict_stats_init(&f[r], TB_PREDICT_RAYTRACE, 1e4, 320, 240, 3, 0, 1);
+        f[r].f[TB_PF_SAMPLES] = 1e4 * (1 + 30 * tb_rng_double(&rng));
+        f[r].f[TB_PF_RAYS] = f[r].f[TB_PF_SAMPLES] * (1 + 4 * tb_rng_double(&rng));
+        f[r].f[TB_PF_HITS] = f[r].f[TB_PF_RAYS] * (0.05 + 0.95 * tb_rng_double(&rng));
+        f[r].f[TB_PF_NODES] = f[r].f[TB_PF_RAYS] * (5 + 40 * tb_rng_double(&rng));
+        tb_prediction p;
+        tb_predict_eval(&truth, &f[r], &p);
+        memset(&y[r], 0, sizeof y[r]);
+        /* 2% noise on every run; runs 5, 17 and 30 slowed three times */
+        y[r].module[TB_PM_RAYTRACE] = p.module[TB_PM_RAYTRACE] * (0.98 + 0.04 * tb_rng_double(&rng)) *
+                                      (r == 5 || r == 17 || r == 30 ? 3.0 : 1.0);
+    }
+    assert_int_equal(tb_costs_fit(f, y, N, 1, &got), TB_OK);
+    static const char *const names[] = {"raytrace.sample", "raytrace.ray", "raytrace.node", "raytrace.hit"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (fabs(got.c[term(names[i])] / truth.c[term(names[i])] - 1.0) > 0.1)
+            fail_msg("%s: fitted %g, true %g", names[i], got.c[term(names[i])], truth.c[term(names[i])]);
+    /* the prediction of an unslowed run stays within 5% */
+    for (int r = 0; r < N; r++) {
+        if (r == 5 || r == 17 || r == 30)
+            continue;
+        tb_prediction p;
+        tb_predict_eval(&got, &f[r], &p);
+        if (fabs(p.module[TB_PM_RAYTRACE] / y[r].module[TB_PM_RAYTRACE] - 1.0) > 0.05)
+            fail_msg("run %d: fitted %g, measured %g", r, p.module[TB_PM_RAYTRACE], y[r].module[TB_PM_RAYTRACE]);
+    }
+    /* the reported error counts the slowed runs too */
+    assert_true(got.fit[TB_PM_RAYTRACE].rel_rms > 0.15);
+}
+
 static void test_eval_modules(void **state)
 {
     (void)state;
@@ -303,6 +351,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fit_recovers_costs),
         cmocka_unit_test(test_fit_channels),
+        cmocka_unit_test(test_fit_outliers),
         cmocka_unit_test(test_eval_modules),
         cmocka_unit_test(test_costs_round_trip),
         cmocka_unit_test(test_costs_bad_files),
