@@ -89,6 +89,7 @@ static const tb_cost_term tb__terms[] = {
     {"memory.emitter_byte", TB_PM_MEMORY, TB_PF_MEM_EMITTERS, "bytes/accounted byte"},
     {"memory.accel_byte", TB_PM_MEMORY, TB_PF_MEM_ACCEL, "bytes/accounted byte"},
     {"memory.film_byte", TB_PM_MEMORY, TB_PF_FILM_BYTES, "bytes/(pixel x channel x 4)"},
+    {"memory.pixel", TB_PM_MEMORY, TB_PF_PIXELS, "bytes/pixel (the images made from the film)"},
     {"memory.element", TB_PM_MEMORY, TB_PF_RAD_ELEMENTS, "bytes/element"},
     {"memory.vertex", TB_PM_MEMORY, TB_PF_RAD_VERTICES, "bytes/vertex"},
     {"memory.form_factor_cache_byte", TB_PM_MEMORY, TB_PF_RAD_CACHE_BYTES, "bytes/cached byte"},

@@ -49,10 +49,13 @@ static void synthetic_runs(const tb_costs *truth, tb_predict_stats *f, tb_predic
     tb_rng_seed(&rng, 5, 0);
     for (int r = 0; r < n; r++) {
         tb_predict_method m = (tb_predict_method)(r % 3);
-        tb_predict_stats_init(&f[r], m, 1e5 * (1 + 20 * tb_rng_double(&rng)), 64 + r * 16, 48 + r * 8, 3, 2, 2);
+        /* RGB and spectral runs, so the per-pixel and per-pixel-channel statistics differ */
+        tb_predict_stats_init(&f[r], m, 1e5 * (1 + 20 * tb_rng_double(&rng)), 64 + r * 16, 48 + r * 8,
+                              r % 4 == 1 ? 31 : 3, 2, 2);
         for (int k = 0; k < TB_PF_COUNT; k++) {
             bool fixed = k == TB_PF_ONE || k == TB_PF_IS_RAYTRACE || k == TB_PF_IS_PATH || k == TB_PF_IS_RADIOSITY ||
-                         k == TB_PF_BYTES || k == TB_PF_PIXELS || k == TB_PF_FILM_BYTES || k == TB_PF_RAD_PIXEL_RAYS;
+                         k == TB_PF_BYTES || k == TB_PF_PIXELS || k == TB_PF_FILM_BYTES || k == TB_PF_RAD_PIXEL_RAYS ||
+                         k == TB_PF_PIXEL_CHANNELS;
             if (!fixed)
                 f[r].f[k] = 1e3 * (0.05 + tb_rng_double(&rng)) * pow(10.0, 3.0 * tb_rng_double(&rng));
         }
