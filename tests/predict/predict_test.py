@@ -19,7 +19,7 @@
    accuracy is the benchmark's job (tools/bench/predict-accuracy.sh), not
    asserted here. Mesh-heavy scenes and the path tracer are not asserted
    with the quick set: their peak comes from the load's transient buffers
-   or the film, which 14 tiny runs do not pin down (docs/predict.md,
+   or the film, which 16 tiny runs do not pin down (docs/predict.md,
    "Limits"; the default set gets them within 25%).
 
 Environment: TESTBED, TB_TEST_TMPDIR."""
