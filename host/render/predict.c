@@ -51,6 +51,7 @@ static const tb_cost_term tb__terms[] = {
     {"raytrace.occlusion_ray", TB_PM_RAYTRACE, TB_PF_OCC_RAYS, "s/occlusion ray"},
     {"raytrace.node", TB_PM_RAYTRACE, TB_PF_NODES, "s/BVH node visited"},
     {"raytrace.test_primitive", TB_PM_RAYTRACE, TB_PF_TESTS_PRIM, "s/test"},
+    {"raytrace.test_torus", TB_PM_RAYTRACE, TB_PF_TESTS_TORUS, "s/test"},
     {"raytrace.test_csg", TB_PM_RAYTRACE, TB_PF_TESTS_CSG, "s/test"},
     {"raytrace.test_mesh", TB_PM_RAYTRACE, TB_PF_TESTS_MESH, "s/test"},
     {"raytrace.hit", TB_PM_RAYTRACE, TB_PF_HITS, "s/hit shaded"},
@@ -62,6 +63,7 @@ static const tb_cost_term tb__terms[] = {
     {"path.occlusion_ray", TB_PM_PATH, TB_PF_OCC_RAYS, "s/occlusion ray"},
     {"path.node", TB_PM_PATH, TB_PF_NODES, "s/BVH node visited"},
     {"path.test_primitive", TB_PM_PATH, TB_PF_TESTS_PRIM, "s/test"},
+    {"path.test_torus", TB_PM_PATH, TB_PF_TESTS_TORUS, "s/test"},
     {"path.test_csg", TB_PM_PATH, TB_PF_TESTS_CSG, "s/test"},
     {"path.test_mesh", TB_PM_PATH, TB_PF_TESTS_MESH, "s/test"},
     {"path.hit", TB_PM_PATH, TB_PF_HITS, "s/hit shaded"},
@@ -111,7 +113,7 @@ const char *tb_pfeat_name(tb_pfeat k)
     static const char *const fname[] = {
         "bytes", "primitives", "csg_nodes", "meshes", "triangles", "emitter_bytes", "emitter_faces", "csg_probes",
         "references",
-        "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive",
+        "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive", "tests_torus",
         "tests_csg", "tests_mesh", "hits", "leaf_tests", "sample_channels", "hit_channels", "pixel_channels",
         "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays",
         "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
@@ -207,7 +209,7 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
     f->f[TB_PF_NODES] += scale * tb__count("BVH/nodes visited");
     for (size_t k = 0; k < sizeof tb__prim_kinds / sizeof tb__prim_kinds[0]; k++) {
         snprintf(name, sizeof name, "Intersect/%s", tb__prim_kinds[k]);
-        f->f[TB_PF_TESTS_PRIM] += scale * tb__count(name);
+        f->f[strcmp(tb__prim_kinds[k], "torus") ? TB_PF_TESTS_PRIM : TB_PF_TESTS_TORUS] += scale * tb__count(name);
     }
     for (size_t k = 0; k < sizeof tb__csg_kinds / sizeof tb__csg_kinds[0]; k++) {
         snprintf(name, sizeof name, "Intersect/%s", tb__csg_kinds[k]);
@@ -224,7 +226,8 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
          * form factors trace occlusion rays only, the image closest-hit rays */
         f->f[TB_PF_RAD_OCC_RAYS] += scale * tb__count("BVH/occlusion rays");
         f->f[TB_PF_SAMPLES] = f->f[TB_PF_RAYS] = f->f[TB_PF_OCC_RAYS] = f->f[TB_PF_NODES] = 0.0;
-        f->f[TB_PF_TESTS_PRIM] = f->f[TB_PF_TESTS_CSG] = f->f[TB_PF_TESTS_MESH] = f->f[TB_PF_HITS] = 0.0;
+        f->f[TB_PF_TESTS_PRIM] = f->f[TB_PF_TESTS_TORUS] = f->f[TB_PF_TESTS_CSG] = f->f[TB_PF_TESTS_MESH] = 0.0;
+        f->f[TB_PF_HITS] = 0.0;
         f->f[TB_PF_LEAF_TESTS] = f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_HIT_CHANNELS] = 0.0;
         double rays = scale * tb__count("Radiosity/rays (receivers x samples)");
         double shafts = tb__count("Form factors/shafts");
@@ -246,7 +249,8 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
 void tb_predict_stats_sub_work(tb_predict_stats *f, const tb_predict_stats *load)
 {
     static const tb_pfeat work[] = {TB_PF_SAMPLES,    TB_PF_RAYS,      TB_PF_OCC_RAYS, TB_PF_NODES,
-                                    TB_PF_TESTS_PRIM, TB_PF_TESTS_CSG, TB_PF_TESTS_MESH, TB_PF_HITS, TB_PF_LEAF_TESTS};
+                                    TB_PF_TESTS_PRIM, TB_PF_TESTS_TORUS, TB_PF_TESTS_CSG, TB_PF_TESTS_MESH,
+                                    TB_PF_HITS,       TB_PF_LEAF_TESTS};
     for (size_t i = 0; i < sizeof work / sizeof work[0]; i++)
         f->f[work[i]] = fmax(0.0, f->f[work[i]] - load->f[work[i]]);
     double ch = f->channels > 0 ? f->channels : 3.0;

@@ -54,7 +54,8 @@ typedef enum tb_pfeat {
     TB_PF_RAYS,            /* closest-hit rays through the BVH */
     TB_PF_OCC_RAYS,        /* occlusion (shadow) rays through the BVH */
     TB_PF_NODES,           /* BVH nodes visited */
-    TB_PF_TESTS_PRIM,      /* intersection tests of analytic primitives */
+    TB_PF_TESTS_PRIM,      /* intersection tests of analytic primitives but tori */
+    TB_PF_TESTS_TORUS,     /* intersection tests of tori (a quartic: several times a quadric's cost) */
     TB_PF_TESTS_CSG,       /* intersection tests of CSG operators */
     TB_PF_TESTS_MESH,      /* intersection tests of polygons objects (their inner BVH walk included) */
     TB_PF_HITS,            /* surface records made (shading per hit) */
