@@ -137,6 +137,11 @@ static const tb__cal_run tb__cal_default[] = {
     {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false, 0},
     {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false, 0},
     {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false, 0},
+    {TB_GEN_GRID, 9, 800, 600, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 4", 4, 0, false, 0},
+    {TB_GEN_MESH, 4, 1024, 768, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 1", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 8", 6, 3, false, 0},
+    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 4", 6, 2, false, 0},
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4", 6, 3, true, 0},
 };
 
 static const tb__cal_run tb__cal_long[] = {
@@ -209,6 +214,11 @@ static const tb__cal_run tb__cal_long[] = {
     {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false, 0},
     {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false, 0},
     {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false, 0},
+    {TB_GEN_GRID, 9, 800, 600, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 4", 4, 0, false, 0},
+    {TB_GEN_MESH, 4, 1024, 768, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 1", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 8", 6, 3, false, 0},
+    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 4", 6, 2, false, 0},
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4", 6, 3, true, 0},
     /* larger scenes */
     {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_RAYTRACE, "", 8, 0, false, 0},
     {TB_GEN_GRID, 400, 480, 360, TB_PREDICT_RAYTRACE, "", 6, 2, true, 0},
