@@ -617,7 +617,25 @@ int tb_cmd_calibrate(int argc, char **argv)
         total += runs[i].weight;
     tb_progress bar;
     bool bar_on = tb_progress_start(&bar, "calibrate", (int64_t)(100.0 * total), NULL, 0) == TB_OK;
-    for (int i = 0; i < nruns && rc == TB_EXIT_OK; i++) {
+    /* Runs in an order that takes the methods in turn (and each method's
+     * runs in their listed order): on a machine whose load drifts, every
+     * module then sees the same mix of quiet and busy moments, instead of
+     * the ray tracer's runs all meeting one load and radiosity's another. */
+    int *order = malloc(sizeof *order * (size_t)nruns), next[TB_PREDICT_METHOD_COUNT] = {0}, done_runs = 0;
+    if (!order) {
+        fprintf(stderr, "testbed calibrate: out of memory\n");
+        rc = TB_EXIT_FAIL;
+        goto done;
+    }
+    while (done_runs < nruns)
+        for (int m = 0; m < TB_PREDICT_METHOD_COUNT; m++) {
+            while (next[m] < nruns && runs[next[m]].method != (tb_predict_method)m)
+                next[m]++;
+            if (next[m] < nruns)
+                order[done_runs++] = next[m]++;
+        }
+    for (int k = 0; k < nruns && rc == TB_EXIT_OK; k++) {
+        int i = order[k];
         char scene[4096], why[4200];
         snprintf(scene, sizeof scene, "%s/%s-%d-%dx%d-%s%d-t%d.mid", dir, tb_gen_kind_name(runs[i].kind), runs[i].count,
                  runs[i].width, runs[i].height, runs[i].spectral ? "s" : "e", runs[i].env, runs[i].tori);
@@ -641,6 +659,7 @@ int tb_cmd_calibrate(int argc, char **argv)
         if (bar_on)
             tb_progress_add(&bar, (int64_t)(100.0 * runs[i].weight));
     }
+    free(order);
     if (bar_on)
         tb_progress_finish(&bar);
     if (rc != TB_EXIT_OK)
