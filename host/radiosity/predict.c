@@ -234,6 +234,7 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
     tb_predict_stats_add_work(f, per_shot * vscale);
     f->f[TB_PF_RAD_RAYS] *= ray_scale;
     f->f[TB_PF_RAD_OCC_RAYS] *= ray_scale;
+    f->f[TB_PF_RAD_NODES] *= ray_scale;
     f->f[TB_PF_RAD_SHAFT_TESTS] *= ray_scale;
     f->rad_shots = shots;
     f->f[TB_PF_RAD_SHOT_ELEMS] = shots * full_elems;

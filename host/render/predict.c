@@ -75,6 +75,7 @@ static const tb_cost_term tb__terms[] = {
     {"radiosity.shot_element", TB_PM_RADIOSITY, TB_PF_RAD_SHOT_ELEMS, "s/(shot x element)"},
     {"radiosity.element", TB_PM_RADIOSITY, TB_PF_RAD_ELEMENTS, "s/element"},
     {"radiosity.occlusion_ray", TB_PM_RADIOSITY, TB_PF_RAD_OCC_RAYS, "s/form-factor ray through the BVH"},
+    {"radiosity.node", TB_PM_RADIOSITY, TB_PF_RAD_NODES, "s/BVH node visited"},
     {"radiosity.shaft_test", TB_PM_RADIOSITY, TB_PF_RAD_SHAFT_TESTS, "s/(ray x shaft occluder)"},
     {"radiosity.csg_probe", TB_PM_RADIOSITY, TB_PF_RAD_MESH_PROBES, "s/CSG probe ray"},
     {"process.raytrace", TB_PM_PROCESS, TB_PF_IS_RAYTRACE, "s"},
@@ -115,7 +116,7 @@ const char *tb_pfeat_name(tb_pfeat k)
         "references",
         "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive", "tests_torus",
         "tests_csg", "tests_mesh", "hits", "leaf_tests", "sample_channels", "hit_channels", "pixel_channels",
-        "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays",
+        "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays", "rad_nodes",
         "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
         "mem_accel", "film_bytes", "is_raytrace", "is_path", "is_radiosity", "one"};
     _Static_assert(sizeof fname / sizeof fname[0] == TB_PF_COUNT, "a name per statistic");
@@ -224,7 +225,10 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
     if (f->method == TB_PREDICT_RADIOSITY) {
         /* the radiosity image's rays are a term of their own (process); the
          * form factors trace occlusion rays only, the image closest-hit rays */
-        f->f[TB_PF_RAD_OCC_RAYS] += scale * tb__count("BVH/occlusion rays");
+        double occ = tb__count("BVH/occlusion rays"), img = tb__count("BVH/rays");
+        f->f[TB_PF_RAD_OCC_RAYS] += scale * occ;
+        if (occ > 0)
+            f->f[TB_PF_RAD_NODES] += scale * tb__count("BVH/nodes visited") * occ / (occ + img);
         f->f[TB_PF_SAMPLES] = f->f[TB_PF_RAYS] = f->f[TB_PF_OCC_RAYS] = f->f[TB_PF_NODES] = 0.0;
         f->f[TB_PF_TESTS_PRIM] = f->f[TB_PF_TESTS_TORUS] = f->f[TB_PF_TESTS_CSG] = f->f[TB_PF_TESTS_MESH] = 0.0;
         f->f[TB_PF_HITS] = 0.0;

@@ -69,6 +69,8 @@ typedef enum tb_pfeat {
     TB_PF_RAD_SHOT_ELEMS,  /* radiosity: shots x elements (each shot updates every element) */
     TB_PF_RAD_ELEMENTS,    /* radiosity: elements of the mesh */
     TB_PF_RAD_OCC_RAYS,    /* radiosity: form-factor rays traced through the BVH (shafts with too many occluders) */
+    TB_PF_RAD_NODES,       /* radiosity: BVH nodes those rays visit (the image rays' share taken out: the
+                              nodes split in proportion to the occlusion and the image rays) */
     TB_PF_RAD_SHAFT_TESTS, /* radiosity: form-factor rays x occluders listed per shaft (rays tested against
                               a shaft's occluder list) */
     TB_PF_RAD_VERTICES,    /* radiosity: vertices of the mesh */
