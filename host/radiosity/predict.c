@@ -16,11 +16,53 @@
 /* How much longer the pilot's elements are than the render's. */
 #define TB__RAD_PILOT_COARSEN 4.0
 
-/* Records the unshot fraction after every pilot shot (a tb_array of double). */
+/* What the pilot records after every shot: the unshot fraction (a tb_array
+ * of double) and, for the shot-count scaling, the shots by object. */
+typedef struct tb__rad_pilot {
+    tb_array decay;      /* unshot fraction after each shot */
+    double *prev;        /* npatches: each shooter's unshot power at the last report */
+    const uint32_t *obj; /* npatches: the shooter's top-level object */
+    double *shots;       /* nobj: pilot shots from each object's shooters */
+    size_t npatches;
+} tb__rad_pilot;
+
 static tb_status tb__rad_record(void *user, const tb_rad_solver *s)
 {
+    tb__rad_pilot *p = user;
     double u = tb_rad_unshot_fraction(s);
-    return tb_array_push(user, &u);
+    /* the shooter is the patch whose unshot power dropped to 0 (others only gain; a light shot has none) */
+    for (size_t i = 0; i < p->npatches; i++) {
+        double now = tb_rad_patch_unshot_power(s, i);
+        if (p->prev[i] > 0.0 && now == 0.0)
+            p->shots[p->obj[i]] += 1.0;
+        p->prev[i] = now;
+    }
+    return tb_array_push(&p->decay, &u);
+}
+
+/* The top-level object of every shooter (patches, else elements) into
+ * obj[0 .. shooters); counts them per object into count[0 .. nobj) when
+ * count is not NULL. */
+static void tb__rad_shooter_objects(const tb_rad_mesh *m, uint32_t *obj, double *count)
+{
+    for (size_t e = 0; e < m->nelems; e++) {
+        size_t p = m->npatches ? m->patch[e] : e;
+        obj[p] = m->elems[e].object;
+    }
+    size_t n = m->npatches ? m->npatches : m->nelems;
+    if (count)
+        for (size_t p = 0; p < n; p++)
+            count[obj[p]] += 1.0;
+}
+
+/* One more than the largest object index of m's elements. */
+static size_t tb__rad_nobj(const tb_rad_mesh *m)
+{
+    size_t n = 0;
+    for (size_t e = 0; e < m->nelems; e++)
+        if ((size_t)m->elems[e].object + 1 > n)
+            n = (size_t)m->elems[e].object + 1;
+    return n;
 }
 
 /* Shots until the unshot fraction reaches `threshold`, along the
@@ -71,8 +113,10 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
     tb_rad_mesh mesh;
     tb_rad_mesh_init(&mesh);
     tb_rad_solver *solver = NULL;
-    tb_array decay;
-    tb_array_init(&decay, sizeof(double));
+    tb__rad_pilot pilot = {0};
+    tb_array_init(&pilot.decay, sizeof(double));
+    double *full_count = NULL, *pilot_count = NULL;
+    uint32_t *full_obj = NULL, *pobj = NULL;
     tb_status st = tb_scene_load(path, &so, &scene);
     if (st)
         goto done;
@@ -105,10 +149,21 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
      * longer, about 1/16 of the shooters, unless the mesh is small already.
      * Shots to convergence per shooter change little with the element size
      * (the Cornell box: 3.7 to 4.2 shots per element from 31 to 1322
-     * elements), so the pilot's shots per shooter times the render's
-     * shooters is the render's shot count. */
+     * elements; with spheres, 1.6 to 2.5 from 1772 to 97), but the
+     * coarsening is not uniform: flat faces get 16 times fewer elements,
+     * curved surfaces (meshed by angle) about as many. So each pilot shot
+     * counts for the ratio of the render's shooters to the pilot's on the
+     * object it was shot from. */
     double full_shooters = (double)(mesh.npatches ? mesh.npatches : mesh.nelems);
     double full_verts = (double)mesh.nverts, full_elems = (double)mesh.nelems;
+    size_t full_nobj = tb__rad_nobj(&mesh);
+    full_count = calloc(full_nobj + 1, sizeof *full_count);
+    full_obj = malloc(((size_t)full_shooters + 1) * sizeof *full_obj);
+    if (!full_count || !full_obj) {
+        st = tb_error(TB_ERR_NOMEM, "predict: out of memory");
+        goto done;
+    }
+    tb__rad_shooter_objects(&mesh, full_obj, full_count);
     if (full_shooters > 256 && (mo.max_edge > 0 || mo.max_area > 0)) {
         tb_rad_mesh_options co = mo;
         co.max_edge *= TB__RAD_PILOT_COARSEN;
@@ -121,27 +176,53 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
             goto done;
     }
     double shooters = (double)(mesh.npatches ? mesh.npatches : mesh.nelems);
+    size_t nobj = tb__rad_nobj(&mesh) > full_nobj ? tb__rad_nobj(&mesh) : full_nobj;
+    pilot.npatches = (size_t)shooters;
+    pilot.prev = calloc(pilot.npatches + 1, sizeof *pilot.prev);
+    pilot.shots = calloc(nobj + 1, sizeof *pilot.shots);
+    pilot_count = calloc(nobj + 1, sizeof *pilot_count);
+    pobj = malloc((pilot.npatches + 1) * sizeof *pobj);
+    pilot.obj = pobj;
+    if (!pilot.prev || !pilot.shots || !pilot_count || !pobj) {
+        st = tb_error(TB_ERR_NOMEM, "predict: out of memory");
+        goto done;
+    }
+    tb__rad_shooter_objects(&mesh, pobj, pilot_count);
     int64_t t0 = tb_stats_now_ns();
     tb_stats_reset();
     if ((st = tb_rad_solver_create(&mesh, NULL, &ro, &solver)))
         goto done;
+    for (size_t i = 0; i < pilot.npatches; i++)
+        pilot.prev[i] = tb_rad_patch_unshot_power(solver, i);
     tb_rad_stop stop = o->stop;
     stop.progress = false;
     stop.time_budget = pilot_seconds;
     stop.max_shots = 0;
-    if ((st = tb_rad_solver_run(solver, &stop, tb__rad_record, &decay, 1)))
+    if ((st = tb_rad_solver_run(solver, &stop, tb__rad_record, &pilot, 1)))
         goto done;
     f->pilot_seconds = 1e-9 * (double)(tb_stats_now_ns() - t0);
     double threshold = o->stop.threshold > 0 ? o->stop.threshold : TB_RAD_DEFAULT_THRESHOLD;
     double pilot_shots = (double)tb_rad_solver_shots(solver), shots = pilot_shots;
     if (tb_rad_unshot_fraction(solver) > threshold && pilot_shots > 0) {
         /* out of pilot time: extrapolate (an underestimate when the decay slows) */
-        double e = tb__rad_extrapolate(&decay, threshold);
+        double e = tb__rad_extrapolate(&pilot.decay, threshold);
         if (isfinite(e) && e > pilot_shots)
             shots = e;
         f->rad_extrapolated = true;
     }
-    shots *= full_shooters / (shooters > 0 ? shooters : 1.0);
+    /* each pilot shot from an object stands for (render's shooters / pilot's) on that object; shots from
+     * point lights and objects missing in one mesh count once, and an extrapolated tail at the mean scale */
+    double scaled = 0.0, counted = 0.0;
+    for (size_t k = 0; k < nobj; k++) {
+        double fc = k < full_nobj ? full_count[k] : 0.0;
+        if (pilot.shots[k] > 0.0) {
+            scaled += pilot.shots[k] * (pilot_count[k] > 0.0 && fc > 0.0 ? fc / pilot_count[k] : 1.0);
+            counted += pilot.shots[k];
+        }
+    }
+    scaled += fmax(0.0, pilot_shots - counted);
+    double mean_scale = pilot_shots > 0 ? scaled / pilot_shots : full_shooters / (shooters > 0 ? shooters : 1.0);
+    shots = scaled + (shots - pilot_shots) * mean_scale;
     if (o->stop.max_shots > 0 && shots > (double)o->stop.max_shots)
         shots = (double)o->stop.max_shots;
     /* per shot, the pilot's rays and form factors grow with the receivers (vertices) */
@@ -152,12 +233,16 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
     tb_stats_set_value("vertices", full_verts);
     tb_predict_stats_add_work(f, per_shot * vscale);
     f->f[TB_PF_RAD_RAYS] *= ray_scale;
+    f->f[TB_PF_RAD_OCC_RAYS] *= ray_scale;
+    f->f[TB_PF_RAD_NODES] *= ray_scale;
+    f->f[TB_PF_RAD_SHAFT_TESTS] *= ray_scale;
     f->rad_shots = shots;
     f->f[TB_PF_RAD_SHOT_ELEMS] = shots * full_elems;
     f->f[TB_PF_RAD_CACHE_BYTES] =
         fmin((double)(512u << 20), f->f[TB_PF_RAD_CACHE_BYTES] / (pilot_shots > 0 ? pilot_shots : 1.0) * shots);
 done:
-    tb_array_free(&decay);
+    tb_array_free(&pilot.decay);
+    free(pilot.prev), free(pilot.shots), free(pobj), free(pilot_count), free(full_count), free(full_obj);
     tb_rad_solver_free(solver);
     tb_rad_mesh_free(&mesh);
     tb_scene_free(scene);

@@ -51,26 +51,38 @@ static const tb_cost_term tb__terms[] = {
     {"raytrace.occlusion_ray", TB_PM_RAYTRACE, TB_PF_OCC_RAYS, "s/occlusion ray"},
     {"raytrace.node", TB_PM_RAYTRACE, TB_PF_NODES, "s/BVH node visited"},
     {"raytrace.test_primitive", TB_PM_RAYTRACE, TB_PF_TESTS_PRIM, "s/test"},
+    {"raytrace.test_torus", TB_PM_RAYTRACE, TB_PF_TESTS_TORUS, "s/test"},
     {"raytrace.test_csg", TB_PM_RAYTRACE, TB_PF_TESTS_CSG, "s/test"},
     {"raytrace.test_mesh", TB_PM_RAYTRACE, TB_PF_TESTS_MESH, "s/test"},
     {"raytrace.hit", TB_PM_RAYTRACE, TB_PF_HITS, "s/hit shaded"},
+    {"raytrace.leaf_test", TB_PM_RAYTRACE, TB_PF_LEAF_TESTS, "s/reference tested"},
+    {"raytrace.sample_channel", TB_PM_RAYTRACE, TB_PF_SAMPLE_CHANNELS, "s/(camera sample x channel)"},
+    {"raytrace.hit_channel", TB_PM_RAYTRACE, TB_PF_HIT_CHANNELS, "s/(hit x channel)"},
     {"path.sample", TB_PM_PATH, TB_PF_SAMPLES, "s/camera sample"},
     {"path.ray", TB_PM_PATH, TB_PF_RAYS, "s/ray"},
     {"path.occlusion_ray", TB_PM_PATH, TB_PF_OCC_RAYS, "s/occlusion ray"},
     {"path.node", TB_PM_PATH, TB_PF_NODES, "s/BVH node visited"},
     {"path.test_primitive", TB_PM_PATH, TB_PF_TESTS_PRIM, "s/test"},
+    {"path.test_torus", TB_PM_PATH, TB_PF_TESTS_TORUS, "s/test"},
     {"path.test_csg", TB_PM_PATH, TB_PF_TESTS_CSG, "s/test"},
     {"path.test_mesh", TB_PM_PATH, TB_PF_TESTS_MESH, "s/test"},
     {"path.hit", TB_PM_PATH, TB_PF_HITS, "s/hit shaded"},
+    {"path.leaf_test", TB_PM_PATH, TB_PF_LEAF_TESTS, "s/reference tested"},
+    {"path.sample_channel", TB_PM_PATH, TB_PF_SAMPLE_CHANNELS, "s/(camera sample x channel)"},
+    {"path.hit_channel", TB_PM_PATH, TB_PF_HIT_CHANNELS, "s/(hit x channel)"},
     {"radiosity.ray", TB_PM_RADIOSITY, TB_PF_RAD_RAYS, "s/form-factor ray"},
     {"radiosity.form_factor", TB_PM_RADIOSITY, TB_PF_RAD_FFS, "s/form factor"},
     {"radiosity.shot_element", TB_PM_RADIOSITY, TB_PF_RAD_SHOT_ELEMS, "s/(shot x element)"},
     {"radiosity.element", TB_PM_RADIOSITY, TB_PF_RAD_ELEMENTS, "s/element"},
+    {"radiosity.occlusion_ray", TB_PM_RADIOSITY, TB_PF_RAD_OCC_RAYS, "s/form-factor ray through the BVH"},
+    {"radiosity.node", TB_PM_RADIOSITY, TB_PF_RAD_NODES, "s/BVH node visited"},
+    {"radiosity.shaft_test", TB_PM_RADIOSITY, TB_PF_RAD_SHAFT_TESTS, "s/(ray x shaft occluder)"},
     {"radiosity.csg_probe", TB_PM_RADIOSITY, TB_PF_RAD_MESH_PROBES, "s/CSG probe ray"},
     {"process.raytrace", TB_PM_PROCESS, TB_PF_IS_RAYTRACE, "s"},
     {"process.path", TB_PM_PROCESS, TB_PF_IS_PATH, "s"},
     {"process.radiosity", TB_PM_PROCESS, TB_PF_IS_RADIOSITY, "s"},
     {"process.pixel", TB_PM_PROCESS, TB_PF_PIXELS, "s/pixel"},
+    {"process.pixel_channel", TB_PM_PROCESS, TB_PF_PIXEL_CHANNELS, "s/(pixel x channel)"},
     {"process.radiosity_pixel_ray", TB_PM_PROCESS, TB_PF_RAD_PIXEL_RAYS, "s/image ray"},
     {"memory.raytrace", TB_PM_MEMORY, TB_PF_IS_RAYTRACE, "bytes"},
     {"memory.path", TB_PM_MEMORY, TB_PF_IS_PATH, "bytes"},
@@ -80,6 +92,7 @@ static const tb_cost_term tb__terms[] = {
     {"memory.emitter_byte", TB_PM_MEMORY, TB_PF_MEM_EMITTERS, "bytes/accounted byte"},
     {"memory.accel_byte", TB_PM_MEMORY, TB_PF_MEM_ACCEL, "bytes/accounted byte"},
     {"memory.film_byte", TB_PM_MEMORY, TB_PF_FILM_BYTES, "bytes/(pixel x channel x 4)"},
+    {"memory.pixel", TB_PM_MEMORY, TB_PF_PIXELS, "bytes/pixel (the images made from the film)"},
     {"memory.element", TB_PM_MEMORY, TB_PF_RAD_ELEMENTS, "bytes/element"},
     {"memory.vertex", TB_PM_MEMORY, TB_PF_RAD_VERTICES, "bytes/vertex"},
     {"memory.form_factor_cache_byte", TB_PM_MEMORY, TB_PF_RAD_CACHE_BYTES, "bytes/cached byte"},
@@ -101,9 +114,10 @@ const char *tb_pfeat_name(tb_pfeat k)
     static const char *const fname[] = {
         "bytes", "primitives", "csg_nodes", "meshes", "triangles", "emitter_bytes", "emitter_faces", "csg_probes",
         "references",
-        "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive",
-        "tests_csg", "tests_mesh", "hits", "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements",
-        "rad_elements", "rad_vertices", "rad_pixel_rays", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
+        "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive", "tests_torus",
+        "tests_csg", "tests_mesh", "hits", "leaf_tests", "sample_channels", "hit_channels", "pixel_channels",
+        "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays", "rad_nodes",
+        "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
         "mem_accel", "film_bytes", "is_raytrace", "is_path", "is_radiosity", "one"};
     _Static_assert(sizeof fname / sizeof fname[0] == TB_PF_COUNT, "a name per statistic");
     return (unsigned)k < TB_PF_COUNT ? fname[k] : "?";
@@ -147,6 +161,8 @@ void tb_predict_stats_init(tb_predict_stats *f, tb_predict_method m, double file
     double px = (double)width * (double)height;
     f->f[TB_PF_PIXELS] = px;
     f->f[TB_PF_FILM_BYTES] = px * (double)nchannels * 4.0;
+    f->f[TB_PF_PIXEL_CHANNELS] = px * (double)nchannels;
+    f->channels = nchannels;
     f->f[TB_PF_RAD_PIXEL_RAYS] = m == TB_PREDICT_RADIOSITY ? px * (double)rad_spp : 0.0;
     f->f[TB_PF_IS_RAYTRACE] = m == TB_PREDICT_RAYTRACE;
     f->f[TB_PF_IS_PATH] = m == TB_PREDICT_PATH;
@@ -194,7 +210,7 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
     f->f[TB_PF_NODES] += scale * tb__count("BVH/nodes visited");
     for (size_t k = 0; k < sizeof tb__prim_kinds / sizeof tb__prim_kinds[0]; k++) {
         snprintf(name, sizeof name, "Intersect/%s", tb__prim_kinds[k]);
-        f->f[TB_PF_TESTS_PRIM] += scale * tb__count(name);
+        f->f[strcmp(tb__prim_kinds[k], "torus") ? TB_PF_TESTS_PRIM : TB_PF_TESTS_TORUS] += scale * tb__count(name);
     }
     for (size_t k = 0; k < sizeof tb__csg_kinds / sizeof tb__csg_kinds[0]; k++) {
         snprintf(name, sizeof name, "Intersect/%s", tb__csg_kinds[k]);
@@ -202,11 +218,26 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
     }
     f->f[TB_PF_TESTS_MESH] += scale * tb__count("Intersect/polygons");
     f->f[TB_PF_HITS] += scale * tb__count("Surface/hits shaded");
+    f->f[TB_PF_LEAF_TESTS] += scale * tb__count("BVH/primitives tested");
+    double ch = f->channels > 0 ? f->channels : 3.0;
+    f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_SAMPLES] * ch;
+    f->f[TB_PF_HIT_CHANNELS] = f->f[TB_PF_HITS] * ch;
     if (f->method == TB_PREDICT_RADIOSITY) {
-        /* the radiosity image's rays are a term of their own (process) */
+        /* the radiosity image's rays are a term of their own (process); the
+         * form factors trace occlusion rays only, the image closest-hit rays */
+        double occ = tb__count("BVH/occlusion rays"), img = tb__count("BVH/rays");
+        f->f[TB_PF_RAD_OCC_RAYS] += scale * occ;
+        if (occ > 0)
+            f->f[TB_PF_RAD_NODES] += scale * tb__count("BVH/nodes visited") * occ / (occ + img);
         f->f[TB_PF_SAMPLES] = f->f[TB_PF_RAYS] = f->f[TB_PF_OCC_RAYS] = f->f[TB_PF_NODES] = 0.0;
-        f->f[TB_PF_TESTS_PRIM] = f->f[TB_PF_TESTS_CSG] = f->f[TB_PF_TESTS_MESH] = f->f[TB_PF_HITS] = 0.0;
-        f->f[TB_PF_RAD_RAYS] += scale * tb__count("Radiosity/rays (receivers x samples)");
+        f->f[TB_PF_TESTS_PRIM] = f->f[TB_PF_TESTS_TORUS] = f->f[TB_PF_TESTS_CSG] = f->f[TB_PF_TESTS_MESH] = 0.0;
+        f->f[TB_PF_HITS] = 0.0;
+        f->f[TB_PF_LEAF_TESTS] = f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_HIT_CHANNELS] = 0.0;
+        double rays = scale * tb__count("Radiosity/rays (receivers x samples)");
+        double shafts = tb__count("Form factors/shafts");
+        f->f[TB_PF_RAD_RAYS] += rays;
+        if (shafts > 0)
+            f->f[TB_PF_RAD_SHAFT_TESTS] += rays * tb__count("Form factors/occluders listed in shafts") / shafts;
         f->f[TB_PF_RAD_FFS] += scale * tb__count("Radiosity/form factors");
         double shots = tb__value("shots"), elems = tb__value("elements");
         f->rad_shots = shots;
@@ -221,10 +252,14 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
 
 void tb_predict_stats_sub_work(tb_predict_stats *f, const tb_predict_stats *load)
 {
-    static const tb_pfeat work[] = {TB_PF_SAMPLES, TB_PF_RAYS, TB_PF_OCC_RAYS, TB_PF_NODES, TB_PF_TESTS_PRIM,
-                                    TB_PF_TESTS_CSG, TB_PF_TESTS_MESH, TB_PF_HITS};
+    static const tb_pfeat work[] = {TB_PF_SAMPLES,    TB_PF_RAYS,      TB_PF_OCC_RAYS, TB_PF_NODES,
+                                    TB_PF_TESTS_PRIM, TB_PF_TESTS_TORUS, TB_PF_TESTS_CSG, TB_PF_TESTS_MESH,
+                                    TB_PF_HITS,       TB_PF_LEAF_TESTS};
     for (size_t i = 0; i < sizeof work / sizeof work[0]; i++)
         f->f[work[i]] = fmax(0.0, f->f[work[i]] - load->f[work[i]]);
+    double ch = f->channels > 0 ? f->channels : 3.0;
+    f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_SAMPLES] * ch;
+    f->f[TB_PF_HIT_CHANNELS] = f->f[TB_PF_HITS] * ch;
 }
 
 /* ------------------------------------------------------------------ pilot */
@@ -322,6 +357,15 @@ void tb_predict_eval(const tb_costs *c, const tb_predict_stats *f, tb_prediction
 
 /* ------------------------------------------------------------------ fit */
 
+/* Relative errors beyond this many robust standard deviations are down-weighted (Huber's k). */
+#define TB__HUBER 2.0
+
+static int tb__cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
 tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, int n, int threads, tb_costs *out)
 {
     if (n < 1)
@@ -329,9 +373,9 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
     memset(out, 0, sizeof *out);
     out->threads = threads;
     double *A = malloc(sizeof *A * (size_t)n * TB_COST_MAX_TERMS), *b = malloc(sizeof *b * (size_t)n);
-    double *w = malloc(sizeof *w * (size_t)n);
-    if (!A || !b || !w) {
-        free(A), free(b), free(w);
+    double *w = malloc(sizeof *w * (size_t)n), *w0 = malloc(sizeof *w0 * (size_t)n);
+    if (!A || !b || !w || !w0) {
+        free(A), free(b), free(w), free(w0);
         return tb_error(TB_ERR_NOMEM, "calibrate: out of memory");
     }
     tb_status st = TB_OK;
@@ -352,7 +396,7 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
             for (int j = 0; j < k; j++)
                 A[(size_t)rows * (size_t)k + (size_t)j] = f[r].f[tb__terms[idx[j]].feature];
             b[rows] = yv;
-            w[rows] = 1.0 / yv; /* relative errors: small and large runs count alike */
+            w[rows] = w0[rows] = 1.0 / yv; /* relative errors: small and large runs count alike */
             rows++;
         }
         if (!rows)
@@ -361,12 +405,51 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
         tb_lsq_info info;
         if ((st = tb_lsq_fit(A, b, w, rows, k, TB_LSQ_NONNEG, x, &info)))
             break;
+        /* Huber reweighting: a run slowed by other jobs on a shared
+         * machine (2-5 times its time) would pull every cost of its module;
+         * runs whose relative error is beyond TB__HUBER x the robust scale
+         * (1.4826 x the median absolute relative error) count less, in
+         * proportion, and the fit is redone (a few rounds). */
+        for (int round = 0; round < 4 && rows > k; round++) {
+            double *res = malloc(sizeof *res * (size_t)rows * 2);
+            if (!res) {
+                st = tb_error(TB_ERR_NOMEM, "calibrate: out of memory");
+                break;
+            }
+            for (int r = 0; r < rows; r++) {
+                double fit = 0.0;
+                for (int j = 0; j < k; j++)
+                    fit += A[(size_t)r * (size_t)k + (size_t)j] * x[j];
+                res[r] = (fit - b[r]) / b[r];
+                res[rows + r] = fabs(res[r]);
+            }
+            qsort(res + rows, (size_t)rows, sizeof *res, tb__cmp_double);
+            double scale = 1.4826 * res[rows + rows / 2], lim = TB__HUBER * fmax(scale, 0.02);
+            bool changed = false;
+            for (int r = 0; r < rows; r++) {
+                double wr = fabs(res[r]) > lim ? lim / fabs(res[r]) : 1.0;
+                changed |= fabs(wr * w0[r] - w[r]) > 1e-3 * w0[r];
+                w[r] = wr * w0[r];
+            }
+            free(res);
+            if (!changed || (st = tb_lsq_fit(A, b, w, rows, k, TB_LSQ_NONNEG, x, &info)))
+                break;
+        }
+        if (st)
+            break;
+        double ss = 0.0; /* the relative RMS error over every run, down-weighted or not */
+        for (int r = 0; r < rows; r++) {
+            double fit = 0.0;
+            for (int j = 0; j < k; j++)
+                fit += A[(size_t)r * (size_t)k + (size_t)j] * x[j];
+            ss += (fit - b[r]) * (fit - b[r]) / (b[r] * b[r]);
+        }
         for (int j = 0; j < k; j++)
             out->c[idx[j]] = x[j];
         out->fit[m].rows = rows;
-        out->fit[m].rel_rms = info.rms;
+        out->fit[m].rel_rms = sqrt(ss / rows);
     }
-    free(A), free(b), free(w);
+    free(A), free(b), free(w), free(w0);
     return st;
 }
 
@@ -379,7 +462,7 @@ tb_status tb_costs_write(const char *path, const tb_costs *c)
     if (st)
         return st;
     FILE *fp = of.fp;
-    fprintf(fp, "{\n  \"schema\": \"testbed-costs-1\",\n  \"cpu\": ");
+    fprintf(fp, "{\n  \"schema\": \"" TB_COSTS_SCHEMA "\",\n  \"cpu\": ");
     tb_json_write_string(fp, c->cpu);
     fprintf(fp, ",\n  \"created_utc\": ");
     tb_json_write_string(fp, c->created);
@@ -647,9 +730,10 @@ tb_status tb_costs_read(const char *path, tb_costs *c)
             tb__jws(&j);
             const char *at = j.p;
             if (!strcmp(key, "schema")) {
-                if (!(st = tb__jstring(&j, sval, sizeof sval)) && strcmp(sval, "testbed-costs-1")) {
+                if (!(st = tb__jstring(&j, sval, sizeof sval)) && strcmp(sval, TB_COSTS_SCHEMA)) {
                     j.p = at;
-                    st = tb__jerr(&j, "schema is not \"testbed-costs-1\"");
+                    st = tb__jerr(&j, "schema is not \"" TB_COSTS_SCHEMA
+                                      "\" (a COSTS.json of another version: re-run testbed calibrate)");
                 }
                 schema = true;
             } else if (!strcmp(key, "threads")) {
@@ -688,7 +772,7 @@ tb_status tb_costs_read(const char *path, tb_costs *c)
             st = tb__jerr(&j, "text after the JSON object");
     }
     if (!st && !schema)
-        st = tb_error(TB_ERR_FORMAT, "%s:1:1: error: no \"schema\": \"testbed-costs-1\"", path);
+        st = tb_error(TB_ERR_FORMAT, "%s:1:1: error: no \"schema\": \"" TB_COSTS_SCHEMA "\"", path);
     if (!st && !threads)
         st = tb_error(TB_ERR_FORMAT, "%s:1:1: error: no \"threads\"", path);
     for (int i = 0; !st && i < TB__NTERMS; i++)

@@ -54,15 +54,25 @@ typedef enum tb_pfeat {
     TB_PF_RAYS,            /* closest-hit rays through the BVH */
     TB_PF_OCC_RAYS,        /* occlusion (shadow) rays through the BVH */
     TB_PF_NODES,           /* BVH nodes visited */
-    TB_PF_TESTS_PRIM,      /* intersection tests of analytic primitives */
+    TB_PF_TESTS_PRIM,      /* intersection tests of analytic primitives but tori */
+    TB_PF_TESTS_TORUS,     /* intersection tests of tori (a quartic: several times a quadric's cost) */
     TB_PF_TESTS_CSG,       /* intersection tests of CSG operators */
     TB_PF_TESTS_MESH,      /* intersection tests of polygons objects (their inner BVH walk included) */
     TB_PF_HITS,            /* surface records made (shading per hit) */
+    TB_PF_LEAF_TESTS,      /* references tested at BVH leaves (triangles included: BVH/primitives tested) */
+    TB_PF_SAMPLE_CHANNELS, /* camera samples x colour channels (3 RGB, 31 spectral: film and path throughput) */
+    TB_PF_HIT_CHANNELS,    /* hits x colour channels (shading evaluates every band) */
+    TB_PF_PIXEL_CHANNELS,  /* pixels x colour channels (resolving and writing the image) */
     TB_PF_PIXELS,          /* image pixels */
     TB_PF_RAD_RAYS,        /* radiosity: form-factor rays (receivers x sample points) */
     TB_PF_RAD_FFS,         /* radiosity: form factors */
     TB_PF_RAD_SHOT_ELEMS,  /* radiosity: shots x elements (each shot updates every element) */
     TB_PF_RAD_ELEMENTS,    /* radiosity: elements of the mesh */
+    TB_PF_RAD_OCC_RAYS,    /* radiosity: form-factor rays traced through the BVH (shafts with too many occluders) */
+    TB_PF_RAD_NODES,       /* radiosity: BVH nodes those rays visit (the image rays' share taken out: the
+                              nodes split in proportion to the occlusion and the image rays) */
+    TB_PF_RAD_SHAFT_TESTS, /* radiosity: form-factor rays x occluders listed per shaft (rays tested against
+                              a shaft's occluder list) */
     TB_PF_RAD_VERTICES,    /* radiosity: vertices of the mesh */
     TB_PF_RAD_PIXEL_RAYS,  /* radiosity: image rays (pixels x --spp) */
     TB_PF_RAD_MESH_PROBES, /* radiosity: CSG probe rays of meshing (Polygonize/CSG probes after the load) */
@@ -132,6 +142,7 @@ typedef struct tb_predict_stats {
     tb_predict_method method;
     double f[TB_PF_COUNT];  /* by tb_pfeat */
     int threads;            /* OpenMP threads of the run (0: OpenMP's default) */
+    double channels;        /* colour channels of the image (3 RGB, 31 spectral; 0 counts as 3) */
     double rad_shots;       /* radiosity: shots (reported, also inside RAD_SHOT_ELEMS) */
     bool rad_extrapolated;  /* radiosity: the shot count was extrapolated from the pilot's decay */
     double pilot_seconds;   /* wall time spent on the pilot */
@@ -152,7 +163,9 @@ typedef struct tb_prediction {
 } tb_prediction;
 
 /* Sets the statistics that do not come from counters: the method, the
- * scene file's size, the image (width x height pixels of nchannels) and,
+ * scene file's size, the image (width x height pixels of nchannels, also
+ * the channels the work counters of tb_predict_stats_add_work are
+ * multiplied by for the per-channel terms) and,
  * for radiosity, the image's rays per pixel (rad_spp). */
 void tb_predict_stats_init(tb_predict_stats *f, tb_predict_method m, double file_bytes, int width, int height,
                            int nchannels, int rad_spp, int threads);
@@ -196,6 +209,10 @@ void tb_predict_eval(const tb_costs *c, const tb_predict_stats *f, tb_prediction
  * errors (util/stats/lsq.h) over n runs; `threads` is recorded. TB_ERR_ARG
  * when n < 1. */
 tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, int n, int threads, tb_costs *out);
+
+/* The schema COSTS.json is written with and the only one read: bumped
+ * whenever the terms change, so an older file is refused. */
+#define TB_COSTS_SCHEMA "testbed-costs-2"
 
 /* Writes COSTS.json (whole or not at all). */
 tb_status tb_costs_write(const char *path, const tb_costs *c);

@@ -2,7 +2,7 @@
 """`testbed calibrate` and `testbed predict` end to end (docs/predict.md).
 
 1. --help of both exits 0; usage errors exit 2.
-2. A real mini calibration (--set quick: fourteen small generated scenes, every
+2. A real mini calibration (--set quick: sixteen small generated scenes, every
    method) writes COSTS.json; it parses, holds every term with a cost >= 0,
    and the --runs CSV has a row per run.
 3. predict --json on a generated scene (raytrace, path, radiosity) is valid
@@ -19,7 +19,7 @@
    accuracy is the benchmark's job (tools/bench/predict-accuracy.sh), not
    asserted here. Mesh-heavy scenes and the path tracer are not asserted
    with the quick set: their peak comes from the load's transient buffers
-   or the film, which 14 tiny runs do not pin down (docs/predict.md,
+   or the film, which 16 tiny runs do not pin down (docs/predict.md,
    "Limits"; the default set gets them within 25%).
 
 Environment: TESTBED, TB_TEST_TMPDIR."""
@@ -71,14 +71,14 @@ def main():
     run("calibrate", "--set", "quick", "--runs", runs_csv)
     check(os.path.exists(default), "calibrate without -o writes " + default)
     costs = json.load(open(default))
-    check(costs["schema"] == "testbed-costs-1" and costs["threads"] >= 1, "COSTS.json schema and threads")
+    check(costs["schema"] == "testbed-costs-2" and costs["threads"] >= 1, "COSTS.json schema and threads")
     check(len(costs["costs"]) >= 40, "COSTS.json has every term")
     for k, v in costs["costs"].items():
         check(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0, "cost %s = %r is finite and >= 0" % (k, v))
     check(set(costs["fit"]) == set(MODULES), "COSTS.json reports every module's fit")
     with open(runs_csv) as f:
         lines = f.read().splitlines()
-    check(len(lines) == 15 and lines[0].startswith("run,method,kind"), "runs CSV: a header and 14 runs")
+    check(len(lines) == 17 and lines[0].startswith("run,method,kind"), "runs CSV: a header and 16 runs")
 
     # 3. predict --json for every method, and the text output
     for method, extra in (("raytrace", []), ("path", ["--spp", "2"]), ("radiosity", ["--max-edge", "3"])):
@@ -96,6 +96,17 @@ def main():
         check(abs(d["modules"]["memory"] - d["peak_rss_bytes"]) <= 1e-3 * d["peak_rss_bytes"],
               "%s: the memory module is the peak" % method)
         check(d["statistics"]["pixels"] > 0, "%s: statistics gathered" % method)
+    # channels: the spectral Cornell box counts 31 per sample and hit, its RGB twin 3
+    here = os.path.dirname(os.path.abspath(__file__))
+    for name, ch in (("cornell-box.mid", 31), ("cornell-box-rgb.mid", 3)):
+        box = os.path.join(here, "..", "..", "scenes", name)
+        s = json.loads(run("predict", box, "--method", "path", "--spp", "1", "--pilot", "16", "--json").stdout)["statistics"]
+        check(s["camera_samples"] > 0 and s["hits"] > 0, "%s: work counted" % name)
+        check(abs(s["sample_channels"] - ch * s["camera_samples"]) <= 1e-6 * s["sample_channels"]
+              and abs(s["hit_channels"] - ch * s["hits"]) <= 1e-6 * s["hit_channels"]
+              and abs(s["pixel_channels"] - ch * s["pixels"]) <= 1e-6 * s["pixel_channels"],
+              "%s: %d channels per sample, hit and pixel: %r" % (name, ch, s))
+        check(s["leaf_tests"] > 0, "%s: leaf tests (triangles) counted" % name)
     p = run("predict", scene, "--costs", default)
     for m in ("load", "raytrace", "process", "memory"):
         check(m in p.stdout, "text output names module %s: %r" % (m, p.stdout))
@@ -103,7 +114,7 @@ def main():
     # 4b. a broken COSTS.json: located error, exit 1
     bad = os.path.join(TMP, "bad.json")
     with open(bad, "w") as f:
-        f.write('{\n  "schema": "testbed-costs-1",\n  "threads": 2,\n  "costs": {"load.fixed": oops}\n}\n')
+        f.write('{\n  "schema": "testbed-costs-2",\n  "threads": 2,\n  "costs": {"load.fixed": oops}\n}\n')
     p = run("predict", scene, "--costs", bad, expect=1)
     check(bad + ":4:27: error: expected a number" in p.stderr, "bad COSTS.json located: %r" % p.stderr)
 

@@ -4,7 +4,10 @@
 # seeds the calibration does not use; raytrace, path and radiosity) runs
 # `testbed predict --json` and the real `testbed render` under GNU time, and
 # writes the table (CSV + Markdown) and a log-log plot of predicted against
-# measured with the +-25% band (PNG + SVG).
+# measured with the +-25% band (PNG + SVG). The work columns check the pilot:
+# the predicted rays (closest-hit plus occlusion; radiosity: shots) over the
+# render's own counters (--stats); a time miss with a work ratio near 1 is
+# the costs', one with the work ratio off is the pilot's.
 #
 #   tools/bench/predict-accuracy.sh [--testbed PATH] [--set default|long|quick]
 #                                   [--out DIR] [--work DIR] [--only raytrace|path|radiosity]
@@ -27,7 +30,7 @@ while [ $# -gt 0 ]; do
     --work) work=$2; shift 2 ;;
     --only) only=$2; shift 2 ;;
     -h | --help)
-        sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'
+        sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'
         exit 0 ;;
     *) echo "predict-accuracy.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
     esac
@@ -70,7 +73,7 @@ echo "gen grid-12|$work/grid-12.mid|radiosity|--max-edge 2" >>"$cases"
 [ -z "$only" ] || { grep "|$only|" "$cases" >"$cases.only" || true; mv "$cases.only" "$cases"; }
 
 csv="$work/rows.csv"
-echo "case,method,options,predicted_s,measured_s,ratio_s,predicted_mib,measured_mib,ratio_mem,pilot_s" >"$csv"
+echo "case,method,options,predicted_s,measured_s,ratio_s,predicted_mib,measured_mib,ratio_mem,pilot_s,predicted_work,measured_work,ratio_work" >"$csv"
 n=0
 while IFS='|' read -r name scene method opts; do
     n=$((n + 1))
@@ -79,16 +82,22 @@ while IFS='|' read -r name scene method opts; do
     "$tb" predict "$scene" --method "$method" $opts --costs "$work/costs.json" --json >"$work/p.json"
     # shellcheck disable=SC2086
     /usr/bin/time -f '%e %M' -o "$work/time.txt" "$tb" render "$scene" --method "$method" $opts \
-        -o "$work/out.png" >/dev/null 2>"$work/render.err" ||
+        -o "$work/out.png" --stats "$work/stats.json" >/dev/null 2>"$work/render.err" ||
         { echo "predict-accuracy: the render failed:" >&2; cat "$work/render.err" >&2; exit 1; }
-    python3 - "$work/p.json" "$work/time.txt" "$name" "$method" "$opts" >>"$csv" <<'EOF'
+    python3 - "$work/p.json" "$work/time.txt" "$name" "$method" "$opts" "$work/stats.json" >>"$csv" <<'EOF'
 import json, sys
 p = json.load(open(sys.argv[1]))
 wall, kib = open(sys.argv[2]).read().split()[-2:]
 wall, mib = float(wall), float(kib) / 1024.0
 pm = p["peak_rss_bytes"] / 1048576.0
-print('"%s",%s,"%s",%.4g,%.4g,%.3f,%.1f,%.1f,%.3f,%.3g' % (sys.argv[3], sys.argv[4], sys.argv[5], p["seconds"], wall,
-      p["seconds"] / wall, pm, mib, pm / mib, p["pilot_seconds"]))
+s = json.load(open(sys.argv[6]))
+if sys.argv[4] == "radiosity":
+    pw, mw = p["radiosity_shots"], s["shots"]
+else:
+    pw = p["statistics"]["rays"] + p["statistics"]["occlusion_rays"]
+    mw = s["counters"]["BVH/rays"] + s["counters"]["BVH/occlusion rays"]
+print('"%s",%s,"%s",%.4g,%.4g,%.3f,%.1f,%.1f,%.3f,%.3g,%.6g,%.6g,%.3f' % (sys.argv[3], sys.argv[4], sys.argv[5],
+      p["seconds"], wall, p["seconds"] / wall, pm, mib, pm / mib, p["pilot_seconds"], pw, mw, pw / mw if mw else 0))
 EOF
 done <"$cases"
 load_after=$(cut -d' ' -f1-3 /proc/loadavg)
@@ -100,13 +109,14 @@ rows = list(csv.DictReader(open(sys.argv[1])))
 def mark(r):
     return "" if 0.75 <= r <= 1.25 else " **miss**"
 with open(sys.argv[2], "w") as f:
-    f.write("| case | method | options | predicted s | measured s | ratio | predicted MiB | measured MiB | ratio |\n")
-    f.write("|---|---|---|---:|---:|---:|---:|---:|---:|\n")
+    f.write("| case | method | options | predicted s | measured s | ratio | predicted MiB | measured MiB | ratio "
+            "| work ratio |\n")
+    f.write("|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n")
     for r in rows:
         rs, rm = float(r["ratio_s"]), float(r["ratio_mem"])
-        f.write("| %s | %s | %s | %s | %s | %.2f%s | %s | %s | %.2f%s |\n" % (
+        f.write("| %s | %s | %s | %s | %s | %.2f%s | %s | %s | %.2f%s | %.2f |\n" % (
             r["case"], r["method"], r["options"] or "", r["predicted_s"], r["measured_s"], rs, mark(rs),
-            r["predicted_mib"], r["measured_mib"], rm, mark(rm)))
+            r["predicted_mib"], r["measured_mib"], rm, mark(rm), float(r["ratio_work"])))
     ts = sum(0.75 <= float(r["ratio_s"]) <= 1.25 for r in rows)
     ms = sum(0.75 <= float(r["ratio_mem"]) <= 1.25 for r in rows)
     f.write("\nWithin +-25%%: time %d of %d, memory %d of %d (calibration set `%s`; load average "

@@ -35,6 +35,11 @@ typedef struct tb__cal_run {
     tb_predict_method method;
     const char *args;    /* extra render options, space separated */
     double weight;       /* rough relative cost, for the progress bar's ETA */
+    int env;             /* what surrounds the grid: 0 nothing (the sky), 1 a floor, 2 a closed room, 3 a closed
+                            room lit only by an emitting ceiling panel (no point or directional light) */
+    bool spectral;       /* the floor / room is spectral, so the scene renders 31 bands */
+    int tori;            /* top-level objects kept: 0 all, 1 all but tori, 2 tori only (a torus test costs
+                            several times another primitive's: this separates them) */
 } tb__cal_run;
 
 /* The quick set (seconds; the tests use it), the default set (about two
@@ -44,91 +49,247 @@ typedef struct tb__cal_run {
  * (samples, pixels, film), depth (rays per sample), radiosity mesh size,
  * sample points and shots. */
 static const tb__cal_run tb__cal_quick[] = {
-    {TB_GEN_GRID, 8, 64, 48, TB_PREDICT_RAYTRACE, "", 1},
-    {TB_GEN_MESH, 4, 96, 72, TB_PREDICT_RAYTRACE, "", 1},
-    {TB_GEN_CSG, 3, 200, 150, TB_PREDICT_RAYTRACE, "", 1},
-    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 1},
-    {TB_GEN_CSG, 6, 64, 48, TB_PREDICT_PATH, "", 1},
-    {TB_GEN_MESH, 2, 48, 36, TB_PREDICT_PATH, "--spp 2", 1},
-    {TB_GEN_MESH, 8, 320, 240, TB_PREDICT_PATH, "", 1},
-    {TB_GEN_GRID, 12, 480, 360, TB_PREDICT_PATH, "", 1},
-    {TB_GEN_GRID, 4, 1024, 768, TB_PREDICT_PATH, "", 2},
-    {TB_GEN_MESH, 6, 800, 600, TB_PREDICT_RAYTRACE, "--light-samples 1", 2},
-    {TB_GEN_GRID, 2, 48, 36, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 8 --samples 2 --spp 1", 1},
-    {TB_GEN_GRID, 3, 64, 48, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 12 --samples 1 --spp 2", 1},
-    {TB_GEN_MESH, 1, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 6 --samples 1", 1},
-    {TB_GEN_CSG, 2, 96, 72, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 4 --samples 1 --spp 1", 1},
+    {TB_GEN_GRID, 8, 64, 48, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0},
+    {TB_GEN_MESH, 4, 96, 72, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0},
+    {TB_GEN_CSG, 3, 200, 150, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0},
+    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0},
+    {TB_GEN_CSG, 6, 64, 48, TB_PREDICT_PATH, "", 1, 0, false, 0},
+    {TB_GEN_MESH, 2, 48, 36, TB_PREDICT_PATH, "--spp 2", 1, 0, false, 0},
+    {TB_GEN_MESH, 8, 320, 240, TB_PREDICT_PATH, "", 1, 0, false, 0},
+    {TB_GEN_GRID, 12, 480, 360, TB_PREDICT_PATH, "", 1, 0, false, 0},
+    {TB_GEN_GRID, 4, 1024, 768, TB_PREDICT_PATH, "", 2, 0, false, 0},
+    {TB_GEN_MESH, 6, 800, 600, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 0, false, 0},
+    {TB_GEN_GRID, 6, 64, 48, TB_PREDICT_RAYTRACE, "", 1, 2, true, 0},
+    {TB_GEN_GRID, 6, 64, 48, TB_PREDICT_PATH, "", 1, 3, false, 0},
+    {TB_GEN_GRID, 2, 48, 36, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 8 --samples 2 --spp 1", 1, 0, false, 0},
+    {TB_GEN_GRID, 3, 64, 48, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 12 --samples 1 --spp 2", 1, 0, false, 0},
+    {TB_GEN_MESH, 1, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 6 --samples 1", 1, 0, false, 0},
+    {TB_GEN_CSG, 2, 96, 72, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 4 --samples 1 --spp 1", 1, 0, false, 0},
 };
 
 static const tb__cal_run tb__cal_default[] = {
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "", 2},
-    {TB_GEN_GRID, 300, 640, 480, TB_PREDICT_RAYTRACE, "", 4},
-    {TB_GEN_GRID, 60, 320, 240, TB_PREDICT_RAYTRACE, "--spp 4", 4},
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2},
-    {TB_GEN_CSG, 150, 480, 360, TB_PREDICT_RAYTRACE, "--max-depth 2", 4},
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_RAYTRACE, "", 2},
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "--light-samples 1", 4},
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2},
-    {TB_GEN_GRID, 300, 640, 480, TB_PREDICT_PATH, "", 3},
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_PATH, "--spp 4", 3},
-    {TB_GEN_CSG, 150, 480, 360, TB_PREDICT_PATH, "", 3},
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2},
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3},
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3},
-    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4},
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4},
-    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3},
-    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4},
-    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80 --samples 16", 8},
-    {TB_GEN_MESH, 4, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 8", 8},
-    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8},
+    /* raytrace: open grids (rays to the sky), floors and closed rooms (every ray hits), RGB and spectral */
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 60, 320, 240, TB_PREDICT_RAYTRACE, "--spp 4", 4, 2, false, 0},
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},
+    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "--max-depth 2", 2, 2, false, 0},
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RAYTRACE, "--spp 4", 2, 2, true, 0},
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, false, 0},
+    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 2, true, 0},
+    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
+    {TB_GEN_MESH, 50, 320, 240, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 2, false, 0},
+    {TB_GEN_MESH, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},
+    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 1, false, 0},
+    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},
+    {TB_GEN_CSG, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},
+    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 2, true, 0},
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
+    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},
+    {TB_GEN_CSG, 9, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},
+    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 1},
+    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 2, false, 2},
+    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 2},
+    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_RAYTRACE, "", 3, 3, false, 1},
+    /* path */
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 60, 240, 180, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 0},
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_PATH, "", 3, 2, true, 0},
+    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_PATH, "", 2, 1, false, 0},
+    {TB_GEN_GRID, 30, 240, 180, TB_PREDICT_PATH, "--max-depth 3", 2, 2, false, 0},
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 2, true, 0},
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},
+    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 0, false, 0},
+    {TB_GEN_CSG, 6, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},
+    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
+    {TB_GEN_MESH, 50, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},
+    {TB_GEN_MESH, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},
+    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3, 1, false, 0},
+    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 0},
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, true, 0},
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false, 0},
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 3, true, 0},
+    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_PATH, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_PATH, "", 4, 2, true, 0},
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
+    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_PATH, "", 3, 1, false, 0},
+    {TB_GEN_CSG, 9, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, true, 0},
+    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_PATH, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 1},
+    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 2},
+    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 2},
+    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 1},
+    /* radiosity */
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4, 0, false, 0},
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4, 0, false, 0},
+    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3, 0, false, 0},
+    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4, 0, false, 0},
+    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80 --samples 16", 8, 0, false, 0},
+    {TB_GEN_MESH, 4, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 8", 8, 0, false, 0},
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8, 0, false, 0},
+    {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false, 0},
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false, 0},
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false, 0},
+    {TB_GEN_GRID, 9, 800, 600, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 4", 4, 0, false, 0},
+    {TB_GEN_MESH, 4, 1024, 768, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 1", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 8", 6, 3, false, 0},
+    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 4", 6, 2, false, 0},
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4", 6, 3, true, 0},
 };
 
 static const tb__cal_run tb__cal_long[] = {
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "", 2},
-    {TB_GEN_GRID, 300, 640, 480, TB_PREDICT_RAYTRACE, "", 4},
-    {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_RAYTRACE, "", 8},
-    {TB_GEN_GRID, 60, 320, 240, TB_PREDICT_RAYTRACE, "--spp 4", 4},
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2},
-    {TB_GEN_CSG, 150, 480, 360, TB_PREDICT_RAYTRACE, "--max-depth 2", 4},
-    {TB_GEN_CSG, 600, 640, 480, TB_PREDICT_RAYTRACE, "", 8},
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_RAYTRACE, "", 2},
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "--light-samples 1", 4},
-    {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_RAYTRACE, "", 8},
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2},
-    {TB_GEN_GRID, 300, 640, 480, TB_PREDICT_PATH, "", 3},
-    {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_PATH, "--spp 2", 8},
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_PATH, "--spp 4", 3},
-    {TB_GEN_CSG, 150, 480, 360, TB_PREDICT_PATH, "", 3},
-    {TB_GEN_CSG, 600, 640, 480, TB_PREDICT_PATH, "--spp 2", 8},
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2},
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3},
-    {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_PATH, "", 8},
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3},
-    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4},
-    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80", 12},
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4},
-    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 4", 8},
-    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3},
-    {TB_GEN_MESH, 6, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 8", 8},
-    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4},
+    /* raytrace: open grids (rays to the sky), floors and closed rooms (every ray hits), RGB and spectral */
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 60, 320, 240, TB_PREDICT_RAYTRACE, "--spp 4", 4, 2, false, 0},
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},
+    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "--max-depth 2", 2, 2, false, 0},
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RAYTRACE, "--spp 4", 2, 2, true, 0},
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, false, 0},
+    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 2, true, 0},
+    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
+    {TB_GEN_MESH, 50, 320, 240, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 2, false, 0},
+    {TB_GEN_MESH, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},
+    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 1, false, 0},
+    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},
+    {TB_GEN_CSG, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},
+    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 2, true, 0},
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
+    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},
+    {TB_GEN_CSG, 9, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},
+    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 1},
+    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 2, false, 2},
+    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 2},
+    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_RAYTRACE, "", 3, 3, false, 1},
+    /* path */
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 60, 240, 180, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 0},
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_PATH, "", 3, 2, true, 0},
+    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_PATH, "", 2, 1, false, 0},
+    {TB_GEN_GRID, 30, 240, 180, TB_PREDICT_PATH, "--max-depth 3", 2, 2, false, 0},
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 2, true, 0},
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},
+    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 0, false, 0},
+    {TB_GEN_CSG, 6, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},
+    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
+    {TB_GEN_MESH, 50, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},
+    {TB_GEN_MESH, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},
+    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3, 1, false, 0},
+    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 0},
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, true, 0},
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false, 0},
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 3, true, 0},
+    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_PATH, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_PATH, "", 4, 2, true, 0},
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
+    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_PATH, "", 3, 1, false, 0},
+    {TB_GEN_CSG, 9, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, true, 0},
+    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_PATH, "", 3, 0, false, 0},
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 1},
+    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 2},
+    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 2},
+    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 1},
+    /* radiosity */
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4, 0, false, 0},
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4, 0, false, 0},
+    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3, 0, false, 0},
+    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4, 0, false, 0},
+    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80 --samples 16", 8, 0, false, 0},
+    {TB_GEN_MESH, 4, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 8", 8, 0, false, 0},
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8, 0, false, 0},
+    {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false, 0},
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false, 0},
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false, 0},
+    {TB_GEN_GRID, 9, 800, 600, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 4", 4, 0, false, 0},
+    {TB_GEN_MESH, 4, 1024, 768, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 1", 3, 0, false, 0},
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 8", 6, 3, false, 0},
+    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 4", 6, 2, false, 0},
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4", 6, 3, true, 0},
+    /* larger scenes */
+    {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_RAYTRACE, "", 8, 0, false, 0},
+    {TB_GEN_GRID, 400, 480, 360, TB_PREDICT_RAYTRACE, "", 6, 2, true, 0},
+    {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_RAYTRACE, "", 8, 2, false, 0},
+    {TB_GEN_CSG, 60, 480, 360, TB_PREDICT_RAYTRACE, "", 8, 1, false, 0},
+    {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_PATH, "--spp 2", 8, 0, false, 0},
+    {TB_GEN_GRID, 400, 480, 360, TB_PREDICT_PATH, "--spp 2", 8, 2, true, 0},
+    {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_PATH, "", 8, 2, false, 0},
+    {TB_GEN_CSG, 60, 480, 360, TB_PREDICT_PATH, "", 8, 1, false, 0},
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 4", 8, 0, false, 0},
+    {TB_GEN_MESH, 6, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 8", 8, 0, false, 0},
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 10, 2, false, 0},
 };
 
 /* tb_gen_sink: writes every item, the camera with the run's resolution. */
 typedef struct tb__cal_writer {
     FILE *fp;
     int width, height;
+    bool no_lights; /* leave the generator's lights out */
+    int tori;       /* tb__cal_run.tori */
 } tb__cal_writer;
 
 static tb_status tb__cal_sink(void *user, const tb_mid_item *item)
 {
     tb__cal_writer *w = user;
+    if (item->type == TB_MID_ITEM_LIGHT && w->no_lights)
+        return TB_OK;
+    if (item->type == TB_MID_ITEM_OBJECT && w->tori && (item->object->kind == TB_PRIM_TORUS) != (w->tori == 2))
+        return TB_OK;
     if (item->type != TB_MID_ITEM_CAMERA)
         return tb_mid_write_item(w->fp, item);
     tb_mid_camera cam = *item->camera;
     cam.width = w->width, cam.height = w->height;
     tb_mid_item copy = {.type = TB_MID_ITEM_CAMERA, .camera = &cam};
     return tb_mid_write_item(w->fp, &copy);
+}
+
+/* Writes the floor or the room around the generated grid (the generator's
+ * layout: objects on a pitch of 4.5 from the origin, the camera above the
+ * front edge, a lamp above the middle). The open grid sees mostly sky, so
+ * its rays rarely hit; the room makes every ray hit and paths bounce as in
+ * closed scenes (the Cornell boxes), which separates the per-hit and
+ * per-channel costs from the per-ray ones. */
+static void tb__cal_room(FILE *fp, const tb__cal_run *r)
+{
+    int side = 1;
+    while (side * side < r->count)
+        side++;
+    double e = side * 4.5, c = e / 2.0, h = 1.1 * e + 6.0, x0 = c - h, x1 = c + h, z1 = e + 14.0;
+    const char *mat = r->spectral ? "spectral wall" : "matte white";
+    if (r->spectral)
+        fprintf(fp, "material \"spectral wall\" {\n    diffuse = spectrum([400 500 600 700], [0.55 0.75 0.7 0.6])\n}\n");
+    /* faces counter-clockwise seen from inside (their fronts face in) */
+    fprintf(fp, "polygons \"calibration room\" {\n    geometry = {\n        vertices = [");
+    const double v[8][3] = {{x0, x0, 0}, {x1, x0, 0}, {x1, x1, 0}, {x0, x1, 0},
+                            {x0, x0, z1}, {x1, x0, z1}, {x1, x1, z1}, {x0, x1, z1}};
+    for (int i = 0; i < 8; i++)
+        fprintf(fp, "[%.6g %.6g %.6g]%s", v[i][0], v[i][1], v[i][2], i < 7 ? " " : "]\n");
+    fprintf(fp, "        faces = [[0 1 2 3]");
+    if (r->env >= 2)
+        fprintf(fp, " [4 7 6 5] [0 4 5 1] [3 2 6 7] [0 3 7 4] [1 5 6 2]");
+    fprintf(fp, "]\n    }\n    rendering = {\n        material = \"%s\"\n    }\n}\n", mat);
+    if (r->env == 3) {
+        /* the panel just under the ceiling, facing down: area-light sampling as in the Cornell boxes */
+        double a = c - 0.25 * h, b = c + 0.25 * h, z = z1 - 0.01;
+        fprintf(fp,
+                "polygons \"calibration panel\" {\n    geometry = {\n        vertices = [[%.6g %.6g %.6g] [%.6g %.6g %.6g] "
+                "[%.6g %.6g %.6g] [%.6g %.6g %.6g]]\n        faces = [[0 1 2 3]]\n    }\n    rendering = {\n"
+                "        material = \"lamp\"\n    }\n}\n",
+                a, a, z, a, b, z, b, b, z, b, a, z);
+    }
 }
 
 /* Writes run r's scene to path. */
@@ -138,11 +299,13 @@ static tb_status tb__cal_scene(const tb__cal_run *r, const char *path)
     tb_status st = tb_outfile_open(&of, path);
     if (st)
         return st;
-    tb__cal_writer w = {of.fp, r->width, r->height};
+    tb__cal_writer w = {of.fp, r->width, r->height, r->env == 3, r->tori};
     tb_gen_options go = {.kind = r->kind, .count = r->count, .seed = 1};
     st = tb_mid_write_header(of.fp);
     if (!st)
         st = tb_generate(&go, tb__cal_sink, &w);
+    if (!st && r->env > 0)
+        tb__cal_room(of.fp, r);
     if (st) {
         tb_outfile_abort(&of);
         return st;
@@ -244,10 +407,12 @@ static void tb__cal_load_child(void *arg, void *out)
     tb_stats_reset();
     tb_scene_options so = {.accel = TB_ACCEL_BVH, .threads = j->threads};
     tb_scene *s = NULL;
-    if (tb_scene_load(j->scene, &so, &s) == TB_OK)
+    if (tb_scene_load(j->scene, &so, &s) == TB_OK) {
         tb_predict_stats_add_work(f, 1.0);
-    else
+        f->channels = s->nchannels;
+    } else {
         _exit(1);
+    }
     tb_scene_free(s);
 }
 
@@ -296,7 +461,7 @@ static void tb__cal_child(const tb__cal_run *r, const char *scene, const char *d
     argv[argc] = NULL;
     tb_predict_stats load;
     memset(&load, 0, sizeof load);
-    if (r->method != TB_PREDICT_RADIOSITY && !tb__cal_load_work(r, scene, threads, &load))
+    if (!tb__cal_load_work(r, scene, threads, &load)) /* also the scene's colour channels */
         return;
     tb_stats_set_enabled(1);
     tb_stats_reset();
@@ -312,10 +477,11 @@ static void tb__cal_child(const tb__cal_run *r, const char *scene, const char *d
     if (sp && r->method == TB_PREDICT_RADIOSITY)
         rad_spp = atoi(sp + 6);
     tb_predict_stats_init(&out->f, r->method, stat(scene, &sb) == 0 ? (double)sb.st_size : 0.0, r->width, r->height,
-                          3, rad_spp, threads);
+                          (int)load.channels, rad_spp, threads);
     tb_predict_stats_add_scene(&out->f);
     tb_predict_stats_add_work(&out->f, 1.0);
-    tb_predict_stats_sub_work(&out->f, &load);
+    if (r->method != TB_PREDICT_RADIOSITY)
+        tb_predict_stats_sub_work(&out->f, &load);
     tb_predict_measured *y = &out->y;
     y->wall = wall;
     y->module[TB_PM_LOAD] = tb__cal_timer("Scene/load");
@@ -451,10 +617,28 @@ int tb_cmd_calibrate(int argc, char **argv)
         total += runs[i].weight;
     tb_progress bar;
     bool bar_on = tb_progress_start(&bar, "calibrate", (int64_t)(100.0 * total), NULL, 0) == TB_OK;
-    for (int i = 0; i < nruns && rc == TB_EXIT_OK; i++) {
+    /* Runs in an order that takes the methods in turn (and each method's
+     * runs in their listed order): on a machine whose load drifts, every
+     * module then sees the same mix of quiet and busy moments, instead of
+     * the ray tracer's runs all meeting one load and radiosity's another. */
+    int *order = malloc(sizeof *order * (size_t)nruns), next[TB_PREDICT_METHOD_COUNT] = {0}, done_runs = 0;
+    if (!order) {
+        fprintf(stderr, "testbed calibrate: out of memory\n");
+        rc = TB_EXIT_FAIL;
+        goto done;
+    }
+    while (done_runs < nruns)
+        for (int m = 0; m < TB_PREDICT_METHOD_COUNT; m++) {
+            while (next[m] < nruns && runs[next[m]].method != (tb_predict_method)m)
+                next[m]++;
+            if (next[m] < nruns)
+                order[done_runs++] = next[m]++;
+        }
+    for (int k = 0; k < nruns && rc == TB_EXIT_OK; k++) {
+        int i = order[k];
         char scene[4096], why[4200];
-        snprintf(scene, sizeof scene, "%s/%s-%d-%dx%d.mid", dir, tb_gen_kind_name(runs[i].kind), runs[i].count,
-                 runs[i].width, runs[i].height);
+        snprintf(scene, sizeof scene, "%s/%s-%d-%dx%d-%s%d-t%d.mid", dir, tb_gen_kind_name(runs[i].kind), runs[i].count,
+                 runs[i].width, runs[i].height, runs[i].spectral ? "s" : "e", runs[i].env, runs[i].tori);
         struct stat sb;
         if (stat(scene, &sb) != 0 && tb__cal_scene(&runs[i], scene)) {
             snprintf(why, sizeof why, "%s", tb_last_error());
@@ -475,6 +659,7 @@ int tb_cmd_calibrate(int argc, char **argv)
         if (bar_on)
             tb_progress_add(&bar, (int64_t)(100.0 * runs[i].weight));
     }
+    free(order);
     if (bar_on)
         tb_progress_finish(&bar);
     if (rc != TB_EXIT_OK)
@@ -543,8 +728,8 @@ done:
         /* the scenes, the last image and log: all ours, in our own folder */
         for (int i = 0; i < nruns; i++) {
             char scene[4096];
-            snprintf(scene, sizeof scene, "%s/%s-%d-%dx%d.mid", dir, tb_gen_kind_name(runs[i].kind), runs[i].count,
-                     runs[i].width, runs[i].height);
+            snprintf(scene, sizeof scene, "%s/%s-%d-%dx%d-%s%d-t%d.mid", dir, tb_gen_kind_name(runs[i].kind), runs[i].count,
+                     runs[i].width, runs[i].height, runs[i].spectral ? "s" : "e", runs[i].env, runs[i].tori);
             unlink(scene);
         }
         char p[4200];
