@@ -10,6 +10,7 @@
 
 #include "host/render/camera.h"
 #include "util/container/array.h"
+#include "util/image/image.h"
 #include "util/stats/stats.h"
 #include "util/stats/summary.h"
 
@@ -236,6 +237,31 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
     f->f[TB_PF_RAD_OCC_RAYS] *= ray_scale;
     f->f[TB_PF_RAD_NODES] *= ray_scale;
     f->f[TB_PF_RAD_SHAFT_TESTS] *= ray_scale;
+    if (image) {
+        /* A pilot image, 1/TB__RAD_PILOT_COARSEN of the resolution each way, of
+         * the pilot's solution: the BVH nodes its rays visit (a view of mostly
+         * sky costs little per ray, a closed room a walk to a leaf), times the
+         * pixel ratio and the full mesh's tree depth over the pilot's. */
+        int W = scene->camera.width, H = scene->camera.height;
+        int pw = (int)(W / TB__RAD_PILOT_COARSEN), ph = (int)(H / TB__RAD_PILOT_COARSEN);
+        pw = pw < 1 ? 1 : pw, ph = ph < 1 ? 1 : ph;
+        tb_camera full = scene->camera;
+        tb_image *img = NULL;
+        tb_stats_reset();
+        if (!(st = tb_camera_from_mid(&scene->mid_camera, pw, ph, &scene->camera)))
+            st = tb_rad_render_image(solver, scene, o->spp, &img);
+        scene->camera = full;
+        tb_image_free(img);
+        if (st)
+            goto done;
+        tb_stat_total nodes;
+        if (tb_stats_get("BVH/nodes visited", TB_STAT_KIND_COUNTER, &nodes) != TB_OK) {
+            tb_clear_error();
+            nodes.v[0] = 0;
+        }
+        double depth = log2(full_elems + 2.0) / log2((double)mesh.nelems + 2.0);
+        f->f[TB_PF_RAD_PIXEL_NODES] = (double)nodes.v[0] * ((double)W * H) / ((double)pw * ph) * depth;
+    }
     f->rad_shots = shots;
     f->f[TB_PF_RAD_SHOT_ELEMS] = shots * full_elems;
     f->f[TB_PF_RAD_CACHE_BYTES] =

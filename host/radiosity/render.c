@@ -14,6 +14,7 @@
 #include "util/image/image.h"
 #include "util/stats/provenance.h"
 #include "util/stats/stats.h"
+#include "host/render/predict.h"
 
 #define TB__RAD_STR2(x) #x
 #define TB__RAD_STR(x) TB__RAD_STR2(x)
@@ -37,6 +38,18 @@ typedef struct tb__rad_report {
     size_t len, cap;
     double b[TB_CHANNELS_MAX];
 } tb__rad_report;
+
+/* BVH nodes visited so far (0 with statistics off): the image rays' share
+ * is told apart from the form factors' for testbed calibrate. */
+static double tb__rad_nodes_visited(void)
+{
+    tb_stat_total t;
+    if (!tb_stats_enabled() || tb_stats_get("BVH/nodes visited", TB_STAT_KIND_COUNTER, &t) != TB_OK) {
+        tb_clear_error();
+        return 0.0;
+    }
+    return (double)t.v[0];
+}
 
 static tb_status tb__rad_report_row(void *user, const tb_rad_solver *s)
 {
@@ -421,9 +434,12 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
     if ((st = tb__rad_provenance(&r, scene_path, &ro, &mo, opt, nthreads)))
         goto done;
     if (opt->image_path) {
+        double nodes0 = tb__rad_nodes_visited();
         if ((st = tb_rad_render_image(r.solver, r.scene, opt->spp, &r.img)) ||
             (st = tb_provenance_to_attrs(&r.prov, r.img)))
             goto done;
+        if (tb_stats_enabled())
+            tb_stats_set_value(TB_RAD_IMAGE_NODES_KEY, tb__rad_nodes_visited() - nodes0);
     }
     tb__rad_where where = tb__rad_where_of(opt, &ro, r.scene->nlights);
     if (opt->stats_path && (st = tb__rad_stats(&r, opt->stats_path, t_mesh, nthreads, &as, &where)))

@@ -84,6 +84,7 @@ static const tb_cost_term tb__terms[] = {
     {"process.pixel", TB_PM_PROCESS, TB_PF_PIXELS, "s/pixel"},
     {"process.pixel_channel", TB_PM_PROCESS, TB_PF_PIXEL_CHANNELS, "s/(pixel x channel)"},
     {"process.radiosity_pixel_ray", TB_PM_PROCESS, TB_PF_RAD_PIXEL_RAYS, "s/image ray"},
+    {"process.radiosity_pixel_node", TB_PM_PROCESS, TB_PF_RAD_PIXEL_NODES, "s/image ray's BVH node visited"},
     {"memory.raytrace", TB_PM_MEMORY, TB_PF_IS_RAYTRACE, "bytes"},
     {"memory.path", TB_PM_MEMORY, TB_PF_IS_PATH, "bytes"},
     {"memory.radiosity", TB_PM_MEMORY, TB_PF_IS_RADIOSITY, "bytes"},
@@ -117,7 +118,7 @@ const char *tb_pfeat_name(tb_pfeat k)
         "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive", "tests_torus",
         "tests_csg", "tests_mesh", "hits", "leaf_tests", "sample_channels", "hit_channels", "pixel_channels",
         "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays", "rad_nodes",
-        "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
+        "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_pixel_nodes", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
         "mem_accel", "film_bytes", "is_raytrace", "is_path", "is_radiosity", "one"};
     _Static_assert(sizeof fname / sizeof fname[0] == TB_PF_COUNT, "a name per statistic");
     return (unsigned)k < TB_PF_COUNT ? fname[k] : "?";
@@ -226,9 +227,14 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
         /* the radiosity image's rays are a term of their own (process); the
          * form factors trace occlusion rays only, the image closest-hit rays */
         double occ = tb__count("BVH/occlusion rays"), img = tb__count("BVH/rays");
+        double nodes = tb__count("BVH/nodes visited"), img_nodes = tb__value(TB_RAD_IMAGE_NODES_KEY);
         f->f[TB_PF_RAD_OCC_RAYS] += scale * occ;
-        if (occ > 0)
-            f->f[TB_PF_RAD_NODES] += scale * tb__count("BVH/nodes visited") * occ / (occ + img);
+        if (img_nodes > 0 && img_nodes <= nodes) { /* the render measured the image's share */
+            f->f[TB_PF_RAD_NODES] += scale * (nodes - img_nodes);
+            f->f[TB_PF_RAD_PIXEL_NODES] += scale * img_nodes;
+        } else if (occ > 0) {
+            f->f[TB_PF_RAD_NODES] += scale * nodes * occ / (occ + img);
+        }
         f->f[TB_PF_SAMPLES] = f->f[TB_PF_RAYS] = f->f[TB_PF_OCC_RAYS] = f->f[TB_PF_NODES] = 0.0;
         f->f[TB_PF_TESTS_PRIM] = f->f[TB_PF_TESTS_TORUS] = f->f[TB_PF_TESTS_CSG] = f->f[TB_PF_TESTS_MESH] = 0.0;
         f->f[TB_PF_HITS] = 0.0;

@@ -75,6 +75,8 @@ typedef enum tb_pfeat {
                               a shaft's occluder list) */
     TB_PF_RAD_VERTICES,    /* radiosity: vertices of the mesh */
     TB_PF_RAD_PIXEL_RAYS,  /* radiosity: image rays (pixels x --spp) */
+    TB_PF_RAD_PIXEL_NODES, /* radiosity: BVH nodes the image rays visit (an image that sees mostly sky costs
+                            * little per ray: a pilot image measures it) */
     TB_PF_RAD_MESH_PROBES, /* radiosity: CSG probe rays of meshing (Polygonize/CSG probes after the load) */
     TB_PF_RAD_CACHE_BYTES, /* radiosity: form factors cached, (distinct shooters) x (vertices + elements) x 4,
                               at most the solver's 512 MiB */
@@ -212,7 +214,11 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
 
 /* The schema COSTS.json is written with and the only one read: bumped
  * whenever the terms change, so an older file is refused. */
-#define TB_COSTS_SCHEMA "testbed-costs-2"
+#define TB_COSTS_SCHEMA "testbed-costs-3"
+
+/* The --stats value in which the radiosity renderer puts the BVH nodes its
+ * image rays visited (the form factors' nodes are the rest of the counter). */
+#define TB_RAD_IMAGE_NODES_KEY "image_bvh_nodes"
 
 /* Writes COSTS.json (whole or not at all). */
 tb_status tb_costs_write(const char *path, const tb_costs *c);
