@@ -160,7 +160,9 @@ typedef struct tb__last_xing {
 
 static _Thread_local tb__last_xing tb__last;
 
-bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
+/* tb_object_intersect, with (u, v) computed only when `uv` is set (else 0):
+ * the rest of the record does not depend on them. */
+static inline bool tb__object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit, bool uv)
 {
     if (!obj || !ray || !tb__ray_ok(ray))
         return false;
@@ -172,8 +174,8 @@ bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
     double u = 0.0, v = 0.0, uvw[3];
     /* A triangle's (u, v): the mix of its corners' by the test's weights
      * (docs/primitives.md, "Parametric coordinates"), else from the point. */
-    if (!(leaf->kind == TB_PRIM_POLYGONS && tb__mesh_tri_weights(leaf, x.tri, ray, uvw) &&
-          tb_object_triangle_uv(leaf, x.tri, uvw, &u, &v))) {
+    if (uv && !(leaf->kind == TB_PRIM_POLYGONS && tb__mesh_tri_weights(leaf, x.tri, ray, uvw) &&
+                tb_object_triangle_uv(leaf, x.tri, uvw, &u, &v))) {
         tb__oray r = tb__object_ray(leaf, ray);
         tb_dvec3 p = {r.o.x + x.t * r.d.x, r.o.y + x.t * r.d.y, r.o.z + x.t * r.d.z};
         int face = (int)x.face;
@@ -188,6 +190,16 @@ bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
     /* A triangle's normal is kept by its mesh (the same formula). */
     hit->ng = leaf->kind == TB_PRIM_POLYGONS ? leaf->mesh->wnormal[x.tri] : tb__world_normal(&x);
     return true;
+}
+
+bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
+{
+    return tb__object_intersect(obj, ray, hit, true);
+}
+
+bool tb_object_intersect_no_uv(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
+{
+    return tb__object_intersect(obj, ray, hit, false);
 }
 
 void tb_object_note_triangle_hit(const tb_object *obj, const tb_ray *ray, uint32_t tri, double t, int dir)

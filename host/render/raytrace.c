@@ -109,7 +109,8 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
     const int nch = s->nchannels;
     tb_channels L = tb_channels_splat(nch, 0.0f);
     tb_hit hit;
-    if (!tb_scene_intersect(s, ray, &hit))
+    /* (u, v) only when a material reads them (textures, patterns, bump maps). */
+    if (!(rt->textures || rt->patterns ? tb_scene_intersect(s, ray, &hit) : tb_scene_intersect_no_uv(s, ray, &hit)))
         return L;
     /* The surface record: point, normals, the material's colours with its
      * textures (filtered over the pixel's footprint at the camera ray's hit)
