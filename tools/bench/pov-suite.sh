@@ -157,7 +157,8 @@ fi
 timeit() {
   local t=()
   for ((i = 0; i < runs; i++)); do
-    t+=("$( { /usr/bin/time -f '%e %U' "$@" >/dev/null 2>/dev/null; } 2>&1 | tail -1)")
+    /usr/bin/time -o "$out/time.txt" -f '%e %U' "$@" >/dev/null 2>&1
+    t+=("$(tail -1 "$out/time.txt")")
   done
   printf '%s\n' "${t[@]}" | python3 -c 'import sys,statistics as s; r=[l.split() for l in sys.stdin]; print(s.median(float(a[0]) for a in r), s.median(float(a[1]) for a in r))'
 }
