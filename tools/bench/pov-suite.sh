@@ -30,6 +30,9 @@
 #            POV-Ray's 2 x 2 area_light grid)
 #   THREADS  thread count for both (default 1)
 #   SUITE    the folder of scene pairs (default tools/bench/pov)
+#   BASELINE another testbed binary (e.g. a Release build of main), timed
+#            in the same run: the last column is its user CPU / POV-Ray's,
+#            so a change is judged within one run on a shared machine
 #   RUNS     timed runs per command (default 3; medians are reported)
 #
 # Timing: /usr/bin/time (GNU time) per run, wall and user CPU seconds of the
@@ -184,6 +187,7 @@ echo "pov-suite: $(povray --version 2>&1 | grep -m1 "^POV-Ray"); $($TESTBED --ve
 echo "pov-suite: load before: $(uptime)"
 hdr=$(printf '%-12s %9s %9s %9s %9s %8s %8s' scene "ours wall" "POV wall" "ours CPU" "POV CPU" "CPU x" "wall x")
 [[ $instr == 1 ]] && hdr="$hdr $(printf '%14s' 'ours instr')"
+[[ -n ${BASELINE:-} ]] && hdr="$hdr $(printf '%8s' 'base x')"
 echo "$hdr"
 rows=$out/rows.txt
 : > "$rows"
@@ -201,9 +205,18 @@ for s in $scenes; do
     n=$(perf stat -x, -e instructions "${ours[@]}" 2>&1 >/dev/null | awk -F, '/instructions/ {print $1}')
     line="$line $(printf '%14s' "$n")"
   fi
+  if [[ -n ${BASELINE:-} ]]; then
+    base=("$BASELINE" "${ours[@]:1}")
+    base[4]=$out/$s.base.png
+    read -r _ bu < <(timeit "${base[@]}")
+    line="$line $(python3 -c 'import sys; print(f"{float(sys.argv[1]) / float(sys.argv[2]):8.2f}")' "$bu" "$pu")"
+  fi
   echo "$line"
   echo "$line" >> "$rows"
 done
-awk '{ if ($6 > m) { m = $6; w = $1 } if ($7 > mw) mw = $7 } END { printf "MAX ratio (user CPU): %.2f (%s); MAX wall ratio: %.2f\n", m, w, mw }' "$rows"
+awk -v base="${BASELINE:-}" '{ if ($6 > m) { m = $6; w = $1 } if ($7 > mw) mw = $7; if ($NF > mb) mb = $NF }
+  END { printf "MAX ratio (user CPU): %.2f (%s); MAX wall ratio: %.2f", m, w, mw
+        if (base != "") printf "; baseline MAX (user CPU): %.2f", mb
+        printf "\n" }' "$rows"
 echo "pov-suite: load after: $(uptime)"
 echo "pov-suite: images in $out (SCENE.ours.png, SCENE.pov.png)"
