@@ -160,7 +160,9 @@ typedef struct tb__last_xing {
 
 static _Thread_local tb__last_xing tb__last;
 
-bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
+/* tb_object_intersect, with (u, v) computed only when `uv` is set (else 0):
+ * the rest of the record does not depend on them. */
+static inline bool tb__object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit, bool uv)
 {
     if (!obj || !ray || !tb__ray_ok(ray))
         return false;
@@ -172,8 +174,8 @@ bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
     double u = 0.0, v = 0.0, uvw[3];
     /* A triangle's (u, v): the mix of its corners' by the test's weights
      * (docs/primitives.md, "Parametric coordinates"), else from the point. */
-    if (!(leaf->kind == TB_PRIM_POLYGONS && tb__mesh_tri_weights(leaf, x.tri, ray, uvw) &&
-          tb_object_triangle_uv(leaf, x.tri, uvw, &u, &v))) {
+    if (uv && !(leaf->kind == TB_PRIM_POLYGONS && tb__mesh_tri_weights(leaf, x.tri, ray, uvw) &&
+                tb_object_triangle_uv(leaf, x.tri, uvw, &u, &v))) {
         tb__oray r = tb__object_ray(leaf, ray);
         tb_dvec3 p = {r.o.x + x.t * r.d.x, r.o.y + x.t * r.d.y, r.o.z + x.t * r.d.z};
         int face = (int)x.face;
@@ -188,6 +190,16 @@ bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
     /* A triangle's normal is kept by its mesh (the same formula). */
     hit->ng = leaf->kind == TB_PRIM_POLYGONS ? leaf->mesh->wnormal[x.tri] : tb__world_normal(&x);
     return true;
+}
+
+bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
+{
+    return tb__object_intersect(obj, ray, hit, true);
+}
+
+bool tb_object_intersect_no_uv(const tb_object *obj, const tb_ray *ray, tb_hit *hit)
+{
+    return tb__object_intersect(obj, ray, hit, false);
 }
 
 void tb_object_note_triangle_hit(const tb_object *obj, const tb_ray *ray, uint32_t tri, double t, int dir)
@@ -352,20 +364,22 @@ bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *
      * that test with t below the memo's, so by tmin alone, and the memo's is
      * in this range too: with the same object and ray (o, d, tmin) it is
      * this query's answer whatever tmax the earlier query had. */
-    tb__xing x;
+    tb__xing xs;
+    const tb__xing *x = &xs; /* the memo's in place (a copy stalled the loads that follow) */
     const tb__last_xing *c = &tb__last;
     if (c->obj == obj && c->gen == tb__object_generation && (float)c->x.t == hit->t && (float)c->x.t <= tmax &&
         memcmp(&c->o, &ray->o, sizeof c->o) == 0 && memcmp(&c->d, &ray->d, sizeof c->d) == 0 &&
         memcmp(&c->tmin, &ray->tmin, sizeof c->tmin) == 0)
-        x = c->x;
-    else if (!tb__closest(obj, ray, ray->tmin, tmax, &x))
+        x = &c->x;
+    else if (!tb__closest(obj, ray, ray->tmin, tmax, &xs))
         return false;
-    if ((float)x.t != hit->t || x.leaf->face_base + x.face != hit->face)
+    if ((float)x->t != hit->t || x->leaf->face_base + x->face != hit->face)
         return false;
-    const tb_object *leaf = x.leaf;
+    const tb_object *leaf = x->leaf;
     tb__oray r = tb__object_ray(leaf, ray);
-    tb_dvec3 po = {r.o.x + x.t * r.d.x, r.o.y + x.t * r.d.y, r.o.z + x.t * r.d.z};
-    double dist = tb__face_residual(leaf, x.face, x.tri, po);
+    const double xt = x->t;
+    tb_dvec3 po = {r.o.x + xt * r.d.x, r.o.y + xt * r.d.y, r.o.z + xt * r.d.z};
+    double dist = tb__face_residual(leaf, x->face, x->tri, po);
     const tb_mat4 *m = &leaf->to_world.m;
     double pw[3], err[3];
     double pov[3] = {po.x, po.y, po.z};

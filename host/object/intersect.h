@@ -30,6 +30,12 @@
  * the way out. */
 bool tb_object_intersect(const tb_object *obj, const tb_ray *ray, tb_hit *hit);
 
+/* tb_object_intersect with hit->u = hit->v = 0 instead of the parametric
+ * coordinates (the rest of the record bit for bit the same): for callers
+ * whose materials read no (u, v), which then skip their cost (atan2, acos,
+ * square roots per hit). */
+bool tb_object_intersect_no_uv(const tb_object *obj, const tb_ray *ray, tb_hit *hit);
+
 /* True if the ray hits the object's surface anywhere with tmin <= t <= tmax
  * (any-hit: may stop at the first one found). */
 bool tb_object_occluded(const tb_object *obj, const tb_ray *ray);

@@ -54,7 +54,7 @@ static double tb__mitchell(double x, double b, double c)
 }
 
 /* The unnormalised 1D profile. */
-static double tb__filter_raw(const tb_filter *f, double x)
+static inline double tb__filter_raw(const tb_filter *f, double x)
 {
     double r = f->radius;
     switch (f->kind) {
@@ -362,6 +362,25 @@ void tb_film_tile_free(tb_film_tile *tile)
     free(tile);
 }
 
+/* floor(v) and ceil(v) as far as comparisons and int conversions see them
+ * (a -0 may come back +0), by a conversion to int64 where |v| < 2^52: the
+ * baseline x86-64 build has no rounding instruction and calls libm. */
+static inline double tb__floor(double v)
+{
+    if (!(fabs(v) < 0x1p52))
+        return floor(v);
+    double t = (double)(long long)v;
+    return t > v ? t - 1.0 : t;
+}
+
+static inline double tb__ceil(double v)
+{
+    if (!(fabs(v) < 0x1p52))
+        return ceil(v);
+    double t = (double)(long long)v;
+    return t < v ? t + 1.0 : t;
+}
+
 /* Splats one sample into `sum`, the accumulator of the pixel rectangle `rect`
  * (row-major, channels + 1 doubles per pixel). Pixels outside rect get
  * nothing. Returns false if the sample was dropped as non-finite. */
@@ -375,8 +394,8 @@ static bool tb__splat(const tb_filter *f, int channels, double *sum, tb_tile_rec
             return false;
     double r = f->radius;
     /* pixels i with |x - (i + 1/2)| <= r; the filter decides the boundary */
-    double lo_x = ceil(x - 0.5 - r), hi_x = floor(x - 0.5 + r);
-    double lo_y = ceil(y - 0.5 - r), hi_y = floor(y - 0.5 + r);
+    double lo_x = tb__ceil(x - 0.5 - r), hi_x = tb__floor(x - 0.5 + r);
+    double lo_y = tb__ceil(y - 0.5 - r), hi_y = tb__floor(y - 0.5 + r);
     int ix0 = lo_x > rect.x0 ? (int)lo_x : rect.x0;
     int ix1 = hi_x < rect.x1 - 1 ? (int)hi_x : rect.x1 - 1;
     int iy0 = lo_y > rect.y0 ? (int)lo_y : rect.y0;
@@ -386,12 +405,13 @@ static bool tb__splat(const tb_filter *f, int channels, double *sum, tb_tile_rec
     /* the support spans at most 2 r + 1 pixels per axis */
     double wx[2 * (int)TB__FILTER_MAX_RADIUS + 2];
     int nx = ix1 - ix0 + 1;
+    /* tb_filter_eval1, inline (a call per pixel and axis cost more than the sum) */
     for (int i = 0; i < nx; i++)
-        wx[i] = tb_filter_eval1(f, x - ((double)(ix0 + i) + 0.5));
+        wx[i] = tb__filter_raw(f, x - ((double)(ix0 + i) + 0.5)) * f->norm;
     int stride = channels + 1;
     int rw = rect.x1 - rect.x0;
     for (int iy = iy0; iy <= iy1; iy++) {
-        double wy = tb_filter_eval1(f, y - ((double)iy + 0.5)) * weight;
+        double wy = tb__filter_raw(f, y - ((double)iy + 0.5)) * f->norm * weight;
         if (wy == 0.0)
             continue;
         double *row = sum + ((size_t)(iy - rect.y0) * (size_t)rw + (size_t)(ix0 - rect.x0)) * (size_t)stride;

@@ -214,6 +214,29 @@ bool tb_light_sample_li(const tb_light *l, tb_vec3 p, tb_light_sample *s)
     return !tb_channels_is_black(s->L);
 }
 
+bool tb_light_delta_at(const tb_light *l, tb_vec3 p, tb_vec3 *wi, float *dist, float *scale)
+{
+    /* The operations of tb_light_sample_li, without its 132-byte record. */
+    if (l->kind == TB_LIGHT_DIRECTIONAL) {
+        *wi = tb_vec3_neg(l->axis);
+        *dist = INFINITY;
+        *scale = 1.0f;
+        return true;
+    }
+    tb_dvec3 d = tb_dvec3_sub(tb__d(l->position), tb__d(p));
+    double dd = tb_dvec3_length(d);
+    if (!(dd > 0.0) || !isfinite(dd))
+        return false;
+    tb_dvec3 w = tb_dvec3_scale(d, 1.0 / dd);
+    double k = tb__shape(l, tb_dvec3_neg(w));
+    if (!(k > 0.0))
+        return false;
+    *wi = tb_dvec3_to_f(w);
+    *dist = (float)dd;
+    *scale = (float)(k / (dd * dd));
+    return true;
+}
+
 /* World direction of a photometric-frame direction of light l. */
 static tb_vec3 tb__from_photometric(const tb_light *l, tb_vec3 v)
 {

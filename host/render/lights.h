@@ -106,6 +106,13 @@ tb_channels tb_light_intensity(const tb_light *l, tb_vec3 w);
  * light's position); *s is then zeroed with L black. */
 bool tb_light_sample_li(const tb_light *l, tb_vec3 p, tb_light_sample *s);
 
+/* The scalar part of tb_light_sample_li for the Whitted light loop: unit
+ * direction *wi toward the light, distance *dist (INFINITY: directional) and
+ * *scale, the float factor whose product with each intensity channel is the
+ * sample's L (bit for bit: 1 for a directional light). False where
+ * tb_light_sample_li gives no light for a reason other than a black L. */
+bool tb_light_delta_at(const tb_light *l, tb_vec3 p, tb_vec3 *wi, float *dist, float *scale);
+
 /* A direction for light leaving a point or spot light (photon emission):
  * uniform on the sphere (point) or in the cone (spot), or from the IES
  * distribution when there is one. *pdf is its solid-angle density and the

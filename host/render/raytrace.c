@@ -109,7 +109,8 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
     const int nch = s->nchannels;
     tb_channels L = tb_channels_splat(nch, 0.0f);
     tb_hit hit;
-    if (!tb_scene_intersect(s, ray, &hit))
+    /* (u, v) only when a material reads them (textures, patterns, bump maps). */
+    if (!(rt->textures || rt->patterns ? tb_scene_intersect(s, ray, &hit) : tb_scene_intersect_no_uv(s, ray, &hit)))
         return L;
     /* The surface record: point, normals, the material's colours with its
      * textures (filtered over the pixel's footprint at the camera ray's hit)
@@ -151,11 +152,26 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
     /* Point, spot and directional lights: Lambert + the model's specular lobe. */
     if ((has_diffuse || has_specular) && s->nlights > 0) {
         for (int i = 0; i < s->nlights; i++) {
-            tb_light_sample ls;
-            if (!tb_light_sample_li(&s->lights[i], p, &ls))
+            /* tb_light_sample_li's L = intensity x ks, channel by channel,
+             * without building its record (its operations, bit for bit). */
+            const tb_light *light = &s->lights[i];
+            tb_vec3 wi;
+            float dist, ks;
+            if (!tb_light_delta_at(light, p, &wi, &dist, &ks))
                 continue;
-            float cosi = tb_vec3_dot(n, ls.wi);
-            if (cosi <= 0.0f || tb__black_p(&ls.L))
+            float Li[TB_CHANNELS_MAX];
+            const int nl = light->intensity.n;
+            bool dark = true;
+            for (int k = 0; k < nl; k++) {
+                Li[k] = light->intensity.v[k] * ks;
+                dark = dark && Li[k] == 0.0f;
+            }
+            if (dark)
+                continue;
+            for (int k = nl; k < nch; k++)
+                Li[k] = light->intensity.v[k];
+            float cosi = tb_vec3_dot(n, wi);
+            if (cosi <= 0.0f)
                 continue;
             /* f = diffuse / pi + the specular lobe, channel by channel with
              * the operations of tb_channels_scale / add / add_scaled. */
@@ -164,11 +180,11 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             for (int k = 0; k < nf; k++)
                 f[k] = diffuse->v[k] * (float)(1.0 / TB_PI);
             if (ggx) {
-                tb_channels b = tb_bsdf_eval(&lobe, wo_local, tb_frame_to_local(&frame, ls.wi));
+                tb_channels b = tb_bsdf_eval(&lobe, wo_local, tb_frame_to_local(&frame, wi));
                 for (int k = 0; k < nf; k++)
                     f[k] += b.v[k];
             } else if (has_specular) {
-                float w = (float)tb_surface_phong_lobe(&sf, ls.wi);
+                float w = (float)tb_surface_phong_lobe(&sf, wi);
                 for (int k = 0; k < nf; k++)
                     f[k] += specular->v[k] * w;
             }
@@ -180,11 +196,12 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
                 black = black && f[k] == 0.0f;
             if (black)
                 continue;
-            if (tb__shadowed(rt, &sf, &ls))
+            TB_STAT_INC(tb__rt_shadow_rays);
+            if (tb_light_set_occluded_delta(&rt->lights, &sf, wi, light->position, dist))
                 continue;
             /* L + (f ls.L) cosi: tb_channels_add(L, scale(mul(f, ls.L), cosi)). */
             for (int k = 0; k < nch; k++)
-                L.v[k] += (k < nf ? f[k] * ls.L.v[k] : 0.0f) * cosi;
+                L.v[k] += (k < nf ? f[k] * Li[k] : 0.0f) * cosi;
         }
     }
 

@@ -812,11 +812,15 @@ static tb_status tb__make_prims(tb_scene *s)
 
 /* Whole objects only: the structure tests the triangle references itself
  * (tb_accel_tri, made by tb__scene_tri_make). */
+/* False while this thread's current query is a tb_scene_intersect_no_uv. */
+static _Thread_local bool tb__want_uv = true;
+
 static bool tb__cb_intersect(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {
     (void)index;
     const tb_scene *s = ctx;
-    return tb_object_intersect(s->objects[prim->object], ray, hit);
+    const tb_object *o = s->objects[prim->object];
+    return tb__want_uv ? tb_object_intersect(o, ray, hit) : tb_object_intersect_no_uv(o, ray, hit);
 }
 
 /* The object tb_scene_occluded_except leaves out of this thread's current
@@ -1069,7 +1073,22 @@ bool tb_scene_intersect(const tb_scene *s, const tb_ray *ray, tb_hit *hit)
     if (!tb_accel_intersect_tri(s->accel, ray, hit, &tri))
         return false;
     if (tri.index != TB_ACCEL_TRI_NONE)
-        tb__scene_tri_finish(s, ray, &tri, hit);
+        tb__scene_tri_finish(s, ray, &tri, hit, true);
+    return true;
+}
+
+bool tb_scene_intersect_no_uv(const tb_scene *s, const tb_ray *ray, tb_hit *hit)
+{
+    if (!s || !s->accel)
+        return false;
+    tb_accel_tri_hit tri;
+    tb__want_uv = false;
+    bool found = tb_accel_intersect_tri(s->accel, ray, hit, &tri);
+    tb__want_uv = true;
+    if (!found)
+        return false;
+    if (tri.index != TB_ACCEL_TRI_NONE)
+        tb__scene_tri_finish(s, ray, &tri, hit, false);
     return true;
 }
 

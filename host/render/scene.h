@@ -232,6 +232,11 @@ void tb_scene_free(tb_scene *s);
  * alike (docs/accel.md, "Tie rule"). */
 bool tb_scene_intersect(const tb_scene *s, const tb_ray *ray, tb_hit *hit);
 
+/* tb_scene_intersect with hit->u = hit->v = 0 (the rest bit for bit the
+ * same): for renderers whose materials read no (u, v) (no texture, pattern
+ * or bump map), which so skip computing them for every candidate hit. */
+bool tb_scene_intersect_no_uv(const tb_scene *s, const tb_ray *ray, tb_hit *hit);
+
 /* True if anything is hit with ray->tmin <= t <= ray->tmax. */
 bool tb_scene_occluded(const tb_scene *s, const tb_ray *ray);
 

@@ -26,10 +26,10 @@
 void tb__scene_tri_make(const tb_object *o, uint32_t tri, tb_accel_tri *r);
 
 /* Completes the closest hit `hit` of tb_scene_intersect on triangle
- * reference th->index (`ray` as given to the structure): its (u, v) and
+ * reference th->index (`ray` as given to the structure): its (u, v) (0 unless `uv`) and
  * normal, as tb_object_intersect gives them for that triangle; and notes the
  * crossing for tb_object_hit_point (tb_object_note_triangle_hit). */
-void tb__scene_tri_finish(const tb_scene *s, const tb_ray *ray, const tb_accel_tri_hit *th, tb_hit *hit);
+void tb__scene_tri_finish(const tb_scene *s, const tb_ray *ray, const tb_accel_tri_hit *th, tb_hit *hit, bool uv);
 
 /* World box of triangle `tri` of polygons object `o` (exact, rounded outward). */
 tb_status tb__scene_tri_bounds(const tb_object *o, uint32_t tri, tb_aabb *out);

@@ -92,14 +92,14 @@ static const tb__uv_frame *tb__uv_frame_of(const tb_geom_polygons *g, int face)
     return f;
 }
 
-void tb__scene_tri_finish(const tb_scene *s, const tb_ray *ray, const tb_accel_tri_hit *th, tb_hit *hit)
+void tb__scene_tri_finish(const tb_scene *s, const tb_ray *ray, const tb_accel_tri_hit *th, tb_hit *hit, bool uv)
 {
     /* hit->object is the reference's object (tb__scene_tri_make), th->sub its
      * triangle: no lookup of the reference (a cache miss per hit on big meshes). */
     const tb_object *o = s->objects[hit->object];
     uint32_t tri = th->sub;
     double u = 0.0, v = 0.0;
-    if (!tb_object_triangle_uv(o, tri, th->uvw, &u, &v)) {
+    if (uv && !tb_object_triangle_uv(o, tri, th->uvw, &u, &v)) {
         /* A face of more than 3 corners with uvs: from the point. */
         tb_dvec3 p = tb_object_ray_point(o, ray, th->t);
         uint32_t face = o->mesh->tri_face[tri];

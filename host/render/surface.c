@@ -613,19 +613,32 @@ static uint32_t tb__self_object(const tb_light_set *ls, int i)
     return e->object;
 }
 
-bool tb_light_set_occluded(const tb_light_set *ls, const tb_surface *sf, const tb_light_sample *s)
+/* The shadow segment from sf toward `point` along wi (dist INFINITY: the
+ * ray along wi), with top-level object `skip` left out. */
+static inline bool tb__occluded(const tb_light_set *ls, const tb_surface *sf, tb_vec3 wi, tb_vec3 point, float dist,
+                                uint32_t skip)
 {
     tb_ray r;
-    r.o = sf->org[tb_spawn_front(sf->ng, s->wi) ? 0 : 1];
+    r.o = sf->org[tb_spawn_front(sf->ng, wi) ? 0 : 1];
     r.tmin = 0.0f;
-    if (isinf(s->dist)) {
-        r.d = s->wi;
+    if (isinf(dist)) {
+        r.d = wi;
         r.tmax = INFINITY;
     } else {
-        r.d = tb_vec3_sub(s->point, r.o);
+        r.d = tb_vec3_sub(point, r.o);
         r.tmax = 1.0f - TB_SHADOW_EPSILON;
     }
-    return tb_scene_occluded_except(ls->scene, &r, s->delta ? UINT32_MAX : tb__self_object(ls, s->emitter));
+    return tb_scene_occluded_except(ls->scene, &r, skip);
+}
+
+bool tb_light_set_occluded(const tb_light_set *ls, const tb_surface *sf, const tb_light_sample *s)
+{
+    return tb__occluded(ls, sf, s->wi, s->point, s->dist, s->delta ? UINT32_MAX : tb__self_object(ls, s->emitter));
+}
+
+bool tb_light_set_occluded_delta(const tb_light_set *ls, const tb_surface *sf, tb_vec3 wi, tb_vec3 point, float dist)
+{
+    return tb__occluded(ls, sf, wi, point, dist, UINT32_MAX);
 }
 
 /* Solid-angle density with which the area light, sampled at p, returns

@@ -219,6 +219,11 @@ bool tb_light_set_sample(const tb_light_set *ls, int light, tb_vec3 p, float u1,
  * block the way to its own visible cap). */
 bool tb_light_set_occluded(const tb_light_set *ls, const tb_surface *sf, const tb_light_sample *s);
 
+/* tb_light_set_occluded for a point, spot or directional light's sample
+ * given by its parts (tb_light_delta_at): direction wi, the light's position
+ * and distance (INFINITY: directional). */
+bool tb_light_set_occluded_delta(const tb_light_set *ls, const tb_surface *sf, tb_vec3 wi, tb_vec3 point, float dist);
+
 /* The area-light sample `s` taken at sf, seen on the exact geometry: true
  * when the ray from sf toward s->wi meets first the front side of an
  * emitting part of the object the sample's emitter stands for; then *Le is

@@ -268,6 +268,52 @@ static void test_sample_record_complete(void **state)
         }
 }
 
+/* tb_light_delta_at is tb_light_sample_li's scalar part bit for bit: the
+ * same direction and distance, intensity x scale equal to its L channel by
+ * channel, and false exactly where it gives no light for a reason other
+ * than a black L (outside a spot cone, p at the light). Random points near
+ * and far, spots hit inside, at and beyond the cone's edge. */
+static void test_delta_at_matches_sample(void **state)
+{
+    (void)state;
+    tb_rng rng;
+    tb_rng_seed(&rng, tb_test_seed("delta at", 43), 0);
+    for (int k = 0; k < 3000; k++) {
+        tb_vec3 lp = rand_point(&rng, k % 3 == 0 ? 1e-3 : 10.0);
+        tb_channels I = tb_channels_rgb((float)(100 * tb_rng_double(&rng)), 0.0f, (float)tb_rng_double(&rng));
+        tb_light l;
+        switch (k % 3) {
+        case 0: l = tb_light_point(lp, I); break;
+        case 1: l = tb_light_spot(lp, rand_dir(&rng), I, 5.0 + 80.0 * tb_rng_double(&rng), 5.0); break;
+        default: l = tb_light_directional(rand_dir(&rng), I); break;
+        }
+        tb_vec3 p = k % 50 == 0 ? lp : rand_point(&rng, k % 7 == 0 ? 1e4 : 10.0);
+        tb_light_sample s;
+        bool rs = tb_light_sample_li(&l, p, &s);
+        tb_vec3 wi;
+        float dist, scale;
+        bool rd = tb_light_delta_at(&l, p, &wi, &dist, &scale);
+        bool black = true;
+        for (int c = 0; c < 3 && rd; c++) {
+            float v = l.intensity.v[c] * scale;
+            assert_memory_equal(&v, &s.L.v[c], sizeof v);
+            black = black && v == 0.0f;
+        }
+        if (rd) {
+            assert_memory_equal(&wi, &s.wi, sizeof wi);
+            assert_memory_equal(&dist, &s.dist, sizeof dist);
+            assert_int_equal(rs, !black);
+        } else {
+            assert_false(rs);
+        }
+    }
+    /* The light at p: no direction, no light. */
+    tb_vec3 wi;
+    float dist, scale;
+    tb_light l = tb_light_point(tb_vec3_make(1, 2, 3), tb_channels_rgb(1, 1, 1));
+    assert_false(tb_light_delta_at(&l, tb_vec3_make(1, 2, 3), &wi, &dist, &scale));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -277,6 +323,7 @@ int main(void)
         cmocka_unit_test(test_from_mid),
         cmocka_unit_test(test_power_and_emission),
         cmocka_unit_test(test_sample_record_complete),
+        cmocka_unit_test(test_delta_at_matches_sample),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -146,6 +146,18 @@ static void check_scene(const char *label, tb_scene *s, long nrays, uint64_t see
             memset(&h, 0xAB, sizeof h);
             bool f = tb_scene_intersect(s, &rays[i], &h);
             bool occ = tb_scene_occluded(s, &rays[i]);
+            /* Without (u, v): the same record bit for bit, u = v = 0. */
+            tb_hit hn;
+            memset(&hn, 0xCD, sizeof hn);
+            bool fn = tb_scene_intersect_no_uv(s, &rays[i], &hn);
+            assert_int_equal(fn, f);
+            if (f) {
+                assert_memory_equal(&hn.t, &h.t, sizeof h.t);
+                assert_memory_equal(&hn.ng, &h.ng, sizeof h.ng);
+                assert_int_equal(hn.object, h.object);
+                assert_int_equal(hn.face, h.face);
+                assert_true(hn.u == 0.0f && hn.v == 0.0f);
+            }
             /* Ties: a ray exactly through an edge or vertex where two faces
              * or triangles of one mesh are hit at the same float t (a
              * silhouette, a fold). Both levels keep the lowest face, then
