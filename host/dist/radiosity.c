@@ -60,9 +60,9 @@ static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, double spin,
 }
 
 /* Every rank's `n_mine` values of `type` (`size` bytes each) into all[], in
- * rank order (counts[r] from rank r); `units`: count them as receivers. */
+ * rank order (counts[r] from rank r); `units`: the receivers they are. */
 static tb_status tb__radx_gather(tb__radx *x, const void *mine, size_t n_mine, void *all, const size_t *counts,
-                                 MPI_Datatype type, size_t size, bool units)
+                                 MPI_Datatype type, size_t size, size_t units)
 {
     double t0 = tb__dist_now();
     int R = x->ex.ranks, off = 0;
@@ -78,7 +78,7 @@ static tb_status tb__radx_gather(tb__radx *x, const void *mine, size_t n_mine, v
         MPI_SUCCESS)
         return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallgatherv failed");
     /* bytes: this rank's values, delivered to every other rank */
-    tb__radx_wait(x, &req, t0, 0.0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), units ? n_mine : 0);
+    tb__radx_wait(x, &req, t0, 0.0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), units);
     return TB_OK;
 }
 
@@ -104,9 +104,9 @@ static void tb__radx_pick(void *in, void *inout, int *len, MPI_Datatype *type)
 }
 #endif
 
-/* Doubles gathered (tb__radx_gather); `units`: count them as receivers. */
+/* Doubles gathered (tb__radx_gather); `units`: the receivers they are. */
 static tb_status tb__radx_gatherd(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts,
-                                  bool units)
+                                  size_t units)
 {
 #ifdef TB_HAVE_MPI
     return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_DOUBLE, sizeof *mine, units);
@@ -116,15 +116,16 @@ static tb_status tb__radx_gatherd(void *ctx, const double *mine, size_t n_mine, 
 #endif
 }
 
-static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts)
+static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts,
+                                    size_t per)
 {
-    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, true);
+    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, per ? n_mine / per : n_mine);
 }
 
 static tb_status tb__radx_allgather_state(void *ctx, const double *mine, size_t n_mine, double *all,
                                           const size_t *counts)
 {
-    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, false);
+    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, 0);
 }
 
 static tb_status tb__radx_select(void *ctx, double *buf, size_t n)
@@ -162,7 +163,7 @@ static tb_status tb__radx_select(void *ctx, double *buf, size_t n)
 static tb_status tb__radx_allgatherf(void *ctx, const float *mine, size_t n_mine, float *all, const size_t *counts)
 {
 #ifdef TB_HAVE_MPI
-    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_FLOAT, sizeof *mine, true);
+    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_FLOAT, sizeof *mine, n_mine);
 #else
     (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts;
     return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
