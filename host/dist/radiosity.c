@@ -5,6 +5,7 @@
 #include "host/dist/dist_internal.h"
 
 #include <limits.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
@@ -13,10 +14,12 @@
 #include <mpi.h>
 #endif
 
-/* Seconds a rank polls the per-shot selection before it sleeps: the ranks
- * arrive within microseconds of each other (each updates its share of the
- * elements), and a sleep would cost tens of microseconds per shot. */
-#define TB__RADX_SELECT_SPIN 30e-6
+/* Seconds a rank polls an exchange (yielding its core between polls)
+ * before it sleeps: about one computed shot's form factors. The ranks
+ * reach each exchange within the imbalance of the shot's split (tens to
+ * hundreds of microseconds); a sleep overshoots by the timer slack (about
+ * 50 us) and the rank woken late delays the next shot on every rank. */
+#define TB__RADX_SPIN 2e-3
 
 /* An exchange and its accounts. */
 typedef struct tb__radx {
@@ -32,24 +35,29 @@ typedef struct tb__radx {
 } tb__radx;
 
 #ifdef TB_HAVE_MPI
-/* Waits for req: first polled without a pause for `spin` seconds (an
- * exchange after balanced work: the shortest sleep lasts about 50 us of
- * timer slack, more than the exchange), then with short sleeps: a rank
- * that is done early leaves the core to one still casting rays (Open MPI's
- * blocking collectives spin, which on shared or oversubscribed cores slows
- * the very rank everyone waits for). Then the accounts: work since the
+/* Waits for req: polled for up to `spin` seconds, with sched_yield between
+ * polls (a rank sharing its core, oversubscribed or on a loaded machine,
+ * hands it to whoever is runnable there; alone on its core the yield
+ * returns at once), then with short, growing sleeps: a rank that is done
+ * far ahead leaves the core to one still casting rays (Open MPI's blocking
+ * collectives spin without yielding). Then the accounts: work since the
  * previous exchange, the wait, `bytes` sent and `units` (receivers). */
-static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, double spin, uint64_t bytes, uint64_t units)
+static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, uint64_t bytes, uint64_t units)
 {
-    for (int done = 0; !done && tb__dist_now() - t0 < spin;)
-        MPI_Test(req, &done, MPI_STATUS_IGNORE);
-    for (long us = 5;;) {
-        int done = 0;
+    int done = 0;
+    for (unsigned i = 1; !done; i++) {
         MPI_Test(req, &done, MPI_STATUS_IGNORE);
         if (done)
             break;
-        /* 5 us doubling to 200 us: an exchange of a few kilobytes is
-         * answered within microseconds when both ranks are there */
+        sched_yield();
+        if (i % 16 == 0 && tb__dist_now() - t0 > TB__RADX_SPIN) /* the clock now and then: it costs a poll */
+            break;
+    }
+    for (long us = 5; !done;) {
+        MPI_Test(req, &done, MPI_STATUS_IGNORE);
+        if (done)
+            break;
+        /* 5 us doubling to 200 us */
         struct timespec ts = {0, us * 1000L};
         nanosleep(&ts, NULL);
         us = us * 2 < 200 ? us * 2 : 200;
@@ -78,7 +86,7 @@ static tb_status tb__radx_gather(tb__radx *x, const void *mine, size_t n_mine, v
         MPI_SUCCESS)
         return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallgatherv failed");
     /* bytes: this rank's values, delivered to every other rank */
-    tb__radx_wait(x, &req, t0, 0.0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), units);
+    tb__radx_wait(x, &req, t0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), units);
     return TB_OK;
 }
 
@@ -152,7 +160,7 @@ static tb_status tb__radx_select(void *ctx, double *buf, size_t n)
     if (MPI_Iallreduce(MPI_IN_PLACE, buf, 1, x->type, x->op, MPI_COMM_WORLD, &req) != MPI_SUCCESS)
         return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallreduce failed");
     /* bytes: a reduction sends about its buffer once per rank */
-    tb__radx_wait(x, &req, t0, TB__RADX_SELECT_SPIN, (uint64_t)(n * sizeof *buf), 0);
+    tb__radx_wait(x, &req, t0, (uint64_t)(n * sizeof *buf), 0);
     return TB_OK;
 #else
     (void)ctx, (void)buf, (void)n;
