@@ -5,7 +5,6 @@
 #include "host/dist/dist_internal.h"
 
 #include <limits.h>
-#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
@@ -14,18 +13,20 @@
 #include <mpi.h>
 #endif
 
-/* Seconds a rank polls an exchange (yielding its core between polls)
- * before it sleeps: about one computed shot's form factors. The ranks
- * reach each exchange within the imbalance of the shot's split (tens to
- * hundreds of microseconds); a sleep overshoots by the timer slack (about
- * 50 us) and the rank woken late delays the next shot on every rank. */
-#define TB__RADX_SPIN 2e-3
+/* Microseconds a rank polls an exchange before it sleeps, unless
+ * TB_DIST_SPIN_US says otherwise: the ranks arrive within microseconds of
+ * each other after balanced work, and a sleep costs tens of microseconds of
+ * timer slack. On cores of its own a rank may poll longer (a rank woken
+ * late delays every rank's next shot); on shared or loaded cores polling
+ * takes the core from the rank everyone waits for. */
+#define TB__RADX_SPIN_US 30
 
 /* An exchange and its accounts. */
 typedef struct tb__radx {
     tb_rad_exchange ex;  /* handed to the solver (ex.ctx == this) */
     int *counts, *displs; /* MPI's int counts and offsets per rank */
     double last;          /* clock when the previous gather returned (work runs from there) */
+    double spin;          /* seconds an exchange is polled before sleeping (TB__RADX_SPIN_US, TB_DIST_SPIN_US) */
 #ifdef TB_HAVE_MPI
     MPI_Datatype type;    /* select: type_n contiguous doubles (type_n 0: none made) */
     size_t type_n;
@@ -35,29 +36,26 @@ typedef struct tb__radx {
 } tb__radx;
 
 #ifdef TB_HAVE_MPI
-/* Waits for req: polled for up to `spin` seconds, with sched_yield between
- * polls (a rank sharing its core, oversubscribed or on a loaded machine,
- * hands it to whoever is runnable there; alone on its core the yield
- * returns at once), then with short, growing sleeps: a rank that is done
- * far ahead leaves the core to one still casting rays (Open MPI's blocking
- * collectives spin without yielding). Then the accounts: work since the
- * previous exchange, the wait, `bytes` sent and `units` (receivers). */
+/* Waits for req: polled without a pause for x->spin seconds, then with
+ * short, growing sleeps: a rank that is done early leaves the core to one
+ * still casting rays (Open MPI's blocking collectives spin, which on shared
+ * or oversubscribed cores slows the very rank everyone waits for). Then the
+ * accounts: work since the previous exchange, the wait, `bytes` sent and
+ * `units` (receivers). */
 static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, uint64_t bytes, uint64_t units)
 {
     int done = 0;
     for (unsigned i = 1; !done; i++) {
         MPI_Test(req, &done, MPI_STATUS_IGNORE);
-        if (done)
-            break;
-        sched_yield();
-        if (i % 16 == 0 && tb__dist_now() - t0 > TB__RADX_SPIN) /* the clock now and then: it costs a poll */
+        if (!done && i % 8 == 0 && tb__dist_now() - t0 >= x->spin) /* the clock now and then: it costs a poll */
             break;
     }
     for (long us = 5; !done;) {
         MPI_Test(req, &done, MPI_STATUS_IGNORE);
         if (done)
             break;
-        /* 5 us doubling to 200 us */
+        /* 5 us doubling to 200 us: an exchange of a few kilobytes is
+         * answered within microseconds when both ranks are there */
         struct timespec ts = {0, us * 1000L};
         nanosleep(&ts, NULL);
         us = us * 2 < 200 ? us * 2 : 200;
@@ -125,9 +123,9 @@ static tb_status tb__radx_gatherd(void *ctx, const double *mine, size_t n_mine, 
 }
 
 static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts,
-                                    size_t per)
+                                    size_t receivers)
 {
-    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, per ? n_mine / per : n_mine);
+    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, receivers);
 }
 
 static tb_status tb__radx_allgather_state(void *ctx, const double *mine, size_t n_mine, double *all,
@@ -219,6 +217,18 @@ tb_rad_exchange *tb_dist_rad_exchange_create(void)
         return NULL;
     }
     x->last = tb__dist_now();
+    x->spin = TB__RADX_SPIN_US * 1e-6;
+    const char *e = getenv("TB_DIST_SPIN_US");
+    if (e && *e) {
+        char *end = NULL;
+        double us = strtod(e, &end);
+        if (*end || !(us >= 0.0 && us <= 1e7)) {
+            free(x->counts), free(x->displs), free(x);
+            tb_error(TB_ERR_ARG, "TB_DIST_SPIN_US='%s': not microseconds in 0..1e7", e);
+            return NULL;
+        }
+        x->spin = us * 1e-6;
+    }
     x->ex = (tb_rad_exchange){.ctx = x, .rank = tb_dist_rank(), .ranks = R, .allgather = tb__radx_allgather,
                               .allgatherf = tb__radx_allgatherf,
                               .allgather_state = tb__radx_allgather_state, .select = tb__radx_select,

@@ -100,7 +100,8 @@ struct tb_rad_solver {
      * factors, everyone's gathered, and how many each process computes */
     double *xmine, *xall;
     size_t *xcounts;
-    size_t *xcounts2;       /* 2 xcounts: values gathered per process (a form factor and a visible fraction) */
+    size_t *xcounts2;       /* values each process sends this shot: its form factors and its near vertices'
+                               visible fractions */
     bool vnear_done;        /* this shot's vertices' near field is done (tb__batch did it) */
     /* several shooters in flight: this process's shooter's form factors,
      * everyone's, and the counts (all equal) */
@@ -532,6 +533,12 @@ static tb__near_shooter tb__near_of(const tb_rad_solver *s, size_t sk)
     return n;
 }
 
+/* Whether vertex v lies within TB__RAD_NEAR shooter radii (a NaN counts as near). */
+static bool tb__vertex_near(const tb_rad_solver *s, size_t v, const tb__near_shooter *n)
+{
+    return !((double)tb_vec3_length2(tb_vec3_sub(s->rp[v], n->cen)) >= n->near2);
+}
+
 /* Vertex v's near field (tb__near_field): within TB__RAD_NEAR shooter radii
  * its sampled s->ff[v] becomes the exact unoccluded form factor times the
  * visible fraction the samples measured, kept in s->vvis[v] (NaN: not
@@ -540,8 +547,7 @@ static tb__near_shooter tb__near_of(const tb_rad_solver *s, size_t sk)
 static void tb__near_vertex(tb_rad_solver *s, size_t v, const tb__near_shooter *n)
 {
     s->vvis[v] = NAN;
-    tb_vec3 d = tb_vec3_sub(s->rp[v], n->cen);
-    if ((double)tb_vec3_length2(d) >= n->near2)
+    if (!tb__vertex_near(s, v, n))
         return;
     double exact = tb_ff_point_polygon(s->rp[v], s->rn[v], n->poly);
     if (!(exact >= 0.0) || !isfinite(exact))
@@ -553,21 +559,31 @@ static void tb__near_vertex(tb_rad_solver *s, size_t v, const tb__near_shooter *
     s->ff[v] = exact * vis;
 }
 
-/* Several processes: every process's clusters' form factors and visible
- * fractions (near field done) into s->ff and s->vvis on every process. Each
- * packs its clusters' pairs in cluster order; the gathered blocks come in
- * rank order and unpack by the same rule. */
-static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex)
+/* Several processes: every process's clusters' form factors and, for the
+ * vertices near the shooter, visible fractions (the near field done) into
+ * s->ff and s->vvis on every process. Which vertices are near follows from
+ * replicated data, so every process knows what each sends: its clusters'
+ * values in cluster order, a near vertex's fraction after its form factor;
+ * the gathered blocks come in rank order and unpack by the same rule. */
+static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex, const tb__near_shooter *near)
 {
     size_t nv = s->m.nverts, ncl = s->ncl, R = (size_t)ex->ranks, n = 0;
+    memset(s->xcounts2, 0, R * sizeof *s->xcounts2);
+    for (size_t c = 0; c < ncl; c++) {
+        size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
+        for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++)
+            s->xcounts2[c % R] += 1 + tb__vertex_near(s, s->corder[q], near);
+    }
     for (size_t c = (size_t)ex->rank; c < ncl; c += R) {
         size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
         for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++) {
             uint32_t v = s->corder[q];
-            s->xmine[n++] = s->ff[v], s->xmine[n++] = s->vvis[v];
+            s->xmine[n++] = s->ff[v];
+            if (tb__vertex_near(s, v, near))
+                s->xmine[n++] = s->vvis[v];
         }
     }
-    tb_status st = ex->allgather(ex->ctx, s->xmine, n, s->xall, s->xcounts2, 2);
+    tb_status st = ex->allgather(ex->ctx, s->xmine, n, s->xall, s->xcounts2, s->xcounts[ex->rank]);
     if (st)
         return st;
     size_t at = 0;
@@ -576,7 +592,8 @@ static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex
             size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
             for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++) {
                 uint32_t v = s->corder[q];
-                s->ff[v] = s->xall[at++], s->vvis[v] = s->xall[at++];
+                s->ff[v] = s->xall[at++];
+                s->vvis[v] = tb__vertex_near(s, v, near) ? s->xall[at++] : NAN;
             }
         }
     return TB_OK;
@@ -629,7 +646,7 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
         }
     }
     s->vnear_done = true;
-    return ex ? tb__gather_clusters(s, ex) : TB_OK;
+    return ex ? tb__gather_clusters(s, ex, &near) : TB_OK;
 }
 
 /* Most distinct reflectance rows the update shares dot products over. */
@@ -681,8 +698,7 @@ static tb_status tb__exchange_init(tb_rad_solver *s, const tb_rad_exchange *ex)
         size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
         s->xcounts[c % R] += q1 - c * TB__RAD_CLUSTER;
     }
-    for (size_t r = 0; r < R; r++)
-        s->xcounts2[r] = 2 * s->xcounts[r];
+
     /* the split update: blocks of shooters and a range of vertices per process */
     if (!ex->select || !ex->allgather_state || ex->several)
         return TB_OK;
