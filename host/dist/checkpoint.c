@@ -271,7 +271,8 @@ static tb_status tb__ckpt_rad_load(void *ctx, bool *found, void **extra, size_t 
         free(buf);
         return tb_error(TB_ERR_NOMEM, "out of memory for a checkpoint of %zu bytes", len);
     }
-    memcpy(*extra, (char *)buf + sizeof xl, (size_t)xl);
+    if (xl) /* (no extra: *extra stays NULL, which memcpy may not take even for 0 bytes) */
+        memcpy(*extra, (char *)buf + sizeof xl, (size_t)xl);
     memcpy(*state, (char *)buf + sizeof xl + xl, sl);
     free(buf);
     *extra_len = (size_t)xl, *state_len = sl, *found = true;

@@ -9,6 +9,8 @@
 #include <string.h>
 #include <time.h>
 
+#include <sys/resource.h>
+
 #ifdef TB_HAVE_MPI
 #include <mpi.h>
 #endif
@@ -54,10 +56,12 @@ tb_status tb_dist_init(int *argc, char ***argv)
 #ifdef TB_HAVE_MPI
     if (launched > 0 && !tb__dist_mpi) {
         int provided = 0;
+        double t0 = tb__dist_now();
         /* every MPI call of host/dist is made under a lock, by one thread at
          * a time: serialized is all it needs */
         if (MPI_Init_thread(argc, argv, MPI_THREAD_SERIALIZED, &provided) != MPI_SUCCESS)
             return tb_error(TB_ERR_IO, "MPI_Init_thread failed");
+        tb__dist_totals.init_seconds = tb__dist_now() - t0;
         if (provided < MPI_THREAD_SERIALIZED) {
             MPI_Finalize();
             return tb_error(TB_ERR_UNSUPPORTED, "this MPI library gives thread level %d, host/dist needs "
@@ -181,31 +185,49 @@ void tb__dist_account(double work, double wait, uint64_t bytes, uint64_t message
     tb__dist_totals.units += units;
 }
 
-tb_dist_stats tb_dist_my_stats(void) { return tb__dist_totals; }
+/* CPU seconds (user + system) of this process so far. */
+static double tb__dist_cpu(void)
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0)
+        return 0.0;
+    return (double)ru.ru_utime.tv_sec + (double)ru.ru_stime.tv_sec +
+           1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
+
+tb_dist_stats tb_dist_my_stats(void)
+{
+    tb_dist_stats s = tb__dist_totals;
+    s.cpu_seconds = tb__dist_cpu();
+    return s;
+}
 
 tb_status tb_dist_gather_stats(tb_dist_stats *all)
 {
 #ifdef TB_HAVE_MPI
     if (tb__dist_mpi) {
-        double mine[5] = {tb__dist_totals.work_seconds, tb__dist_totals.wait_seconds,
+        enum { K = 7 };
+        double mine[K] = {tb__dist_totals.work_seconds, tb__dist_totals.wait_seconds,
                           (double)tb__dist_totals.bytes_sent, (double)tb__dist_totals.messages,
-                          (double)tb__dist_totals.units};
+                          (double)tb__dist_totals.units, tb__dist_totals.init_seconds, tb__dist_cpu()};
         double *buf = NULL;
         if (tb__dist_rank_v == 0 && !(buf = malloc(sizeof mine * (size_t)tb__dist_size_v)))
             return tb_error(TB_ERR_NOMEM, "out of memory for the ranks' stats");
-        MPI_Gather(mine, 5, MPI_DOUBLE, buf, 5, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+        MPI_Gather(mine, K, MPI_DOUBLE, buf, K, MPI_DOUBLE, 0, MPI_COMM_WORLD);
         if (buf) {
-            for (int r = 0; r < tb__dist_size_v; r++)
-                all[r] = (tb_dist_stats){.work_seconds = buf[5 * r], .wait_seconds = buf[5 * r + 1],
-                                         .bytes_sent = (uint64_t)buf[5 * r + 2],
-                                         .messages = (uint64_t)buf[5 * r + 3], .units = (uint64_t)buf[5 * r + 4]};
+            for (int r = 0; r < tb__dist_size_v; r++) {
+                const double *b = buf + K * r;
+                all[r] = (tb_dist_stats){.work_seconds = b[0], .wait_seconds = b[1], .bytes_sent = (uint64_t)b[2],
+                                         .messages = (uint64_t)b[3], .units = (uint64_t)b[4],
+                                         .init_seconds = b[5], .cpu_seconds = b[6]};
+            }
             free(buf);
         }
         return TB_OK;
     }
 #endif
     if (all)
-        all[0] = tb__dist_totals;
+        all[0] = tb_dist_my_stats();
     return TB_OK;
 }
 
@@ -225,7 +247,8 @@ tb_status tb_dist_report_stats(const char *unit)
             double v;
         } kv[] = {{"work_seconds", all[r].work_seconds}, {"wait_seconds", all[r].wait_seconds},
                   {"bytes_sent", (double)all[r].bytes_sent}, {"messages", (double)all[r].messages},
-                  {unit, (double)all[r].units}};
+                  {unit, (double)all[r].units}, {"init_seconds", all[r].init_seconds},
+                  {"cpu_seconds", all[r].cpu_seconds}};
         for (size_t k = 0; k < sizeof kv / sizeof kv[0] && !st; k++) {
             snprintf(key, sizeof key, "rank%d_%s", r, kv[k].name);
             st = tb_stats_set_value(key, kv[k].v);

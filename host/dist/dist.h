@@ -29,6 +29,8 @@ typedef struct tb_dist_stats {
     uint64_t bytes_sent;  /* payload bytes this rank sent (tiles, results, grants) */
     uint64_t messages;    /* point-to-point messages and collective calls it took part in */
     uint64_t units;       /* work units done here: tiles, or receivers of shots */
+    double init_seconds;  /* wall time of this rank's MPI start (MPI_Init_thread) */
+    double cpu_seconds;   /* CPU time (user + system) of this process so far, when gathered */
 } tb_dist_stats;
 
 /* True if this build has MPI (CMake found it and TB_MPI was on). */
@@ -73,7 +75,8 @@ tb_status tb_dist_gather_stats(tb_dist_stats *all);
 
 /* Every rank's totals as stats values on rank 0 (tb_stats_set_value of
  * util/stats: ranks, rank<R>_work_seconds, rank<R>_wait_seconds,
- * rank<R>_bytes_sent, rank<R>_messages, rank<R>_<unit>s). Collective. */
+ * rank<R>_bytes_sent, rank<R>_messages, rank<R>_<unit>s,
+ * rank<R>_init_seconds, rank<R>_cpu_seconds). Collective. */
 tb_status tb_dist_report_stats(const char *unit);
 
 #endif

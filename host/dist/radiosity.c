@@ -13,16 +13,20 @@
 #include <mpi.h>
 #endif
 
-/* Seconds a rank polls the per-shot selection before it sleeps: the ranks
- * arrive within microseconds of each other (each updates its share of the
- * elements), and a sleep would cost tens of microseconds per shot. */
-#define TB__RADX_SELECT_SPIN 30e-6
+/* Microseconds a rank polls an exchange before it sleeps, unless
+ * TB_DIST_SPIN_US says otherwise: the ranks arrive within microseconds of
+ * each other after balanced work, and a sleep costs tens of microseconds of
+ * timer slack. On cores of its own a rank may poll longer (a rank woken
+ * late delays every rank's next shot); on shared or loaded cores polling
+ * takes the core from the rank everyone waits for. */
+#define TB__RADX_SPIN_US 30
 
 /* An exchange and its accounts. */
 typedef struct tb__radx {
     tb_rad_exchange ex;  /* handed to the solver (ex.ctx == this) */
     int *counts, *displs; /* MPI's int counts and offsets per rank */
     double last;          /* clock when the previous gather returned (work runs from there) */
+    double spin;          /* seconds an exchange is polled before sleeping (TB__RADX_SPIN_US, TB_DIST_SPIN_US) */
 #ifdef TB_HAVE_MPI
     MPI_Datatype type;    /* select: type_n contiguous doubles (type_n 0: none made) */
     size_t type_n;
@@ -32,19 +36,21 @@ typedef struct tb__radx {
 } tb__radx;
 
 #ifdef TB_HAVE_MPI
-/* Waits for req: first polled without a pause for `spin` seconds (an
- * exchange after balanced work: the shortest sleep lasts about 50 us of
- * timer slack, more than the exchange), then with short sleeps: a rank
- * that is done early leaves the core to one still casting rays (Open MPI's
- * blocking collectives spin, which on shared or oversubscribed cores slows
- * the very rank everyone waits for). Then the accounts: work since the
- * previous exchange, the wait, `bytes` sent and `units` (receivers). */
-static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, double spin, uint64_t bytes, uint64_t units)
+/* Waits for req: polled without a pause for x->spin seconds, then with
+ * short, growing sleeps: a rank that is done early leaves the core to one
+ * still casting rays (Open MPI's blocking collectives spin, which on shared
+ * or oversubscribed cores slows the very rank everyone waits for). Then the
+ * accounts: work since the previous exchange, the wait, `bytes` sent and
+ * `units` (receivers). */
+static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, uint64_t bytes, uint64_t units)
 {
-    for (int done = 0; !done && tb__dist_now() - t0 < spin;)
+    int done = 0;
+    for (unsigned i = 1; !done; i++) {
         MPI_Test(req, &done, MPI_STATUS_IGNORE);
-    for (long us = 5;;) {
-        int done = 0;
+        if (!done && i % 8 == 0 && tb__dist_now() - t0 >= x->spin) /* the clock now and then: it costs a poll */
+            break;
+    }
+    for (long us = 5; !done;) {
         MPI_Test(req, &done, MPI_STATUS_IGNORE);
         if (done)
             break;
@@ -60,9 +66,9 @@ static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, double spin,
 }
 
 /* Every rank's `n_mine` values of `type` (`size` bytes each) into all[], in
- * rank order (counts[r] from rank r); `units`: count them as receivers. */
+ * rank order (counts[r] from rank r); `units`: the receivers they are. */
 static tb_status tb__radx_gather(tb__radx *x, const void *mine, size_t n_mine, void *all, const size_t *counts,
-                                 MPI_Datatype type, size_t size, bool units)
+                                 MPI_Datatype type, size_t size, size_t units)
 {
     double t0 = tb__dist_now();
     int R = x->ex.ranks, off = 0;
@@ -78,7 +84,7 @@ static tb_status tb__radx_gather(tb__radx *x, const void *mine, size_t n_mine, v
         MPI_SUCCESS)
         return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallgatherv failed");
     /* bytes: this rank's values, delivered to every other rank */
-    tb__radx_wait(x, &req, t0, 0.0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), units ? n_mine : 0);
+    tb__radx_wait(x, &req, t0, (uint64_t)(n_mine * size) * (uint64_t)(x->ex.ranks - 1), units);
     return TB_OK;
 }
 
@@ -104,9 +110,9 @@ static void tb__radx_pick(void *in, void *inout, int *len, MPI_Datatype *type)
 }
 #endif
 
-/* Doubles gathered (tb__radx_gather); `units`: count them as receivers. */
+/* Doubles gathered (tb__radx_gather); `units`: the receivers they are. */
 static tb_status tb__radx_gatherd(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts,
-                                  bool units)
+                                  size_t units)
 {
 #ifdef TB_HAVE_MPI
     return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_DOUBLE, sizeof *mine, units);
@@ -116,15 +122,16 @@ static tb_status tb__radx_gatherd(void *ctx, const double *mine, size_t n_mine, 
 #endif
 }
 
-static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts)
+static tb_status tb__radx_allgather(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts,
+                                    size_t receivers)
 {
-    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, true);
+    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, receivers);
 }
 
 static tb_status tb__radx_allgather_state(void *ctx, const double *mine, size_t n_mine, double *all,
                                           const size_t *counts)
 {
-    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, false);
+    return tb__radx_gatherd(ctx, mine, n_mine, all, counts, 0);
 }
 
 static tb_status tb__radx_select(void *ctx, double *buf, size_t n)
@@ -151,7 +158,7 @@ static tb_status tb__radx_select(void *ctx, double *buf, size_t n)
     if (MPI_Iallreduce(MPI_IN_PLACE, buf, 1, x->type, x->op, MPI_COMM_WORLD, &req) != MPI_SUCCESS)
         return tb_error(TB_ERR_IO, "radiosity exchange: MPI_Iallreduce failed");
     /* bytes: a reduction sends about its buffer once per rank */
-    tb__radx_wait(x, &req, t0, TB__RADX_SELECT_SPIN, (uint64_t)(n * sizeof *buf), 0);
+    tb__radx_wait(x, &req, t0, (uint64_t)(n * sizeof *buf), 0);
     return TB_OK;
 #else
     (void)ctx, (void)buf, (void)n;
@@ -162,7 +169,7 @@ static tb_status tb__radx_select(void *ctx, double *buf, size_t n)
 static tb_status tb__radx_allgatherf(void *ctx, const float *mine, size_t n_mine, float *all, const size_t *counts)
 {
 #ifdef TB_HAVE_MPI
-    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_FLOAT, sizeof *mine, true);
+    return tb__radx_gather(ctx, mine, n_mine, all, counts, MPI_FLOAT, sizeof *mine, n_mine);
 #else
     (void)ctx, (void)mine, (void)n_mine, (void)all, (void)counts;
     return tb_error(TB_ERR_UNSUPPORTED, "radiosity exchange over ranks in a build without MPI");
@@ -210,6 +217,18 @@ tb_rad_exchange *tb_dist_rad_exchange_create(void)
         return NULL;
     }
     x->last = tb__dist_now();
+    x->spin = TB__RADX_SPIN_US * 1e-6;
+    const char *e = getenv("TB_DIST_SPIN_US");
+    if (e && *e) {
+        char *end = NULL;
+        double us = strtod(e, &end);
+        if (*end || !(us >= 0.0 && us <= 1e7)) {
+            free(x->counts), free(x->displs), free(x);
+            tb_error(TB_ERR_ARG, "TB_DIST_SPIN_US='%s': not microseconds in 0..1e7", e);
+            return NULL;
+        }
+        x->spin = us * 1e-6;
+    }
     x->ex = (tb_rad_exchange){.ctx = x, .rank = tb_dist_rank(), .ranks = R, .allgather = tb__radx_allgather,
                               .allgatherf = tb__radx_allgatherf,
                               .allgather_state = tb__radx_allgather_state, .select = tb__radx_select,

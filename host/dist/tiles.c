@@ -261,7 +261,8 @@ static int tb__tiles_worker_poll(tb__tiles *t)
         }
         moved = 1;
     }
-    memmove(t->outbox, t->outbox + nout, sizeof *t->outbox * (size_t)(t->nout - nout));
+    if (nout > 0) /* (the outbox is NULL until the first tile: no pointer arithmetic on it) */
+        memmove(t->outbox, t->outbox + nout, sizeof *t->outbox * (size_t)(t->nout - nout));
     t->nout -= nout;
     bool ask = !t->asked && !t->done && t->qlen < t->ahead;
     int want = t->ahead - t->qlen; /* what the queue lacks */

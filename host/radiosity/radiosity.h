@@ -178,9 +178,11 @@ typedef struct tb_rad_exchange {
     void *ctx;  /* passed to every function */
     int rank;   /* this process */
     int ranks;  /* processes in the job */
-    /* Collective: every process's `mine` (n_mine values) concatenated in rank
-     * order into all[] (counts[r] values from rank r). */
-    tb_status (*allgather)(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts);
+    /* Collective: every process's `mine` (n_mine values, for `receivers` of
+     * its receivers) concatenated in rank order into all[] (counts[r] values
+     * from rank r). */
+    tb_status (*allgather)(void *ctx, const double *mine, size_t n_mine, double *all, const size_t *counts,
+                           size_t receivers);
     /* The same for floats (the several-shooters mode's form factors). */
     tb_status (*allgatherf)(void *ctx, const float *mine, size_t n_mine, float *all, const size_t *counts);
     /* Collective, the update split over processes by shooter (docs/distributed.md):

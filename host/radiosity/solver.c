@@ -100,6 +100,9 @@ struct tb_rad_solver {
      * factors, everyone's gathered, and how many each process computes */
     double *xmine, *xall;
     size_t *xcounts;
+    size_t *xcounts2;       /* values each process sends this shot: its form factors and its near vertices'
+                               visible fractions */
+    bool vnear_done;        /* this shot's vertices' near field is done (tb__batch did it) */
     /* several shooters in flight: this process's shooter's form factors,
      * everyone's, and the counts (all equal) */
     float *xsev, *xsevall; /* the form factors are floats: sent as they are, half the bytes of doubles */
@@ -330,7 +333,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     tb_hemicube_free(s->hc);
     tb_pqueue_free(&s->q);
     tb_rad_lights_free(s->lights);
-    free(s->xmine), free(s->xall), free(s->xcounts);
+    free(s->xmine), free(s->xall), free(s->xcounts), free(s->xcounts2);
     free(s->xsev), free(s->xsevall), free(s->xsevcounts);
     free(s->eabs), free(s->erec), free(s->sel), free(s->xst), free(s->xstcounts);
     free(s->lshot);
@@ -514,26 +517,84 @@ static bool tb__cluster_faces(const tb_rad_solver *s, tb_vec3 ns, size_t q0, siz
     return false;
 }
 
-/* Several processes: every process's clusters' form factors into s->ff on
- * every process. Each packs its clusters' values in cluster order; the
- * gathered blocks come in rank order and unpack by the same rule. */
-static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex)
+/* The shooter's data the vertices' near field needs (tb__near_vertex). */
+typedef struct tb__near_shooter {
+    const tb_ff_polygon *poly;
+    tb_vec3 cen, nrm;
+    double area, near2; /* area; squared distance within which a vertex is near */
+} tb__near_shooter;
+
+static double tb__radius2(const tb_ff_polygon *p, tb_vec3 c);
+
+static tb__near_shooter tb__near_of(const tb_rad_solver *s, size_t sk)
+{
+    tb__near_shooter n = {&s->spoly[sk], s->scen[sk], s->snrm[sk], s->sarea[sk], 0.0};
+    n.near2 = TB__RAD_NEAR * TB__RAD_NEAR * tb__radius2(n.poly, n.cen);
+    return n;
+}
+
+/* Whether vertex v lies within TB__RAD_NEAR shooter radii (a NaN counts as near). */
+static bool tb__vertex_near(const tb_rad_solver *s, size_t v, const tb__near_shooter *n)
+{
+    return !((double)tb_vec3_length2(tb_vec3_sub(s->rp[v], n->cen)) >= n->near2);
+}
+
+/* Vertex v's near field (tb__near_field): within TB__RAD_NEAR shooter radii
+ * its sampled s->ff[v] becomes the exact unoccluded form factor times the
+ * visible fraction the samples measured, kept in s->vvis[v] (NaN: not
+ * near). Each vertex's own inputs only: any split over threads or
+ * processes gives the same values. */
+static void tb__near_vertex(tb_rad_solver *s, size_t v, const tb__near_shooter *n)
+{
+    s->vvis[v] = NAN;
+    if (!tb__vertex_near(s, v, n))
+        return;
+    double exact = tb_ff_point_polygon(s->rp[v], s->rn[v], n->poly);
+    if (!(exact >= 0.0) || !isfinite(exact))
+        return;
+    double open = tb_ff_raycast(s->pts, s->opt.samples, n->nrm, n->area, s->rp[v], s->rn[v], NULL, NULL);
+    double vis = open > 0.0 ? s->ff[v] / open : 1.0;
+    vis = vis > 1.0 ? 1.0 : vis;
+    s->vvis[v] = vis;
+    s->ff[v] = exact * vis;
+}
+
+/* Several processes: every process's clusters' form factors and, for the
+ * vertices near the shooter, visible fractions (the near field done) into
+ * s->ff and s->vvis on every process. Which vertices are near follows from
+ * replicated data, so every process knows what each sends: its clusters'
+ * values in cluster order, a near vertex's fraction after its form factor;
+ * the gathered blocks come in rank order and unpack by the same rule. */
+static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex, const tb__near_shooter *near)
 {
     size_t nv = s->m.nverts, ncl = s->ncl, R = (size_t)ex->ranks, n = 0;
-    for (size_t c = (size_t)ex->rank; c < ncl; c += R) {
+    memset(s->xcounts2, 0, R * sizeof *s->xcounts2);
+    for (size_t c = 0; c < ncl; c++) {
         size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
         for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++)
-            s->xmine[n++] = s->ff[s->corder[q]];
+            s->xcounts2[c % R] += 1 + tb__vertex_near(s, s->corder[q], near);
     }
-    tb_status st = ex->allgather(ex->ctx, s->xmine, n, s->xall, s->xcounts);
+    for (size_t c = (size_t)ex->rank; c < ncl; c += R) {
+        size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
+        for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++) {
+            uint32_t v = s->corder[q];
+            s->xmine[n++] = s->ff[v];
+            if (tb__vertex_near(s, v, near))
+                s->xmine[n++] = s->vvis[v];
+        }
+    }
+    tb_status st = ex->allgather(ex->ctx, s->xmine, n, s->xall, s->xcounts2, s->xcounts[ex->rank]);
     if (st)
         return st;
     size_t at = 0;
     for (size_t r = 0; r < R; r++)
         for (size_t c = r; c < ncl; c += R) {
             size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
-            for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++)
-                s->ff[s->corder[q]] = s->xall[at++];
+            for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++) {
+                uint32_t v = s->corder[q];
+                s->ff[v] = s->xall[at++];
+                s->vvis[v] = tb__vertex_near(s, v, near) ? s->xall[at++] : NAN;
+            }
         }
     return TB_OK;
 }
@@ -560,6 +621,9 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
     const tb_rad_exchange *ex = s->xcounts && share ? s->opt.exchange : NULL;
     ptrdiff_t c0 = ex ? ex->rank : 0, dc = ex ? ex->ranks : 1;
     ptrdiff_t nmine = ncl > c0 ? (ncl - c0 + dc - 1) / dc : 0;
+    /* the vertices' near field goes with their cluster: split over threads
+     * and processes like the rays, not repeated whole on every process */
+    const tb__near_shooter near = tb__near_of(s, k);
 #pragma omp parallel for schedule(dynamic, 4)
     for (ptrdiff_t ci = 0; ci < nmine; ci++) {
         ptrdiff_t c = c0 + ci * dc;
@@ -578,9 +642,11 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
         for (size_t q = q0; q < q1; q++) {
             uint32_t v = s->corder[q];
             s->ff[v] = tb_ff_raycast(s->pts, s->opt.samples, nrm, area, s->rp[v], s->rn[v], fn, ctx);
+            tb__near_vertex(s, v, &near);
         }
     }
-    return ex ? tb__gather_clusters(s, ex) : TB_OK;
+    s->vnear_done = true;
+    return ex ? tb__gather_clusters(s, ex, &near) : TB_OK;
 }
 
 /* Most distinct reflectance rows the update shares dot products over. */
@@ -622,15 +688,17 @@ static void tb__reflectance_rows(tb_rad_solver *s)
 static tb_status tb__exchange_init(tb_rad_solver *s, const tb_rad_exchange *ex)
 {
     size_t nv = s->m.nverts, R = (size_t)ex->ranks;
-    s->xmine = malloc(nv * sizeof *s->xmine);
-    s->xall = malloc(nv * sizeof *s->xall);
+    s->xmine = malloc(2 * nv * sizeof *s->xmine);
+    s->xall = malloc(2 * nv * sizeof *s->xall);
     s->xcounts = calloc(R, sizeof *s->xcounts);
-    if (!s->xmine || !s->xall || !s->xcounts)
+    s->xcounts2 = calloc(R, sizeof *s->xcounts2);
+    if (!s->xmine || !s->xall || !s->xcounts || !s->xcounts2)
         return tb_error(TB_ERR_NOMEM, "radiosity: out of memory for the exchange");
     for (size_t c = 0; c < s->ncl; c++) {
         size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
         s->xcounts[c % R] += q1 - c * TB__RAD_CLUSTER;
     }
+
     /* the split update: blocks of shooters and a range of vertices per process */
     if (!ex->select || !ex->allgather_state || ex->several)
         return TB_OK;
@@ -1021,6 +1089,7 @@ static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t k, bool share)
         tb_stat_add(&tb__rad_rays, (int64_t)s->m.nverts * s->opt.samples);
         if (!st)
             tb__near_field(s, k);
+        s->vnear_done = false;
     }
     tb_stat_add(&tb__rad_ffs, (int64_t)s->nrecv);
     (void)tb_timer_stop(tt);
@@ -1132,21 +1201,11 @@ static void tb__near_field(tb_rad_solver *s, size_t sk)
     const tb_ff_polygon *poly = &s->spoly[sk];
     const tb_vec3 cen = s->scen[sk], nrm = s->snrm[sk];
     const double area = s->sarea[sk];
-    double rad2 = tb__radius2(poly, cen);
-    double rad = sqrt(rad2), near2 = TB__RAD_NEAR * TB__RAD_NEAR * rad2;
-    for (size_t v = 0; v < s->m.nverts; v++) {
-        s->vvis[v] = NAN;
-        tb_vec3 d = tb_vec3_sub(s->rp[v], cen);
-        if ((double)tb_vec3_length2(d) >= near2)
-            continue;
-        double exact = tb_ff_point_polygon(s->rp[v], s->rn[v], poly);
-        if (!(exact >= 0.0) || !isfinite(exact))
-            continue;
-        double open = tb_ff_raycast(s->pts, s->opt.samples, nrm, area, s->rp[v], s->rn[v], NULL, NULL);
-        double vis = open > 0.0 ? s->ff[v] / open : 1.0;
-        vis = vis > 1.0 ? 1.0 : vis;
-        s->vvis[v] = vis;
-        s->ff[v] = exact * vis;
+    double rad = sqrt(tb__radius2(poly, cen));
+    if (!s->vnear_done) { /* (tb__batch does the vertices with their clusters) */
+        const tb__near_shooter near = tb__near_of(s, sk);
+        for (size_t v = 0; v < s->m.nverts; v++)
+            tb__near_vertex(s, v, &near);
     }
     s->nnear = 0;
     uint32_t qa, qb; /* a split solve: this process's elements only */

@@ -45,6 +45,11 @@ assert 'ranks=%d' % n in j['provenance']['options'], j['provenance']['options']
 assert sum(j['rank%d_tiles' % r] for r in range(n)) == 50, [j['rank%d_tiles' % r] for r in range(n)]
 for r in range(1, n):
     assert j['rank%d_bytes_sent' % r] > 0 and j['rank%d_work_seconds' % r] >= 0, r
+# every rank reports its MPI start (wall time) and its own CPU time (positive,
+# and not a clock read as a date)
+for r in range(n):
+    assert j['rank%d_init_seconds' % r] > 0, r
+    assert 0 < j['rank%d_cpu_seconds' % r] < 1e4, r
 PY
 done
 

@@ -8,12 +8,16 @@
 # tile and per shot), and what reading the MID file costs against parsing it
 # (every rank reads the scene itself; the alternative is rank 0 broadcasting
 # the bytes), and radiosity with several shooters in flight against the
-# deterministic mode (time, and the difference of the results).
+# deterministic mode (time, and the difference of the results). Also what
+# the machine allows at all (two independent one-thread renders side by
+# side against one alone: no 2-rank job can beat that ratio) and what MPI's
+# start costs with Open MPI's default components against loopback-only ones.
 #
 #   tools/bench/dist-scaling.sh [--quick] [--reps N]
 #
 # Environment: TESTBED (default build/ci/testbed), MPIRUN (default: mpirun
-# on loopback shared memory, allowed as root). Prints the load average
+# on loopback shared memory with the ob1 and sm/pt2pt components, allowed as
+# root; docs/distributed.md "Running on one machine"). Prints the load average
 # before and after every case: figures taken at a load above the core count
 # are not a measure of scaling (the ranks wait for cores, not for each other).
 # Exit status: 0 done, 1 a run failed, 2 usage error.
@@ -25,7 +29,7 @@ while [[ $# -gt 0 ]]; do
     case $1 in
         --quick) quick=1 reps=1 ;;
         --reps) [[ $# -ge 2 ]] || { echo "dist-scaling: --reps needs N" >&2; exit 2; }; reps=$2; shift ;;
-        -h|--help) sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        -h|--help) sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "dist-scaling: unknown option '$1' (see --help)" >&2; exit 2 ;;
     esac
     shift
@@ -33,7 +37,9 @@ done
 TB=${TESTBED:-$root/build/ci/testbed}
 [[ -x $TB ]] || { echo "dist-scaling: no testbed at $TB (set TESTBED)" >&2; exit 2; }
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMP_WAIT_POLICY=passive
-MPIRUN=${MPIRUN:-mpirun --oversubscribe --bind-to none --mca btl self,vader}
+MPIRUN_BASE="mpirun --oversubscribe --bind-to none"
+LOOPBACK="--mca btl self,vader --mca pml ob1 --mca osc sm,pt2pt"
+MPIRUN=${MPIRUN:-$MPIRUN_BASE $LOOPBACK}
 work=$(mktemp -d "${TMPDIR:-/tmp}/dist-scaling.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 
@@ -65,12 +71,53 @@ sys.exit(rc)
 PY
 }
 
+# the machine's ceiling: one 1-thread render alone against two of them side
+# by side (the same work twice, no MPI): 2 x alone / together is the most
+# any 2 x 1 job can gain here (cores that slow each other down, or a host
+# that gives the second vCPU less, show here, not in the code)
+ceiling() {
+    local a=999999 b=999999 w c r
+    for ((r = 0; r < reps; r++)); do
+        read -r w c < <(timed "$work/o" "$TB" render "$@" --threads 1 -o "$work/c1.pfm") || { failed=1; return; }
+        if awk -v x="$w" -v y="$a" 'BEGIN { exit !(x < y) }'; then a=$w; fi
+        # shellcheck disable=SC2016
+        read -r w c < <(timed "$work/o" bash -c 'o=$1; shift; "$@" -o "$o/c2.pfm" & "$@" -o "$o/c3.pfm"; wait' _ \
+            "$work" "$TB" render "$@" --threads 1) || { failed=1; return; }
+        if awk -v x="$w" -v y="$b" 'BEGIN { exit !(x < y) }'; then b=$w; fi
+    done
+    printf 'ceiling (%s): one 1-thread render alone %.2f s, two side by side %.2f s: at most %.2fx for 2 ranks x 1 thread (load %s)\n' \
+        "$1" "$a" "$b" "$(awk -v x="$a" -v y="$b" 'BEGIN { print 2 * x / y }')" "$(load)"
+}
+
+# MPI's start with Open MPI's default components, loopback transports only,
+# and loopback with the ob1 and sm/pt2pt components (no UCX or libfabric
+# probing): wall time of a job of 16 x 16 pixels and each rank's MPI_Init
+# (--stats rank<R>_init_seconds), best of `reps`
+startup_flags() {
+    printf '| mpirun flags | job wall (s) | MPI start, rank 0 / rank 1 (s) | load |\n|---|---|---|---|\n'
+    local label flags r w c best i0 i1
+    for label in "(Open MPI's defaults)" "--mca btl self,vader" "$LOOPBACK"; do
+        flags=$label; [[ $label == "(Open MPI's defaults)" ]] && flags=
+        best=999999 i0='' i1=''
+        for ((r = 0; r < reps + 2; r++)); do
+            # shellcheck disable=SC2086
+            read -r w c < <(timed "$work/o" $MPIRUN_BASE $flags -np 2 "$TB" render "$work/tiny.mid" --spp 1 --threads 1 \
+                -o "$work/t.pfm" --stats "$work/startup.stats") || { cat "$work/o"; failed=1; return; }
+            if awk -v x="$w" -v y="$best" 'BEGIN { exit !(x < y) }'; then
+                best=$w
+                read -r i0 i1 < <(python3 -c 'import json, sys; j = json.load(open(sys.argv[1]))
+print("%.3f %.3f" % (j["rank0_init_seconds"], j["rank1_init_seconds"]))' "$work/startup.stats")
+            fi
+        done
+        # shellcheck disable=SC2016
+        printf '| `%s` | %.2f | %s / %s | %s |\n' "$label" "$best" "$i0" "$i1" "$(load)"
+    done
+}
+
 # case NAME ARGS...: the fastest of `reps` runs of 1 rank and of 2 ranks (1
 # thread each): wall seconds and CPU seconds; then the 2-rank run's stats.
 # Under load the wall times measure the scheduler, not the code: the CPU
 # seconds still show what distributing costs (2 ranks' CPU over 1 rank's).
-printf '| case | 1 rank x 1 thread: wall / CPU (s) | 2 ranks x 1 thread: wall / CPU (s) | speedup (wall) | CPU cost of 2 ranks | load before/after |\n'
-printf '|---|---|---|---|---|---|\n'
 failed=0
 case_() {
     local name=$1; shift
@@ -91,10 +138,19 @@ case_() {
 # the fixed price of a job (launch, MPI start, scene load, output): a
 # render of 16 x 16 pixels; the speed-ups below include it once
 sed 's/resolution = \[[0-9]* [0-9]*\]/resolution = [16 16]/' "$box" > "$work/tiny.mid"
+startup_flags
+echo
+ceiling "$box" --spp $spp
+echo
+printf '| case | 1 rank x 1 thread: wall / CPU (s) | 2 ranks x 1 thread: wall / CPU (s) | speedup (wall) | CPU cost of 2 ranks | load before/after |\n'
+printf '|---|---|---|---|---|---|\n'
 case_ start-up "$work/tiny.mid" --spp 1 -o "$work/t.pfm"
 case_ raytrace-box "$box" --spp $spp --passes 2 -o "$work/a.pfm"
 case_ path-spheres "$spheres" --method path --spp $spp -o "$work/b.pfm"
 case_ radiosity-box "$box" --method radiosity --patches "$work/c.csv"
+# the same with each exchange polled for 1 ms before the rank sleeps (for
+# ranks on cores of their own: docs/distributed.md, TB_DIST_SPIN_US)
+TB_DIST_SPIN_US=1000 case_ radiosity-box-spin "$box" --method radiosity --patches "$work/c.csv"
 case_ raytrace-grid "$work/grid.mid" --spp $spp -o "$work/d.pfm"
 case_ path-grid "$work/grid.mid" --method path --spp $spp -o "$work/e.pfm"
 # the generated grid's palette has a reflectance of 1 (no radiosity): the
@@ -103,8 +159,8 @@ case_ radiosity-room "$room" --method radiosity --threshold $room_thr --patches 
 
 # the model's inputs, from the 2-rank stats of each case
 echo
-printf '| case | rank | units | work (s) | wait (s) | bytes sent | compute per unit (ms) | bytes per unit |\n'
-printf '|---|---|---|---|---|---|---|---|\n'
+printf '| case | rank | units | work (s) | wait (s) | MPI start (s) | CPU (s) | bytes sent | compute per unit (ms) | bytes per unit |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|\n'
 for j in "$work"/*.json; do
     python3 - "$j" <<'PY'
 import json, os, sys
@@ -112,12 +168,13 @@ j = json.load(open(sys.argv[1])); name = os.path.basename(sys.argv[1])[:-5]
 for r in range(int(j.get('ranks', 1))):
     u = next(v for k, v in j.items() if k.startswith('rank%d_' % r) and k.split('_', 1)[1] in ('tiles', 'receivers'))
     w = j['rank%d_work_seconds' % r]; b = j['rank%d_bytes_sent' % r]
-    print('| %s | %d | %d | %.3f | %.3f | %d | %.4f | %.1f |' % (name, r, u, w, j['rank%d_wait_seconds' % r], b,
+    print('| %s | %d | %d | %.3f | %.3f | %.3f | %.3f | %d | %.4f | %.1f |' % (name, r, u, w,
+          j['rank%d_wait_seconds' % r], j.get('rank%d_init_seconds' % r, 0), j.get('rank%d_cpu_seconds' % r, 0), b,
           1e3 * w / u if u else 0, b / u if u else 0))
 t = j.get('timers', {})
 ff = t.get('Radiosity/form factor time'); up = t.get('Radiosity/update time')
 if ff and ff['calls']:
-    print('| %s | form factors | %d computed shots | %.3f s (%.3f ms/shot) | update %.3f s in %d shots | | | |' % (
+    print('| %s | form factors | %d computed shots | %.3f s (%.3f ms/shot) | update %.3f s in %d shots | | | | | |' % (
           name, ff['calls'], ff['seconds'], 1e3 * ff['seconds'] / ff['calls'], up['seconds'], up['calls']))
 PY
 done

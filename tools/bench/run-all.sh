@@ -614,7 +614,7 @@ bench_dist() {
     table scaling "Distributed: 1 rank x 1 thread vs 2 ranks x 1 thread (fastest of 3 runs, 1 with --quick; CPU = every process of the job)" \
         case "1 rank: wall / CPU s" "2 ranks: wall / CPU s" "speedup (wall)" "CPU cost of 2 ranks" "load before/after"
     cmd env TESTBED="$TB" "$root/tools/bench/dist-scaling.sh" "${q[@]}"
-    last_output | awk -F' *[|] *' '/^[|] [a-z]+-[a-z]+ [|] [0-9.]+ \// { printf "%s\t%s\t%s\t%s\t%s\t%s\n", $2, $3, $4, $5, $6, $7 }' | rows
+    last_output | awk -F' *[|] *' '/^[|] [a-z]+(-[a-z]+)+ [|] [0-9.]+ \// { printf "%s\t%s\t%s\t%s\t%s\t%s\n", $2, $3, $4, $5, $6, $7 }' | rows
 }
 
 bench_methods-error() {

@@ -112,8 +112,9 @@ void tb_cli_dist_summary(const char *prog, const char *unit, bool print)
         return;
     }
     for (int r = 0; r < n && print; r++)
-        printf("%s: rank %d: %llu %s, work %.3f s, wait %.3f s, %llu bytes sent in %llu messages\n", prog, r,
-               (unsigned long long)all[r].units, unit, all[r].work_seconds, all[r].wait_seconds,
-               (unsigned long long)all[r].bytes_sent, (unsigned long long)all[r].messages);
+        printf("%s: rank %d: %llu %s, work %.3f s, wait %.3f s, %llu bytes sent in %llu messages; MPI start %.3f s, "
+               "CPU %.3f s\n", prog, r, (unsigned long long)all[r].units, unit, all[r].work_seconds,
+               all[r].wait_seconds, (unsigned long long)all[r].bytes_sent, (unsigned long long)all[r].messages,
+               all[r].init_seconds, all[r].cpu_seconds);
     free(all);
 }
