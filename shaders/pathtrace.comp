@@ -2,7 +2,11 @@
 // "Path tracer"): one module, one pipeline per stage (specialization
 // constant 1), the path state in device buffers (shared/pathtrace.h). The host
 // records init, then per bounce extend -> shade -> shadow, many bounces to one
-// command buffer; nothing returns to the host between bounces.
+// command buffer, and accumulate after the last; nothing returns to the host
+// between bounces. A light sample's contribution is not stored per channel:
+// the shadow stage marks it clear, and the next shade (or accumulate) adds
+// throughput x the emitter's radiance x its scale, so the shadow stage
+// touches no channel values.
 //
 // The estimator is the CPU path tracer's (host/render/pathtrace.c) for the
 // materials and lights this kernel takes: Lambert surfaces (two-sided, the
@@ -48,16 +52,21 @@ layout(binding = 1) uniform usamplerBuffer node_texels;
 layout(binding = 2) uniform usamplerBuffer tri_texels;
 layout(std430, binding = 3) readonly buffer Placed { tb_gpu_placed placed[]; };
 layout(binding = 4) uniform usamplerBuffer ref_texels;
-layout(std430, binding = 5) buffer States { tb_gpu_pt_state states[]; };
+// The header's word 0 counts live paths (TB_GPU_PT_STATE_HEADER bytes).
+layout(std430, binding = 5) buffer States {
+    uint alive_count;
+    uint header_pad[7];
+    tb_gpu_pt_state states[];
+};
 layout(std430, binding = 6) buffer Hits { tb_gpu_hit hits[]; };
-layout(std430, binding = 7) buffer Values { float values[]; };
+// Channel values, written here and read through value_texels (the same
+// buffer as R32UI texels: gathers on CPU drivers, docs/gpu.md).
+layout(std430, binding = 7) writeonly buffer Values { float values[]; };
 layout(std430, binding = 8) buffer Shadows { tb_gpu_ray shadows[]; };
 layout(std430, binding = 9) readonly buffer Emitters { tb_gpu_emitter emitters[]; };
-// Per material its diffuse colour and emitted radiance (NCH each), per
-// emitter its radiance (NCH), the emitter CDF (NEMIT + 1) and pmf (NEMIT).
-layout(std430, binding = 10) readonly buffer Table { float table[]; };
-// Word 0: the live-path count; then per object its material.
-layout(std430, binding = 11) buffer Objects { uint objects[]; };
+// The scene's table (shared/pathtrace.h) as R32UI texels.
+layout(binding = 10) uniform usamplerBuffer table_texels;
+layout(binding = 11) uniform usamplerBuffer value_texels;
 
 layout(push_constant) uniform Push {
     uint n;
@@ -93,11 +102,14 @@ const float SHADOW_EPSILON = 1e-4; // TB_SHADOW_EPSILON
 const int EMIT_BASE = 2 * NMAT * NCH; // first emitter radiance in the table
 const int CDF_BASE = EMIT_BASE + NEMIT * NCH;
 const int PMF_BASE = CDF_BASE + NEMIT + 1;
+const int DMAX_BASE = PMF_BASE + NEMIT; // per material its largest diffuse channel
+const int OBJ_BASE = DMAX_BASE + NMAT;  // per object its material
 
 uint g_i;  // this invocation's path
 uint g_n;  // paths
 
-float val(uint v, int c) { return values[(v * uint(NCH) + uint(c)) * g_n + g_i]; }
+float tab(int i) { return uintBitsToFloat(texelFetch(table_texels, i).x); }
+float val(uint v, int c) { return uintBitsToFloat(texelFetch(value_texels, int((v * uint(NCH) + uint(c)) * g_n + g_i)).x); }
 void set_val(uint v, int c, float x) { values[(v * uint(NCH) + uint(c)) * g_n + g_i] = x; }
 
 // pcg4d (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT 2020).
@@ -238,25 +250,23 @@ int pick_emitter(float u, out float pmf, out float ur)
     int lo = 0, hi = NEMIT - 1;
     while (lo < hi) {
         int mid = (lo + hi + 1) / 2;
-        if (table[CDF_BASE + mid] <= u)
+        if (tab(CDF_BASE + mid) <= u)
             lo = mid;
         else
             hi = mid - 1;
     }
-    while (lo > 0 && table[PMF_BASE + lo] <= 0.0)
+    while (lo > 0 && tab(PMF_BASE + lo) <= 0.0)
         lo--; // u at the top end by rounding: the last emitter with power
-    pmf = table[PMF_BASE + lo];
-    ur = pmf > 0.0 ? min((u - table[CDF_BASE + lo]) / pmf, uintBitsToFloat(0x3f7fffffu)) : 0.0;
+    pmf = tab(PMF_BASE + lo);
+    ur = pmf > 0.0 ? min((u - tab(CDF_BASE + lo)) / pmf, uintBitsToFloat(0x3f7fffffu)) : 0.0;
     ur = max(ur, 0.0);
     return lo;
 }
 
 void stage_init()
 {
-    for (int c = 0; c < NCH; c++) {
-        set_val(TB_GPU_PT_BETA, c, 1.0);
+    for (int c = 0; c < NCH; c++)
         set_val(TB_GPU_PT_L, c, 0.0);
-    }
 }
 
 void stage_extend()
@@ -283,26 +293,36 @@ void stage_extend()
     hits[g_i] = h;
 }
 
+// Adds the path's clear light sample: throughput x radiance x scale.
+void add_light_sample(inout tb_gpu_pt_state st)
+{
+    if (st.shadow != TB_GPU_PT_SHADOW_CLEAR)
+        return;
+    int eb = EMIT_BASE + int(st.emitter) * NCH;
+    for (int c = 0; c < NCH; c++)
+        set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + val(TB_GPU_PT_BETA, c) * tab(eb + c) * st.scale);
+    st.shadow = TB_GPU_PT_SHADOW_NONE;
+}
+
 void stage_shade()
 {
     tb_gpu_pt_state st = states[g_i];
     if (st.alive == 0u)
         return;
+    add_light_sample(st);
     tb_gpu_ray r = rays[g_i];
     tb_gpu_hit h = hits[g_i];
     vec3 ng = vec3(h.ng[0], h.ng[1], h.ng[2]);
-    uint m = objects[TB_GPU_PT_OBJECT_BASE + h.object];
-    int mb = int(m) * 2 * NCH;
+    int m = int(texelFetch(table_texels, OBJ_BASE + int(h.object)).x);
+    int mb = m * 2 * NCH;
     bool front = dot(r.d, ng) < 0.0;
     // Emission of a front face, counted where no light sample could have
-    // found it: at the camera ray's hit.
+    // found it: at the camera ray's hit (throughput 1, radiance 0 so far).
     if (front && st.depth == 0u)
         for (int c = 0; c < NCH; c++)
-            set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + val(TB_GPU_PT_BETA, c) * table[mb + NCH + c]);
-    bool diffuse = false;
-    for (int c = 0; c < NCH; c++)
-        diffuse = diffuse || table[mb + c] > 0.0;
-    if (!diffuse || (pc.max_depth > 0u && st.depth >= pc.max_depth) || st.depth >= pc.max_bounces) {
+            set_val(TB_GPU_PT_L, c, tab(mb + NCH + c));
+    if (!(tab(DMAX_BASE + m) > 0.0) || (pc.max_depth > 0u && st.depth >= pc.max_depth) ||
+        st.depth >= pc.max_bounces) {
         st.alive = 0u;
         states[g_i] = st;
         return;
@@ -311,8 +331,8 @@ void stage_shade()
     vec3 p = r.o + h.t * r.d;
     vec3 perr = (abs(r.o) + abs(h.t * r.d)) * (1.0 / 131072.0);
 
-    // One sample of the area light, traced by the shadow stage.
-    st.shadow = 0u;
+    // One sample of the area light, its shadow ray traced by the shadow stage.
+    float scale = 0.0;
     if (NEMIT > 0) {
         float u1 = rnd(st), u2 = rnd(st);
         float pmf, ur;
@@ -326,10 +346,9 @@ void stage_shade()
             vec3 wi = dq / dist;
             float cosi = dot(n, wi);
             if (dist > 0.0 && pdf > 0.0 && cosi > 0.0) {
-                float s = INV_PI * cosi / pdf;
-                int eb = EMIT_BASE + k * NCH;
-                for (int c = 0; c < NCH; c++)
-                    set_val(TB_GPU_PT_SHADOW, c, val(TB_GPU_PT_BETA, c) * table[mb + c] * table[eb + c] * s);
+                // Lambert f = diffuse / pi; the diffuse colour goes into the
+                // throughput below, so the scale holds the rest
+                scale = INV_PI * cosi / pdf;
                 vec3 o = spawn_origin(p, perr, ng, wi);
                 tb_gpu_ray sr;
                 sr.o = o;
@@ -337,7 +356,7 @@ void stage_shade()
                 sr.d = q - o;
                 sr.tmax = 1.0 - SHADOW_EPSILON;
                 shadows[g_i] = sr;
-                st.shadow = 1u;
+                st.emitter = uint(k);
             }
         }
     }
@@ -352,25 +371,33 @@ void stage_shade()
     basis(n, b1, b2);
     vec3 wi = normalize(b1 * dk.x + b2 * dk.y + n * z);
     bool go = z > 0.0 && dot(wi, n) > 0.0;
+    float beta[NCH];
     float bmax = 0.0;
     for (int c = 0; c < NCH; c++) {
-        float b = val(TB_GPU_PT_BETA, c) * table[mb + c];
-        set_val(TB_GPU_PT_BETA, c, b);
-        bmax = max(bmax, b);
+        beta[c] = (st.depth == 0u ? 1.0 : val(TB_GPU_PT_BETA, c)) * tab(mb + c);
+        bmax = max(bmax, beta[c]);
     }
     go = go && bmax > 0.0 && !isinf(bmax) && !isnan(bmax);
     st.depth++;
-    // Russian roulette.
+    // Russian roulette: the throughput is divided by q, the light sample's
+    // scale multiplied by it (its contribution is before the roulette).
     if (go && st.depth >= pc.rr_depth) {
         float q = min(1.0, bmax);
         if (q < 1.0) {
-            if (!(rnd(st) < q))
+            if (!(rnd(st) < q)) {
                 go = false;
-            else
+            } else {
                 for (int c = 0; c < NCH; c++)
-                    set_val(TB_GPU_PT_BETA, c, val(TB_GPU_PT_BETA, c) * (1.0 / q));
+                    beta[c] *= 1.0 / q;
+                scale *= q;
+            }
         }
     }
+    st.shadow = scale > 0.0 ? TB_GPU_PT_SHADOW_PENDING : TB_GPU_PT_SHADOW_NONE;
+    st.scale = scale;
+    if (go || scale > 0.0)
+        for (int c = 0; c < NCH; c++)
+            set_val(TB_GPU_PT_BETA, c, beta[c]);
     if (go) {
         tb_gpu_ray nr;
         nr.o = spawn_origin(p, perr, ng, wi);
@@ -382,19 +409,25 @@ void stage_shade()
     st.alive = go ? 1u : 0u;
     states[g_i] = st;
     if (go && pc.count != 0u)
-        atomicAdd(objects[TB_GPU_PT_ALIVE_WORD], 1u);
+        atomicAdd(alive_count, 1u);
 }
 
 void stage_shadow()
 {
-    if (states[g_i].shadow == 0u)
+    if (states[g_i].shadow != TB_GPU_PT_SHADOW_PENDING)
         return;
-    states[g_i].shadow = 0u;
     tb_bvh_hit b;
-    if (tb_bvh_traverse(shadows[g_i], pc.nnodes, true, b))
+    bool blocked = tb_bvh_traverse(shadows[g_i], pc.nnodes, true, b);
+    states[g_i].shadow = blocked ? TB_GPU_PT_SHADOW_NONE : TB_GPU_PT_SHADOW_CLEAR;
+}
+
+void stage_accumulate()
+{
+    tb_gpu_pt_state st = states[g_i];
+    if (st.shadow != TB_GPU_PT_SHADOW_CLEAR)
         return;
-    for (int c = 0; c < NCH; c++)
-        set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + val(TB_GPU_PT_SHADOW, c));
+    add_light_sample(st);
+    states[g_i].shadow = st.shadow;
 }
 
 void main()
@@ -409,6 +442,8 @@ void main()
         stage_extend();
     else if (STAGE == TB_GPU_PT_STAGE_SHADE)
         stage_shade();
-    else
+    else if (STAGE == TB_GPU_PT_STAGE_SHADOW)
         stage_shadow();
+    else
+        stage_accumulate();
 }

@@ -40,8 +40,8 @@ struct tb_gpu_pathtracer {
     tb_pt_options opt;
     int nch;
     size_t cap; /* paths per batch */
-    tb_gpu_buffer *b_rays, *b_states, *b_hits, *b_values, *b_shadows, *b_emitters, *b_table, *b_objects;
-    tb_gpu_kernel *k[4]; /* per TB_GPU_PT_STAGE_* */
+    tb_gpu_buffer *b_rays, *b_states, *b_hits, *b_values, *b_shadows, *b_emitters, *b_table;
+    tb_gpu_kernel *k[TB_GPU_PT_STAGES]; /* per TB_GPU_PT_STAGE_* */
     tb_gpu_pt_state *states; /* host staging of one batch */
     float *L;                /* host copy of one batch's radiance (word-major) */
     tb_gpu_pt_stats st;
@@ -97,8 +97,8 @@ void tb_gpu_pt_destroy(tb_gpu_pathtracer *pt)
 {
     if (!pt)
         return;
-    tb_gpu_buffer *bs[] = {pt->b_rays,      pt->b_states,    pt->b_hits,  pt->b_values,
-                           pt->b_shadows,   pt->b_emitters,  pt->b_table, pt->b_objects};
+    tb_gpu_buffer *bs[] = {pt->b_rays,    pt->b_states,    pt->b_hits, pt->b_values,
+                           pt->b_shadows, pt->b_emitters, pt->b_table};
     for (size_t i = 0; i < sizeof bs / sizeof *bs; i++)
         tb_gpu_buffer_destroy(bs[i]);
     tb_gpu_scene_destroy(pt->gscene);
@@ -107,7 +107,8 @@ void tb_gpu_pt_destroy(tb_gpu_pathtracer *pt)
     free(pt);
 }
 
-/* The material and emitter tables (pathtrace.comp's bindings 9-11). */
+/* The emitters and the scene's table (shared/pathtrace.h; pathtrace.comp's
+ * bindings 9 and 10). */
 static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
 {
     const tb_scene *s = pt->scene;
@@ -117,11 +118,12 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
     tb_status st = tb_light_set_init(&ls, s);
     if (st)
         return st;
-    size_t nt = (size_t)2 * (size_t)nm * (size_t)nch + (size_t)ne * (size_t)nch + 2 * (size_t)ne + 1;
+    const size_t eb = (size_t)2 * (size_t)nm * (size_t)nch, cb = eb + (size_t)ne * (size_t)nch,
+                 pb = cb + (size_t)ne + 1, db = pb + (size_t)ne, ob = db + (size_t)nm;
+    const size_t nt = ob + s->nobjects;
     float *t = calloc(nt, sizeof *t);
     tb_gpu_emitter *em = calloc((size_t)(ne > 0 ? ne : 1), sizeof *em);
-    uint32_t *obj = calloc((size_t)s->nobjects + TB_GPU_PT_OBJECT_BASE, sizeof *obj);
-    if (!t || !em || !obj) {
+    if (!t || !em) {
         st = tb_error(TB_ERR_NOMEM, "GPU path tracer: out of memory");
         goto done;
     }
@@ -132,9 +134,8 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
             t[(size_t)m * 2 * (size_t)nch + (size_t)c] = mt->diffuse.v[c];
             t[(size_t)m * 2 * (size_t)nch + (size_t)nch + (size_t)c] = Le.v[c];
         }
+        t[db + (size_t)m] = tb_channels_max(mt->diffuse);
     }
-    const size_t eb = (size_t)2 * (size_t)nm * (size_t)nch, cb = eb + (size_t)ne * (size_t)nch,
-                 pb = cb + (size_t)ne + 1;
     *emitter_kinds = 0;
     double cdf = 0.0;
     for (int i = 0; i < ne; i++) {
@@ -157,24 +158,22 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
         cdf += pmf;
     }
     t[cb + (size_t)ne] = 1.0f;
-    for (uint32_t i = 0; i < s->nobjects; i++)
-        obj[TB_GPU_PT_OBJECT_BASE + i] = (uint32_t)s->objects[i]->material;
+    for (uint32_t i = 0; i < s->nobjects; i++) {
+        uint32_t m = (uint32_t)s->objects[i]->material; /* a uint in the float table */
+        memcpy(&t[ob + i], &m, sizeof m);
+    }
     pt->b_table = tb_gpu_buffer_create(pt->dev, nt * sizeof *t);
     pt->b_emitters = tb_gpu_buffer_create(pt->dev, (size_t)(ne > 0 ? ne : 1) * sizeof *em);
-    pt->b_objects = tb_gpu_buffer_create(pt->dev, ((size_t)s->nobjects + TB_GPU_PT_OBJECT_BASE) * sizeof *obj);
-    if (!pt->b_table || !pt->b_emitters || !pt->b_objects) {
+    if (!pt->b_table || !pt->b_emitters) {
         st = TB_ERR_DEVICE;
         goto done;
     }
     if ((st = tb_gpu_buffer_upload(pt->b_table, 0, t, nt * sizeof *t)) ||
-        (st = tb_gpu_buffer_upload(pt->b_emitters, 0, em, (size_t)(ne > 0 ? ne : 1) * sizeof *em)) ||
-        (st = tb_gpu_buffer_upload(pt->b_objects, 0, obj,
-                                   ((size_t)s->nobjects + TB_GPU_PT_OBJECT_BASE) * sizeof *obj)))
+        (st = tb_gpu_buffer_upload(pt->b_emitters, 0, em, (size_t)(ne > 0 ? ne : 1) * sizeof *em)))
         goto done;
 done:
     free(t);
     free(em);
-    free(obj);
     tb_light_set_release(&ls);
     return st;
 }
@@ -224,7 +223,7 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
         goto fail;
     const size_t n = pt->cap, nv = (size_t)TB_GPU_PT_NVALUES * (size_t)pt->nch;
     pt->b_rays = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_ray));
-    pt->b_states = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_pt_state));
+    pt->b_states = tb_gpu_buffer_create(dev, TB_GPU_PT_STATE_HEADER + n * sizeof(tb_gpu_pt_state));
     pt->b_hits = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_hit));
     pt->b_values = tb_gpu_buffer_create(dev, n * nv * sizeof(float));
     pt->b_shadows = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_ray));
@@ -253,15 +252,16 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
         {11, b->has_planar},
         {12, b->has_tori},
     };
-    static const char *const names[4] = {"pathtrace init", "pathtrace extend", "pathtrace shade",
-                                         "pathtrace shadow"};
-    for (uint32_t stage = 0; stage < 4; stage++) {
+    static const char *const names[TB_GPU_PT_STAGES] = {"pathtrace init", "pathtrace extend", "pathtrace shade",
+                                                        "pathtrace shadow", "pathtrace accumulate"};
+    for (uint32_t stage = 0; stage < TB_GPU_PT_STAGES; stage++) {
         spec[0].value = stage;
         pt->k[stage] = tb_gpu_kernel_get(
             dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("pathtrace"),
                                        .name = names[stage],
                                        .buffers = 12,
                                        .kinds = {0, TB_GPU_BIND_TEXELS_RGBA32UI, TB_GPU_BIND_TEXELS_RGBA32UI, 0,
+                                                 TB_GPU_BIND_TEXELS_R32UI, 0, 0, 0, 0, 0, TB_GPU_BIND_TEXELS_R32UI,
                                                  TB_GPU_BIND_TEXELS_R32UI},
                                        .push_size = sizeof(tb_gpu_pt_push),
                                        .spec = spec,
@@ -286,7 +286,7 @@ static tb_gpu_dispatch tb__gpt_dispatch(tb_gpu_pathtracer *pt, uint32_t stage, c
     const tb_gpu_scene_bindings *b = &pt->bind;
     return (tb_gpu_dispatch){pt->k[stage],
                              {pt->b_rays, b->nodes, b->tris, b->placed, b->refs, pt->b_states, pt->b_hits,
-                              pt->b_values, pt->b_shadows, pt->b_emitters, pt->b_table, pt->b_objects},
+                              pt->b_values, pt->b_shadows, pt->b_emitters, pt->b_table, pt->b_values},
                              push,
                              push->n,
                              0.0};
@@ -301,7 +301,7 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
         pt->states[i] = (tb_gpu_pt_state){.seed0 = seeds[2 * i], .seed1 = seeds[2 * i + 1], .alive = 1};
     tb_status st = tb_gpu_buffer_upload(pt->b_rays, 0, rays, n * sizeof *rays);
     if (!st)
-        st = tb_gpu_buffer_upload(pt->b_states, 0, pt->states, n * sizeof *pt->states);
+        st = tb_gpu_buffer_upload(pt->b_states, TB_GPU_PT_STATE_HEADER, pt->states, n * sizeof *pt->states);
     if (st)
         return st;
     /* push constants: [0] every stage, [1] the last shade of a submission (counts) */
@@ -313,7 +313,7 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
                                .max_bounces = TB_PT_MAX_BOUNCES};
     push[1] = push[0];
     push[1].count = 1;
-    tb_gpu_dispatch d[1 + 3 * TB_GPU_PT_BOUNCES_PER_SUBMIT];
+    tb_gpu_dispatch d[2 + 3 * TB_GPU_PT_BOUNCES_PER_SUBMIT];
     bool first = true;
     for (int bounce = 0; bounce <= TB_PT_MAX_BOUNCES;) {
         int nd = 0;
@@ -326,8 +326,11 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
             d[nd++] = tb__gpt_dispatch(pt, TB_GPU_PT_STAGE_SHADE, &push[last ? 1 : 0]);
             d[nd++] = tb__gpt_dispatch(pt, TB_GPU_PT_STAGE_SHADOW, &push[0]);
         }
+        /* the clear light samples, of ended paths and of live ones alike
+         * (before their next shade): the last bounce needs no extra submission */
+        d[nd++] = tb__gpt_dispatch(pt, TB_GPU_PT_STAGE_ACCUMULATE, &push[0]);
         const uint32_t zero = 0;
-        if ((st = tb_gpu_buffer_upload(pt->b_objects, TB_GPU_PT_ALIVE_WORD * sizeof zero, &zero, sizeof zero)))
+        if ((st = tb_gpu_buffer_upload(pt->b_states, 0, &zero, sizeof zero)))
             return st;
         if ((st = tb_gpu_run(pt->dev, d, nd)))
             return st;
@@ -338,7 +341,7 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
         for (int k = 0; k < nd; k++)
             pt->st.kernel_seconds += d[k].seconds;
         uint32_t alive = 0;
-        if ((st = tb_gpu_buffer_download(pt->b_objects, TB_GPU_PT_ALIVE_WORD * sizeof alive, &alive, sizeof alive)))
+        if ((st = tb_gpu_buffer_download(pt->b_states, 0, &alive, sizeof alive)))
             return st;
         if (alive == 0)
             break;
