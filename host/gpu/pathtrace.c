@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "host/gpu/intersect.h"
+#include "host/gpu/render_internal.h"
 #include "host/gpu/spirv.h"
 #include "host/render/antialias.h"
 #include "host/render/camera.h"
@@ -140,15 +141,7 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
     double cdf = 0.0;
     for (int i = 0; i < ne; i++) {
         const tb_emitter *e = &s->emitters[i];
-        tb_gpu_emitter g = {.v0 = e->v[0], .kind = (uint32_t)e->kind, .v1 = e->v[1], .radius = e->radius,
-                            .v2 = e->v[2], .two_sided = e->two_sided};
-        if (e->kind == TB_EMITTER_TRIANGLE || e->kind == TB_EMITTER_PARALLELOGRAM) {
-            tb_dvec3 e1 = tb_dvec3_sub(tb_vec3_to_d(e->v[1]), tb_vec3_to_d(e->v[0]));
-            tb_dvec3 e2 = tb_dvec3_sub(tb_vec3_to_d(e->v[2]), tb_vec3_to_d(e->v[0]));
-            g.normal = tb_dvec3_to_f(tb_dvec3_normalize(tb_dvec3_cross(e1, e2)));
-        }
-        g.inv_area = (float)(1.0 / ls.area.areas[i]);
-        em[i] = g;
+        em[i] = tb__gpu_emitter_record(e, ls.area.areas[i]);
         *emitter_kinds |= 1u << (uint32_t)e->kind;
         for (int c = 0; c < nch; c++)
             t[eb + (size_t)i * (size_t)nch + (size_t)c] = e->radiance.v[c];
@@ -183,14 +176,10 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
     *out = NULL;
     if (!s || !s->accel)
         return tb_error(TB_ERR_ARG, "GPU path tracer: the scene has no acceleration structure");
-    tb_pt_options po = o ? *o : (tb_pt_options){0};
-    if (po.max_depth < 0 || po.max_depth > TB_PT_MAX_BOUNCES)
-        return tb_error(TB_ERR_ARG, "GPU path tracer: max depth %d not in 0..%d", po.max_depth, TB_PT_MAX_BOUNCES);
-    if (po.rr_depth < 0 || po.rr_depth > TB_PT_MAX_BOUNCES)
-        return tb_error(TB_ERR_ARG, "GPU path tracer: Russian roulette depth %d not in 0..%d", po.rr_depth,
-                        TB_PT_MAX_BOUNCES);
-    if (po.rr_depth == 0)
-        po.rr_depth = TB_PT_DEFAULT_RR_DEPTH;
+    tb_pt_options po;
+    tb_status st = tb_pt_options_resolve(o, &po);
+    if (st)
+        return tb_error_context(st, "GPU path tracer");
     const char *why = tb_gpu_pt_unsupported(s);
     if (why)
         return tb_error(TB_ERR_UNSUPPORTED, "GPU path tracer: %s", why);
@@ -202,7 +191,6 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
     pt->opt = po;
     pt->nch = s->nchannels;
     pt->cap = TB__GPT_BATCH;
-    tb_status st = TB_OK;
     if (!(pt->gscene = tb_gpu_scene_create(dev, s))) {
         st = TB_ERR_DEVICE;
         goto fail;
@@ -212,7 +200,7 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
     if (info.cpu_objects > 0) {
         for (uint32_t i = 0; i < s->nobjects; i++)
             if (!tb_gpu_scene_object_on_gpu(pt->gscene, i)) {
-                st = tb_error(TB_ERR_UNSUPPORTED, "GPU path tracer: object %u is intersected on the CPU only (%s)",
+                st = tb_error(TB_ERR_UNSUPPORTED, "object %u is intersected on the CPU only (%s)",
                               i, tb_gpu_scene_object_route(pt->gscene, i));
                 goto fail;
             }
@@ -256,8 +244,9 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
                                                         "pathtrace shadow", "pathtrace accumulate"};
     for (uint32_t stage = 0; stage < TB_GPU_PT_STAGES; stage++) {
         spec[0].value = stage;
+        const bool trace = stage == TB_GPU_PT_STAGE_EXTEND || stage == TB_GPU_PT_STAGE_SHADOW;
         pt->k[stage] = tb_gpu_kernel_get(
-            dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin("pathtrace"),
+            dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin(trace ? "pathtrace_trace" : "pathtrace"),
                                        .name = names[stage],
                                        .buffers = 12,
                                        .kinds = {0, TB_GPU_BIND_TEXELS_RGBA32UI, TB_GPU_BIND_TEXELS_RGBA32UI, 0,
