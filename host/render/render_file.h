@@ -11,7 +11,8 @@
  *     if (tb_render_file("scene.mid", &o, NULL)) die(tb_last_error());
  *
  * host/render may not use host/gpu: a caller that wants the Vulkan renderer
- * supplies it as `backend` (the command's calls tb_gpu_render_raytrace). */
+ * supplies it as `backend` (the command's calls tb_gpu_render_raytrace, or
+ * with --method path tb_gpu_render_path). */
 #ifndef TB_HOST_RENDER_RENDER_FILE_H
 #define TB_HOST_RENDER_RENDER_FILE_H
 
