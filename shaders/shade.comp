@@ -63,9 +63,6 @@ const int PW0 = HAS_COLOR_PATTERN ? 2 : 0; // pattern words per item: the diffus
 const int PW = PW0 + (HAS_TEXTURE ? 6 : 0); // and the diffuse and specular texture RGB
 const float PI = 3.14159265358979323846;
 const float INV_PI = 0.318309886183790671537767526745028724;
-const float TWO_PI = 6.28318530717958647692528676655900576;
-const float PI_4 = 0.785398163397448309615660845819875721;
-const float PI_2 = 1.57079632679489661923132169163975144;
 const float SHADOW_EPSILON = 1e-4;  // TB_SHADOW_EPSILON
 
 layout(std430, binding = 0) readonly buffer Items { tb_gpu_shade_item items[]; };
@@ -91,44 +88,7 @@ int tb_perm(int i) { return int(colours[pc.perm + uint(i & 255)]); }
 uint tb_texinfo(uint i) { return texinfo[i]; }
 float tb_texel(uint i) { return texels[i]; }
 #include "lib/texture.glsl"
-
-// The next float above / below x (x finite).
-float next_up(float x)
-{
-    if (x == 0.0)
-        return uintBitsToFloat(1u);
-    uint b = floatBitsToUint(x);
-    return uintBitsToFloat(x > 0.0 ? b + 1u : b - 1u);
-}
-float next_down(float x) { return -next_up(-x); }
-
-// tb_spawn_ray_origin (host/object/hit.h): p moved off the surface along ng
-// to w's side by the error bound perr, then one float further.
-vec3 spawn_origin(vec3 p, vec3 perr, vec3 ng, vec3 w)
-{
-    float d = next_up(dot(abs(ng), perr));
-    float s = dot(w, ng) < 0.0 ? -d : d;
-    vec3 off = s * ng;
-    vec3 po = p + off;
-    for (int i = 0; i < 3; i++) {
-        if (off[i] > 0.0)
-            po[i] = next_up(po[i]);
-        else if (off[i] < 0.0)
-            po[i] = next_down(po[i]);
-    }
-    return po;
-}
-
-// tb_dvec3_basis (util/math/vec.h): Duff et al.'s orthonormal basis; the
-// sign is copysign's (-0 counts as negative), as in the C code.
-void basis(vec3 n, out vec3 b1, out vec3 b2)
-{
-    float sgn = (floatBitsToUint(n.z) & 0x80000000u) != 0u ? -1.0 : 1.0;
-    float a = -1.0 / (sgn + n.z);
-    float b = n.x * n.y * a;
-    b1 = vec3(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
-    b2 = vec3(b, sgn + n.y * n.y * a, -n.y);
-}
+#include "lib/emitter.glsl"
 
 // tb_spot_falloff (host/render/lights.c).
 float spot_falloff(float cos_total, float cos_falloff, float c)
@@ -329,69 +289,6 @@ float spec_colour(int c)
         k = a + g_fs * (b - a);
     }
     return HAS_TEXTURE ? k * g_tex[TB_GPU_TEX_SPECULAR][c % 3] : k;
-}
-
-// A point on emitter e seen from p (tb__sample_emitter in host/render/lights.c):
-// false if it gives no light.
-bool sample_emitter(tb_gpu_emitter e, vec3 p, float u1, float u2, out vec3 q, out float pdf_sa)
-{
-    float pdf_a = e.inv_area;
-    vec3 nq;
-    if ((EMITTER_KINDS & (1u << TB_GPU_EMITTER_TRIANGLE)) != 0u && e.kind == TB_GPU_EMITTER_TRIANGLE) {
-        float su = sqrt(u1);
-        float b0 = 1.0 - su, b1 = u2 * su, b2 = 1.0 - b0 - b1;
-        q = e.v0 * b0 + e.v1 * b1 + e.v2 * b2;
-        nq = e.normal;
-    } else if ((EMITTER_KINDS & (1u << TB_GPU_EMITTER_PARALLELOGRAM)) != 0u &&
-               e.kind == TB_GPU_EMITTER_PARALLELOGRAM) {
-        q = e.v0 + (e.v1 - e.v0) * u1 + (e.v2 - e.v0) * u2;
-        nq = e.normal;
-    } else if ((EMITTER_KINDS & (1u << TB_GPU_EMITTER_DISC)) != 0u && e.kind == TB_GPU_EMITTER_DISC) {
-        float ox = 2.0 * u1 - 1.0, oy = 2.0 * u2 - 1.0;
-        vec2 dk = vec2(0.0);
-        if (ox != 0.0 || oy != 0.0) {
-            float r, th;
-            if (abs(ox) > abs(oy)) {
-                r = ox;
-                th = PI_4 * (oy / ox);
-            } else {
-                r = oy;
-                th = PI_2 - PI_4 * (ox / oy);
-            }
-            dk = vec2(r * cos(th), r * sin(th));
-        }
-        vec3 b1, b2;
-        basis(e.v1, b1, b2);
-        q = e.v0 + b1 * (e.radius * dk.x) + b2 * (e.radius * dk.y);
-        nq = e.v1;
-    } else if ((EMITTER_KINDS & (1u << TB_GPU_EMITTER_SPHERE)) != 0u && e.kind == TB_GPU_EMITTER_SPHERE) {
-        vec3 pc_ = p - e.v0;
-        float r = e.radius, dc = length(pc_);
-        if (!(dc > r * (1.0 + 1e-6)))
-            return false; // inside: the host routes scenes with two-sided spheres to the CPU
-        float s2max = (r / dc) * (r / dc);
-        float omc_max = s2max / (1.0 + sqrt(max(0.0, 1.0 - s2max)));
-        float omc = u1 * omc_max;
-        float ct = 1.0 - omc, s2 = omc * (2.0 - omc);
-        float cos_alpha = s2 / sqrt(s2max) + ct * sqrt(max(0.0, 1.0 - s2 / s2max));
-        float sin_alpha = sqrt(max(0.0, 1.0 - cos_alpha * cos_alpha));
-        float phi = TWO_PI * u2;
-        vec3 axis = pc_ / dc, b1, b2;
-        basis(axis, b1, b2);
-        nq = normalize(b1 * (sin_alpha * cos(phi)) + b2 * (sin_alpha * sin(phi)) + axis * cos_alpha);
-        q = e.v0 + nq * r;
-        pdf_sa = 1.0 / (TWO_PI * omc_max);
-        return pdf_sa > 0.0 && !isinf(pdf_sa);
-    } else {
-        return false;
-    }
-    vec3 d = q - p;
-    float d2 = dot(d, d);
-    float cq = -dot(nq, d) / sqrt(d2);
-    if (!(d2 > 0.0) || cq == 0.0 || (cq < 0.0 && e.two_sided == 0u))
-        return false;
-    pdf_sa = pdf_a * d2 / abs(cq);
-    return !isinf(pdf_sa) && !isnan(pdf_sa);
 }
 
 void main()

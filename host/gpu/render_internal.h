@@ -89,6 +89,10 @@ struct tb_gpu_renderer {
 /* Monotonic wall clock, seconds. */
 double tb__gr_now(void);
 
+/* The shade kernel's record of emitter e of area `area` (render_upload.c;
+ * the path tracer's kernel reads the same records). */
+tb_gpu_emitter tb__gpu_emitter_record(const tb_emitter *e, double area);
+
 /* render_route.c: the features of every material, which are routed (and
  * why), the kernel's per-material flags and what the kernel must handle
  * (r->uses). TB_ERR_NOMEM. */

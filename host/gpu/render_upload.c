@@ -250,22 +250,26 @@ static void tb__fill_lights(tb_gpu_renderer *r, tb__tables *t)
     }
 }
 
+tb_gpu_emitter tb__gpu_emitter_record(const tb_emitter *e, double area)
+{
+    tb_gpu_emitter g = {.v0 = e->v[0], .kind = (uint32_t)e->kind, .v1 = e->v[1], .radius = e->radius,
+                        .v2 = e->v[2], .two_sided = e->two_sided};
+    if (e->kind == TB_EMITTER_TRIANGLE || e->kind == TB_EMITTER_PARALLELOGRAM) {
+        tb_dvec3 e1 = tb_dvec3_sub(tb_vec3_to_d(e->v[1]), tb_vec3_to_d(e->v[0]));
+        tb_dvec3 e2 = tb_dvec3_sub(tb_vec3_to_d(e->v[2]), tb_vec3_to_d(e->v[0]));
+        g.normal = tb_dvec3_to_f(tb_dvec3_normalize(tb_dvec3_cross(e1, e2)));
+    }
+    g.inv_area = (float)(1.0 / area);
+    return g;
+}
+
 /* Emitter records and their radiances. */
 static void tb__fill_emitters(tb_gpu_renderer *r, tb__tables *t)
 {
     const tb_scene *s = r->scene;
     for (int i = 0; i < s->nemitters; i++) {
         const tb_emitter *e = &s->emitters[i];
-        tb_gpu_emitter g = {.v0 = e->v[0], .kind = (uint32_t)e->kind, .v1 = e->v[1], .radius = e->radius,
-                            .v2 = e->v[2], .two_sided = e->two_sided};
-        if (e->kind == TB_EMITTER_TRIANGLE || e->kind == TB_EMITTER_PARALLELOGRAM) {
-            tb_dvec3 e1 = tb_dvec3_sub(tb_vec3_to_d(e->v[1]), tb_vec3_to_d(e->v[0]));
-            tb_dvec3 e2 = tb_dvec3_sub(tb_vec3_to_d(e->v[2]), tb_vec3_to_d(e->v[0]));
-            g.normal = tb_dvec3_to_f(tb_dvec3_normalize(tb_dvec3_cross(e1, e2)));
-        }
-        double area = r->rt.lights.has_area ? r->rt.lights.area.areas[i] : tb_emitter_area(e);
-        g.inv_area = (float)(1.0 / area);
-        t->ems[i] = g;
+        t->ems[i] = tb__gpu_emitter_record(e, r->rt.lights.has_area ? r->rt.lights.area.areas[i] : tb_emitter_area(e));
         for (int c = 0; c < r->nch; c++)
             t->col[r->emitter_col + (size_t)i * (size_t)r->nch + (size_t)c] = e->radiance.v[c];
     }

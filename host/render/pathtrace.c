@@ -21,12 +21,10 @@ struct tb_pathtracer {
     tb_light_set lights;
 };
 
-tb_status tb_pt_create(const tb_scene *s, const tb_pt_options *o, tb_pathtracer **out)
+tb_status tb_pt_options_resolve(const tb_pt_options *o, tb_pt_options *out)
 {
-    *out = NULL;
-    if (!s || !s->accel)
-        return tb_error(TB_ERR_ARG, "pathtrace: the scene has no acceleration structure");
     tb_pt_options po = o ? *o : (tb_pt_options){0};
+    *out = po;
     if (po.max_depth < 0 || po.max_depth > TB_PT_MAX_BOUNCES)
         return tb_error(TB_ERR_ARG, "pathtrace: max depth %d not in 0..%d", po.max_depth, TB_PT_MAX_BOUNCES);
     if (po.rr_depth < 0 || po.rr_depth > TB_PT_MAX_BOUNCES)
@@ -36,6 +34,19 @@ tb_status tb_pt_create(const tb_scene *s, const tb_pt_options *o, tb_pathtracer 
         return tb_error(TB_ERR_ARG, "pathtrace: samples per pixel %d < 0", po.spp);
     if (po.rr_depth == 0)
         po.rr_depth = TB_PT_DEFAULT_RR_DEPTH;
+    *out = po;
+    return TB_OK;
+}
+
+tb_status tb_pt_create(const tb_scene *s, const tb_pt_options *o, tb_pathtracer **out)
+{
+    *out = NULL;
+    if (!s || !s->accel)
+        return tb_error(TB_ERR_ARG, "pathtrace: the scene has no acceleration structure");
+    tb_pt_options po;
+    tb_status rc = tb_pt_options_resolve(o, &po);
+    if (rc)
+        return rc;
     tb_pathtracer *pt = calloc(1, sizeof *pt);
     if (!pt)
         return tb_error(TB_ERR_NOMEM, "pathtrace: out of memory");

@@ -64,6 +64,11 @@ typedef struct tb_pt_path {
     uint8_t done;         /* the path has ended */
 } tb_pt_path;
 
+/* `o` (NULL: defaults) checked and with its defaults filled in, into *out
+ * (the GPU path tracer takes the same options). TB_ERR_ARG for negative
+ * depths or depths beyond TB_PT_MAX_BOUNCES, negative spp. */
+tb_status tb_pt_options_resolve(const tb_pt_options *o, tb_pt_options *out);
+
 /* Prepares a path tracer for `s` (which must stay alive). TB_ERR_ARG for a
  * scene without an acceleration structure or bad options (negative depths,
  * unknown texture filter). */

@@ -68,8 +68,6 @@ static tb_status tb__rf_check(const tb_render_file_options *o)
     if (o->backend && o->render.exchange && o->render.exchange->ranks > 1)
         return tb_error(TB_ERR_ARG, "the Vulkan backend renders in one process, not over %d ranks",
                         o->render.exchange->ranks);
-    if (o->method && o->backend)
-        return tb_error(TB_ERR_ARG, "method %s: a backend renders only the ray tracer", o->method->name);
     return TB_OK;
 }
 
@@ -118,8 +116,10 @@ static tb_status tb__rf_report_open(tb__rf_run *r, const tb_render_file_options 
     return TB_OK;
 }
 
-/* The method if there is one; else the backend if there is one and it
- * renders, else the CPU ray tracer. */
+/* The backend if there is one and it renders (the command's backend knows
+ * the method: with a method, the backend renders that method); else the
+ * method if there is one, else the CPU ray tracer. A method is initialised
+ * first in any case: its options go into the provenance. */
 static tb_status tb__rf_render(tb__rf_run *r, const tb_render_file_options *o, const tb_render_options *ro,
                                tb_render_stats *rs, bool *on_backend)
 {
@@ -130,7 +130,6 @@ static tb_status tb__rf_render(tb__rf_run *r, const tb_render_file_options *o, c
         if (st)
             return st;
         r->method_ready = true;
-        return tb_render(r->scene, r->method_sample, r->method_ctx, ro, &r->img, rs);
     }
     if (o->backend) {
         tb_status st = o->backend(o->backend_user, r->scene, ro, &r->img, rs);
@@ -141,7 +140,11 @@ static tb_status tb__rf_render(tb__rf_run *r, const tb_render_file_options *o, c
         }
         *on_backend = r->img != NULL;
     }
-    return *on_backend ? TB_OK : tb_render_raytrace(r->scene, ro, &r->img, rs);
+    if (*on_backend)
+        return TB_OK;
+    if (r->method)
+        return tb_render(r->scene, r->method_sample, r->method_ctx, ro, &r->img, rs);
+    return tb_render_raytrace(r->scene, ro, &r->img, rs);
 }
 
 /* The provenance of the image and the stats. */
@@ -155,10 +158,11 @@ static tb_status tb__rf_provenance(tb__rf_run *r, const char *scene_path, const 
     r->has_prov = true;
     char popts[1024];
     if (r->method)
-        snprintf(popts, sizeof popts, "method=%s spp=%d passes=%d adaptive=%d filter=%s:%g accel=%s %s threads=%d colour=%s backend=cpu",
+        snprintf(popts, sizeof popts, "method=%s spp=%d passes=%d adaptive=%d filter=%s:%g accel=%s %s threads=%d colour=%s backend=%s",
                  r->method->name, ro->aa.spp, ro->passes, (int)ro->aa.adaptive, tb_filter_kind_name(ro->filter.kind),
                  ro->filter.radius, tb_accel_kind_name(o->scene.accel), r->method_desc, nthreads,
-                 r->scene->spectral ? "spectral" : "rgb");
+                 r->scene->spectral ? "spectral" : "rgb",
+                 on_backend ? (o->backend_name ? o->backend_name : "backend") : "cpu");
     else
         snprintf(popts, sizeof popts,
              "method=raytrace spp=%d passes=%d adaptive=%d filter=%s:%g accel=%s max_depth=%d "

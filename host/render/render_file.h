@@ -11,7 +11,8 @@
  *     if (tb_render_file("scene.mid", &o, NULL)) die(tb_last_error());
  *
  * host/render may not use host/gpu: a caller that wants the Vulkan renderer
- * supplies it as `backend` (the command's calls tb_gpu_render_raytrace). */
+ * supplies it as `backend` (the command's calls tb_gpu_render_raytrace, or
+ * with --method path tb_gpu_render_path). */
 #ifndef TB_HOST_RENDER_RENDER_FILE_H
 #define TB_HOST_RENDER_RENDER_FILE_H
 
@@ -74,7 +75,7 @@ typedef struct tb_render_file_options {
     int argc;                   /* the command line recorded in the provenance (argv[0]: the program) */
     char **argv;                /* NULL: an empty command line */
     const tb_render_method *method; /* NULL: the Whitted ray tracer (tb_render_raytrace) */
-    tb_render_backend_fn backend; /* NULL: the CPU path; only with the ray tracer (method NULL) */
+    tb_render_backend_fn backend; /* NULL: the CPU path; with a method it must render that method */
     tb_render_backend_stats_fn backend_stats; /* NULL: none */
     void *backend_user;
     const char *backend_name;   /* the provenance's backend= when the backend made the image ("vulkan") */

@@ -4,7 +4,7 @@
 # light only) is darker than the uncapped default, --passes with --report
 # against --reference writes a row per pass, Ctrl-C writes the image so far
 # and exits 130, and the refusals exit 2 with a message: --backend vulkan
-# (path and hybrid run on the CPU only), bad --max-depth values, ray-tracer
+# with --adaptive (path) and at all (hybrid), bad --max-depth values, ray-tracer
 # options with the path tracer and --rr-depth without it.
 #   pt_cli.sh  (with TESTBED, TB_SOURCE_DIR, TB_TEST_TMPDIR set)
 set -u
@@ -73,7 +73,7 @@ expect2() { # expect2 WHAT PATTERN ARGS...
     [ $rc -eq 2 ] || { cat "$T/out"; fail "$what: exit $rc, expected 2"; }
     grep -q -- "$pat" "$T/out" || { cat "$T/out"; fail "$what: message lacks '$pat'"; }
 }
-expect2 "path on vulkan" "the path tracer runs on the CPU only" --method path --backend vulkan
+expect2 "adaptive path on vulkan" "no adaptive antialiasing" --method path --backend vulkan --adaptive
 expect2 "hybrid on vulkan" "runs on the CPU only" --method hybrid --backend vulkan
 expect2 "negative depth" "max-depth" --method path --max-depth -1
 expect2 "depth too large" "max-depth" --method path --max-depth 5000

@@ -17,6 +17,7 @@
 #include "commands.h"
 #include "dist_cli.h"
 #include "host/gpu/gpu.h"
+#include "host/gpu/pathtrace.h"
 #include "host/gpu/render.h"
 #include "host/render/pathtrace.h"
 #include "host/render/render_file.h"
@@ -75,6 +76,8 @@ typedef struct tb__render_cmd {
     int device;                /* --device, or -1 */
     tb_gpu_render_stats gs;    /* what the wavefront did, when it made the image */
     tb_gpu_device_info info;   /* the device's limits, for --stats (when Vulkan ran) */
+    const tb_pt_options *pt;   /* --method path: the path tracer's options (else NULL: the ray tracer) */
+    tb_gpu_pt_stats ps;        /* what the device path tracer did, when it made the image */
 } tb__render_cmd;
 
 /* tb_render_hook_fn: Ctrl-C writes the partial image while the render runs. */
@@ -95,12 +98,22 @@ static void tb__render_hook(void *user, bool starting)
 }
 
 /* tb_render_backend_fn: the Vulkan wavefront tracer (docs/gpu.md, "Shade
- * kernel and wavefront renderer"); auto falls back to the CPU path (*out
- * left NULL) on any Vulkan failure. */
+ * kernel and wavefront renderer") or, with --method path, the Vulkan path
+ * tracer (docs/gpu.md, "Path tracer"); auto falls back to the CPU path (*out
+ * left NULL) on any Vulkan failure, and for the path tracer on a scene the
+ * kernel does not take (saying why). */
 static tb_status tb__render_gpu(void *user, const tb_scene *scene, const tb_render_options *ro, tb_image **out,
                                 tb_render_stats *rs)
 {
     tb__render_cmd *c = user;
+    const char *why = c->pt ? tb_gpu_pt_unsupported(scene) : NULL;
+    if (why && c->mode != TB_GPU_MODE_CPU) {
+        if (c->mode == TB_GPU_MODE_VULKAN || c->device >= 0)
+            return tb_error(TB_ERR_UNSUPPORTED, "--backend vulkan: the Vulkan path tracer does not take this scene: "
+                                                "%s (use --backend cpu)", why);
+        fprintf(stderr, "testbed render: backend cpu: the Vulkan path tracer does not take this scene: %s\n", why);
+        return TB_OK;
+    }
     tb_gpu_session gsess;
     tb_status st = tb_gpu_backend_choose(c->mode, c->device, false, &gsess);
     if (st)
@@ -108,7 +121,10 @@ static tb_status tb__render_gpu(void *user, const tb_scene *scene, const tb_rend
     fprintf(stderr, "testbed render: backend %s: %s\n", tb_gpu_backend_name(gsess.backend), gsess.reason);
     if (gsess.backend == TB_GPU_BACKEND_VULKAN) {
         c->info = *tb_gpu_device_info_of(gsess.device);
-        st = tb_gpu_render_raytrace(gsess.device, scene, ro, out, rs, &c->gs);
+        if (c->pt)
+            st = tb_gpu_render_path(gsess.device, scene, c->pt, ro, out, rs, &c->ps);
+        else
+            st = tb_gpu_render_raytrace(gsess.device, scene, ro, out, rs, &c->gs);
     }
     tb_gpu_session_close(&gsess);
     if (st && c->mode == TB_GPU_MODE_AUTO && c->device < 0) {
@@ -124,6 +140,19 @@ static tb_status tb__render_gpu(void *user, const tb_scene *scene, const tb_rend
 static tb_status tb__render_gpu_stats(void *user)
 {
     const tb__render_cmd *c = user;
+    if (c->pt) {
+        const tb_gpu_pt_stats *ps = &c->ps;
+        tb_status st = tb_stats_set_value("gpu_paths", (double)ps->paths);
+        if (!st)
+            st = tb_stats_set_value("gpu_command_buffers", (double)ps->submits);
+        if (!st)
+            st = tb_stats_set_value("gpu_bounce_rounds", (double)ps->bounces);
+        if (!st)
+            st = tb_stats_set_value("gpu_dispatches", (double)ps->dispatches);
+        if (!st)
+            st = tb_stats_set_value("gpu_kernel_seconds", ps->kernel_seconds);
+        return st;
+    }
     const tb_gpu_render_stats *gs = &c->gs;
     tb_status st = tb_stats_set_value("gpu_shaded_hits", (double)gs->gpu_shaded);
     if (!st)
@@ -188,7 +217,7 @@ static int tb__cmd_render(int argc, char **argv)
         {"method", .type = TB_OPT_CHOICE, .dest = &method, .choices = methods, .metavar = "M",
          .help = "raytrace|path|hybrid|radiosity: raytrace (default: the Whitted ray\n"
                  "tracer), path (the path tracer, docs/pathtrace.md: the options here but\n"
-                 "--light-samples, --glossy-samples and --backend vulkan), hybrid or radiosity\n"
+                 "--light-samples and --glossy-samples), hybrid or radiosity\n"
                  "(their options: testbed render --method hybrid|radiosity --help)"},
         {"spp", .type = TB_OPT_INT, .dest = &ro->aa.spp, .min = 1, .max = TB_AA_MAX_SPP, .metavar = "N",
          .help = "samples per pixel (per pass; default %D)"},
@@ -213,7 +242,10 @@ static int tb__cmd_render(int argc, char **argv)
                  "real GPU and otherwise, or if the device fails, the CPU path (says why).\n"
                  "Same image as cpu within docs/accuracy.md's tolerance; materials with a\n"
                  "feature the kernel lacks (docs/gpu.md, \"Routing by feature mask\") are\n"
-                 "shaded on the CPU (the summary line counts those hits and says why)"},
+                 "shaded on the CPU (the summary line counts those hits and says why).\n"
+                 "With --method path: the Vulkan path tracer (Lambert materials, area\n"
+                 "lights; docs/gpu.md, \"Path tracer\"), statistically equal to cpu; a scene\n"
+                 "with other features is refused by vulkan, rendered on the CPU by auto"},
         {"device", .type = TB_OPT_INT, .dest = &gdevice, .min = 0, .max = 1024, .metavar = "N",
          .help = "Vulkan device N (testbed devices lists them; implies Vulkan in auto)"},
         {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels,
@@ -280,9 +312,9 @@ static int tb__cmd_render(int argc, char **argv)
     tb_pt_options po = {0};
     tb_render_method path_method = tb_pt_method(&po);
     if (method == TB__PATH) {
-        if (backend == TB_GPU_MODE_VULKAN || gdevice >= 0)
-            return tb_cli_usage_error(&cli, "--backend vulkan: the path tracer runs on the CPU only; use --backend cpu "
-                                            "(or --method raytrace for the Vulkan ray tracer)");
+        if ((backend == TB_GPU_MODE_VULKAN || gdevice >= 0) && adaptive)
+            return tb_cli_usage_error(&cli, "--backend vulkan: the Vulkan path tracer has no adaptive antialiasing; "
+                                            "use --backend cpu or a fixed --spp");
         if (light_seen || glossy_seen)
             return tb_cli_usage_error(&cli, "--%s goes with --method raytrace (the path tracer takes one light "
                                             "sample per vertex and samples its BSDFs)",
@@ -329,7 +361,9 @@ static int tb__cmd_render(int argc, char **argv)
                                   resume_path, &ex, &ck, &persist))
         return TB_EXIT_FAIL;
     ro->progress = root;
-    if (method != TB__PATH) { /* the Vulkan backend renders only the ray tracer, in one process */
+    if (method == TB__PATH)
+        cmd.pt = &po;
+    if (method != TB__PATH || !ro->aa.adaptive) { /* the Vulkan backends render in one process */
         if (tb_dist_size() == 1)
             o.backend = tb__render_gpu;
         o.backend_stats = tb__render_gpu_stats;
@@ -376,7 +410,13 @@ static int tb__cmd_render(int argc, char **argv)
            res.spectral ? "spectral" : "rgb", res.stats.interrupted ? ", INTERRUPTED (partial image)" : "",
            o.image_path);
     const tb_gpu_render_stats *gs = &cmd.gs;
-    if (res.backend)
+    const tb_gpu_pt_stats *ps = &cmd.ps;
+    if (res.backend && cmd.pt)
+        printf("testbed render: vulkan path tracer: %llu paths, %llu command buffers of up to %d bounces, "
+               "%llu dispatches; kernels %.3f s, wavefront %.3f s\n",
+               (unsigned long long)ps->paths, (unsigned long long)ps->submits, TB_GPU_PT_BOUNCES_PER_SUBMIT,
+               (unsigned long long)ps->dispatches, ps->kernel_seconds, ps->wall_seconds);
+    else if (res.backend)
         printf("testbed render: vulkan: %llu hits shaded by the kernel, %llu routed to the CPU path%s%s%s, "
                "%llu shadow rays, %llu waves; wavefront %.3f s: intersect + occlusion %.3f s, shade %.3f s "
                "(kernel %.3f s), routed %.3f s\n",

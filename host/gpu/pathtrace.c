@@ -1,0 +1,517 @@
+/* The Vulkan path tracer (pathtrace.h, docs/gpu.md "Path tracer"): tables and
+ * path-state buffers on the device, the stage dispatches of
+ * shaders/pathtrace.comp, and the render on host/render's pass driver. */
+#include "host/gpu/pathtrace.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "host/gpu/intersect.h"
+#include "host/gpu/render_internal.h"
+#include "host/gpu/spirv.h"
+#include "host/render/antialias.h"
+#include "host/render/camera.h"
+#include "host/render/features.h"
+#include "host/render/lights.h"
+#include "host/render/render_internal.h"
+#include "host/render/sampling.h"
+#include "host/render/surface.h"
+#include "shaders/shared/hit.h"
+#include "shaders/shared/pathtrace.h"
+#include "shaders/shared/ray.h"
+#include "shaders/shared/shade.h"
+#include "util/math/rng.h"
+#include "util/stats/stats.h"
+
+TB_STAT_COUNTER(tb__gpt_paths, "GPU path tracer/paths");
+TB_STAT_COUNTER(tb__gpt_submits, "GPU path tracer/command buffers");
+
+/* Paths per device batch (the buffers are sized for it once). */
+#define TB__GPT_BATCH 65536u
+/* Specialization constants of pathtrace.comp besides the stage (ids 2 .. 12). */
+#define TB__GPT_SPEC 11
+
+struct tb_gpu_pathtracer {
+    tb_gpu_device *dev;
+    const tb_scene *scene;
+    tb_gpu_scene *gscene;
+    tb_gpu_scene_bindings bind;
+    tb_pt_options opt;
+    int nch;
+    size_t cap; /* paths per batch */
+    tb_gpu_buffer *b_rays, *b_states, *b_hits, *b_values, *b_shadows, *b_emitters, *b_table;
+    tb_gpu_kernel *k[TB_GPU_PT_STAGES]; /* per TB_GPU_PT_STAGE_* */
+    tb_gpu_pt_state *states; /* host staging of one batch */
+    float *L;                /* host copy of one batch's radiance (word-major) */
+    tb_gpu_pt_stats st;
+};
+
+static double tb__gpt_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+const char *tb_gpu_pt_unsupported(const tb_scene *s)
+{
+    if (s->nlights > 0)
+        return "point, spot and directional lights are not in the kernel (area lights only)";
+    for (int i = 0; i < s->nmaterials; i++) {
+        const tb_material *m = &s->materials[i];
+        if (m->diffuse_texture || m->specular_texture || m->transmission_texture || m->emission_texture)
+            return "image textures are not in the kernel";
+        if (m->diffuse_pattern.kind != TB_MID_PATTERN_NONE || m->specular_pattern.kind != TB_MID_PATTERN_NONE)
+            return "procedural patterns are not in the kernel";
+        if (m->bump.kind != TB_MID_PATTERN_NONE)
+            return "bump maps are not in the kernel";
+        if (!tb_channels_is_black(m->transmission))
+            return "transmitting (dielectric) materials are not in the kernel (Lambert only)";
+        if (m->model != TB_MID_MODEL_LAMBERT && !tb_channels_is_black(m->specular))
+            return "specular (Phong, Blinn, GGX) materials are not in the kernel (Lambert only)";
+    }
+    for (int i = 0; i < s->nemitters; i++) {
+        const tb_emitter *e = &s->emitters[i];
+        if (e->kind == TB_EMITTER_CUSTOM)
+            return "custom emitters are not in the kernel";
+        if (e->kind == TB_EMITTER_SPHERE && e->two_sided)
+            return "two-sided sphere emitters are not in the kernel";
+    }
+    uint32_t *of = malloc((s->nobjects ? s->nobjects : 1) * sizeof *of);
+    if (!of)
+        return "out of memory";
+    tb_object_features(s, of);
+    const char *why = NULL;
+    for (uint32_t i = 0; i < s->nobjects && !why; i++) {
+        if (of[i] & (TB_OBJ_FEAT_CSG_UNION | TB_OBJ_FEAT_CSG_INTERSECTION | TB_OBJ_FEAT_CSG_DIFFERENCE))
+            why = "CSG objects are not in the kernel";
+        else if (s->objects[i]->material < 0 || s->objects[i]->material >= s->nmaterials)
+            why = "an object without a material";
+    }
+    free(of);
+    return why;
+}
+
+void tb_gpu_pt_destroy(tb_gpu_pathtracer *pt)
+{
+    if (!pt)
+        return;
+    tb_gpu_buffer *bs[] = {pt->b_rays,    pt->b_states,    pt->b_hits, pt->b_values,
+                           pt->b_shadows, pt->b_emitters, pt->b_table};
+    for (size_t i = 0; i < sizeof bs / sizeof *bs; i++)
+        tb_gpu_buffer_destroy(bs[i]);
+    tb_gpu_scene_destroy(pt->gscene);
+    free(pt->states);
+    free(pt->L);
+    free(pt);
+}
+
+/* The emitters and the scene's table (shared/pathtrace.h; pathtrace.comp's
+ * bindings 9 and 10). */
+static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
+{
+    const tb_scene *s = pt->scene;
+    const int nch = pt->nch, nm = s->nmaterials, ne = s->nemitters;
+    tb_light_set ls;
+    memset(&ls, 0, sizeof ls);
+    tb_status st = tb_light_set_init(&ls, s);
+    if (st)
+        return st;
+    const size_t eb = (size_t)2 * (size_t)nm * (size_t)nch, cb = eb + (size_t)ne * (size_t)nch,
+                 pb = cb + (size_t)ne + 1, db = pb + (size_t)ne, ob = db + (size_t)nm;
+    const size_t nt = ob + s->nobjects;
+    float *t = calloc(nt, sizeof *t);
+    tb_gpu_emitter *em = calloc((size_t)(ne > 0 ? ne : 1), sizeof *em);
+    if (!t || !em) {
+        st = tb_error(TB_ERR_NOMEM, "GPU path tracer: out of memory");
+        goto done;
+    }
+    for (int m = 0; m < nm; m++) {
+        const tb_material *mt = &s->materials[m];
+        tb_channels Le = mt->emits ? tb_radiance_from_exitance(mt->emission) : tb_channels_splat(nch, 0.0f);
+        for (int c = 0; c < nch; c++) {
+            t[(size_t)m * 2 * (size_t)nch + (size_t)c] = mt->diffuse.v[c];
+            t[(size_t)m * 2 * (size_t)nch + (size_t)nch + (size_t)c] = Le.v[c];
+        }
+        t[db + (size_t)m] = tb_channels_max(mt->diffuse);
+    }
+    *emitter_kinds = 0;
+    double cdf = 0.0;
+    for (int i = 0; i < ne; i++) {
+        const tb_emitter *e = &s->emitters[i];
+        em[i] = tb__gpu_emitter_record(e, ls.area.areas[i]);
+        *emitter_kinds |= 1u << (uint32_t)e->kind;
+        for (int c = 0; c < nch; c++)
+            t[eb + (size_t)i * (size_t)nch + (size_t)c] = e->radiance.v[c];
+        double pmf = tb_distrib1d_pmf(&ls.area.select, i);
+        t[cb + (size_t)i] = (float)cdf;
+        t[pb + (size_t)i] = (float)pmf;
+        cdf += pmf;
+    }
+    t[cb + (size_t)ne] = 1.0f;
+    for (uint32_t i = 0; i < s->nobjects; i++) {
+        uint32_t m = (uint32_t)s->objects[i]->material; /* a uint in the float table */
+        memcpy(&t[ob + i], &m, sizeof m);
+    }
+    pt->b_table = tb_gpu_buffer_create(pt->dev, nt * sizeof *t);
+    pt->b_emitters = tb_gpu_buffer_create(pt->dev, (size_t)(ne > 0 ? ne : 1) * sizeof *em);
+    if (!pt->b_table || !pt->b_emitters) {
+        st = TB_ERR_DEVICE;
+        goto done;
+    }
+    if ((st = tb_gpu_buffer_upload(pt->b_table, 0, t, nt * sizeof *t)) ||
+        (st = tb_gpu_buffer_upload(pt->b_emitters, 0, em, (size_t)(ne > 0 ? ne : 1) * sizeof *em)))
+        goto done;
+done:
+    free(t);
+    free(em);
+    tb_light_set_release(&ls);
+    return st;
+}
+
+tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_options *o, tb_gpu_pathtracer **out)
+{
+    *out = NULL;
+    if (!s || !s->accel)
+        return tb_error(TB_ERR_ARG, "GPU path tracer: the scene has no acceleration structure");
+    tb_pt_options po;
+    tb_status st = tb_pt_options_resolve(o, &po);
+    if (st)
+        return tb_error_context(st, "GPU path tracer");
+    const char *why = tb_gpu_pt_unsupported(s);
+    if (why)
+        return tb_error(TB_ERR_UNSUPPORTED, "GPU path tracer: %s", why);
+    tb_gpu_pathtracer *pt = calloc(1, sizeof *pt);
+    if (!pt)
+        return tb_error(TB_ERR_NOMEM, "GPU path tracer: out of memory");
+    pt->dev = dev;
+    pt->scene = s;
+    pt->opt = po;
+    pt->nch = s->nchannels;
+    pt->cap = TB__GPT_BATCH;
+    if (!(pt->gscene = tb_gpu_scene_create(dev, s))) {
+        st = TB_ERR_DEVICE;
+        goto fail;
+    }
+    tb_gpu_scene_info info;
+    tb_gpu_scene_get_info(pt->gscene, &info);
+    if (info.cpu_objects > 0) {
+        for (uint32_t i = 0; i < s->nobjects; i++)
+            if (!tb_gpu_scene_object_on_gpu(pt->gscene, i)) {
+                st = tb_error(TB_ERR_UNSUPPORTED, "object %u is intersected on the CPU only (%s)",
+                              i, tb_gpu_scene_object_route(pt->gscene, i));
+                goto fail;
+            }
+    }
+    tb_gpu_scene_get_bindings(pt->gscene, &pt->bind);
+    uint32_t kinds = 0;
+    if ((st = tb__gpt_tables(pt, &kinds)))
+        goto fail;
+    const size_t n = pt->cap, nv = (size_t)TB_GPU_PT_NVALUES * (size_t)pt->nch;
+    pt->b_rays = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_ray));
+    pt->b_states = tb_gpu_buffer_create(dev, TB_GPU_PT_STATE_HEADER + n * sizeof(tb_gpu_pt_state));
+    pt->b_hits = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_hit));
+    pt->b_values = tb_gpu_buffer_create(dev, n * nv * sizeof(float));
+    pt->b_shadows = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_ray));
+    pt->states = malloc(n * sizeof *pt->states);
+    pt->L = malloc(n * (size_t)pt->nch * sizeof *pt->L);
+    if (!pt->b_rays || !pt->b_states || !pt->b_hits || !pt->b_values || !pt->b_shadows) {
+        st = TB_ERR_DEVICE;
+        goto fail;
+    }
+    if (!pt->states || !pt->L) {
+        st = tb_error(TB_ERR_NOMEM, "GPU path tracer: out of memory");
+        goto fail;
+    }
+    const tb_gpu_scene_bindings *b = &pt->bind;
+    tb_gpu_spec_constant spec[1 + TB__GPT_SPEC] = {
+        {1, 0},
+        {2, (uint32_t)pt->nch},
+        {3, (uint32_t)(s->nmaterials > 0 ? s->nmaterials : 1)},
+        {4, (uint32_t)s->nemitters},
+        {5, kinds},
+        {6, b->stack},
+        {7, b->has_triangles},
+        {8, b->has_spheres},
+        {9, b->has_cubes},
+        {10, b->has_quadrics},
+        {11, b->has_planar},
+        {12, b->has_tori},
+    };
+    static const char *const names[TB_GPU_PT_STAGES] = {"pathtrace init", "pathtrace extend", "pathtrace shade",
+                                                        "pathtrace shadow", "pathtrace accumulate"};
+    for (uint32_t stage = 0; stage < TB_GPU_PT_STAGES; stage++) {
+        spec[0].value = stage;
+        const bool trace = stage == TB_GPU_PT_STAGE_EXTEND || stage == TB_GPU_PT_STAGE_SHADOW;
+        pt->k[stage] = tb_gpu_kernel_get(
+            dev, &(tb_gpu_kernel_desc){.spirv = tb_gpu_builtin(trace ? "pathtrace_trace" : "pathtrace"),
+                                       .name = names[stage],
+                                       .buffers = 12,
+                                       .kinds = {0, TB_GPU_BIND_TEXELS_RGBA32UI, TB_GPU_BIND_TEXELS_RGBA32UI, 0,
+                                                 TB_GPU_BIND_TEXELS_R32UI, 0, 0, 0, 0, 0, TB_GPU_BIND_TEXELS_R32UI,
+                                                 TB_GPU_BIND_TEXELS_R32UI},
+                                       .push_size = sizeof(tb_gpu_pt_push),
+                                       .spec = spec,
+                                       .spec_count = 1 + TB__GPT_SPEC});
+        if (!pt->k[stage]) {
+            st = TB_ERR_DEVICE;
+            goto fail;
+        }
+    }
+    *out = pt;
+    return TB_OK;
+fail:
+    tb_gpu_pt_destroy(pt);
+    return tb_error_context(st, "GPU path tracer");
+}
+
+void tb_gpu_pt_get_stats(const tb_gpu_pathtracer *pt, tb_gpu_pt_stats *out) { *out = pt->st; }
+
+/* A dispatch of `stage` over the batch's buffers. */
+static tb_gpu_dispatch tb__gpt_dispatch(tb_gpu_pathtracer *pt, uint32_t stage, const tb_gpu_pt_push *push)
+{
+    const tb_gpu_scene_bindings *b = &pt->bind;
+    return (tb_gpu_dispatch){pt->k[stage],
+                             {pt->b_rays, b->nodes, b->tris, b->placed, b->refs, pt->b_states, pt->b_hits,
+                              pt->b_values, pt->b_shadows, pt->b_emitters, pt->b_table, pt->b_values},
+                             push,
+                             push->n,
+                             0.0};
+}
+
+/* Traces rays[0..n) (n <= cap) to the end of their paths. */
+static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const uint32_t *seeds, size_t n,
+                               float *out)
+{
+    const int nch = pt->nch;
+    for (size_t i = 0; i < n; i++)
+        pt->states[i] = (tb_gpu_pt_state){.seed0 = seeds[2 * i], .seed1 = seeds[2 * i + 1], .alive = 1};
+    tb_status st = tb_gpu_buffer_upload(pt->b_rays, 0, rays, n * sizeof *rays);
+    if (!st)
+        st = tb_gpu_buffer_upload(pt->b_states, TB_GPU_PT_STATE_HEADER, pt->states, n * sizeof *pt->states);
+    if (st)
+        return st;
+    /* push constants: [0] every stage, [1] the last shade of a submission (counts) */
+    tb_gpu_pt_push push[2];
+    push[0] = (tb_gpu_pt_push){.n = (uint32_t)n,
+                               .nnodes = pt->bind.nnodes,
+                               .max_depth = (uint32_t)pt->opt.max_depth,
+                               .rr_depth = (uint32_t)pt->opt.rr_depth,
+                               .max_bounces = TB_PT_MAX_BOUNCES};
+    push[1] = push[0];
+    push[1].count = 1;
+    tb_gpu_dispatch d[2 + 3 * TB_GPU_PT_BOUNCES_PER_SUBMIT];
+    bool first = true;
+    for (int bounce = 0; bounce <= TB_PT_MAX_BOUNCES;) {
+        int nd = 0;
+        if (first)
+            d[nd++] = tb__gpt_dispatch(pt, TB_GPU_PT_STAGE_INIT, &push[0]);
+        first = false;
+        for (int k = 0; k < TB_GPU_PT_BOUNCES_PER_SUBMIT; k++, bounce++) {
+            bool last = k == TB_GPU_PT_BOUNCES_PER_SUBMIT - 1;
+            d[nd++] = tb__gpt_dispatch(pt, TB_GPU_PT_STAGE_EXTEND, &push[0]);
+            d[nd++] = tb__gpt_dispatch(pt, TB_GPU_PT_STAGE_SHADE, &push[last ? 1 : 0]);
+            d[nd++] = tb__gpt_dispatch(pt, TB_GPU_PT_STAGE_SHADOW, &push[0]);
+        }
+        /* the clear light samples, of ended paths and of live ones alike
+         * (before their next shade): the last bounce needs no extra submission */
+        d[nd++] = tb__gpt_dispatch(pt, TB_GPU_PT_STAGE_ACCUMULATE, &push[0]);
+        const uint32_t zero = 0;
+        if ((st = tb_gpu_buffer_upload(pt->b_states, 0, &zero, sizeof zero)))
+            return st;
+        if ((st = tb_gpu_run(pt->dev, d, nd)))
+            return st;
+        pt->st.submits++;
+        pt->st.bounces += TB_GPU_PT_BOUNCES_PER_SUBMIT;
+        pt->st.dispatches += (uint64_t)nd;
+        TB_STAT_INC(tb__gpt_submits);
+        for (int k = 0; k < nd; k++)
+            pt->st.kernel_seconds += d[k].seconds;
+        uint32_t alive = 0;
+        if ((st = tb_gpu_buffer_download(pt->b_states, 0, &alive, sizeof alive)))
+            return st;
+        if (alive == 0)
+            break;
+    }
+    /* radiance: the TB_GPU_PT_L arrays, word-major */
+    const size_t lo = (size_t)TB_GPU_PT_L * (size_t)nch * n * sizeof(float);
+    if ((st = tb_gpu_buffer_download(pt->b_values, lo, pt->L, (size_t)nch * n * sizeof(float))))
+        return st;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < nch; c++)
+            out[i * (size_t)nch + (size_t)c] = pt->L[(size_t)c * n + i];
+    return TB_OK;
+}
+
+tb_status tb_gpu_pt_radiance(tb_gpu_pathtracer *pt, const tb_ray *rays, const uint32_t *seeds, size_t n,
+                             float *out)
+{
+    double t0 = tb__gpt_now();
+    tb_status st = TB_OK;
+    for (size_t at = 0; at < n && !st; at += pt->cap) {
+        size_t m = n - at < pt->cap ? n - at : pt->cap;
+        st = tb__gpt_batch(pt, rays + at, seeds + 2 * at, m, out + at * (size_t)pt->nch);
+    }
+    pt->st.paths += n;
+    tb_stat_add(&tb__gpt_paths, (int64_t)n);
+    pt->st.wall_seconds += tb__gpt_now() - t0;
+    return st;
+}
+
+/* ------------------------------------------------------------ the render */
+
+/* The renderer as tb__render_drive runs it. */
+typedef struct tb__gpt_engine {
+    tb_gpu_pathtracer *pt;
+    const tb_render_options *o;
+    size_t cap;          /* samples per batch (whole tiles; at least one tile) */
+    tb_ray *rays;
+    uint32_t *seeds;
+    double *xy;
+    float *L;
+    float *pxy;          /* a pixel's sample positions */
+    tb_film_tile **tiles; /* the batch's tiles */
+    int max_tiles;
+} tb__gpt_engine;
+
+static tb_status tb__gpt_start(void *ctx, const tb_film *film)
+{
+    tb__gpt_engine *e = ctx;
+    const int spp = e->o->aa.spp;
+    size_t tile_max = 0;
+    for (int t = 0; t < tb_film_tile_count(film); t++) {
+        tb_tile_rect rc = tb_film_tile_rect(film, t);
+        size_t k = (size_t)(rc.x1 - rc.x0) * (size_t)(rc.y1 - rc.y0) * (size_t)spp;
+        tile_max = k > tile_max ? k : tile_max;
+    }
+    e->cap = tile_max > TB__GPT_BATCH ? tile_max : TB__GPT_BATCH;
+    e->max_tiles = tile_max > 0 ? (int)(e->cap / tile_max) + 1 : 1;
+    e->rays = malloc(e->cap * sizeof *e->rays);
+    e->seeds = malloc(e->cap * 2 * sizeof *e->seeds);
+    e->xy = malloc(e->cap * 2 * sizeof *e->xy);
+    e->L = malloc(e->cap * (size_t)e->pt->nch * sizeof *e->L);
+    e->pxy = malloc((size_t)spp * 2 * sizeof *e->pxy);
+    e->tiles = calloc((size_t)e->max_tiles, sizeof *e->tiles);
+    if (!e->rays || !e->seeds || !e->xy || !e->L || !e->pxy || !e->tiles)
+        return tb_error(TB_ERR_NOMEM, "GPU path tracer: out of memory");
+    return TB_OK;
+}
+
+/* The camera samples of tile `tile` from sample q on, as the CPU path makes
+ * them (tb_pt_sample): position, stream, lens numbers, camera ray; then two
+ * words of the stream seed the device's. Returns the next q. */
+static size_t tb__gpt_tile_rays(tb__gpt_engine *e, const tb_film_tile *tile, const tb_aa_options *aa, size_t q)
+{
+    const tb_camera *cam = &e->pt->scene->camera;
+    tb_tile_rect rc = tb_film_tile_pixels(tile);
+    for (int py = rc.y0; py < rc.y1; py++)
+        for (int px = rc.x0; px < rc.x1; px++) {
+            tb_pixel_sampler ps;
+            tb_pixel_sampler_init(&ps, aa, px, py);
+            int ns = tb_pixel_sampler_round(&ps, e->pxy);
+            for (int j = 0; j < ns; j++, q++) {
+                double x = (double)px + (double)e->pxy[2 * j], y = (double)py + (double)e->pxy[2 * j + 1];
+                tb_rng rng;
+                tb_aa_sample_rng(aa, px, py, (uint32_t)j, &rng);
+                float lu, lv;
+                tb_camera_lens_numbers(cam, &rng, &lu, &lv);
+                e->rays[q] = tb_camera_ray(cam, x, y, lu, lv);
+                e->seeds[2 * q] = tb_rng_u32(&rng);
+                e->seeds[2 * q + 1] = tb_rng_u32(&rng);
+                e->xy[2 * q] = x;
+                e->xy[2 * q + 1] = y;
+            }
+        }
+    return q;
+}
+
+static tb_status tb__gpt_pass(void *ctx, tb__render_run *run, tb_film *film, const tb_aa_options *aa,
+                              tb_aa_stats *as)
+{
+    tb__gpt_engine *e = ctx;
+    as->max_spp_used = aa->spp;
+    tb_status err = tb_film_begin_pass(film);
+    const int ntiles = tb_film_tile_count(film);
+    const size_t nch = (size_t)e->pt->nch;
+    int t = 0;
+    while (t < ntiles && !err) {
+        if (tb__render_should_stop(run)) {
+            for (int k = t; k < ntiles; k++)
+                tb_film_tile_skip(film, k);
+            as->tiles_skipped += ntiles - t;
+            break;
+        }
+        /* whole tiles while they fit */
+        int nt = 0;
+        size_t q = 0;
+        while (t + nt < ntiles && nt < e->max_tiles) {
+            tb_tile_rect rc = tb_film_tile_rect(film, t + nt);
+            size_t k = (size_t)(rc.x1 - rc.x0) * (size_t)(rc.y1 - rc.y0) * (size_t)aa->spp;
+            if (nt > 0 && q + k > e->cap)
+                break;
+            if (!(e->tiles[nt] = tb_film_tile_create(film, t + nt))) {
+                err = TB_ERR_NOMEM;
+                break;
+            }
+            q = tb__gpt_tile_rays(e, e->tiles[nt], aa, q);
+            nt++;
+        }
+        if (!err)
+            err = tb_gpu_pt_radiance(e->pt, e->rays, e->seeds, q, e->L);
+        /* splat in the CPU path's order, merge in index order */
+        size_t s = 0;
+        for (int k = 0; k < nt; k++) {
+            tb_tile_rect rc = tb_film_tile_pixels(e->tiles[k]);
+            const double wt = 1.0 / (double)aa->spp;
+            for (int py = rc.y0; py < rc.y1 && !err; py++)
+                for (int px = rc.x0; px < rc.x1; px++) {
+                    for (int j = 0; j < aa->spp; j++, s++)
+                        tb_film_tile_add(e->tiles[k], e->xy[2 * s], e->xy[2 * s + 1], e->L + s * nch, wt);
+                    tb_film_tile_record_samples(e->tiles[k], px, py, (uint32_t)aa->spp);
+                }
+            if (!err) {
+                as->pixels += (uint64_t)(rc.x1 - rc.x0) * (uint64_t)(rc.y1 - rc.y0);
+                if (run->progress)
+                    tb_progress_add(run->progress, (int64_t)(rc.x1 - rc.x0) * (rc.y1 - rc.y0));
+                err = tb_film_tile_submit(film, e->tiles[k]);
+            } else {
+                tb_film_tile_free(e->tiles[k]);
+            }
+            e->tiles[k] = NULL;
+        }
+        as->samples += q;
+        t += nt;
+    }
+    return err;
+}
+
+tb_status tb_gpu_render_path(tb_gpu_device *dev, const tb_scene *s, const tb_pt_options *po,
+                             const tb_render_options *o, tb_image **out, tb_render_stats *stats,
+                             tb_gpu_pt_stats *gstats)
+{
+    *out = NULL;
+    tb_status err = tb__render_check(o);
+    if (err)
+        return err;
+    if (o->aa.adaptive)
+        return tb_error(TB_ERR_UNSUPPORTED, "GPU path tracer: adaptive antialiasing is not implemented "
+                                            "(use fixed --spp, or --backend cpu)");
+    tb__gpt_engine e = {.o = o};
+    if ((err = tb_gpu_pt_create(dev, s, po, &e.pt)))
+        return err;
+    tb_render_stats rs;
+    memset(&rs, 0, sizeof rs);
+    err = tb__render_drive(s, o, &(tb__render_engine){.ctx = &e, .start = tb__gpt_start, .pass = tb__gpt_pass},
+                           out, &rs);
+    if (gstats)
+        tb_gpu_pt_get_stats(e.pt, gstats);
+    if (stats)
+        *stats = rs;
+    for (int k = 0; k < e.max_tiles && e.tiles; k++)
+        tb_film_tile_free(e.tiles[k]);
+    free(e.rays), free(e.seeds), free(e.xy), free(e.L), free(e.pxy), free(e.tiles);
+    tb_gpu_pt_destroy(e.pt);
+    return err;
+}

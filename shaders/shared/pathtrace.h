@@ -1,0 +1,82 @@
+/* Layouts of the Vulkan path tracer's wavefront (shaders/pathtrace.comp,
+ * host/gpu/pathtrace.c; docs/gpu.md, "Path tracer"). The path state lives in
+ * device buffers for the whole of a call: per path its ray (tb_gpu_ray), its
+ * closest hit (tb_gpu_hit), a tb_gpu_pt_state (after a 32-byte header
+ * holding the live-path count), its shadow ray, and the channel values
+ * (throughput, radiance) stored word-major: value v (TB_GPU_PT_BETA, _L) of
+ * channel c of path i at (v * nch + c) * n + i, so that neighbouring
+ * invocations touch neighbouring words. The scene's tables are one array of
+ * 32-bit words (read as texels): per material its diffuse colour and emitted
+ * radiance (nch each), per emitter its radiance (nch), the emitters' CDF
+ * (nemitters + 1) and pmf (nemitters), per material its largest diffuse
+ * channel, then per object its material (a uint). See shared/types.h for the
+ * rules. */
+#ifndef TB_SHADERS_SHARED_PATHTRACE_H
+#define TB_SHADERS_SHARED_PATHTRACE_H
+
+#include "types.h"
+
+/* The channel arrays of the value buffer. */
+#define TB_GPU_PT_BETA 0u   /* throughput */
+#define TB_GPU_PT_L 1u      /* radiance gathered */
+#define TB_GPU_PT_NVALUES 2u
+
+/* Kernel stages (specialization constant 1 of pathtrace.comp). */
+#define TB_GPU_PT_STAGE_INIT 0u       /* radiance 0 */
+#define TB_GPU_PT_STAGE_EXTEND 1u     /* closest hit of each live path's ray; a miss ends the path */
+#define TB_GPU_PT_STAGE_SHADE 2u      /* the last light sample if clear, emission, light sample + shadow ray,
+                                         BSDF sample, roulette */
+#define TB_GPU_PT_STAGE_SHADOW 3u     /* any hit of the pending shadow rays: clear or blocked */
+#define TB_GPU_PT_STAGE_ACCUMULATE 4u /* after the last bounce: the clear light samples of ended paths */
+#define TB_GPU_PT_STAGES 5u
+
+/* tb_gpu_pt_state.shadow */
+#define TB_GPU_PT_SHADOW_NONE 0u    /* no light sample pending */
+#define TB_GPU_PT_SHADOW_PENDING 1u /* its shadow ray is still to trace */
+#define TB_GPU_PT_SHADOW_CLEAR 2u   /* traced and clear: add throughput x the emitter's radiance x scale */
+
+/* Bytes before the first tb_gpu_pt_state in the state buffer: word 0 is
+ * the live paths counted by the last shade dispatch asked to count (the
+ * host zeroes it before a submission). */
+#define TB_GPU_PT_STATE_HEADER 32u
+
+#ifndef TB_GPU_GLSL
+typedef struct tb_gpu_pt_state tb_gpu_pt_state;
+typedef struct tb_gpu_pt_push tb_gpu_pt_push;
+#endif
+
+/* One path's scalars; std430 size 32. The random stream is counter-based:
+ * draw k of the path is a hash of (seed0, seed1, k). */
+struct tb_gpu_pt_state {
+    TB_GPU_UINT seed0;   /* from the camera sample's CPU stream (offset 0) */
+    TB_GPU_UINT seed1;   /* offset 4 */
+    TB_GPU_UINT counter; /* numbers drawn so far (offset 8) */
+    TB_GPU_UINT depth;   /* bounces so far; the camera ray is 0 (offset 12) */
+    TB_GPU_UINT alive;   /* 1 while the path goes on (offset 16) */
+    TB_GPU_UINT shadow;  /* TB_GPU_PT_SHADOW_* (offset 20) */
+    TB_GPU_UINT emitter; /* the light sample's emitter (offset 24) */
+    float scale;         /* its contribution per unit throughput and emitter radiance (offset 28) */
+};
+
+/* Push constants of every stage; size 32. */
+struct tb_gpu_pt_push {
+    TB_GPU_UINT n;          /* paths */
+    TB_GPU_UINT nnodes;     /* BVH nodes (0: nothing on the device) */
+    TB_GPU_UINT max_depth;  /* most bounces (0: only the hard cap) */
+    TB_GPU_UINT rr_depth;   /* bounces before Russian roulette */
+    TB_GPU_UINT max_bounces; /* the hard cap (TB_PT_MAX_BOUNCES) */
+    TB_GPU_UINT count;      /* shade: 1 to count the live paths into the state buffer's header */
+    TB_GPU_UINT pad0, pad1;
+};
+
+#ifndef TB_GPU_GLSL
+_Static_assert(sizeof(tb_gpu_pt_state) == 32 && offsetof(tb_gpu_pt_state, counter) == 8 &&
+                   offsetof(tb_gpu_pt_state, depth) == 12 && offsetof(tb_gpu_pt_state, alive) == 16 &&
+                   offsetof(tb_gpu_pt_state, shadow) == 20 && offsetof(tb_gpu_pt_state, scale) == 28,
+               "tb_gpu_pt_state follows the std430 offsets of its GLSL twin");
+_Static_assert(sizeof(tb_gpu_pt_push) == 32 && offsetof(tb_gpu_pt_push, max_bounces) == 16 &&
+                   offsetof(tb_gpu_pt_push, count) == 20,
+               "tb_gpu_pt_push follows the std430 offsets of its GLSL twin");
+#endif
+
+#endif

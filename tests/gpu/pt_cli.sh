@@ -1,0 +1,53 @@
+#!/bin/sh
+# `testbed render --method path --backend vulkan` (docs/gpu.md, "Path
+# tracer"): renders the RGB Cornell box under the validation layer (summary
+# line, stats, provenance backend=vulkan, finite pixels), the same image for
+# the same seed and another for another seed; refuses a scene with features
+# the kernel lacks (exit 1, the reason, no image) while --backend auto renders
+# it on the CPU saying why; --adaptive with vulkan is a usage error (exit 2).
+# Statistical equality with the CPU path is pt_equivalence.c's.
+set -eu
+: "${TESTBED:?}" "${TB_SOURCE_DIR:?}" "${TB_TEST_TMPDIR:?}"
+. "$TB_SOURCE_DIR/tests/gpu/gpu_test.sh"
+scratch_dir pt_cli
+fail() { echo "FAIL: $*"; [ -f "$t/out" ] && cat "$t/out"; exit 1; }
+
+sized "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" "$t/box.mid" 24 24
+sized "$TB_SOURCE_DIR/scenes/cornell-box-spheres.mid" "$t/spheres.mid" 24 24
+
+TB_VK_VALIDATION=1 "$TESTBED" render "$t/box.mid" --method path --backend vulkan --spp 4 -o "$t/a.pfm" \
+    --stats "$t/a.json" >"$t/out" 2>&1 || fail "render"
+grep -q "vulkan path tracer: 2304 paths" "$t/out" || fail "summary line"
+if grep -qi "validation" "$t/out"; then fail "validation messages"; fi
+grep -q '"gpu_paths": 2304' "$t/a.json" || fail "stats gpu_paths"
+grep -q 'method=path.*backend=vulkan' "$t/a.json" || fail "provenance backend=vulkan"
+python3 - "$t/a.pfm" <<'PY' || fail "image"
+import math, struct, sys
+with open(sys.argv[1], "rb") as f:
+    assert f.readline().strip() == b"PF"
+    w, h = map(int, f.readline().split())
+    s = float(f.readline())
+    v = struct.unpack(("<" if s < 0 else ">") + "%df" % (w * h * 3), f.read())
+assert all(math.isfinite(x) and x >= 0 for x in v), "non-finite or negative pixel"
+assert sum(v) > 0, "black image"
+PY
+"$TESTBED" render "$t/box.mid" --method path --backend vulkan --spp 4 -o "$t/b.pfm" >"$t/out" 2>&1 || fail "again"
+cmp -s "$t/a.pfm" "$t/b.pfm" || fail "the same seed gave another image"
+"$TESTBED" render "$t/box.mid" --method path --backend vulkan --spp 4 --seed 9 -o "$t/c.pfm" >"$t/out" 2>&1 ||
+    fail "seed 9"
+if cmp -s "$t/a.pfm" "$t/c.pfm"; then fail "another seed gave the same image"; fi
+
+# a scene the kernel does not take: vulkan refuses, auto uses the CPU
+if "$TESTBED" render "$t/spheres.mid" --method path --backend vulkan --spp 1 -o "$t/s.pfm" >"$t/out" 2>&1; then
+    fail "the spheres box (specular, glass) should be refused"
+fi
+grep -q "does not take this scene: specular" "$t/out" || fail "refusal message"
+[ ! -e "$t/s.pfm" ] || fail "a refused render wrote an image"
+"$TESTBED" render "$t/spheres.mid" --method path --backend auto --spp 1 -o "$t/s.pfm" >"$t/out" 2>&1 || fail "auto"
+grep -q "backend cpu" "$t/out" || fail "auto should say it renders on the CPU"
+if grep -q "vulkan path tracer:" "$t/out"; then fail "auto ran the kernel on the spheres box"; fi
+
+"$TESTBED" render "$t/box.mid" --method path --backend vulkan --adaptive -o "$t/x.pfm" >"$t/out" 2>&1 && rc=0 || rc=$?
+[ "$rc" -eq 2 ] || fail "--adaptive with vulkan: exit $rc, expected 2"
+grep -q "no adaptive antialiasing" "$t/out" || fail "--adaptive message"
+echo "pt_cli (gpu): all checks passed"

@@ -1,0 +1,362 @@
+/* The Vulkan path tracer (host/gpu/pathtrace.h) is statistically equal to the
+ * CPU path tracer (tb_render_path) on every bundled scene it takes, and
+ * refuses, with the reason, every bundled scene it does not take.
+ *
+ * Each scene at TB__W x TB__H pixels, TB__SPP samples per pixel, rendered K
+ * times with independent seeds on each backend (linear sRGB). Then, as
+ * Mitsuba's Z-tests (Jakob et al., mitsuba3 src/python/python/test/...), per
+ * pixel and channel Welch's t-test of the two sets of K values, the p-values
+ * held against the Sidak-corrected level 1 - (1 - alpha)^(1 / tests) for an
+ * overall alpha = 0.01; and a bound on the mean image difference: per
+ * channel, the image means of the two backends within 4 standard errors
+ * (from the spread of the K renders' means) and that standard error below 2%
+ * of the mean, so the bound is tight enough to see a small bias.
+ *
+ * Negative controls (the test must be able to fail): the same procedure
+ * rejects the CPU path tracer capped at one bounce (direct light only)
+ * against the GPU's uncapped render, per pixel and in the mean; and the
+ * capped renders of both backends agree (the --max-depth path of the kernel).
+ * Validation layer on; any message fails. */
+#include "gpu_test.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "host/gpu/pathtrace.h"
+#include "host/render/pathtrace.h"
+#include "host/render/render.h"
+#include "host/render/scene.h"
+
+#define TB__W 32
+#define TB__H 24
+#define TB__SPP 4
+#define TB__K 16
+#define TB__ALPHA 0.01
+
+static int tb__setup(void **state)
+{
+    static gpu_test_env e;
+    gpu_test_open(&e, NULL);
+    *state = &e;
+    return 0;
+}
+
+static int tb__teardown(void **state)
+{
+    gpu_test_close(*state);
+    return 0;
+}
+
+/* ln Gamma(x), x > 0 (Lanczos, g = 7, 9 terms: |error| < 1e-13). */
+static double tb__lgamma(double x)
+{
+    static const double c[9] = {0.99999999999980993,  676.5203681218851,     -1259.1392167224028,
+                                771.32342877765313,   -176.61502916214059,   12.507343278686905,
+                                -0.13857109526572012, 9.9843695780195716e-6, 1.5056327351493116e-7};
+    x -= 1.0;
+    double a = c[0], t = x + 7.5;
+    for (int i = 1; i < 9; i++)
+        a += c[i] / (x + (double)i);
+    return 0.91893853320467274178 /* ln sqrt(2 pi) */ + (x + 0.5) * log(t) - t + log(a);
+}
+
+/* The continued fraction of the incomplete beta function (Lentz's method). */
+static double tb__betacf(double a, double b, double x)
+{
+    const double tiny = 1e-300;
+    double qab = a + b, qap = a + 1.0, qam = a - 1.0, c = 1.0, d = 1.0 - qab * x / qap;
+    d = fabs(d) < tiny ? tiny : d;
+    d = 1.0 / d;
+    double h = d;
+    for (int m = 1; m <= 300; m++) {
+        double m2 = 2.0 * m, aa = m * (b - m) * x / ((qam + m2) * (a + m2));
+        d = 1.0 + aa * d;
+        d = fabs(d) < tiny ? tiny : d;
+        c = 1.0 + aa / c;
+        c = fabs(c) < tiny ? tiny : c;
+        d = 1.0 / d;
+        h *= d * c;
+        aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2));
+        d = 1.0 + aa * d;
+        d = fabs(d) < tiny ? tiny : d;
+        c = 1.0 + aa / c;
+        c = fabs(c) < tiny ? tiny : c;
+        d = 1.0 / d;
+        double del = d * c;
+        h *= del;
+        if (fabs(del - 1.0) < 1e-15)
+            break;
+    }
+    return h;
+}
+
+/* The regularised incomplete beta function I_x(a, b). */
+static double tb__betai(double a, double b, double x)
+{
+    if (x <= 0.0)
+        return 0.0;
+    if (x >= 1.0)
+        return 1.0;
+    double bt = exp(tb__lgamma(a + b) - tb__lgamma(a) - tb__lgamma(b) + a * log(x) + b * log1p(-x));
+    if (x < (a + 1.0) / (a + b + 2.0))
+        return bt * tb__betacf(a, b, x) / a;
+    return 1.0 - bt * tb__betacf(b, a, 1.0 - x) / b;
+}
+
+/* Two-sided p-value of Student's t with df degrees of freedom. */
+static double tb__t_pvalue(double t, double df) { return tb__betai(0.5 * df, 0.5, df / (df + t * t)); }
+
+/* The p-value routine against known values (scipy.stats.t.sf(t, df) * 2). */
+static void test_t_pvalue(void **state)
+{
+    (void)state;
+    assert_true(fabs(tb__t_pvalue(0.0, 10.0) - 1.0) < 1e-12);
+    assert_true(fabs(tb__t_pvalue(2.228138851986273, 10.0) - 0.05) < 1e-9);   /* t_0.975, 10 dof */
+    assert_true(fabs(tb__t_pvalue(2.042272456301238, 30.0) - 0.05) < 1e-9);   /* t_0.975, 30 dof */
+    assert_true(fabs(tb__t_pvalue(4.604094871415897, 4.0) - 0.01) < 1e-9);    /* t_0.995, 4 dof */
+    assert_true(fabs(tb__t_pvalue(1.959963984540054, 1e7) - 0.05) < 1e-6);    /* the normal limit */
+    assert_true(tb__t_pvalue(40.0, 20.0) < 1e-19 && tb__t_pvalue(40.0, 20.0) > 0.0);
+}
+
+/* Bundled scene `name` at TB__W x TB__H. */
+static tb_scene *tb__scene(const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/scenes/%s", TB_SOURCE_DIR, name);
+    FILE *fp = fopen(path, "rb");
+    if (!fp)
+        fail_msg("cannot read %s", path);
+    fseek(fp, 0, SEEK_END);
+    long n = ftell(fp);
+    fseek(fp, 0, SEEK_SET);
+    char *text = malloc((size_t)n + 64);
+    assert_non_null(text);
+    assert_true(fread(text, 1, (size_t)n, fp) == (size_t)n);
+    text[n] = 0;
+    fclose(fp);
+    /* resolution = [W H] -> [TB__W TB__H] (same length or shorter, padded) */
+    char *r = strstr(text, "resolution = [");
+    assert_non_null(r);
+    char *e = strchr(r, ']');
+    char repl[64];
+    int k = snprintf(repl, sizeof repl, "resolution = [%d %d", TB__W, TB__H);
+    assert_true(k <= (int)(e - r));
+    memcpy(r, repl, (size_t)k);
+    memset(r + k, ' ', (size_t)(e - r - k));
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s/scenes", TB_SOURCE_DIR);
+    tb_scene *s = gpu_test_load(text, name, dir);
+    free(text);
+    return s;
+}
+
+/* K renders (seeds base .. base + K - 1) into v[k][pixel * 3 + c]. */
+static void tb__renders(gpu_test_env *env, const tb_scene *s, bool gpu, int max_depth, uint64_t base, float **v)
+{
+    tb_render_options ro = tb_render_defaults();
+    ro.aa.spp = TB__SPP;
+    ro.threads = 2;
+    ro.progress = false;
+    tb_pt_options po = {.max_depth = max_depth};
+    for (int k = 0; k < TB__K; k++) {
+        ro.aa.seed = base + (uint64_t)k;
+        tb_image *img = NULL;
+        tb_status st = gpu ? tb_gpu_render_path(env->dev, s, &po, &ro, &img, NULL, NULL)
+                           : tb_render_path(s, &po, &ro, &img, NULL);
+        if (st)
+            fail_msg("%s render: %s", gpu ? "GPU" : "CPU", tb_last_error());
+        assert_int_equal(img->width, TB__W);
+        assert_int_equal(img->height, TB__H);
+        assert_int_equal(img->channels, 3);
+        v[k] = malloc((size_t)TB__W * TB__H * 3 * sizeof *v[k]);
+        assert_non_null(v[k]);
+        memcpy(v[k], img->pixels, (size_t)TB__W * TB__H * 3 * sizeof *v[k]);
+        tb_image_free(img);
+    }
+}
+
+/* What the comparison of two sets of K renders found. */
+typedef struct tb__verdict {
+    int tests;          /* pixel channels tested */
+    int rejected;       /* below the Sidak level */
+    double min_p;       /* smallest p-value */
+    int worst;          /* its pixel channel */
+    double mean_z[3];   /* per channel: (mean a - mean b) / its standard error */
+    double rel_se[3];   /* that standard error / the mean */
+    double rel_diff[3]; /* (mean a - mean b) / mean b */
+} tb__verdict;
+
+static tb__verdict tb__compare(float **a, float **b)
+{
+    tb__verdict r = {.min_p = 1.0, .worst = -1};
+    const int n = TB__W * TB__H * 3;
+    double *p = malloc((size_t)n * sizeof *p);
+    assert_non_null(p);
+    const double K = TB__K;
+    for (int i = 0; i < n; i++) {
+        double ma = 0, mb = 0, va = 0, vb = 0;
+        for (int k = 0; k < TB__K; k++)
+            ma += a[k][i], mb += b[k][i];
+        ma /= K, mb /= K;
+        for (int k = 0; k < TB__K; k++)
+            va += (a[k][i] - ma) * (a[k][i] - ma), vb += (b[k][i] - mb) * (b[k][i] - mb);
+        va /= K - 1.0, vb /= K - 1.0;
+        p[i] = -1.0;
+        if (va == 0.0 && vb == 0.0) {
+            /* a constant pixel (a black one, or one that sees only the light):
+             * the two values must agree to float rounding */
+            if (fabs(ma - mb) > 1e-5 * fmax(fabs(ma), fabs(mb)) + 1e-30)
+                p[i] = 0.0;
+            else
+                continue;
+        } else {
+            double sa = va / K, sb = vb / K, se2 = sa + sb;
+            double df = se2 * se2 / (sa * sa / (K - 1.0) + sb * sb / (K - 1.0));
+            p[i] = tb__t_pvalue((ma - mb) / sqrt(se2), df);
+        }
+        r.tests++;
+    }
+    const double level = 1.0 - pow(1.0 - TB__ALPHA, 1.0 / (r.tests > 0 ? r.tests : 1));
+    for (int i = 0; i < n; i++) {
+        if (p[i] < 0.0)
+            continue;
+        if (p[i] < level)
+            r.rejected++;
+        if (p[i] < r.min_p)
+            r.min_p = p[i], r.worst = i;
+    }
+    free(p);
+    for (int c = 0; c < 3; c++) {
+        double ia[TB__K], ib[TB__K], ma = 0, mb = 0, va = 0, vb = 0;
+        for (int k = 0; k < TB__K; k++) {
+            double sa = 0, sb = 0;
+            for (int q = c; q < n; q += 3)
+                sa += a[k][q], sb += b[k][q];
+            ia[k] = sa / (TB__W * TB__H), ib[k] = sb / (TB__W * TB__H);
+            ma += ia[k], mb += ib[k];
+        }
+        ma /= K, mb /= K;
+        for (int k = 0; k < TB__K; k++)
+            va += (ia[k] - ma) * (ia[k] - ma), vb += (ib[k] - mb) * (ib[k] - mb);
+        double se = sqrt(va / (K - 1.0) / K + vb / (K - 1.0) / K);
+        r.mean_z[c] = se > 0.0 ? (ma - mb) / se : (ma == mb ? 0.0 : INFINITY);
+        r.rel_se[c] = mb > 0.0 ? se / mb : INFINITY;
+        r.rel_diff[c] = mb > 0.0 ? (ma - mb) / mb : INFINITY;
+    }
+    return r;
+}
+
+static void tb__print(const char *what, const tb__verdict *v)
+{
+    printf("[ pt-equiv ] %-44s %4d tests, %d below the Sidak level %.3g, min p %.3g (pixel %d, %d ch %d); "
+           "mean diff %+.2f%% %+.2f%% %+.2f%% (z %+.2f %+.2f %+.2f, se %.2f%%)\n",
+           what, v->tests, v->rejected, 1.0 - pow(1.0 - TB__ALPHA, 1.0 / (v->tests > 0 ? v->tests : 1)), v->min_p,
+           v->worst >= 0 ? v->worst / 3 % TB__W : -1, v->worst >= 0 ? v->worst / 3 / TB__W : -1,
+           v->worst >= 0 ? v->worst % 3 : -1, 100 * v->rel_diff[0], 100 * v->rel_diff[1], 100 * v->rel_diff[2],
+           v->mean_z[0], v->mean_z[1], v->mean_z[2],
+           100 * fmax(v->rel_se[0], fmax(v->rel_se[1], v->rel_se[2])));
+}
+
+static void tb__free(float **v)
+{
+    for (int k = 0; k < TB__K; k++)
+        free(v[k]);
+}
+
+/* Equal: nothing below the Sidak level, the means within 4 standard errors
+ * and the standard error small enough for the bound to mean something. */
+static void tb__assert_equal(const char *what, const tb__verdict *v)
+{
+    tb__print(what, v);
+    assert_true(v->tests > TB__W * TB__H); /* most pixels are lit: the test tested something */
+    if (v->rejected > 0)
+        fail_msg("%s: %d pixel channels differ (min p %.3g)", what, v->rejected, v->min_p);
+    for (int c = 0; c < 3; c++) {
+        if (!(fabs(v->mean_z[c]) < 4.0))
+            fail_msg("%s: channel %d: image means differ by %.2f standard errors", what, c, v->mean_z[c]);
+        if (!(v->rel_se[c] < 0.02))
+            fail_msg("%s: channel %d: standard error %.3g of the mean: too noisy to bound", what, c, v->rel_se[c]);
+    }
+}
+
+/* Scene `name` on both backends: equal. */
+static void tb__equivalent(gpu_test_env *env, const char *name)
+{
+    tb_scene *s = tb__scene(name);
+    const char *why = tb_gpu_pt_unsupported(s);
+    if (why)
+        fail_msg("%s: the kernel should take it but says: %s", name, why);
+    float *cpu[TB__K], *gpu[TB__K];
+    tb__renders(env, s, false, 0, 1000, cpu);
+    tb__renders(env, s, true, 0, 2000, gpu);
+    tb__verdict v = tb__compare(gpu, cpu);
+    tb__assert_equal(name, &v);
+    tb__free(cpu);
+    tb__free(gpu);
+    tb_scene_free(s);
+}
+
+static void test_cornell_box(void **state) { tb__equivalent(*state, "cornell-box.mid"); }
+static void test_cornell_box_rgb(void **state) { tb__equivalent(*state, "cornell-box-rgb.mid"); }
+static void test_radiosity_room(void **state) { tb__equivalent(*state, "radiosity-room.mid"); }
+
+/* The controls on the RGB Cornell box: direct light only on both backends
+ * agrees; the CPU's direct light against the GPU's full render is rejected
+ * per pixel and in the mean. */
+static void test_controls(void **state)
+{
+    gpu_test_env *env = *state;
+    tb_scene *s = tb__scene("cornell-box-rgb.mid");
+    float *cpu1[TB__K], *gpu1[TB__K], *gpu[TB__K];
+    tb__renders(env, s, false, 1, 3000, cpu1);
+    tb__renders(env, s, true, 1, 4000, gpu1);
+    tb__renders(env, s, true, 0, 5000, gpu);
+    tb__verdict v = tb__compare(gpu1, cpu1);
+    tb__assert_equal("cornell-box-rgb.mid, max depth 1", &v);
+    v = tb__compare(gpu, cpu1);
+    tb__print("control: GPU full vs CPU direct only", &v);
+    assert_true(v.rejected > 0);
+    assert_true(fabs(v.mean_z[0]) > 4.0 && fabs(v.mean_z[1]) > 4.0 && fabs(v.mean_z[2]) > 4.0);
+    tb__free(cpu1);
+    tb__free(gpu1);
+    tb__free(gpu);
+    tb_scene_free(s);
+}
+
+/* The scenes with features outside the kernel are refused with the reason. */
+static void test_refused(void **state)
+{
+    gpu_test_env *env = *state;
+    static const struct {
+        const char *scene, *why;
+    } cases[] = {
+        {"cornell-box-spheres.mid", "specular (Phong, Blinn, GGX) materials"},
+        {"materials.mid", "point, spot and directional lights"},
+        {"showcase.mid", "point, spot and directional lights"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        tb_scene *s = tb__scene(cases[i].scene);
+        const char *why = tb_gpu_pt_unsupported(s);
+        printf("[ pt-equiv ] %-44s refused: %s\n", cases[i].scene, why ? why : "(not refused)");
+        assert_non_null(why);
+        tb_render_options ro = tb_render_defaults();
+        ro.aa.spp = 1;
+        ro.progress = false;
+        tb_image *img = NULL;
+        gpu_assert_error(tb_gpu_render_path(env->dev, s, NULL, &ro, &img, NULL, NULL), TB_ERR_UNSUPPORTED,
+                         cases[i].why);
+        assert_null(img);
+        tb_scene_free(s);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_t_pvalue),       cmocka_unit_test(test_cornell_box),
+        cmocka_unit_test(test_cornell_box_rgb), cmocka_unit_test(test_radiosity_room),
+        cmocka_unit_test(test_controls),       cmocka_unit_test(test_refused),
+    };
+    return cmocka_run_group_tests(tests, tb__setup, tb__teardown);
+}
