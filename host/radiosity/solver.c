@@ -56,6 +56,7 @@ struct tb_rad_solver {
     tb_vec3 *rp, *rn;       /* ray cast: receiver positions and normals (the vertices) */
     tb_vec3 *pts;           /* ray cast: shooter sample points */
     tb_ff_polygon *polys;   /* every element */
+    double *erad;           /* per element: its radius about its centroid (tb__radius2's root) */
     tb_ff_occluders *occ;   /* the CPU backend's, when the solver built it */
     float (*boxes)[6];      /* with occ: bounds of clusters of touching occluders (lo xyz, hi xyz, padded) */
     size_t nboxes;
@@ -319,6 +320,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->rn);
     free(s->pts);
     free(s->polys);
+    free(s->erad);
     free(s->rho_mean);
     free(s->pof), free(s->pstart), free(s->pel), free(s->spoly), free(s->sarea), free(s->scen), free(s->snrm);
     free(s->sdirty);
@@ -342,6 +344,18 @@ void tb_rad_solver_free(tb_rad_solver *s)
 }
 
 const tb_rad_mesh *tb_rad_solver_mesh(const tb_rad_solver *s) { return &s->m; }
+
+/* Squared distance from c to the farthest corner of p (p's radius about c;
+ * a NaN distance is passed over, as fmax does). */
+static double tb__radius2(const tb_ff_polygon *p, tb_vec3 c)
+{
+    double r2 = 0.0;
+    for (int k = 0; k < p->n; k++) {
+        double x = (double)tb_vec3_length2(tb_vec3_sub(p->v[k], c));
+        r2 = x > r2 ? x : r2;
+    }
+    return r2;
+}
 
 static void *tb__calloc(size_t n, size_t size, bool *ok)
 {
@@ -800,6 +814,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     s->snrm = tb__calloc(s->nsh, sizeof *s->snrm, &ok);
     s->sdirty = tb__calloc(s->nsh, sizeof *s->sdirty, &ok);
     s->polys = tb__calloc(ne, sizeof *s->polys, &ok);
+    s->erad = tb__calloc(ne, sizeof *s->erad, &ok);
     s->rho_mean = tb__calloc((size_t)nc, sizeof *s->rho_mean, &ok);
     if (hemi) {
         s->vert_area = tb__calloc(nv, sizeof *s->vert_area, &ok);
@@ -819,8 +834,10 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     memcpy(s->m.elems, mesh->elems, ne * sizeof *s->m.elems);
     memcpy(s->m.rho, mesh->rho, ne * (size_t)nc * sizeof *s->m.rho);
     memcpy(s->m.emission, mesh->emission, ne * (size_t)nc * sizeof *s->m.emission);
-    for (size_t i = 0; i < ne; i++)
+    for (size_t i = 0; i < ne; i++) {
         tb_rad_mesh_polygon(&s->m, i, &s->polys[i]);
+        s->erad[i] = sqrt(tb__radius2(&s->polys[i], s->m.elems[i].centroid));
+    }
     {
         tb_status st = tb_rad_mesh_copy_patches(&s->m, mesh, NULL);
         if (!st)
@@ -1129,21 +1146,13 @@ static double tb__element_mean_ff(const tb_ff_polygon *pj, tb_vec3 nj, const tb_
     return wsum > 0.0 ? sum / wsum : 0.0;
 }
 
-/* Squared distance from c to the farthest corner of p (p's radius about c). */
-static double tb__radius2(const tb_ff_polygon *p, tb_vec3 c)
-{
-    double r2 = 0.0;
-    for (int k = 0; k < p->n; k++)
-        r2 = fmax(r2, (double)tb_vec3_length2(tb_vec3_sub(p->v[k], c)));
-    return r2;
-}
 
 /* Whether element j can come within TB__RAD_NEAR shooter radii `rad` of the
  * shooter's centroid cen: its centroid lies within that plus its own radius. */
 static bool tb__near_element(const tb_rad_solver *s, size_t j, tb_vec3 cen, double rad)
 {
     const tb_rad_element *ej = &s->m.elems[j];
-    double lim = TB__RAD_NEAR * rad + sqrt(tb__radius2(&s->polys[j], ej->centroid));
+    double lim = TB__RAD_NEAR * rad + s->erad[j];
     return !((double)tb_vec3_length2(tb_vec3_sub(ej->centroid, cen)) >= lim * lim); /* !(>=): a NaN counts as near */
 }
 
