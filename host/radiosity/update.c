@@ -1,8 +1,9 @@
 /* The solver's per-shot update kernels, x86-64 baseline build (update_internal.h). */
-#include <stdbool.h>
-
-#define TB__RAD_UPDATE_NAME(x) tb__rad_update_##x
 #include "host/radiosity/update_kernels_internal.h"
+
+void tb__rad_update_vertices(const tb__rad_update *u, size_t v0, size_t v1) { tb__rad_update_vertices_body(u, v0, v1); }
+
+void tb__rad_update_elements(const tb__rad_update *u, size_t q0, size_t q1) { tb__rad_update_elements_body(u, q0, q1); }
 
 bool tb__rad_have_avx(void)
 {

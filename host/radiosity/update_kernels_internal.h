@@ -1,8 +1,11 @@
-/* The body of the update kernels (update_internal.h), included by update.c and by
- * update_avx.c (built with -mavx) with TB__RAD_UPDATE_NAME naming them. */
+/* The bodies of the update kernels (update_internal.h), inlined by update.c
+ * and by update_avx.c (built with -mavx): one source, two instruction sets. */
+#ifndef TB_RADIOSITY_UPDATE_KERNELS_INTERNAL_H
+#define TB_RADIOSITY_UPDATE_KERNELS_INTERNAL_H
+
 #include "host/radiosity/update_internal.h"
 
-void TB__RAD_UPDATE_NAME(vertices)(const tb__rad_update *u, size_t v0, size_t v1)
+static inline void tb__rad_update_vertices_body(const tb__rad_update *u, size_t v0, size_t v1)
 {
     const size_t nc = u->nc;
     const double *restrict dBi = u->dBi;
@@ -16,7 +19,7 @@ void TB__RAD_UPDATE_NAME(vertices)(const tb__rad_update *u, size_t v0, size_t v1
     }
 }
 
-void TB__RAD_UPDATE_NAME(elements)(const tb__rad_update *u, size_t q0, size_t q1)
+static inline void tb__rad_update_elements_body(const tb__rad_update *u, size_t q0, size_t q1)
 {
     const size_t nc = u->nc;
     const double *restrict dBi = u->dBi;
@@ -34,3 +37,5 @@ void TB__RAD_UPDATE_NAME(elements)(const tb__rad_update *u, size_t q0, size_t q1
         }
     }
 }
+
+#endif
