@@ -639,7 +639,8 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
             fn = NULL, ctx = NULL; /* no exchange: tb_ff_raycast casts no ray */
             TB_STAT_INC(tb__rad_facing_none);
         }
-        else if (!tb_ff_occluders_shaft(s->occ, s->clbox[c], s->crp + q0, q1 - q0, a, s->pts, (size_t)s->opt.samples, &sh)) {
+        else if (!tb_ff_occluders_shaft(s->occ, s->clbox[c], s->crp + q0, q1 - q0, a, s->pts, (size_t)s->opt.samples,
+                                        &sh)) {
             fn = tb__visible, ctx = &vis;
             if (!tb__cluster_boxes(s, s->clbox[c], a, &vis, vbox))
                 vis.box = NULL;

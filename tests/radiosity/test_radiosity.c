@@ -688,7 +688,8 @@ static void test_update_kernels(void **state)
         vff[v] = v % 5 == 0 ? 0.0f : (float)((x = x * 6364136223846793005ull + 1) >> 40) * 0x1p-24f;
     vff[3] = INFINITY;
     for (int j = 0; j < NE; j++) {
-        eff[j] = j % 7 == 0 ? 0.0f : j % 11 == 0 ? -0.5f : (float)((x = x * 6364136223846793005ull + 1) >> 40) * 0x1p-24f;
+        float r = (float)((x = x * 6364136223846793005ull + 1) >> 40) * 0x1p-24f;
+        eff[j] = j % 7 == 0 ? 0.0f : j % 11 == 0 ? -0.5f : r;
         pel[j] = (uint32_t)((j * 17) % NE); /* a permutation */
         pof[j] = (uint32_t)(j / 3);
         for (int c = 0; c < NC; c++)
