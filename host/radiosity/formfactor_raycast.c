@@ -333,6 +333,7 @@ typedef struct tb__shaft_plane {
 
 typedef struct tb__shaft_geom {
     double u[6]; /* union of the two boxes */
+    double ulo[3], uhi[3]; /* the union widened by m (u[x] - m, u[x + 3] + m) */
     tb__shaft_plane pl[12];
     int np;
     double m;
@@ -348,10 +349,10 @@ static int tb__shaft_extremal(const float *a, const float *b, int axis, int hi)
 }
 
 /* False only if box bx (lo xyz, hi xyz) is outside the shaft by more than the margin. */
-static bool tb__shaft_meets(const tb__shaft_geom *g, const float *bx)
+static inline bool tb__shaft_meets(const tb__shaft_geom *g, const float *bx)
 {
     for (int x = 0; x < 3; x++)
-        if (bx[x] > g->u[x + 3] + g->m || bx[x + 3] < g->u[x] - g->m)
+        if (bx[x] > g->uhi[x] || bx[x + 3] < g->ulo[x])
             return false;
     for (int k = 0; k < g->np; k++) {
         const tb__shaft_plane *p = &g->pl[k];
@@ -372,11 +373,12 @@ static bool tb__tri_may_block(const tb_ff_occluders *occ, uint32_t t, const floa
 {
     const double *pl = occ->tri_plane[t];
     double a0 = -pl[3], a1 = -pl[3], b0 = -pl[3], b1 = -pl[3]; /* plane distance ranges over the boxes */
-    for (int x = 0; x < 3; x++) {
-        int l = pl[x] >= 0.0 ? x : x + 3, h = pl[x] >= 0.0 ? x + 3 : x;
-        a0 += pl[x] * ra[l], a1 += pl[x] * ra[h];
-        b0 += pl[x] * rb[l], b1 += pl[x] * rb[h];
-    }
+    if (!apts || !bpts) /* (the points, where given, replace them) */
+        for (int x = 0; x < 3; x++) {
+            int l = pl[x] >= 0.0 ? x : x + 3, h = pl[x] >= 0.0 ? x + 3 : x;
+            a0 += pl[x] * ra[l], a1 += pl[x] * ra[h];
+            b0 += pl[x] * rb[l], b1 += pl[x] * rb[h];
+        }
     if (apts) { /* the points themselves: far tighter than their box when it is tilted */
         a0 = INFINITY, a1 = -INFINITY;
         for (size_t k = 0; k < na; k++) {
@@ -469,8 +471,10 @@ bool tb_ff_occluders_shaft(const tb_ff_occluders *occ, const float a[6], const t
     tb__shaft_geom g;
     g.m = TB__SHAFT_MARGIN * mag;
     sh->margin = g.m;
-    for (int x = 0; x < 3; x++)
+    for (int x = 0; x < 3; x++) {
         g.u[x] = tb__fmin(a[x], b[x]), g.u[x + 3] = tb__fmax(a[x + 3], b[x + 3]);
+        g.ulo[x] = g.u[x] - g.m, g.uhi[x] = g.u[x + 3] + g.m;
+    }
     /* Haines and Wallace: where one box reaches furthest on side si of axis
      * i and the other on side sj of axis j, the hull of the two has a face
      * through their (si, sj) edges, parallel to the third axis. */

@@ -5,6 +5,7 @@
 
 #include "host/radiosity/lights.h"
 #include "host/radiosity/radiosity.h"
+#include "host/radiosity/update_internal.h"
 #include "util/base/fault.h"
 #include "util/base/progress.h"
 #include "util/container/pqueue.h"
@@ -55,9 +56,11 @@ struct tb_rad_solver {
     tb_vec3 *rp, *rn;       /* ray cast: receiver positions and normals (the vertices) */
     tb_vec3 *pts;           /* ray cast: shooter sample points */
     tb_ff_polygon *polys;   /* every element */
+    double *erad;           /* per element: its radius about its centroid (tb__radius2's root) */
     tb_ff_occluders *occ;   /* the CPU backend's, when the solver built it */
     float (*boxes)[6];      /* with occ: bounds of clusters of touching occluders (lo xyz, hi xyz, padded) */
     size_t nboxes;
+    float box_pad;          /* with occ: the boxes' padding */
     uint32_t *corder;       /* with occ: the vertices in clusters of TB__RAD_CLUSTER, near ones together */
     float (*clbox)[6];      /* bounds of each cluster's receivers */
     tb_vec3 *crp;           /* the receiver positions in corder's order */
@@ -91,6 +94,7 @@ struct tb_rad_solver {
     uint32_t *row_elem;     /* an element with each distinct row */
     double *row_dot;        /* per distinct row: sum_c rho[c] dBi[c] of the current shot */
     size_t nrows;
+    bool avx;               /* the update's AVX kernels (tb__rad_have_avx) */
     /* point, spot and directional lights (the block at the end of this file) */
     tb_rad_lights *lights;  /* NULL: none */
     unsigned char *lshot;   /* nlights: shot yet */
@@ -319,6 +323,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     free(s->rn);
     free(s->pts);
     free(s->polys);
+    free(s->erad);
     free(s->rho_mean);
     free(s->pof), free(s->pstart), free(s->pel), free(s->spoly), free(s->sarea), free(s->scen), free(s->snrm);
     free(s->sdirty);
@@ -342,6 +347,18 @@ void tb_rad_solver_free(tb_rad_solver *s)
 }
 
 const tb_rad_mesh *tb_rad_solver_mesh(const tb_rad_solver *s) { return &s->m; }
+
+/* Squared distance from c to the farthest corner of p (p's radius about c;
+ * a NaN distance is passed over, as fmax does). */
+static double tb__radius2(const tb_ff_polygon *p, tb_vec3 c)
+{
+    double r2 = 0.0;
+    for (int k = 0; k < p->n; k++) {
+        double x = (double)tb_vec3_length2(tb_vec3_sub(p->v[k], c));
+        r2 = x > r2 ? x : r2;
+    }
+    return r2;
+}
 
 static void *tb__calloc(size_t n, size_t size, bool *ok)
 {
@@ -394,6 +411,7 @@ static tb_status tb__occluder_boxes(tb_rad_solver *s, const tb_ff_polygon *occ, 
     }
     s->boxes = b;
     s->nboxes = n;
+    s->box_pad = pad;
     return TB_OK;
 }
 
@@ -424,14 +442,62 @@ static inline bool tb__segment_box(tb_vec3 a, tb_vec3 b, const float *box)
     return true;
 }
 
+/* Most occluder boxes tb__batch lists per cluster (more: all are tested). */
+#define TB__RAD_CLUSTER_BOXES 32
+
+/* tb__visible's context: the solver and the occluder boxes one cluster's
+ * segments can touch (box[0..n) indices into s->boxes; box NULL: all). */
+typedef struct tb__vis_ctx {
+    const tb_rad_solver *s;
+    const uint16_t *box;
+    size_t n;
+} tb__vis_ctx;
+
 /* A tb_ff_visible_fn over the solver's occluders: the boxes first, then
- * the BVH (the same answer as tb_ff_occluders_visible alone). */
+ * the BVH (the same answer as tb_ff_occluders_visible alone: every
+ * occluder lies inside a box, so a segment that misses them all crosses
+ * none). */
 static bool tb__visible(void *ctx, tb_vec3 a, tb_vec3 b)
 {
-    const tb_rad_solver *s = ctx;
+    const tb__vis_ctx *v = ctx;
+    const tb_rad_solver *s = v->s;
+    if (v->box) {
+        for (size_t k = 0; k < v->n; k++)
+            if (tb__segment_box(a, b, s->boxes[v->box[k]]))
+                return tb_ff_occluders_visible(s->occ, a, b);
+        return true;
+    }
     for (size_t k = 0; k < s->nboxes; k++)
         if (tb__segment_box(a, b, s->boxes[k]))
             return tb_ff_occluders_visible(s->occ, a, b);
+    return true;
+}
+
+/* The occluder boxes that meet the bounds of a cluster's segments, the
+ * union lo..hi of its receivers' box and the sample points' (padded like
+ * the boxes): the others cannot be touched by them. False (use them all)
+ * if there are more than TB__RAD_CLUSTER_BOXES. */
+static bool tb__cluster_boxes(const tb_rad_solver *s, const float *ca, const float *cb, tb__vis_ctx *v,
+                              uint16_t *box)
+{
+    if (s->nboxes > UINT16_MAX)
+        return false;
+    float lo[3], hi[3];
+    for (int x = 0; x < 3; x++) {
+        float l = fminf(ca[x], cb[x]), h = fmaxf(ca[x + 3], cb[x + 3]);
+        float pad = 1e-4f * (fabsf(l) + fabsf(h)) + s->box_pad;
+        lo[x] = l - pad, hi[x] = h + pad;
+    }
+    size_t n = 0;
+    for (size_t k = 0; k < s->nboxes; k++) {
+        const float *b = s->boxes[k];
+        if (b[0] > hi[0] || b[1] > hi[1] || b[2] > hi[2] || b[3] < lo[0] || b[4] < lo[1] || b[5] < lo[2])
+            continue;
+        if (n == TB__RAD_CLUSTER_BOXES)
+            return false;
+        box[n++] = (uint16_t)k;
+    }
+    v->box = box, v->n = n;
     return true;
 }
 
@@ -628,6 +694,8 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
     for (ptrdiff_t ci = 0; ci < nmine; ci++) {
         ptrdiff_t c = c0 + ci * dc;
         tb_ff_shaft sh;
+        tb__vis_ctx vis = {s, NULL, 0};
+        uint16_t vbox[TB__RAD_CLUSTER_BOXES];
         tb_ff_visible_fn fn = tb_ff_shaft_visible;
         void *ctx = &sh;
         size_t q0 = (size_t)c * TB__RAD_CLUSTER, q1 = q0 + TB__RAD_CLUSTER < nv ? q0 + TB__RAD_CLUSTER : nv;
@@ -635,8 +703,12 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
             fn = NULL, ctx = NULL; /* no exchange: tb_ff_raycast casts no ray */
             TB_STAT_INC(tb__rad_facing_none);
         }
-        else if (!tb_ff_occluders_shaft(s->occ, s->clbox[c], s->crp + q0, q1 - q0, a, s->pts, (size_t)s->opt.samples, &sh))
-            fn = tb__visible, ctx = s;
+        else if (!tb_ff_occluders_shaft(s->occ, s->clbox[c], s->crp + q0, q1 - q0, a, s->pts, (size_t)s->opt.samples,
+                                        &sh)) {
+            fn = tb__visible, ctx = &vis;
+            if (!tb__cluster_boxes(s, s->clbox[c], a, &vis, vbox))
+                vis.box = NULL;
+        }
         else if (sh.n == 0)
             fn = NULL, ctx = NULL; /* nothing in the way: the same sum without tests */
         for (size_t q = q0; q < q1; q++) {
@@ -811,6 +883,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     s->snrm = tb__calloc(s->nsh, sizeof *s->snrm, &ok);
     s->sdirty = tb__calloc(s->nsh, sizeof *s->sdirty, &ok);
     s->polys = tb__calloc(ne, sizeof *s->polys, &ok);
+    s->erad = tb__calloc(ne, sizeof *s->erad, &ok);
     s->rho_mean = tb__calloc((size_t)nc, sizeof *s->rho_mean, &ok);
     if (hemi) {
         s->vert_area = tb__calloc(nv, sizeof *s->vert_area, &ok);
@@ -830,8 +903,10 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     memcpy(s->m.elems, mesh->elems, ne * sizeof *s->m.elems);
     memcpy(s->m.rho, mesh->rho, ne * (size_t)nc * sizeof *s->m.rho);
     memcpy(s->m.emission, mesh->emission, ne * (size_t)nc * sizeof *s->m.emission);
-    for (size_t i = 0; i < ne; i++)
+    for (size_t i = 0; i < ne; i++) {
         tb_rad_mesh_polygon(&s->m, i, &s->polys[i]);
+        s->erad[i] = sqrt(tb__radius2(&s->polys[i], s->m.elems[i].centroid));
+    }
     {
         tb_status st = tb_rad_mesh_copy_patches(&s->m, mesh, NULL);
         if (!st)
@@ -887,6 +962,7 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
     for (int c = 0; c < nc; c++)
         s->rho_mean[c] /= s->total_area;
     tb__reflectance_rows(s);
+    s->avx = tb__rad_have_avx();
     if (o.nlights > 0) {
         tb_status st = tb__lights_init(s, state);
         if (st) {
@@ -1140,21 +1216,13 @@ static double tb__element_mean_ff(const tb_ff_polygon *pj, tb_vec3 nj, const tb_
     return wsum > 0.0 ? sum / wsum : 0.0;
 }
 
-/* Squared distance from c to the farthest corner of p (p's radius about c). */
-static double tb__radius2(const tb_ff_polygon *p, tb_vec3 c)
-{
-    double r2 = 0.0;
-    for (int k = 0; k < p->n; k++)
-        r2 = fmax(r2, (double)tb_vec3_length2(tb_vec3_sub(p->v[k], c)));
-    return r2;
-}
 
 /* Whether element j can come within TB__RAD_NEAR shooter radii `rad` of the
  * shooter's centroid cen: its centroid lies within that plus its own radius. */
 static bool tb__near_element(const tb_rad_solver *s, size_t j, tb_vec3 cen, double rad)
 {
     const tb_rad_element *ej = &s->m.elems[j];
-    double lim = TB__RAD_NEAR * rad + sqrt(tb__radius2(&s->polys[j], ej->centroid));
+    double lim = TB__RAD_NEAR * rad + s->erad[j];
     return !((double)tb_vec3_length2(tb_vec3_sub(ej->centroid, cen)) >= lim * lim); /* !(>=): a NaN counts as near */
 }
 
@@ -1428,25 +1496,24 @@ static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0)
             for (size_t k = 0; k < s->nrows; k++)
                 s->row_dot[k] = tb__dot(rhos + (size_t)s->row_elem[k] * ncs, dBi, ncs);
         size_t va = s->split ? s->v0 : 0, vb = s->split ? s->v1 : s->m.nverts;
-        for (size_t v = va; v < vb; v++) {
-            double f = s->vff[v];
-            if (f != 0.0)
-                for (size_t c = 0; c < ncs; c++)
-                    Hv[v * ncs + c] += dBi[c] * f;
-        }
         uint32_t qa, qb; /* each element's update is its own: any split gives the same values */
         tb__owned(s, &qa, &qb);
+        /* the channel loops (update_internal.h: AVX where the CPU has it),
+         * then the scalars per element */
+        tb__rad_update u = {ncs, dBi, s->vff, s->eff, s->pel, s->pof, i, rhos, Hv, He, dB};
+        if (s->avx) {
+            tb__rad_update_vertices_avx(&u, va, vb);
+            tb__rad_update_elements_avx(&u, qa, qb);
+        } else {
+            tb__rad_update_vertices(&u, va, vb);
+            tb__rad_update_elements(&u, qa, qb);
+        }
         for (uint32_t q = qa; q < qb; q++) {
             size_t j = s->pel[q];
             double g = s->eff[j];
             if (s->pof[j] == i || !(g > 0.0)) /* the shooting patch's own elements get nothing */
                 continue;
             double aj = s->m.elems[j].area;
-            for (size_t c = 0; c < ncs; c++) {
-                double dh = dBi[c] * g, rho = rhos[j * ncs + c];
-                He[j * ncs + c] += dh;
-                dB[j * ncs + c] += rho * dh;
-            }
             /* received: sum_c dBi g aj; reflected (what joins the unshot
              * power): sum_c rho dBi g aj, per distinct reflectance row */
             double rec = sum_dbi * g * aj;

@@ -14,6 +14,7 @@
 #include <omp.h>
 
 #include "host/radiosity/radiosity.h"
+#include "host/radiosity/update_internal.h"
 #include "host/render/scene.h"
 #include "rad_test.h"
 #include "tb_test.h"
@@ -668,6 +669,82 @@ static void test_shaft(void **state)
     tb_scene_free(sc);
 }
 
+/* The shot update's channel kernels (update_internal.h): the baseline and
+ * AVX builds give the same bits as the plain loops, over any split of the
+ * ranges, with 31 channels (not a multiple of the vector width), elements
+ * of the shooter and with F = 0 left alone, and infinities and NaN passed
+ * through as the loops pass them. */
+static void test_update_kernels(void **state)
+{
+    (void)state;
+    enum { NV = 37, NE = 29, NC = 31 };
+    double dBi[NC];
+    float vff[NV], eff[NE], rho[NE * NC];
+    uint32_t pel[NE], pof[NE];
+    uint64_t x = 12345;
+    for (int c = 0; c < NC; c++)
+        dBi[c] = (double)((x = x * 6364136223846793005ull + 1442695040888963407ull) >> 11) * 0x1p-53 * 3.0;
+    for (int v = 0; v < NV; v++)
+        vff[v] = v % 5 == 0 ? 0.0f : (float)((x = x * 6364136223846793005ull + 1) >> 40) * 0x1p-24f;
+    vff[3] = INFINITY;
+    for (int j = 0; j < NE; j++) {
+        float r = (float)((x = x * 6364136223846793005ull + 1) >> 40) * 0x1p-24f;
+        eff[j] = j % 7 == 0 ? 0.0f : j % 11 == 0 ? -0.5f : r;
+        pel[j] = (uint32_t)((j * 17) % NE); /* a permutation */
+        pof[j] = (uint32_t)(j / 3);
+        for (int c = 0; c < NC; c++)
+            rho[j * NC + c] = (float)((x = x * 6364136223846793005ull + 1) >> 40) * 0x1p-24f * 0.99f;
+    }
+    eff[4] = NAN;
+    static double ref[3][NV * NC], got[3][NV * NC];
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < NV * NC; i++)
+            ref[k][i] = 0.25 * (double)(i % 13);
+    memcpy(got, ref, sizeof got);
+    /* the plain loops, as tb__shoot had them */
+    for (int v = 0; v < NV; v++)
+        if ((double)vff[v] != 0.0)
+            for (int c = 0; c < NC; c++)
+                ref[0][v * NC + c] += dBi[c] * (double)vff[v];
+    for (int q = 0; q < NE; q++) {
+        uint32_t j = pel[q];
+        double g = eff[j];
+        if (pof[j] == 2 || !(g > 0.0))
+            continue;
+        for (int c = 0; c < NC; c++) {
+            double dh = dBi[c] * g;
+            ref[1][j * NC + c] += dh;
+            ref[2][j * NC + c] += (double)rho[j * NC + c] * dh;
+        }
+    }
+    for (int avx = 0; avx < 2; avx++) {
+        if (avx && !tb__rad_have_avx())
+            break;
+        for (size_t cut = 0; cut <= NE; cut += 7) {
+            double w[3][NV * NC];
+            memcpy(w, got, sizeof w);
+            tb__rad_update u = {NC, dBi, vff, eff, pel, pof, 2, rho, w[0], w[1], w[2]};
+            size_t vcut = cut < NV ? cut : NV;
+            if (avx) {
+                tb__rad_update_vertices_avx(&u, vcut, NV);
+                tb__rad_update_vertices_avx(&u, 0, vcut);
+                tb__rad_update_elements_avx(&u, 0, cut);
+                tb__rad_update_elements_avx(&u, cut, NE);
+            } else {
+                tb__rad_update_vertices(&u, vcut, NV);
+                tb__rad_update_vertices(&u, 0, vcut);
+                tb__rad_update_elements(&u, 0, cut);
+                tb__rad_update_elements(&u, cut, NE);
+            }
+            assert_memory_equal(w[0], ref[0], sizeof ref[0]);
+            assert_memory_equal(w[1], ref[1], NE * NC * sizeof(double));
+            assert_memory_equal(w[2], ref[2], NE * NC * sizeof(double));
+        }
+    }
+    assert_true(isinf(ref[0][3 * NC]) || isnan(ref[0][3 * NC])); /* the infinity reached its vertex */
+    assert_true(ref[1][0] == got[1][0]); /* element 0: F = 0, untouched */
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1)
@@ -678,7 +755,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_reciprocity),     cmocka_unit_test(test_threads),
         cmocka_unit_test(test_patches_csv),     cmocka_unit_test(test_continue), cmocka_unit_test(test_pack),
         cmocka_unit_test(test_errors),          cmocka_unit_test(test_cornell_image),
-        cmocka_unit_test(test_occluders), cmocka_unit_test(test_shaft),
+        cmocka_unit_test(test_occluders), cmocka_unit_test(test_shaft), cmocka_unit_test(test_update_kernels),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
