@@ -84,7 +84,7 @@ void tb_scene_memory(const tb_scene *s, tb_scene_memory_use *m)
     m->emitters = tb__alloc((size_t)s->nemitters * sizeof(tb_emitter)) +
                   tb__alloc((size_t)s->nemissive * sizeof(tb_scene_emissive));
     m->lights = tb__alloc((size_t)s->nlights * sizeof(tb_light));
-    m->prims = tb__alloc(s->nprims * sizeof(tb_accel_prim));
+    m->prims = s->prims ? tb__alloc(s->nprims * sizeof(tb_accel_prim)) : 0; /* dropped once the structure is built */
     if (s->accel) {
         tb_accel_stats as;
         tb_accel_get_stats(s->accel, &as);
