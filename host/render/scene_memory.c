@@ -36,9 +36,9 @@ static size_t tb__mesh_bytes(const tb_object_mesh *m)
 static size_t tb__node_bytes(const tb_object *o, size_t *mesh)
 {
     size_t n = o->name ? tb__alloc(strlen(o->name) + 1) : 0;
-    n += tb__alloc((size_t)o->nprofile * 2 * sizeof(double));
     if (o->kind == TB_PRIM_PRISM)
-        n += tb__alloc((size_t)o->geom.prism.nprofile * sizeof(tb_vec2));
+        n += tb__alloc((size_t)o->nprofile * 2 * sizeof(double)) +
+             tb__alloc((size_t)o->geom.prism.nprofile * sizeof(tb_vec2));
     if (o->kind == TB_PRIM_POLYGONS) {
         const tb_geom_polygons *g = &o->geom.polygons;
         size_t m = 0;
