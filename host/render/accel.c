@@ -155,6 +155,7 @@ tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t 
                     acc->tris[t++] = *tr;
             }
             acc->stats.memory_bytes += ntri * sizeof *acc->tris + (acc->tri_of ? nkept * sizeof *acc->tri_of : 0);
+            acc->stats.tri_bytes += ntri * sizeof *acc->tris;
         }
         if (!st && acc->tris && kind == TB_ACCEL_BVH && !o.bvh_no_pack)
             st = tb__bvhw_pack(acc);

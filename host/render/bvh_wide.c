@@ -314,6 +314,7 @@ tb_status tb__bvhw_pack(tb_accel *acc)
     acc->lanes = lanes;
     acc->lanes_f32 = f32;
     acc->stats.memory_bytes += bytes;
+    acc->stats.tri_bytes += bytes;
 #else
     (void)acc;
 #endif

@@ -5,6 +5,7 @@
 #include "tb_test.h"
 
 #include <limits.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -247,6 +248,9 @@ static void test_memory_accounting(void **state)
     assert_int_equal(m.total, m.objects + m.meshes + m.fed + m.materials + m.emitters + m.lights + m.prims + m.accel);
     assert_true(m.per_object > (double)sizeof(tb_object) && m.per_object < 4096.0);
     assert_true(m.per_triangle > 0.0);
+    /* The two shares divide the objects, meshes and structure between them, nothing left out or counted twice. */
+    double shared = m.per_object * (double)m.nobjects + m.per_triangle * (double)m.triangles;
+    assert_true(fabs(shared - (double)(m.objects + m.meshes + m.prims + m.accel)) < 1e-6 * shared);
     tb_scene_memory_use z;
     tb_scene_memory(NULL, &z);
     assert_int_equal(z.total, 0);
