@@ -251,6 +251,23 @@ static void test_memory_accounting(void **state)
     /* The two shares divide the objects, meshes and structure between them, nothing left out or counted twice. */
     double shared = m.per_object * (double)m.nobjects + m.per_triangle * (double)m.triangles;
     assert_true(fabs(shared - (double)(m.objects + m.meshes + m.prims + m.accel)) < 1e-6 * shared);
+    /* The references are made again, bit for bit, from the objects: as a
+     * load without a structure keeps them, and a rebuild finds them. */
+    tb_accel_prim *again;
+    assert_int_equal(tb_scene_refs(s, &again), TB_OK);
+    FILE *fp = fmemopen((void *)text, strlen(text), "r");
+    assert_non_null(fp);
+    tb_scene_options o = {.no_accel = true};
+    tb_scene *kept;
+    assert_int_equal(tb_scene_load_stream(fp, "scale.mid", NULL, &o, &kept), TB_OK);
+    fclose(fp);
+    assert_int_equal(kept->nprims, 15);
+    assert_non_null(kept->prims);
+    assert_memory_equal(again, kept->prims, 15 * sizeof *again);
+    tb_scene_free(kept);
+    free(again);
+    assert_int_equal(tb_scene_rebuild_accel(s, TB_ACCEL_GRID, NULL), TB_OK);
+    assert_null(s->prims);
     tb_scene_memory_use z;
     tb_scene_memory(NULL, &z);
     assert_int_equal(z.total, 0);
