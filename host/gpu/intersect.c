@@ -632,9 +632,16 @@ tb_gpu_scene *tb_gpu_scene_create_ex(tb_gpu_device *dev, const tb_scene *scene, 
         else
             g->info.cpu_objects++;
     }
+    /* The scene's references (made again: the scene drops its array once its structure is built). */
+    tb_accel_prim *refs;
+    if (tb_scene_refs(scene, &refs)) {
+        free(gref), free(cref), free(gidx);
+        tb_gpu_scene_destroy(g);
+        return NULL;
+    }
     size_t ng = 0, nc = 0;
     for (size_t i = 0; i < scene->nprims; ++i) {
-        const tb_accel_prim *p = &scene->prims[i];
+        const tb_accel_prim *p = &refs[i];
         if (on_gpu[p->object]) {
             gidx[ng] = (uint32_t)i;
             gref[ng++] = *p;
@@ -642,6 +649,7 @@ tb_gpu_scene *tb_gpu_scene_create_ex(tb_gpu_device *dev, const tb_scene *scene, 
             cref[nc++] = *p;
         }
     }
+    free(refs);
     tb_status st = tb__build_gpu(g, gref, gidx, ng);
     g->info.gpu_triangles = g->ntris;
     g->info.gpu_spheres = g->nspheres;

@@ -552,7 +552,8 @@ static void tb__object_clear(tb_object *o)
         tb__object_clear(&o->children[i]);
     free(o->children);
     free(o->name);
-    free(o->profile);
+    if (o->kind == TB_PRIM_PRISM)
+        free(o->profile);
     if (o->kind == TB_PRIM_POLYGONS) {
         tb_geom_polygons *g = &o->geom.polygons;
         if (o->fed_shared) {

@@ -73,41 +73,55 @@ typedef struct tb_object tb_object;
  * cache from one thread at a time. */
 typedef struct tb_object_fed_cache tb_object_fed_cache;
 
-/* A primitive or a CSG node with its children. */
+/* A primitive or a CSG node with its children. Fields are ordered so that
+ * no padding is left, and the fields of one kind (revolved quadrics, prisms)
+ * share storage: 472 bytes on 64-bit targets (docs/performance.md, "Memory per
+ * object"). */
 struct tb_object {
     tb_prim_kind kind;
     uint32_t index;          /* index of the top-level object (MID order, from 0); children carry their root's */
     int material;            /* opaque material index from the build callback (-1 without one) */
+    int nchildren;
+    uint32_t face_base;      /* first face ID of this node within the top-level object's numbering (0 for a lone primitive) */
+    uint32_t nfaces;         /* face IDs this node uses: tb_param_face_count for a primitive, the sum over children for CSG */
+    bool closed;             /* a solid (closed surface), so usable inside CSG */
+    bool flip;               /* a CSG leaf subtracted an odd number of times on its path: its normals point inward in the result */
+    bool inv_affine;         /* to_world.inv's last row is exactly 0 0 0 1 (checked at build): the world -> object
+                                ray mapping's fast path; false (the general path) for an object not built here */
+    bool zclosed[2];         /* cylinder, cone, conic: the radius is zero at zrange[0] / [1] (an apex: no cap) */
+    bool profile_convex;     /* prism: the profile is convex (clipped by planes, else crossings are counted) */
     char *name;              /* copy of the MID name, or NULL */
     tb_transform to_world;   /* object space to world (double, with inverse): the full product for children too */
+    double scale;            /* Frobenius norm of the linear part of to_world (bounds world error from object error) */
     tb_mid_geometry geom;    /* deep copy of the parameters; pointers owned by the object. Polygons from a FED
                                 file are given here in inline form (the file's vertices, and each face's outer
                                 loop as a polygon; mesh.text NULL), so param and bounds work on them; the holes
                                 are in `fed` */
+    tb_object *children;     /* CSG nodes: the children, in MID order */
+    const tb_object *parent; /* the CSG node holding this one, NULL at the top */
     tb_object_mesh *mesh;    /* polygons: the triangulated mesh; NULL for other kinds */
     struct tb_fed *fed;      /* polygons from a FED file: the loaded mesh (util/mesh/fed.h); NULL otherwise */
     struct tb__fed_shared *fed_shared; /* when fed and the geom arrays are borrowed from a
                                 tb_object_fed_cache entry (private); NULL when the object owns them */
     tb_mid_ref mesh_file;    /* polygons from a FED file: the reference as written and resolved (owned copies) */
-    int nchildren;
-    tb_object *children;     /* CSG nodes: the children, in MID order */
-    const tb_object *parent; /* the CSG node holding this one, NULL at the top */
-    uint32_t face_base;      /* first face ID of this node within the top-level object's numbering (0 for a lone primitive) */
-    uint32_t nfaces;         /* face IDs this node uses: tb_param_face_count for a primitive, the sum over children for CSG */
-    bool closed;             /* a solid (closed surface), so usable inside CSG */
-    bool flip;               /* a CSG leaf subtracted an odd number of times on its path: its normals point inward in the result */
-    /* Derived at build time for intersection (docs/primitives.md). */
-    double conic[3];         /* cylinder, cone, conic: r^2 = conic[0] + conic[1] z + conic[2] z^2 */
-    double zrange[2];        /* cylinder, cone, conic: the z range */
-    bool zclosed[2];         /* cylinder, cone, conic: the radius is zero at zrange[0] / [1] (an apex: no cap) */
-    int nprofile;            /* prism: profile points used by the test (0: large regular prism, tested by sectors) */
-    double *profile;         /* prism: those points as x y pairs (owned) */
-    double profile_orient;   /* prism: +1 if the profile turns counter-clockwise, -1 if clockwise */
-    bool profile_convex;     /* prism: the profile is convex (clipped by planes, else crossings are counted) */
-    double scale;            /* Frobenius norm of the linear part of to_world (bounds world error from object error) */
-    bool inv_affine;         /* to_world.inv's last row is exactly 0 0 0 1 (checked at build): the world -> object
-                                ray mapping's fast path; false (the general path) for an object not built here */
+    /* Derived at build time for intersection (docs/primitives.md); only the
+     * object's own kind's fields are meaningful (the others share storage). */
+    union {
+        struct {
+            double conic[3];  /* cylinder, cone, conic: r^2 = conic[0] + conic[1] z + conic[2] z^2 */
+            double zrange[2]; /* cylinder, cone, conic: the z range */
+        };
+        struct {
+            double *profile;       /* prism: the profile points used by the test, as x y pairs (owned) */
+            double profile_orient; /* prism: +1 if the profile turns counter-clockwise, -1 if clockwise */
+            int nprofile;          /* prism: profile points used by the test (0: large regular prism, tested by
+                                      sectors) */
+        };
+    };
 };
+
+
+_Static_assert(sizeof(void *) != 8 || sizeof(tb_object) == 472, "tb_object stays 472 bytes (no padding)");
 
 /* Maps a resolved MID material to the renderer's material index; returns
  * TB_OK or an error (with tb_error) that aborts the build. */

@@ -137,13 +137,27 @@ tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t 
     }
     /* Triangle references in stored order, so a leaf's lie side by side. */
     if (!st && nkept > 0 && cb->tris) {
-        acc->tris = malloc(nkept * sizeof *acc->tris);
-        if (!acc->tris)
-            st = tb_error(TB_ERR_NOMEM, "accel: out of memory for %zu triangle references", nkept);
-        for (size_t k = 0; !st && k < nkept; k++)
-            acc->tris[k] = cb->tris[acc->index[k]];
-        acc->stats.memory_bytes += nkept * sizeof *acc->tris;
-        if (!st && kind == TB_ACCEL_BVH && !o.bvh_no_pack)
+        size_t ntri = 0;
+        for (size_t k = 0; k < nkept; k++)
+            ntri += cb->tris[acc->index[k]].object != TB_ACCEL_TRI_NONE;
+        /* Records for the triangles only; a map from reference to record
+         * unless every reference is one. */
+        if (ntri > 0) {
+            acc->tris = malloc(ntri * sizeof *acc->tris);
+            acc->tri_of = ntri < nkept ? malloc(nkept * sizeof *acc->tri_of) : NULL;
+            if (!acc->tris || (ntri < nkept && !acc->tri_of))
+                st = tb_error(TB_ERR_NOMEM, "accel: out of memory for %zu triangle references", ntri);
+            for (size_t k = 0, t = 0; !st && k < nkept; k++) {
+                const tb_accel_tri *tr = &cb->tris[acc->index[k]];
+                if (acc->tri_of)
+                    acc->tri_of[k] = tr->object != TB_ACCEL_TRI_NONE ? (uint32_t)t : TB_ACCEL_TRI_NONE;
+                if (tr->object != TB_ACCEL_TRI_NONE)
+                    acc->tris[t++] = *tr;
+            }
+            acc->stats.memory_bytes += ntri * sizeof *acc->tris + (acc->tri_of ? nkept * sizeof *acc->tri_of : 0);
+            acc->stats.tri_bytes += ntri * sizeof *acc->tris;
+        }
+        if (!st && acc->tris && kind == TB_ACCEL_BVH && !o.bvh_no_pack)
             st = tb__bvhw_pack(acc);
     }
     if (st) {
@@ -275,5 +289,6 @@ void tb_accel_free(tb_accel *acc)
     free(acc->prims);
     free(acc->index);
     free(acc->tris);
+    free(acc->tri_of);
     free(acc);
 }

@@ -110,7 +110,10 @@ struct tb_accel {
     size_t n;              /* references stored */
     tb_accel_prim *prims;  /* stored references: BVH leaf order, else input order (empty boxes dropped) */
     uint32_t *index;       /* input index of each stored reference (the tie rule's last key) */
-    tb_accel_tri *tris;    /* cb.tris in stored order (a leaf's triangles side by side), or NULL */
+    tb_accel_tri *tris;    /* cb.tris's triangles in stored order (a leaf's triangles side by side), or NULL
+                              when there is none: see tb__accel_tri_at */
+    uint32_t *tri_of;      /* per stored reference, its record in tris (TB_ACCEL_TRI_NONE: not a triangle);
+                              NULL when every reference is a triangle (record k is reference k) */
     tb_aabb bounds;        /* union of the stored boxes */
     tb_accel_stats stats;  /* filled at build */
     tb_bvh_node *nodes;    /* BVH: depth-first binary nodes (the layout tb_accel_bvh_nodes exposes) */
@@ -216,6 +219,19 @@ typedef struct tb__accel_best {
     tb_accel_tri_hit tri; /* the hit's triangle details when it came from a triangle reference */
 } tb__accel_best;
 
+/* The triangle record of stored reference k, or NULL if it is not a triangle
+ * (only triangles have one: an 80-byte record per whole object would double
+ * the structure's size in a scene of objects and a few meshes). */
+static inline const tb_accel_tri *tb__accel_tri_at(const tb_accel *acc, size_t k)
+{
+    if (!acc->tris)
+        return NULL;
+    if (!acc->tri_of)
+        return &acc->tris[k];
+    uint32_t i = acc->tri_of[k];
+    return i == TB_ACCEL_TRI_NONE ? NULL : &acc->tris[i];
+}
+
 /* The triangle test on stored reference k (acc->tris[k] is a triangle): the
  * crossing's float t in [tmin, tmax]. */
 static inline __attribute__((always_inline)) bool tb__accel_tri_test(const tb_accel_tri *tr, const tb_ray *ray,
@@ -260,8 +276,8 @@ static inline bool tb__accel_tri_offer(tb__accel_best *b, uint32_t object, uint3
 /* Tests stored reference k against the running best; true if it improved it. */
 static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best *b)
 {
-    const tb_accel_tri *tr = acc->tris ? &acc->tris[k] : NULL;
-    if (tr && tr->object != TB_ACCEL_TRI_NONE) {
+    const tb_accel_tri *tr = tb__accel_tri_at(acc, k);
+    if (tr) {
         double t, uvw[3];
         int dir;
         if (!tb__accel_tri_test(tr, &b->ray, &b->w, &b->wready, &t, &dir, uvw))
@@ -302,8 +318,8 @@ static inline tb__accel_any tb__accel_any_start(const tb_ray *ray)
 static inline bool tb__accel_test_any(const tb_accel *acc, size_t k, tb__accel_any *q)
 {
     const tb_ray *ray = q->ray;
-    const tb_accel_tri *tr = acc->tris ? &acc->tris[k] : NULL;
-    if (tr && tr->object != TB_ACCEL_TRI_NONE) {
+    const tb_accel_tri *tr = tb__accel_tri_at(acc, k);
+    if (tr) {
         double t;
         int dir;
         return tb__accel_tri_test(tr, ray, &q->w, &q->wready, &t, &dir, NULL);

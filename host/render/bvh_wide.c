@@ -253,7 +253,7 @@ static bool tb__bvhw_all_tris(const tb_accel *acc, const tb__bvhw_node *nd, unsi
     uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
     bool all = n > 0;
     for (uint32_t j = 0; all && j < n; j++)
-        all = acc->tris[s + j].object != TB_ACCEL_TRI_NONE;
+        all = tb__accel_tri_at(acc, s + j) != NULL;
     return all;
 }
 
@@ -275,7 +275,7 @@ tb_status tb__bvhw_pack(tb_accel *acc)
             uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
             for (uint32_t j = 0; f32 && j < n; j++)
                 for (unsigned r = 0; r < 9; r++) {
-                    double v = acc->tris[s + j].v[r];
+                    double v = tb__accel_tri_at(acc, s + j)->v[r];
                     f32 = f32 && (double)(float)v == v; /* (a zero keeps its sign through float) */
                 }
         }
@@ -299,7 +299,7 @@ tb_status tb__bvhw_pack(tb_accel *acc)
             char *base = (char *)lanes + per * s;
             tb__lane_ids *ids = (tb__lane_ids *)(base + 9 * (size_t)n * (f32 ? sizeof(float) : sizeof(double)));
             for (uint32_t j = 0; j < n; j++) {
-                const tb_accel_tri *tr = &acc->tris[s + j];
+                const tb_accel_tri *tr = tb__accel_tri_at(acc, s + j);
                 for (unsigned r = 0; r < 9; r++) { /* row 3 c + a is v[3 c + a] */
                     if (f32)
                         ((float *)base)[r * n + j] = (float)tr->v[r];
@@ -314,6 +314,7 @@ tb_status tb__bvhw_pack(tb_accel *acc)
     acc->lanes = lanes;
     acc->lanes_f32 = f32;
     acc->stats.memory_bytes += bytes;
+    acc->stats.tri_bytes += bytes;
 #else
     (void)acc;
 #endif

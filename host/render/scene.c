@@ -766,45 +766,85 @@ static tb_status tb__finish_emitters(tb_scene *s, int threads)
     return TB_OK;
 }
 
-/* The acceleration references: one per triangle of a polygons object, one
- * per other object; and the world bounds. */
-static tb_status tb__make_prims(tb_scene *s)
+/* Number of acceleration references: one per triangle of a polygons object, one per other object. */
+static size_t tb__count_prims(const tb_scene *s)
 {
     size_t n = 0;
     for (uint32_t i = 0; i < s->nobjects; i++) {
         const tb_object *o = s->objects[i];
         n += o->kind == TB_PRIM_POLYGONS && o->mesh ? o->mesh->ntris : 1;
     }
-    s->prims = n ? malloc(sizeof *s->prims * n) : NULL;
-    if (n && !s->prims)
-        return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", n);
-    s->bounds = tb_aabb_empty();
+    return n;
+}
+
+/* Fills prims[0 .. tb__count_prims(s)) with the references in build order;
+ * *bounds (may be NULL) becomes their union. */
+static tb_status tb__fill_prims(const tb_scene *s, tb_accel_prim *prims, tb_aabb *bounds)
+{
+    tb_aabb box = tb_aabb_empty();
     size_t k = 0;
     for (uint32_t i = 0; i < s->nobjects; i++) {
         const tb_object *o = s->objects[i];
         tb_status st;
         if (o->kind == TB_PRIM_POLYGONS && o->mesh) {
             for (uint32_t t = 0; t < o->mesh->ntris; t++) {
-                tb_accel_prim *r = &s->prims[k++];
+                tb_accel_prim *r = &prims[k++];
                 r->object = i;
                 r->sub = t;
                 if ((st = tb__scene_tri_bounds(o, t, &r->bounds)))
                     return st;
-                s->bounds = tb_aabb_union(s->bounds, r->bounds);
+                box = tb_aabb_union(box, r->bounds);
             }
         } else {
-            tb_accel_prim *r = &s->prims[k++];
+            tb_accel_prim *r = &prims[k++];
             r->object = i;
             r->sub = TB_SCENE_WHOLE_OBJECT;
             if ((st = tb__scene_object_bounds(o, &r->bounds)))
                 return st;
-            s->bounds = tb_aabb_union(s->bounds, r->bounds);
+            box = tb_aabb_union(box, r->bounds);
         }
     }
+    if (bounds)
+        *bounds = box;
+    return TB_OK;
+}
+
+/* The acceleration references and the world bounds. The array lives until
+ * the structure is built over it (which keeps its own copy). */
+static tb_status tb__make_prims(tb_scene *s)
+{
+    size_t n = tb__count_prims(s);
+    s->prims = n ? malloc(sizeof *s->prims * n) : NULL;
+    if (n && !s->prims)
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", n);
+    tb_status st = tb__fill_prims(s, s->prims, &s->bounds);
+    if (st)
+        return st;
     s->nprims = n;
     s->stats.nprims = n;
     tb_stat_add(&tb__n_tris, (int64_t)s->stats.triangles);
     tb_stat_add(&tb__n_refs, (int64_t)n);
+    return TB_OK;
+}
+
+tb_status tb_scene_refs(const tb_scene *s, tb_accel_prim **out)
+{
+    *out = NULL;
+    if (!s->nprims)
+        return TB_OK;
+    tb_accel_prim *p = malloc(sizeof *p * s->nprims);
+    if (!p)
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", s->nprims);
+    tb_status st = TB_OK;
+    if (s->prims)
+        memcpy(p, s->prims, sizeof *p * s->nprims);
+    else
+        st = tb__fill_prims(s, p, NULL);
+    if (st) {
+        free(p);
+        return st;
+    }
+    *out = p;
     return TB_OK;
 }
 
@@ -846,16 +886,26 @@ tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel
      * none when there is no triangle reference (the structure then keeps no
      * 80-byte record per reference: every one goes to the callbacks, as a
      * whole-object reference does anyway). */
+    tb_accel_prim *prims = s->prims;
+    if (!prims) { /* dropped after the last build: made again */
+        tb_status st = tb_scene_refs(s, &prims);
+        if (st) {
+            tb_timer_stop(tt);
+            return st;
+        }
+    }
     bool any_tri = false;
     for (size_t k = 0; k < s->nprims && !any_tri; k++)
-        any_tri = s->prims[k].sub != TB_SCENE_WHOLE_OBJECT;
+        any_tri = prims[k].sub != TB_SCENE_WHOLE_OBJECT;
     tb_accel_tri *tris = any_tri ? malloc(sizeof *tris * s->nprims) : NULL;
     if (any_tri && !tris) {
         tb_timer_stop(tt);
+        if (prims != s->prims)
+            free(prims);
         return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", s->nprims);
     }
     for (size_t k = 0; tris && k < s->nprims; k++) {
-        const tb_accel_prim *r = &s->prims[k];
+        const tb_accel_prim *r = &prims[k];
         if (r->sub == TB_SCENE_WHOLE_OBJECT)
             tris[k] = (tb_accel_tri){.object = TB_ACCEL_TRI_NONE};
         else
@@ -863,9 +913,13 @@ tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel
     }
     tb_accel_callbacks cb = {tb__cb_intersect, tb__cb_occluded, s, tris};
     tb_accel *acc;
-    tb_status st = tb_accel_build(kind, s->prims, s->nprims, &cb, opt, &acc);
+    tb_status st = tb_accel_build(kind, prims, s->nprims, &cb, opt, &acc);
     tb_timer_stop(tt);
     free(tris);
+    /* The structure keeps its own copy: the scene's array goes (32 bytes per
+     * reference; tb_scene_refs makes it again for the few that need it). */
+    free(prims);
+    s->prims = NULL;
     if (st)
         return tb_error_context(st, "scene");
     tb_accel_free(s->accel);

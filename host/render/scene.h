@@ -159,9 +159,10 @@ typedef struct tb_scene {
     tb_accel *accel;            /* NULL with no_accel. Query it through tb_scene_intersect, which
                                    completes the (u, v) and normal of hits on mesh triangles (left 0
                                    by the structure); tb_accel_occluded may be called directly */
-    size_t nprims;
-    tb_accel_prim *prims;       /* the acceleration references in build order (a triangle: object, sub =
-                                   its index in the object's mesh) */
+    size_t nprims;              /* acceleration references */
+    tb_accel_prim *prims;       /* those references in build order (a triangle: object, sub = its index in
+                                   the object's mesh) while no structure is built over them (no_accel);
+                                   NULL once one is (the structure keeps its own copy): tb_scene_refs */
     tb_scene_stats stats;
     tb__scene_priv *priv;       /* owned storage (strings, IES tables) */
 } tb_scene;
@@ -182,6 +183,11 @@ tb_status tb_scene_load_stream(FILE *fp, const char *name, const char *base_dir,
  * defaults). On failure the scene keeps its old structure. */
 tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel_options *opt);
 
+/* The s->nprims acceleration references in build order, made again from the
+ * objects when the scene no longer holds them (s->prims NULL): *out is a new
+ * array the caller frees (NULL when there is none). TB_ERR_NOMEM. */
+tb_status tb_scene_refs(const tb_scene *s, tb_accel_prim **out);
+
 /* The world-space area of emissive object `i` (index into s->emissive): the
  * stored one, or else computed now from two tessellations (Richardson
  * extrapolation, docs/rendering.md). TB_ERR_UNSUPPORTED for a CSG object,
@@ -200,7 +206,7 @@ typedef struct tb_scene_memory_use {
     size_t materials;    /* the material table */
     size_t emitters;     /* area-light emitters and the emissive-object list */
     size_t lights;       /* point, spot and directional lights */
-    size_t prims;        /* acceleration references */
+    size_t prims;        /* the scene's array of acceleration references (0 once a structure is built) */
     size_t accel;        /* the acceleration structure */
     size_t total;        /* the sum */
     size_t nobjects;     /* objects counted in `objects` */

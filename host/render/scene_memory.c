@@ -36,9 +36,9 @@ static size_t tb__mesh_bytes(const tb_object_mesh *m)
 static size_t tb__node_bytes(const tb_object *o, size_t *mesh)
 {
     size_t n = o->name ? tb__alloc(strlen(o->name) + 1) : 0;
-    n += tb__alloc((size_t)o->nprofile * 2 * sizeof(double));
     if (o->kind == TB_PRIM_PRISM)
-        n += tb__alloc((size_t)o->geom.prism.nprofile * sizeof(tb_vec2));
+        n += tb__alloc((size_t)o->nprofile * 2 * sizeof(double)) +
+             tb__alloc((size_t)o->geom.prism.nprofile * sizeof(tb_vec2));
     if (o->kind == TB_PRIM_POLYGONS) {
         const tb_geom_polygons *g = &o->geom.polygons;
         size_t m = 0;
@@ -84,18 +84,22 @@ void tb_scene_memory(const tb_scene *s, tb_scene_memory_use *m)
     m->emitters = tb__alloc((size_t)s->nemitters * sizeof(tb_emitter)) +
                   tb__alloc((size_t)s->nemissive * sizeof(tb_scene_emissive));
     m->lights = tb__alloc((size_t)s->nlights * sizeof(tb_light));
-    m->prims = tb__alloc(s->nprims * sizeof(tb_accel_prim));
+    m->prims = s->prims ? tb__alloc(s->nprims * sizeof(tb_accel_prim)) : 0; /* dropped once the structure is built */
+    size_t tri_only = 0; /* held for the triangle references alone */
     if (s->accel) {
         tb_accel_stats as;
         tb_accel_get_stats(s->accel, &as);
         m->accel = as.memory_bytes;
+        tri_only = as.tri_bytes;
     }
     m->total = m->objects + m->meshes + m->fed + m->materials + m->emitters + m->lights + m->prims + m->accel;
     m->triangles = s->stats.triangles;
-    /* Each reference's share: its record and the structure over all of them. */
-    double per_ref = s->nprims ? (double)(m->prims + m->accel) / (double)s->nprims : 0.0;
+    /* Each reference's share of the structure over all of them; the
+     * triangle records and packed corners go to the triangles alone. */
+    double per_ref = s->nprims ? (double)(m->prims + m->accel - tri_only) / (double)s->nprims : 0.0;
     m->per_object = m->nobjects ? ((double)m->objects + per_ref * (double)whole) / (double)m->nobjects : 0.0;
-    m->per_triangle = m->triangles ? ((double)m->meshes + per_ref * (double)(s->nprims - whole)) / (double)m->triangles
+    m->per_triangle = m->triangles ? ((double)m->meshes + (double)tri_only + per_ref * (double)(s->nprims - whole)) /
+                                         (double)m->triangles
                                    : 0.0;
 }
 

@@ -376,6 +376,17 @@ static void test_triangle_references(void **state)
     tb_accel *acc[NKINDS];
     for (int k = 0; k < NKINDS; k++)
         assert_int_equal(tb_accel_build(kinds[k], s.refs, s.n, &cb, NULL, &acc[k]), TB_OK);
+    /* Records are kept for the triangle references only, each reached from its reference. */
+    for (int k = 0; k < NKINDS; k++) {
+        size_t with = 0;
+        for (size_t j = 0; j < acc[k]->n; j++) {
+            const tb_accel_tri *tr = tb__accel_tri_at(acc[k], j);
+            with += tr != NULL;
+            assert_true(!tr || tr->object == s.prims[acc[k]->index[j]].object);
+        }
+        assert_int_equal(with, ntri);
+        assert_non_null(acc[k]->tri_of);
+    }
     /* The structures copied the records: the caller's array may go. */
     tb_accel_tri *kept = malloc(s.n * sizeof *kept);
     assert_non_null(kept);
@@ -1102,10 +1113,10 @@ static void test_packed_leaves(void **state)
                     for (uint32_t j = 0; j < cnt; j++) {
                         for (unsigned row = 0; row < 9; row++) {
                             double v = f32 ? (double)bf[row * cnt + j] : bd[row * cnt + j];
-                            assert_memory_equal(&v, &pk->tris[s0 + j].v[row], sizeof(double));
+                            assert_memory_equal(&v, &tb__accel_tri_at(pk, s0 + j)->v[row], sizeof(double));
                         }
-                        assert_int_equal(ids[j].object, pk->tris[s0 + j].object);
-                        assert_int_equal(ids[j].face, pk->tris[s0 + j].face);
+                        assert_int_equal(ids[j].object, tb__accel_tri_at(pk, s0 + j)->object);
+                        assert_int_equal(ids[j].face, tb__accel_tri_at(pk, s0 + j)->face);
                         assert_int_equal(ids[j].index, pk->index[s0 + j]);
                     }
                 }

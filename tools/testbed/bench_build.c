@@ -215,14 +215,23 @@ static bool tb__time_embree_bvh(const tb_scene *s, int threads, int repeat, doub
             fprintf(stderr, "testbed bench accel: out of memory\n");
         return false;
     }
+    tb_accel_prim *refs;
+    if (tb_scene_refs(s, &refs)) {
+        fprintf(stderr, "testbed bench accel: %s\n", tb_last_error());
+        free(in);
+        free(work);
+        rtcReleaseDevice(d);
+        return false;
+    }
     tb_aabb root = tb_aabb_empty();
     for (size_t i = 0; i < s->nprims; i++) {
-        const tb_aabb *b = &s->prims[i].bounds;
+        const tb_aabb *b = &refs[i].bounds;
         if (tb_aabb_is_empty(b)) /* tb_accel_build drops these too */
             continue;
         root = tb_aabb_union(root, *b);
         in[n++] = (struct RTCBuildPrimitive){b->lo.x, b->lo.y, b->lo.z, 0, b->hi.x, b->hi.y, b->hi.z, (unsigned)i};
     }
+    free(refs);
     bool ok = true;
     for (int r = 0; r < repeat && ok; r++) {
         memcpy(work, in, sizeof *in * n); /* the builder reorders its input */

@@ -119,6 +119,7 @@ typedef struct tb__embree {
     RTCDevice dev;
     RTCScene scene;
     const tb_scene *s;
+    tb_accel_prim *refs; /* the scene's references (tb_scene_refs), user data of the geometries */
 } tb__embree;
 
 static void tb__user_bounds(const struct RTCBoundsFunctionArguments *args)
@@ -184,8 +185,12 @@ static int tb__embree_build(const tb_scene *s, tb__embree *e, bool robust, const
     if (robust)
         rtcSetSceneFlags(e->scene, RTC_SCENE_FLAG_ROBUST);
     /* The user geometries' boxes: the scene's whole-object references. */
+    if (tb_scene_refs(s, &e->refs)) {
+        fprintf(stderr, "testbed bench rays: %s\n", tb_last_error());
+        return 0;
+    }
     for (size_t i = 0; i < s->nprims; i++) {
-        const tb_accel_prim *p = &s->prims[i];
+        const tb_accel_prim *p = &e->refs[i];
         if (p->sub != TB_SCENE_WHOLE_OBJECT)
             continue;
         RTCGeometry g = rtcNewGeometry(e->dev, RTC_GEOMETRY_TYPE_USER);
@@ -217,6 +222,8 @@ static void tb__embree_free(tb__embree *e)
         rtcReleaseScene(e->scene);
     if (e->dev)
         rtcReleaseDevice(e->dev);
+    free(e->refs);
+    e->refs = NULL;
 }
 
 static double tb__trace_embree(const tb__embree *e, const tb__rayset *rs, int k, int threads, int passes,
