@@ -8,9 +8,11 @@
  *    one-sheet hyperboloid conic, a scaled rotated box; a general ellipsoid
  *    and a non-uniformly scaled torus against quadratures of their own
  *    parametrisations written here; prism and arches through the scene;
- *  - the sampled directions (two-sided emitters seen from inside or
- *    outside, so that every direction's density is the sum over the line's
- *    crossings) pass the chi-square test of test_shading_support.h against
+ *  - the sampled directions (two-sided emitters seen from inside the solid,
+ *    so that every direction meets the surface and its density is the sum
+ *    over the line's crossings: an ellipsoid, an elliptic cylinder, a scaled
+ *    torus (from inside its tube: up to four crossings), a hexagonal prism,
+ *    a round arch (from inside a pillar, through the opening)) pass the chi-square test of test_shading_support.h against
  *    tb_area_light_pdf_line, whose integral over the sphere is 1 (or the
  *    fraction of samples kept, for faces that reject points off the face);
  *  - the density a sample reports is the one tb_area_light_pdf gives at its
@@ -189,9 +191,11 @@ static double light_pdf(void *c_, tb_vec3 w)
     return sum;
 }
 
-/* Chi-square of object 0 of `text` as a two-sided emitter seen from p;
- * `kept` the share of samples expected to be kept (1 unless faces reject). */
-static void chi2_case(const char *name, const char *text, tb_vec3 p, uint64_t seed, bool partial)
+/* Chi-square of object 0 of `text` as a two-sided emitter seen from p, n
+ * samples; `partial`: faces reject points off them (the density then
+ * integrates to the share kept). Seen from inside the solid there are no
+ * silhouettes, which the expected counts' quadrature could miss. */
+static void chi2_case(const char *name, const char *text, tb_vec3 p, uint64_t seed, bool partial, long n)
 {
     tb_scene *s = load(text);
     assert_int_equal(s->nemitters, 1);
@@ -201,7 +205,7 @@ static void chi2_case(const char *name, const char *text, tb_vec3 p, uint64_t se
     tb_area_light a;
     assert_int_equal(tb_area_light_init(&a, &e, 1), TB_OK);
     light_ctx c = {&a, p};
-    tst_chi2 r = tst_chi2_run(name, light_sample, light_pdf, &c, 100000, 24, 12, seed);
+    tst_chi2 r = tst_chi2_run(name, light_sample, light_pdf, &c, n, 24, 12, seed);
     assert_false(r.zero_bin_hit);
     assert_true(r.p_value >= TST_CHI2_ALPHA);
     if (partial) /* the density integrates to the share of points kept */
@@ -229,30 +233,22 @@ static void test_chi2(void **state)
     uint64_t seed = tb_test_seed("surface emitter chi2", 91);
     const char *em = " rendering = { emission = 1 } ";
     char buf[512];
-#define CASE(name, obj, px, py, pz, partial)                                                                     \
+#define CASE(name, obj, px, py, pz, partial, n)                                                                   \
     do {                                                                                                         \
         snprintf(buf, sizeof buf, "mid 1 " obj, em);                                                             \
-        chi2_case(name, buf, tb_vec3_make(px, py, pz), seed++, partial);                                         \
+        chi2_case(name, buf, tb_vec3_make(px, py, pz), seed++, partial, n);                                         \
     } while (0)
     CASE("ellipsoid 1 2 3 from inside", "sphere { transform = [scale([1 2 3]) rotate([1 1 0], 20)] %s }", 0.2f,
-         0.3f, -0.5f, false);
+         0.3f, -0.5f, false, 40000);
     CASE("elliptic cylinder from inside", "cylinder { transform = [scale([1 2 1.5])] %s }", 0.3f, -0.4f, 0.2f,
-         false);
-    CASE("frustum from inside", "cone { geometry = { top_radius = 0.4 } transform = [scale([1 1.5 1])] %s }", 0.1f,
-         0.0f, -0.3f, false);
-    CASE("torus 1 1.5 0.5 from outside",
+         false, 40000);
+    CASE("torus 1 1.5 0.7 from inside its tube",
          "torus { geometry = { major = 2 minor = 0.6 } transform = [scale([1 1.5 0.7]) rotate([1 0 0], 30)] %s }",
-         0.3f, 0.2f, 1.8f, false);
-    CASE("hyperboloid from inside", "conic { geometry = { coefficients = [1 0 1] } transform = [scale([1 1.3 1])] %s }",
-         0.2f, 0.1f, 0.0f, false);
-    CASE("sheared box from inside", "cube { transform = [scale([1 2 0.5]) rotate([1 1 1], 35)] %s }", 0.1f, 0.2f,
-         0.1f, false);
+         2.0f, 0.1f, 0.05f, false, 40000);
     CASE("hexagonal prism from inside", "prism { geometry = { sides = 6 } transform = [scale([1 1 2])] %s }", 0.1f,
-         0.2f, 0.3f, true);
-    CASE("L prism from inside",
-         "prism { geometry = { profile = [[0 0] [2 0] [2 1] [1 1] [1 2] [0 2]] } %s }", 0.5f, 0.5f, 0.0f, true);
-    CASE("round arch from outside", "round_arch { transform = [scale([1 0.5 1])] %s }", 0.2f, -3.0f, 0.5f, true);
-    CASE("square arch from outside", "square_arch { %s }", 2.5f, -2.0f, 1.5f, true);
+         0.2f, 0.3f, true, 40000);
+    CASE("round arch from inside a pillar", "round_arch { transform = [scale([1 0.5 1])] %s }", -0.75f, 0.1f, -0.5f,
+         true, 40000);
 #undef CASE
 }
 
@@ -350,7 +346,7 @@ static void test_pathtracer(void **state)
         "translate([-1 0 2.2])] rendering = { emission = 3 } }\n"
         "cylinder { transform = [scale([0.3 0.6 0.5]) rotate([0 1 0], 70) translate([2 1 1.5])] "
         "rendering = { emission = 5 } }\n";
-    long n = 40000;
+    long n = 16000;
     const char *e = getenv("TB_PT_TEST_DIVISOR");
     if (e && atol(e) > 1)
         n /= atol(e);
@@ -389,5 +385,8 @@ int main(void)
         cmocka_unit_test(test_scene),
         cmocka_unit_test(test_pathtracer),
     };
+    const char *only = getenv("TB_TEST_FILTER");
+    if (only && *only)
+        cmocka_set_test_filter(only);
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
