@@ -49,7 +49,8 @@ static tb_scene *load_opt(const char *text, const tb_scene_options *opt)
 
 static tb_scene *load(const char *text) { return load_opt(text, NULL); }
 
-/* Area of the surface of object i of a one-object scene `text`, by its surface emitter. */
+/* Area of the surface of object i of a one-object scene `text`, by its
+ * surface emitter; prints its table's size. */
 static double surf_area(const char *text)
 {
     tb_scene *s = load(text);
@@ -57,6 +58,7 @@ static double surf_area(const char *text)
     if (tb_surface_emitter_make(s->objects[0], &se))
         fail_msg("%s", tb_last_error());
     double a = tb_surface_emitter_area(se);
+    printf("[ table    ] %d cells, %zu bytes\n", tb_surface_emitter_cells(se), tb_surface_emitter_bytes(se, 16));
     tb_surface_emitter_free(se);
     tb_scene_free(s);
     return a;
