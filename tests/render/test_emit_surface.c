@@ -6,8 +6,9 @@
  *    cylinder (perimeter by the trapezoid rule, spectrally exact for the
  *    periodic integrand), cone and frustum, torus (also scaled), a
  *    one-sheet hyperboloid conic, a scaled rotated box; a general ellipsoid
- *    and a non-uniformly scaled torus against quadratures of their own
- *    parametrisations written here; prism and arches through the scene;
+ *    (also scaled by 1e-6 and 1e6) and a non-uniformly scaled torus against
+ *    quadratures of their own parametrisations written here; prisms
+ *    (caps exactly); arches through the scene;
  *  - the sampled directions (two-sided emitters seen from inside the solid,
  *    so that every direction meets the surface and its density is the sum
  *    over the line's crossings: an ellipsoid, an elliptic cylinder, a scaled
@@ -140,6 +141,11 @@ static void test_areas(void **state)
     }
     check_area("ellipsoid 1 2 3", "mid 1 sphere { transform = [scale([1 2 3]) translate([10 0 0])] }",
                ellipsoid_area(1, 2, 3), 1e-8);
+    /* tiny and huge scales: the same relative accuracy */
+    check_area("ellipsoid 1 2 3 x 1e-6", "mid 1 sphere { transform = [scale([1e-6 2e-6 3e-6]) translate([5 5 5])] }",
+               ellipsoid_area(1, 2, 3) * 1e-12, 1e-8);
+    check_area("ellipsoid 1 2 3 x 1e6", "mid 1 sphere { transform = [scale([1e6 2e6 3e6])] }",
+               ellipsoid_area(1, 2, 3) * 1e12, 1e-8);
     check_area("cylinder", "mid 1 cylinder { }", 4.0 * M_PI + 2.0 * M_PI, 1e-12);
     check_area("open cylinder", "mid 1 cylinder { geometry = { caps = false } }", 4.0 * M_PI, 1e-12);
     check_area("elliptic cylinder 1 3 h 2", "mid 1 cylinder { transform = [scale([1 3 2]) rotate([0 1 1], 25)] }",
