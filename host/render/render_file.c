@@ -229,8 +229,6 @@ tb_status tb_render_file(const char *scene_path, const tb_render_file_options *o
     tb_scene_options so = opt->scene;
     if (so.threads == 0)
         so.threads = ro.threads;
-    if (opt->backend)
-        so.tessellated_emitters = true; /* the GPU kernel samples no analytic surface emitter */
     const tb_tile_exchange *ex = ro.exchange;
     bool root = !ex || ex->rank == 0;
     st = tb_scene_load(scene_path, &so, &r.scene);

@@ -75,8 +75,8 @@ typedef struct tb_scene_options {
                                      made): for renderers that do not sample emitters (radiosity), so
                                      curved and CSG emitters are not tessellated */
     bool tessellated_emitters;    /* every curved primitive's emitters are the triangles of its tessellation
-                                     (the GPU renderer's kernel samples no analytic surface); default: one
-                                     analytic surface emitter per primitive (docs/lights.md) */
+                                     (the former behaviour, for comparisons); default: one analytic surface
+                                     emitter per primitive (docs/lights.md) */
 } tb_scene_options;
 
 /* A procedural pattern or bump map of a material (MID 1.1, docs/mid.md 7.2),
