@@ -212,11 +212,10 @@ tb_status tb_surface_emitter_make(const tb_object *o, tb_surface_emitter **out)
         return tb_error(TB_ERR_ARG, "surface emitter: %s has no faces", tb_prim_kind_name(o->kind));
     enum { G = TB_SURF_CELLS };
     tb__sface *fs = malloc(sizeof *fs * (size_t)nids);
-    double *w = malloc(sizeof *w * (size_t)nids * G * G), *fa = malloc(sizeof *fa * (size_t)nids);
-    if (!fs || !w || !fa) {
+    double *w = malloc(sizeof *w * (size_t)nids * G * G);
+    if (!fs || !w) {
         free(fs);
         free(w);
-        free(fa);
         return tb_error(TB_ERR_NOMEM, "surface emitter: out of memory");
     }
     int nf = 0, nrows = 0, ncells = 0;
@@ -233,7 +232,6 @@ tb_status tb_surface_emitter_make(const tb_object *o, tb_surface_emitter **out)
         if (!(sum > 0.0) || !(a > 0.0))
             continue; /* a face of no area (a degenerate cap): nothing to sample */
         fs[nf] = (tb__sface){f, nu, nv, nrows};
-        fa[nf] = a;
         area += a;
         nf++;
         nrows += nv;
@@ -242,7 +240,6 @@ tb_status tb_surface_emitter_make(const tb_object *o, tb_surface_emitter **out)
     if (nf == 0 || !(area > 0.0) || !isfinite(area)) {
         free(fs);
         free(w);
-        free(fa);
         return tb_error(TB_ERR_ARG, "surface emitter: %s has no area", tb_prim_kind_name(o->kind));
     }
     /* one block: struct, faces, local, cdfs, column offsets */
@@ -253,7 +250,6 @@ tb_status tb_surface_emitter_make(const tb_object *o, tb_surface_emitter **out)
     if (!blk) {
         free(fs);
         free(w);
-        free(fa);
         return tb_error(TB_ERR_NOMEM, "surface emitter: out of memory");
     }
     tb_surface_emitter *se = (tb_surface_emitter *)blk;
@@ -284,7 +280,6 @@ tb_status tb_surface_emitter_make(const tb_object *o, tb_surface_emitter **out)
         free(blk);
         free(fs);
         free(w);
-        free(fa);
         return tb_error(TB_ERR_NOMEM, "surface emitter: out of memory");
     }
     int cell = 0, row = 0, coff = 0;
@@ -315,7 +310,6 @@ tb_status tb_surface_emitter_make(const tb_object *o, tb_surface_emitter **out)
     free(fw);
     free(fs);
     free(w);
-    free(fa);
     *out = se;
     return TB_OK;
 }
