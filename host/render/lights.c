@@ -408,6 +408,8 @@ bool tb_emitter_intersect(const tb_emitter *e, tb_vec3 of, tb_vec3 df, double *t
         nn = tb_dvec3_sub(tb_dvec3_add(o, tb_dvec3_scale(d, tt)), c);
         break;
     }
+    case TB_EMITTER_CUSTOM:
+        return e->intersect && e->intersect(e->ctx, of, df, 0.0, t, q, n);
     default:
         return false;
     }
@@ -698,6 +700,29 @@ double tb_area_light_pdf(const tb_area_light *a, int emitter, tb_vec3 pf, tb_vec
     if (cq == 0.0 || (cq < 0.0 && !e->two_sided))
         return 0.0;
     return pmf * pdf_a * d2 / fabs(cq);
+}
+
+double tb_area_light_pdf_line(const tb_area_light *a, int emitter, tb_vec3 p, tb_vec3 w)
+{
+    if (emitter < 0 || emitter >= a->n)
+        return 0.0;
+    const tb_emitter *e = &a->emitters[emitter];
+    double t;
+    tb_vec3 q, nq;
+    if (e->kind != TB_EMITTER_CUSTOM || !e->intersect)
+        return tb_emitter_intersect(e, p, w, &t, &q, &nq) ? tb_area_light_pdf(a, emitter, p, q, nq) : 0.0;
+    /* Every crossing: the sampler may return any point of the surface that
+     * faces p, hidden ones included (a torus seen through its hole). */
+    double pdf = 0.0, tmin = 0.0;
+    for (int k = 0; k < 64 && e->intersect(e->ctx, p, w, tmin, &t, &q, &nq); k++) {
+        pdf += tb_area_light_pdf(a, emitter, p, q, nq);
+        /* past this crossing: the float ray parameter's resolution */
+        double next = t * (1.0 + 0x1p-20) + 0x1p-60;
+        if (!(next > tmin))
+            break;
+        tmin = next;
+    }
+    return pdf;
 }
 
 tb_channels tb_area_light_irradiance(const tb_area_light *a, tb_vec3 p, tb_vec3 n, int n_samples,

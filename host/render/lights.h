@@ -144,6 +144,12 @@ typedef bool (*tb_emitter_sample_fn)(void *ctx, float u1, float u2, tb_vec3 *q, 
                                      double *pdf_area);
 /* Custom emitters: the density per unit area of the sampler at surface point q. */
 typedef double (*tb_emitter_pdf_fn)(void *ctx, tb_vec3 q);
+/* Custom emitters (optional): the first crossing of the line o + t d with
+ * the surface at t > tmin: t, point and front normal; false if none. Lets
+ * a renderer find the emitter along a ray (tb_emitter_intersect,
+ * tb_area_light_pdf_line). */
+typedef bool (*tb_emitter_intersect_fn)(void *ctx, tb_vec3 o, tb_vec3 d, double tmin, double *t, tb_vec3 *q,
+                                        tb_vec3 *n);
 
 /* One emitting surface with uniform radiance. Textured emission is not
  * handled here (a renderer can split the surface). */
@@ -157,6 +163,7 @@ typedef struct tb_emitter {
     double area;             /* custom: the surface area (the others compute theirs) */
     tb_emitter_sample_fn sample; /* custom */
     tb_emitter_pdf_fn pdf;       /* custom */
+    tb_emitter_intersect_fn intersect; /* custom, optional (NULL: rays never find it) */
     void *ctx;                   /* custom */
 } tb_emitter;
 
@@ -246,6 +253,13 @@ bool tb_area_light_sample_at(const tb_area_light *a, tb_area_light_at *at, float
  * sampling when a BSDF-sampled ray hits an emitter. 0 where the sampler never
  * goes (behind a one-sided emitter, outside a sphere's visible cap). */
 double tb_area_light_pdf(const tb_area_light *a, int emitter, tb_vec3 p, tb_vec3 q, tb_vec3 nq);
+
+/* Solid-angle density with which tb_area_light_sample returns the unit
+ * direction w from p through emitter `emitter`: tb_area_light_pdf summed
+ * over every crossing of the half-line with the emitter's surface (one at
+ * most for the flat kinds and the sphere; a custom emitter with an
+ * intersect callback may have several, e.g. a torus). 0 if none. */
+double tb_area_light_pdf_line(const tb_area_light *a, int emitter, tb_vec3 p, tb_vec3 w);
 
 /* Answers whether a shadow segment is blocked (the renderer's closure). */
 typedef bool (*tb_occluded_fn)(void *ctx, const tb_ray *shadow);

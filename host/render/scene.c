@@ -16,6 +16,7 @@
 
 #include "host/object/intersect.h"
 #include "host/render/ies.h"
+#include "host/render/emit_surface.h"
 #include "host/render/scene_internal.h"
 #include "host/mid/mid_reader.h"
 #include "util/container/hash_table.h"
@@ -478,6 +479,12 @@ tb_status tb_scene_emissive_area(const tb_scene *s, int i, double *area)
     const tb_object *o = s->objects[e->object];
     if (tb_prim_is_csg(o->kind))
         return tb_error(TB_ERR_UNSUPPORTED, "scene: no area for CSG object %u", e->object);
+    /* An analytic surface emitter holds its area (no tessellation). */
+    if (e->nemitters == 1 && e->first_emitter < s->nemitters &&
+        tb_emitter_is_surface(&s->emitters[e->first_emitter])) {
+        *area = s->emitters[e->first_emitter].area;
+        return TB_OK;
+    }
     return tb__scene_leaf_area(o, area);
 }
 
@@ -705,19 +712,21 @@ static tb_status tb__finish_lights(tb_scene *s)
     return TB_OK;
 }
 
-/* The emitters of every emissive object: each object tessellated once (the
+/* The emitters of every emissive object: each object's made once (the
  * objects in parallel, each into its own array), then put together in
  * object order, so the result does not depend on the threads. */
-static tb_status tb__finish_emitters(tb_scene *s, int threads)
+static tb_status tb__finish_emitters(tb_scene *s, int threads, bool tessellate)
 {
     int ne = s->nemissive;
     if (ne == 0)
         return TB_OK;
     tb_array *per = calloc((size_t)ne, sizeof *per);
     tb_status *sts = calloc((size_t)ne, sizeof *sts);
-    if (!per || !sts) {
+    size_t *tables = calloc((size_t)ne, sizeof *tables);
+    if (!per || !sts || !tables) {
         free(per);
         free(sts);
+        free(tables);
         return tb_error(TB_ERR_NOMEM, "scene: out of memory for emitters");
     }
     for (int i = 0; i < ne; i++)
@@ -729,19 +738,21 @@ static tb_status tb__finish_emitters(tb_scene *s, int threads)
         tb_scene_emissive *e = &s->emissive[i];
         const tb_object *o = s->objects[e->object];
         tb_channels L = tb_radiance_from_exitance(s->materials[e->material].emission);
-        sts[i] = tb__scene_leaf_emitters(o, L, &per[i], &e->nemitters);
+        sts[i] = tb__scene_leaf_emitters(o, L, tessellate, &per[i], &e->nemitters, &tables[i]);
     }
     tb_status st = TB_OK;
-    size_t total = 0;
-    for (int i = 0; i < ne && !st; i++) {
-        st = sts[i] ? tb_error(sts[i], "scene: out of memory for emitters") : TB_OK;
+    size_t total = 0, table_bytes = 0;
+    for (int i = 0; i < ne; i++) {
+        if (!st && sts[i])
+            st = tb_error(sts[i], "scene: out of memory for emitters");
         total += per[i].len;
+        table_bytes += tables[i];
     }
     if (!st && total > (size_t)INT32_MAX)
         st = tb_error(TB_ERR_UNSUPPORTED, "scene: more than 2^31 - 1 emitters");
     if (!st) {
         /* The emitters and a renderer's area-light tables over them. */
-        s->priv->used += total * (sizeof *s->emitters + 3 * sizeof(double));
+        s->priv->used += total * (sizeof *s->emitters + 3 * sizeof(double)) + table_bytes;
         st = tb__check_memory(s, "with the emitters");
     }
     if (!st && total && !(s->emitters = malloc(sizeof *s->emitters * total)))
@@ -755,11 +766,15 @@ static tb_status tb__finish_emitters(tb_scene *s, int threads)
             if (per[i].len)
                 memcpy(s->emitters + n, per[i].data, per[i].len * sizeof(tb_emitter));
             n += e->nemitters;
+        } else {
+            for (size_t k = 0; k < per[i].len; k++)
+                tb__scene_free_emitter(tb_array_at(&per[i], k));
         }
         tb_array_free(&per[i]);
     }
     free(per);
     free(sts);
+    free(tables);
     if (st)
         return st;
     s->nemitters = n;
@@ -987,7 +1002,7 @@ static tb_status tb__load(tb_mid_reader *r, const char *name, const tb_scene_opt
     if (!st)
         st = tb__finish_lights(s);
     if (!st && !opt->no_emitters)
-        st = tb__finish_emitters(s, opt->threads);
+        st = tb__finish_emitters(s, opt->threads, opt->tessellated_emitters);
     if (!st)
         tb_stat_add(&tb__n_emissive, s->nemissive);
     if (!st)
@@ -1090,6 +1105,8 @@ void tb_scene_free(tb_scene *s)
     free(s->materials);
     free(s->lights);
     free(s->emissive);
+    for (int i = 0; i < s->nemitters; i++)
+        tb__scene_free_emitter(&s->emitters[i]);
     free(s->emitters);
     free(s->prims);
     tb__scene_priv *p = s->priv;

@@ -74,6 +74,9 @@ typedef struct tb_scene_options {
     bool no_emitters;             /* make no area-light emitters (nemitters 0, the emissive list is still
                                      made): for renderers that do not sample emitters (radiosity), so
                                      curved and CSG emitters are not tessellated */
+    bool tessellated_emitters;    /* every curved primitive's emitters are the triangles of its tessellation
+                                     (the former behaviour, for comparisons); default: one analytic surface
+                                     emitter per primitive (docs/lights.md) */
 } tb_scene_options;
 
 /* A procedural pattern or bump map of a material (MID 1.1, docs/mid.md 7.2),

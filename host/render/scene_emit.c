@@ -1,12 +1,14 @@
 /* Emissive objects: the world-space area of an emitting primitive and its
  * emitters for area-light sampling (docs/rendering.md, "Emissive objects";
- * docs/raytrace.md): exact ones for polygons and spheres under a similarity,
- * triangles of the world-space tessellation for every other primitive and
- * for CSG objects. */
+ * docs/lights.md): exact ones for polygons and spheres under a similarity,
+ * an analytic surface emitter (emit_surface.h) for every other primitive,
+ * triangles of the world-space tessellation for CSG objects (and for every
+ * curved primitive when a renderer asks for tessellated emitters). */
 #include <math.h>
 #include <stdlib.h>
 
 #include "host/object/polygonize.h"
+#include "host/render/emit_surface.h"
 #include "host/render/scene_internal.h"
 #include "util/base/error.h"
 #include "util/container/array.h"
@@ -252,13 +254,51 @@ static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_array *
     return TB_OK;
 }
 
-tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_array *out, int *count)
+/* The analytic emitter of primitive `leaf` (emit_surface.h): appended to
+ * out (when not NULL) with its table, else only measured; *bytes gets the
+ * table's bytes. A surface that cannot have one (no area) gets no emitter. */
+static tb_status tb__surface_emitter(const tb_object *leaf, tb_channels L, tb_array *out, int *count, size_t *bytes)
+{
+    tb_surface_emitter *se;
+    tb_status st = tb_surface_emitter_make(leaf, &se);
+    if (st) {
+        if (st != TB_ERR_NOMEM)
+            tb_clear_error();
+        return st == TB_ERR_NOMEM ? st : TB_OK;
+    }
+    if (tb_surface_emitter_partial(se)) {
+        /* arch faces: the table's area is an estimate; the tessellation's
+         * (exact for flat faces; a round arch's vault by extrapolation) */
+        double a;
+        if (tb__scene_leaf_area(leaf, &a) == TB_OK && a > 0.0 && isfinite(a))
+            tb_surface_emitter_set_area(se, a);
+        else
+            tb_clear_error();
+    }
+    if (bytes)
+        *bytes += tb_surface_emitter_bytes(se, TB_SCENE_MALLOC_OVERHEAD);
+    if (!out) {
+        tb_surface_emitter_free(se);
+        *count = 1;
+        return TB_OK;
+    }
+    tb_emitter e = tb_emitter_surface(se, L);
+    if (tb_array_push(out, &e)) {
+        tb_surface_emitter_free(se);
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for emitters");
+    }
+    *count = 1;
+    return TB_OK;
+}
+
+tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, bool tessellate, tb_array *out, int *count,
+                                  size_t *bytes)
 {
     *count = 0;
     if (leaf->kind == TB_PRIM_SPHERE) {
         double s;
         if (!tb__similarity(&leaf->to_world, &s))
-            return tb__tess_emitters(leaf, L, out, count);
+            return tessellate ? tb__tess_emitters(leaf, L, out, count) : tb__surface_emitter(leaf, L, out, count, bytes);
         if (out) {
             tb_dvec3 c = tb_transform_dpoint(&leaf->to_world, (tb_dvec3){0.0, 0.0, 0.0});
             tb_emitter e = tb_emitter_sphere(tb_dvec3_to_f(c), (float)s, L);
@@ -270,8 +310,10 @@ tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_array
         *count = 1;
         return TB_OK;
     }
-    if (leaf->kind != TB_PRIM_POLYGONS)
+    if (tb_prim_is_csg(leaf->kind) || (tessellate && leaf->kind != TB_PRIM_POLYGONS))
         return tb__tess_emitters(leaf, L, out, count);
+    if (leaf->kind != TB_PRIM_POLYGONS)
+        return tb__surface_emitter(leaf, L, out, count, bytes);
     if (!leaf->mesh)
         return TB_OK;
     const tb_object_mesh *m = leaf->mesh;
@@ -295,4 +337,12 @@ tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_array
     }
     *count = n;
     return TB_OK;
+}
+
+void tb__scene_free_emitter(tb_emitter *e)
+{
+    if (tb_emitter_is_surface(e)) {
+        tb_surface_emitter_free(e->ctx);
+        e->ctx = NULL;
+    }
 }

@@ -49,11 +49,20 @@ tb_status tb__scene_leaf_area(const tb_object *leaf, double *area);
 
 /* The emitters of object `leaf` (a primitive or a CSG tree) with radiance L:
  * one triangle per triangle of a polygons object, one sphere for a sphere
- * under a similarity transform, otherwise the triangles of its world-space
- * tessellation (scene_emit.c). Appends them to out (a tb_array of
- * tb_emitter, when not NULL) and writes their count to *n (none if the
- * tessellation fails). TB_ERR_NOMEM only. */
-tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, tb_array *out, int *n);
+ * under a similarity transform, one analytic surface emitter
+ * (emit_surface.h) for every other primitive, the triangles of the
+ * world-space tessellation for a CSG tree, and with `tessellate` for every
+ * primitive other than polygons and similarity spheres too (scene_emit.c).
+ * Appends them to out (a tb_array of tb_emitter, when not NULL; a surface
+ * emitter's table is then owned by the emitter: tb__scene_free_emitter)
+ * and writes their count to *n (none if the shape has no area or the
+ * tessellation fails); adds the bytes of surface emitter tables to *bytes
+ * (may be NULL). TB_ERR_NOMEM only. */
+tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, bool tessellate, tb_array *out, int *n,
+                                  size_t *bytes);
+
+/* Frees what emitter e owns (a surface emitter's table); e stays as it is. */
+void tb__scene_free_emitter(tb_emitter *e);
 
 /* ------------------------------------------------------------------ memory (scene_memory.c) */
 

@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 
 #include "host/mid/mid_reader.h"
+#include "host/render/emit_surface.h"
 #include "host/render/scene_internal.h"
 #include "util/container/hash_table.h"
 #include "util/mesh/fed.h"
@@ -83,6 +84,9 @@ void tb_scene_memory(const tb_scene *s, tb_scene_memory_use *m)
     m->materials = tb__alloc((size_t)s->nmaterials * sizeof(tb_material));
     m->emitters = tb__alloc((size_t)s->nemitters * sizeof(tb_emitter)) +
                   tb__alloc((size_t)s->nemissive * sizeof(tb_scene_emissive));
+    for (int i = 0; i < s->nemitters; i++)
+        if (tb_emitter_is_surface(&s->emitters[i]))
+            m->emitters += tb_surface_emitter_bytes(s->emitters[i].ctx, TB_SCENE_MALLOC_OVERHEAD);
     m->lights = tb__alloc((size_t)s->nlights * sizeof(tb_light));
     m->prims = s->prims ? tb__alloc(s->nprims * sizeof(tb_accel_prim)) : 0; /* dropped once the structure is built */
     size_t tri_only = 0; /* held for the triangle references alone */
@@ -199,7 +203,7 @@ tb_status tb_scene_predict_memory(const char *path, tb_scene_memory_use *u)
     tb_status st = tb_mid_reader_open(&r, path);
     if (st)
         return st;
-    size_t refs = 0, fedsize = 0, nfeds = 0, nemitters = 0, nemissive = 0;
+    size_t refs = 0, fedsize = 0, nfeds = 0, nemitters = 0, nemissive = 0, tables = 0;
     char **feds = NULL;
     tb_htab mats;
     tb_htab_init(&mats, TB_HTAB_U64);
@@ -220,7 +224,7 @@ tb_status tb_scene_predict_memory(const char *path, tb_scene_memory_use *u)
             tb_object *o;
             int k = 0;
             if (tb_object_from_mid(m, 0, NULL, NULL, &o) == TB_OK) {
-                st = tb__scene_leaf_emitters(o, tb_channels_splat(3, 0.0f), NULL, &k);
+                st = tb__scene_leaf_emitters(o, tb_channels_splat(3, 0.0f), false, NULL, &k, &tables);
                 tb_object_free(o);
             } else {
                 tb_clear_error(); /* the load will report it, located */
@@ -243,7 +247,7 @@ tb_status tb_scene_predict_memory(const char *path, tb_scene_memory_use *u)
     /* The scene's emitters (the renderers' area light reads them in place,
      * tb_area_light_init_shared) and the light's areas and selection table. */
     u->emitters = tb__alloc(nemitters * (sizeof(tb_emitter) + 3 * sizeof(double))) +
-                  tb__alloc(nemissive * sizeof(tb_scene_emissive));
+                  tb__alloc(nemissive * sizeof(tb_scene_emissive)) + tables;
     u->prims = tb__alloc(refs * sizeof(tb_accel_prim));
     u->accel = refs * (TB__SCENE_BUILD_PER_REF - sizeof(tb_accel_prim));
     u->total = u->objects + u->meshes + u->fed + u->materials + u->emitters + u->lights + u->prims + u->accel;

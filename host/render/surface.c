@@ -8,6 +8,7 @@
 
 #include "host/object/intersect.h"
 #include "host/object/param.h"
+#include "host/render/emit_surface.h"
 #include "host/render/raytrace_internal.h"
 #include "host/render/sampling.h"
 #include "util/color/bands.h"
@@ -608,9 +609,15 @@ static uint32_t tb__self_object(const tb_light_set *ls, int i)
         return UINT32_MAX;
     const tb_emitter *e = &ls->area.emitters[i];
     const tb_scene *s = ls->scene;
-    if (e->kind != TB_EMITTER_SPHERE || e->object >= s->nobjects || s->objects[e->object]->kind != TB_PRIM_SPHERE)
+    if (e->object >= s->nobjects)
         return UINT32_MAX;
-    return e->object;
+    if (e->kind == TB_EMITTER_SPHERE)
+        return s->objects[e->object]->kind == TB_PRIM_SPHERE ? e->object : UINT32_MAX;
+    /* An analytic emitter over a convex primitive's surface: a point of it
+     * facing p sees p on the outer side of its tangent plane, so the
+     * segment cannot cross the surface (in float it could graze it at the
+     * silhouette: a spurious self-shadow). */
+    return tb_emitter_is_surface(e) && tb_surface_emitter_convex(e->ctx) ? e->object : UINT32_MAX;
 }
 
 /* The shadow segment from sf toward `point` along wi (dist INFINITY: the
@@ -657,10 +664,7 @@ static double tb__object_pdf(const tb_light_set *ls, uint32_t object, tb_vec3 p,
             i = (i / TB_LIGHT_SET_BLOCK + 1) * TB_LIGHT_SET_BLOCK - 1; /* the rest of the block */
             continue;
         }
-        double t;
-        tb_vec3 q, nq;
-        if (tb_emitter_intersect(&ls->area.emitters[i], p, w, &t, &q, &nq))
-            pdf += tb_area_light_pdf(&ls->area, i, p, q, nq);
+        pdf += tb_area_light_pdf_line(&ls->area, i, p, w);
     }
     return pdf;
 }
@@ -701,12 +705,8 @@ bool tb_light_set_visible_emitter(const tb_light_set *ls, const tb_surfaces *ss,
 double tb_light_set_pdf_dir(const tb_light_set *ls, tb_vec3 p, tb_vec3 w)
 {
     double pdf = 0.0;
-    for (int i = 0; ls->has_area && i < ls->area.n; i++) {
-        double t;
-        tb_vec3 q, nq;
-        if (tb_emitter_intersect(&ls->area.emitters[i], p, w, &t, &q, &nq))
-            pdf += tb_area_light_pdf(&ls->area, i, p, q, nq);
-    }
+    for (int i = 0; ls->has_area && i < ls->area.n; i++)
+        pdf += tb_area_light_pdf_line(&ls->area, i, p, w);
     return pdf;
 }
 

@@ -25,7 +25,7 @@
    pixel covers many checks, the default EWA filter gives the mean 0.5 with
    a tiny spread, trilinear the mean 0.5, and --texture-filter bilinear at
    1 spp (no prefiltering) a large spread (aliasing).
-7. Emitters from tessellations: an emissive cube (exitance M, edge 1) above
+7. Emitters of curved primitives (analytic) and CSG objects (tessellated): an emissive cube (exitance M, edge 1) above
    a Lambertian floor, seen at a floor point P off to one side: the bottom
    face and one vertical face see P, E(P) = M (F_bottom + F_side) with each
    form factor from the polygon contour integral (Lambert),
@@ -285,7 +285,7 @@ m, sd, lo = stats["bilinear"]
 check(sd > 0.1, "bilinear at 1 spp aliases: far-row standard deviation %.4f > 0.1" % sd)
 
 
-# ------------------------------------------- 7. emitters from tessellations
+# ------------------- 7. emitters of curved primitives (analytic) and CSG objects (tessellated)
 Mc, rho = 2.0, 0.5
 P = (1.5, 0.0, 0.3)
 
