@@ -1,4 +1,5 @@
 /* util/base: error messages and all-or-nothing output files. */
+#define _DEFAULT_SOURCE /* mknod and makedev, to make a device to write to */
 #include "tb_test.h"
 
 #include <string.h>
@@ -7,6 +8,8 @@
 
 #include "util/base/error.h"
 #include "util/base/outfile.h"
+
+#include <sys/sysmacros.h>
 
 static void test_error_message_and_context(void **state)
 {
@@ -66,6 +69,31 @@ static void test_outfile_commit_replaces_whole(void **state)
     unlink(path);
 }
 
+/* A device as the output (`-o /dev/null`, `--stats /dev/stdout`) is written
+ * in place: renaming the temporary file over it would replace the device node
+ * with a regular file (as root, /dev/null itself). Tested on a null device
+ * made in the test folder; skipped where mknod is not allowed (not root). */
+static void test_outfile_device_in_place(void **state)
+{
+    (void)state;
+    char path[512];
+    snprintf(path, sizeof path, "%s/outfile_null_device", tb_test_tmpdir());
+    unlink(path);
+    if (mknod(path, S_IFCHR | 0666, makedev(1, 3)) != 0)
+        skip();
+    tb_outfile of;
+    assert_int_equal(tb_outfile_open(&of, path), TB_OK);
+    fputs("discarded", of.fp);
+    assert_int_equal(tb_outfile_commit(&of), TB_OK);
+    assert_int_equal(tb_outfile_open(&of, path), TB_OK);
+    tb_outfile_abort(&of); /* an abort leaves the device too */
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    assert_true(S_ISCHR(st.st_mode));
+    assert_int_equal(tb__count_tmp_files(tb_test_tmpdir(), "outfile_null_device"), 0);
+    unlink(path);
+}
+
 static void test_outfile_bad_folder(void **state)
 {
     (void)state;
@@ -109,6 +137,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_error_message_and_context),
         cmocka_unit_test(test_outfile_commit_replaces_whole),
+        cmocka_unit_test(test_outfile_device_in_place),
         cmocka_unit_test(test_outfile_bad_folder),
         cmocka_unit_test(test_rng_reference_and_streams),
     };

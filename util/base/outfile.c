@@ -27,6 +27,19 @@ tb_status tb_outfile_open(tb_outfile *of, const char *path)
         return tb_error(TB_ERR_NOMEM, "%s: out of memory", path);
     }
     memcpy(of->path, path, n + 1);
+    struct stat sb;
+    if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISDIR(sb.st_mode)) {
+        /* a device or FIFO: nothing to replace atomically, and a rename would replace the node itself */
+        free(of->tmp_path);
+        of->tmp_path = NULL;
+        of->fp = fopen(path, "wb");
+        if (!of->fp) {
+            tb_status st = tb_error(TB_ERR_IO, "%s: cannot open output file: %s", path, strerror(errno));
+            tb__outfile_free(of);
+            return st;
+        }
+        return TB_OK;
+    }
     /* A dot-prefixed name would be nicer but needs splitting the folder off;
      * a suffix keeps the file in the same folder, which is what rename needs. */
     snprintf(of->tmp_path, n + 16, "%s.tmp.XXXXXX", path);
@@ -56,7 +69,7 @@ tb_status tb_outfile_commit(tb_outfile *of)
     if (fflush(of->fp) != 0) { failed = 1; err = errno; }
     if (fclose(of->fp) != 0 && !failed) { failed = 1; err = errno; }
     of->fp = NULL;
-    if (!failed) {
+    if (!failed && of->tmp_path) {
         /* mkstemp creates 0600; give the file the usual permissions. */
         mode_t mask = umask(0);
         umask(mask);
@@ -65,7 +78,8 @@ tb_status tb_outfile_commit(tb_outfile *of)
     }
     if (failed) {
         tb_status st = tb_error(TB_ERR_IO, "%s: write failed: %s", of->path, strerror(err));
-        unlink(of->tmp_path);
+        if (of->tmp_path)
+            unlink(of->tmp_path);
         tb__outfile_free(of);
         return st;
     }

@@ -10,10 +10,13 @@
 typedef struct tb_outfile {
     FILE *fp;         /* open on the temporary file */
     char *path;       /* final name, taken on commit */
-    char *tmp_path;   /* temporary name in the same folder (same filesystem, so rename is atomic) */
+    char *tmp_path;   /* temporary name in the same folder (same filesystem, so rename is atomic);
+                       * NULL when `path` is a device or FIFO, written in place (renaming over
+                       * /dev/null would replace the device with a file) */
 } tb_outfile;
 
-/* Creates the temporary file for `path`; on failure nothing is left on disk. */
+/* Creates the temporary file for `path` (a device or FIFO such as /dev/null
+ * or /dev/stdout is opened in place); on failure nothing is left on disk. */
 tb_status tb_outfile_open(tb_outfile *of, const char *path);
 
 /* Flushes, closes and renames the temporary file to its final name. On failure
