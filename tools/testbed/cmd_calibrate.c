@@ -67,158 +67,89 @@ static const tb__cal_run tb__cal_quick[] = {
     {TB_GEN_CSG, 2, 96, 72, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 4 --samples 1 --spp 1", 1, 0, false, 0},
 };
 
-static const tb__cal_run tb__cal_default[] = {
-    /* raytrace: open grids (rays to the sky), floors and closed rooms (every ray hits), RGB and spectral */
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 60, 320, 240, TB_PREDICT_RAYTRACE, "--spp 4", 4, 2, false, 0},
-    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},
-    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "--max-depth 2", 2, 2, false, 0},
-    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RAYTRACE, "--spp 4", 2, 2, true, 0},
-    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, false, 0},
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
-    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 2, true, 0},
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
-    {TB_GEN_MESH, 50, 320, 240, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 2, false, 0},
-    {TB_GEN_MESH, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 1, false, 0},
-    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},
-    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},
-    {TB_GEN_CSG, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},
-    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 2, true, 0},
-    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
-    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},
-    {TB_GEN_CSG, 9, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},
-    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 1},
-    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 2, false, 2},
-    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 2},
-    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_RAYTRACE, "", 3, 3, false, 1},
-    /* path */
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 60, 240, 180, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 0},
-    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_PATH, "", 3, 2, true, 0},
-    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_PATH, "", 2, 1, false, 0},
-    {TB_GEN_GRID, 30, 240, 180, TB_PREDICT_PATH, "--max-depth 3", 2, 2, false, 0},
-    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 2, true, 0},
-    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 0, false, 0},
-    {TB_GEN_CSG, 6, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
-    {TB_GEN_MESH, 50, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},
-    {TB_GEN_MESH, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3, 1, false, 0},
-    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 0},
-    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, true, 0},
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false, 0},
-    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 3, true, 0},
-    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_PATH, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_PATH, "", 4, 2, true, 0},
-    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
-    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_PATH, "", 3, 1, false, 0},
-    {TB_GEN_CSG, 9, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, true, 0},
-    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_PATH, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 1},
-    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 2},
-    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 2},
-    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 1},
-    /* radiosity */
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3, 0, false, 0},
-    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4, 0, false, 0},
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4, 0, false, 0},
-    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3, 0, false, 0},
-    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4, 0, false, 0},
-    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80 --samples 16", 8, 0, false, 0},
-    {TB_GEN_MESH, 4, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 8", 8, 0, false, 0},
-    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8, 0, false, 0},
-    {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false, 0},
-    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false, 0},
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false, 0},
-    {TB_GEN_GRID, 9, 800, 600, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 4", 4, 0, false, 0},
-    {TB_GEN_MESH, 4, 1024, 768, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 1", 3, 0, false, 0},
-    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 8", 6, 3, false, 0},
-    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 4", 6, 2, false, 0},
+/* The default set's runs; the long set adds larger scenes to them. */
+#define TB__CAL_DEFAULT_RUNS \
+    /* raytrace: open grids (rays to the sky), floors and closed rooms (every ray hits), RGB and spectral */                       \
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},                                                          \
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},                                                         \
+    {TB_GEN_GRID, 60, 320, 240, TB_PREDICT_RAYTRACE, "--spp 4", 4, 2, false, 0},                                                   \
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},                                                           \
+    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},                                                         \
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "--max-depth 2", 2, 2, false, 0},                                             \
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RAYTRACE, "--spp 4", 2, 2, true, 0},                                                     \
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, false, 0},                                                            \
+    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},                                                           \
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 2, true, 0},                                                      \
+    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},                                                          \
+    {TB_GEN_MESH, 50, 320, 240, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 2, false, 0},                                         \
+    {TB_GEN_MESH, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},                                                            \
+    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 1, false, 0},                                                          \
+    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},                                                          \
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},                                                     \
+    {TB_GEN_CSG, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},                                                            \
+    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},                                                          \
+    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 2, true, 0},                                                            \
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},                                                            \
+    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},                                                           \
+    {TB_GEN_CSG, 9, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},                                                      \
+    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},                                                          \
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 1},                                                         \
+    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 2, false, 2},                                                         \
+    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 2},                                                         \
+    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_RAYTRACE, "", 3, 3, false, 1},                                                         \
+    /* path */                                                                                                                     \
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},                                                       \
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 0},                                                             \
+    {TB_GEN_GRID, 60, 240, 180, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 0},                                                       \
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_PATH, "", 3, 2, true, 0},                                                               \
+    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_PATH, "", 2, 1, false, 0},                                                             \
+    {TB_GEN_GRID, 30, 240, 180, TB_PREDICT_PATH, "--max-depth 3", 2, 2, false, 0},                                                 \
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 2, true, 0},                                                         \
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},                                                                \
+    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 0, false, 0},                                                        \
+    {TB_GEN_CSG, 6, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},                                                          \
+    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},                                                       \
+    {TB_GEN_MESH, 50, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},                                                              \
+    {TB_GEN_MESH, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},                                                         \
+    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3, 1, false, 0},                                                 \
+    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 0},                                                              \
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, true, 0},                                                                \
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false, 0},                                                         \
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 3, true, 0},                                                         \
+    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_PATH, "", 3, 0, false, 0},                                                              \
+    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_PATH, "", 4, 2, true, 0},                                                                \
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},                                                         \
+    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_PATH, "", 3, 1, false, 0},                                                               \
+    {TB_GEN_CSG, 9, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, true, 0},                                                          \
+    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_PATH, "", 3, 0, false, 0},                                                              \
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 1},                                                             \
+    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 2},                                                      \
+    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 2},                                                             \
+    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 1},                                                             \
+    /* radiosity */                                                                                                                \
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3, 0, false, 0},                   \
+    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4, 0, false, 0},               \
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4, 0, false, 0},                \
+    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3, 0, false, 0},       \
+    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4, 0, false, 0},              \
+    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80 --samples 16", 8, 0, false, 0},             \
+    {TB_GEN_MESH, 4, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 8", 8, 0, false, 0},              \
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8, 0, false, 0},              \
+    {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false, 0},              \
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false, 0}, \
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false, 0},              \
+    {TB_GEN_GRID, 9, 800, 600, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 4", 4, 0, false, 0},       \
+    {TB_GEN_MESH, 4, 1024, 768, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 1", 3, 0, false, 0},      \
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 8", 6, 3, false, 0},              \
+    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 4", 6, 2, false, 0},             \
     {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4", 6, 3, true, 0},
+
+static const tb__cal_run tb__cal_default[] = {
+    TB__CAL_DEFAULT_RUNS
 };
 
 static const tb__cal_run tb__cal_long[] = {
-    /* raytrace: open grids (rays to the sky), floors and closed rooms (every ray hits), RGB and spectral */
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 60, 320, 240, TB_PREDICT_RAYTRACE, "--spp 4", 4, 2, false, 0},
-    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},
-    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "--max-depth 2", 2, 2, false, 0},
-    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RAYTRACE, "--spp 4", 2, 2, true, 0},
-    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, false, 0},
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
-    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 2, true, 0},
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
-    {TB_GEN_MESH, 50, 320, 240, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 2, false, 0},
-    {TB_GEN_MESH, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 1, false, 0},
-    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},
-    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},
-    {TB_GEN_CSG, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},
-    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 2, true, 0},
-    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},
-    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},
-    {TB_GEN_CSG, 9, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},
-    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 1},
-    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 2, false, 2},
-    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 2},
-    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_RAYTRACE, "", 3, 3, false, 1},
-    /* path */
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 60, 240, 180, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 0},
-    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_PATH, "", 3, 2, true, 0},
-    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_PATH, "", 2, 1, false, 0},
-    {TB_GEN_GRID, 30, 240, 180, TB_PREDICT_PATH, "--max-depth 3", 2, 2, false, 0},
-    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 2, true, 0},
-    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 0, false, 0},
-    {TB_GEN_CSG, 6, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
-    {TB_GEN_MESH, 50, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},
-    {TB_GEN_MESH, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3, 1, false, 0},
-    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 0},
-    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, true, 0},
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false, 0},
-    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 3, true, 0},
-    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_PATH, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_PATH, "", 4, 2, true, 0},
-    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},
-    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_PATH, "", 3, 1, false, 0},
-    {TB_GEN_CSG, 9, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, true, 0},
-    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_PATH, "", 3, 0, false, 0},
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 1},
-    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 2},
-    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 2},
-    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 1},
-    /* radiosity */
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3, 0, false, 0},
-    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4, 0, false, 0},
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4, 0, false, 0},
-    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3, 0, false, 0},
-    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4, 0, false, 0},
-    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80 --samples 16", 8, 0, false, 0},
-    {TB_GEN_MESH, 4, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 8", 8, 0, false, 0},
-    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8, 0, false, 0},
-    {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false, 0},
-    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false, 0},
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false, 0},
-    {TB_GEN_GRID, 9, 800, 600, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 4", 4, 0, false, 0},
-    {TB_GEN_MESH, 4, 1024, 768, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 1", 3, 0, false, 0},
-    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 8", 6, 3, false, 0},
-    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 4", 6, 2, false, 0},
-    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4", 6, 3, true, 0},
+    TB__CAL_DEFAULT_RUNS
     /* larger scenes */
     {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_RAYTRACE, "", 8, 0, false, 0},
     {TB_GEN_GRID, 400, 480, 360, TB_PREDICT_RAYTRACE, "", 6, 2, true, 0},
