@@ -254,13 +254,9 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
         tb_image_free(img);
         if (st)
             goto done;
-        tb_stat_total nodes;
-        if (tb_stats_get("BVH/nodes visited", TB_STAT_KIND_COUNTER, &nodes) != TB_OK) {
-            tb_clear_error();
-            nodes.v[0] = 0;
-        }
+        double nodes = (double)tb_stats_counter("BVH/nodes visited");
         double depth = log2(full_elems + 2.0) / log2((double)mesh.nelems + 2.0);
-        f->f[TB_PF_RAD_PIXEL_NODES] = (double)nodes.v[0] * ((double)W * H) / ((double)pw * ph) * depth;
+        f->f[TB_PF_RAD_PIXEL_NODES] = nodes * ((double)W * H) / ((double)pw * ph) * depth;
     }
     f->rad_shots = shots;
     f->f[TB_PF_RAD_SHOT_ELEMS] = shots * full_elems;

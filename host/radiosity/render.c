@@ -43,12 +43,7 @@ typedef struct tb__rad_report {
  * is told apart from the form factors' for testbed calibrate. */
 static double tb__rad_nodes_visited(void)
 {
-    tb_stat_total t;
-    if (!tb_stats_enabled() || tb_stats_get("BVH/nodes visited", TB_STAT_KIND_COUNTER, &t) != TB_OK) {
-        tb_clear_error();
-        return 0.0;
-    }
-    return (double)t.v[0];
+    return tb_stats_enabled() ? (double)tb_stats_counter("BVH/nodes visited") : 0.0;
 }
 
 static tb_status tb__rad_report_row(void *user, const tb_rad_solver *s)

@@ -135,7 +135,7 @@ static double tb__stat(const char *name, tb_stat_kind kind)
     return (double)t.v[0];
 }
 
-static double tb__count(const char *name) { return tb__stat(name, TB_STAT_KIND_COUNTER); }
+static double tb__count(const char *name) { return (double)tb_stats_counter(name); }
 
 static double tb__value(const char *key)
 {

@@ -865,10 +865,11 @@ tb_status tb_scene_refs(const tb_scene *s, tb_accel_prim **out)
 
 /* ------------------------------------------------------------------ accel callbacks */
 
-/* Whole objects only: the structure tests the triangle references itself
- * (tb_accel_tri, made by tb__scene_tri_make). */
 /* False while this thread's current query is a tb_scene_intersect_no_uv. */
 static _Thread_local bool tb__want_uv = true;
+
+/* Whole objects only: the structure tests the triangle references itself
+ * (tb_accel_tri, made by tb__scene_tri_make). */
 
 static bool tb__cb_intersect(void *ctx, const tb_accel_prim *prim, uint32_t index, const tb_ray *ray, tb_hit *hit)
 {

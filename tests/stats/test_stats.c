@@ -93,6 +93,11 @@ static void test_counts_survive_thread_exit(void **state)
         assert_int_equal(pthread_join(th[i], NULL), 0);
     TB_STAT_INC(t_thread); /* and this thread's own */
     assert_int_equal(tb__get("Test/from exited threads", TB_STAT_KIND_COUNTER, 0), 4 * per + 1);
+    /* tb_stats_counter: the same total; 0 and no error for a name nobody declared */
+    assert_int_equal(tb_stats_counter("Test/from exited threads"), 4 * per + 1);
+    tb_clear_error();
+    assert_int_equal(tb_stats_counter("Test/no such counter"), 0);
+    assert_string_equal(tb_last_error(), "");
 }
 
 static void test_distribution_exact(void **state)

@@ -201,12 +201,6 @@ static double tb__trace(const tb_accel *acc, const tb_ray *rays, size_t n, bool 
     return tb__clock(CLOCK_MONOTONIC) - w0;
 }
 
-/* The current total of counter `name` (0 if it does not exist). */
-static int64_t tb__counter(const char *name)
-{
-    tb_stat_total t;
-    return tb_stats_get(name, TB_STAT_KIND_COUNTER, &t) == TB_OK ? t.v[0] : 0;
-}
 
 /* Traversal steps (BVH nodes or grid voxels) and callback calls of each kind. */
 static const char *const tb__step_counter[3] = {"BVH/nodes visited", "Grid/voxels visited", NULL};
@@ -279,12 +273,12 @@ static long tb__bench_scene(tb__bscene *s, long nrays, const long *threads, int 
         for (int k = 0; k < 3 && ok; k++) {
             for (int ti = 0; ti < nthreads && use[k]; ti++) {
                 double cpu;
-                int64_t steps0 = tb__step_counter[k] ? tb__counter(tb__step_counter[k]) : 0;
-                int64_t tests0 = tb__counter(tb__test_counter[k]);
+                int64_t steps0 = tb__step_counter[k] ? tb_stats_counter(tb__step_counter[k]) : 0;
+                int64_t tests0 = tb_stats_counter(tb__test_counter[k]);
                 double sec = tb__trace(acc[k], rays, traced[k], set == TB__RAYS_SHADOW, (int)threads[ti], hits[k],
                                        found[k], &cpu);
-                double steps = (double)((tb__step_counter[k] ? tb__counter(tb__step_counter[k]) : 0) - steps0);
-                double tests = (double)(tb__counter(tb__test_counter[k]) - tests0);
+                double steps = (double)((tb__step_counter[k] ? tb_stats_counter(tb__step_counter[k]) : 0) - steps0);
+                double tests = (double)(tb_stats_counter(tb__test_counter[k]) - tests0);
                 size_t nh = 0;
                 for (size_t i = 0; i < traced[k]; i++)
                     nh += found[k][i];

@@ -314,12 +314,6 @@ static int tb__make_sets(const tb_scene *s, uint64_t nprimary, uint64_t seed, tb
     return 1;
 }
 
-/* The current total of counter `name` (0 if it does not exist). */
-static int64_t tb__counter(const char *name)
-{
-    tb_stat_total t;
-    return tb_stats_get(name, TB_STAT_KIND_COUNTER, &t) == TB_OK ? t.v[0] : 0;
-}
 
 /* ------------------------------------------------------------ options */
 
@@ -593,12 +587,12 @@ static void tb__time_set(const tb__rays_args *a, const tb__rays_run *run, int k,
                 bool first = ti == 0 && r == 0;
                 bool theirs_now = (turn == 0) == (r % 2 == 1);
                 if (!theirs_now) {
-                    int64_t nodes0 = tb__counter("BVH/nodes visited");
-                    int64_t tests0 = tb__counter("BVH/primitives tested");
+                    int64_t nodes0 = tb_stats_counter("BVH/nodes visited");
+                    int64_t tests0 = tb_stats_counter("BVH/primitives tested");
                     t = tb__trace_ours(run->s, rs, k, th->v[ti], tm->passes, first ? run->ours : NULL, &c);
                     if (first) {
-                        tm->nodes = (double)(tb__counter("BVH/nodes visited") - nodes0) / traced;
-                        tm->tests = (double)(tb__counter("BVH/primitives tested") - tests0) / traced;
+                        tm->nodes = (double)(tb_stats_counter("BVH/nodes visited") - nodes0) / traced;
+                        tm->tests = (double)(tb_stats_counter("BVH/primitives tested") - tests0) / traced;
                     }
                     tm->wall_ours[ti] = fmin(t, tm->wall_ours[ti]);
                     tm->cpu_ours[ti] = fmin(c, tm->cpu_ours[ti]);

@@ -370,6 +370,16 @@ tb_status tb_stats_get(const char *name, tb_stat_kind kind, tb_stat_total *out)
     return tb_error(TB_ERR_NOT_FOUND, "no statistic '%s' of that kind", name);
 }
 
+int64_t tb_stats_counter(const char *name)
+{
+    tb_stat_total t;
+    if (tb_stats_get(name, TB_STAT_KIND_COUNTER, &t) != TB_OK) {
+        tb_clear_error();
+        return 0;
+    }
+    return t.v[0];
+}
+
 /* ---------------------------------------------------------------- table */
 
 /* Columns a UTF-8 string takes on a terminal (code points, not bytes). */

@@ -251,6 +251,9 @@ typedef struct tb_stat_total {
  * if none is registered. */
 tb_status tb_stats_get(const char *name, tb_stat_kind kind, tb_stat_total *out);
 
+/* The total of the counter called `name`, 0 if none is registered (no error set). */
+int64_t tb_stats_counter(const char *name);
+
 /* ---------------------------------------------------------------- reports */
 
 /* Prints a table grouped by category (the name before the first '/'), with
