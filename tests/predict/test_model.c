@@ -314,15 +314,15 @@ static void test_costs_bad_files(void **state)
 
     expect_bad("empty.json", "", TB_ERR_FORMAT, "predict-model-empty.json:1:1: error: expected a JSON object");
     expect_bad("array.json", "[1, 2]", TB_ERR_FORMAT, ":1:1: error: expected a JSON object");
-    expect_bad("trunc.json", "{\"schema\": \"testbed-costs-3\",\n  \"threads\": 2,\n  \"costs\": {\"load.fixed\": 1",
+    expect_bad("trunc.json", "{\"schema\": \"testbed-costs-4\",\n  \"threads\": 2,\n  \"costs\": {\"load.fixed\": 1",
                TB_ERR_FORMAT, ":3:28: error: expected ',' or '}'");
     expect_bad("schema.json", "{\"schema\": \"other\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
-               ":1:12: error: schema is not \"testbed-costs-3\"");
+               ":1:12: error: schema is not \"testbed-costs-4\"");
     /* a file of the previous model (other terms) is refused by its schema, with what to do */
-    expect_bad("old.json", "{\"schema\": \"testbed-costs-1\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
-               "schema is not \"testbed-costs-3\" (a COSTS.json of another version: re-run testbed calibrate)");
+    expect_bad("old.json", "{\"schema\": \"testbed-costs-3\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
+               "schema is not \"testbed-costs-4\" (a COSTS.json of another version: re-run testbed calibrate)");
     expect_bad("noschema.json", "{\"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT, "no \"schema\"");
-    expect_bad("missing.json", "{\"schema\": \"testbed-costs-3\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
+    expect_bad("missing.json", "{\"schema\": \"testbed-costs-4\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
                "cost term \"load.parse_byte\" is missing");
     /* an unknown term, a negative and a non-number cost, a duplicate, text after */
     char *p = strstr(strcpy(bad, good), "\"load.primitive\"");
