@@ -56,6 +56,7 @@ static const tb_cost_term tb__terms[] = {
     {"raytrace.test_mesh", TB_PM_RAYTRACE, TB_PF_TESTS_MESH, "s/test"},
     {"raytrace.hit", TB_PM_RAYTRACE, TB_PF_HITS, "s/hit shaded"},
     {"raytrace.leaf_test", TB_PM_RAYTRACE, TB_PF_LEAF_TESTS, "s/reference tested"},
+    {"raytrace.noise_octave", TB_PM_RAYTRACE, TB_PF_NOISE_OCTAVES, "s/noise octave (patterns, bump maps)"},
     {"raytrace.sample_channel", TB_PM_RAYTRACE, TB_PF_SAMPLE_CHANNELS, "s/(camera sample x channel)"},
     {"raytrace.hit_channel", TB_PM_RAYTRACE, TB_PF_HIT_CHANNELS, "s/(hit x channel)"},
     {"path.sample", TB_PM_PATH, TB_PF_SAMPLES, "s/camera sample"},
@@ -68,6 +69,7 @@ static const tb_cost_term tb__terms[] = {
     {"path.test_mesh", TB_PM_PATH, TB_PF_TESTS_MESH, "s/test"},
     {"path.hit", TB_PM_PATH, TB_PF_HITS, "s/hit shaded"},
     {"path.leaf_test", TB_PM_PATH, TB_PF_LEAF_TESTS, "s/reference tested"},
+    {"path.noise_octave", TB_PM_PATH, TB_PF_NOISE_OCTAVES, "s/noise octave (patterns, bump maps)"},
     {"path.sample_channel", TB_PM_PATH, TB_PF_SAMPLE_CHANNELS, "s/(camera sample x channel)"},
     {"path.hit_channel", TB_PM_PATH, TB_PF_HIT_CHANNELS, "s/(hit x channel)"},
     {"radiosity.ray", TB_PM_RADIOSITY, TB_PF_RAD_RAYS, "s/form-factor ray"},
@@ -119,7 +121,7 @@ const char *tb_pfeat_name(tb_pfeat k)
         "bytes", "primitives", "csg_nodes", "meshes", "triangles", "emitter_bytes", "emitter_faces", "csg_probes",
         "references",
         "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive", "tests_torus",
-        "tests_csg", "tests_mesh", "hits", "leaf_tests", "sample_channels", "hit_channels", "pixel_channels",
+        "tests_csg", "tests_mesh", "hits", "leaf_tests", "noise_octaves", "sample_channels", "hit_channels", "pixel_channels",
         "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays", "rad_nodes",
         "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_pixel_nodes", "rad_pixel_leaf_tests", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
         "mem_accel", "film_bytes", "vulkan_probe", "is_raytrace", "is_path", "is_radiosity", "one"};
@@ -225,6 +227,7 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
     f->f[TB_PF_TESTS_MESH] += scale * tb__count("Intersect/polygons");
     f->f[TB_PF_HITS] += scale * tb__count("Surface/hits shaded");
     f->f[TB_PF_LEAF_TESTS] += scale * tb__count("BVH/primitives tested");
+    f->f[TB_PF_NOISE_OCTAVES] += scale * tb__count("Pattern/noise octaves");
     double ch = f->channels > 0 ? f->channels : 3.0;
     f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_SAMPLES] * ch;
     f->f[TB_PF_HIT_CHANNELS] = f->f[TB_PF_HITS] * ch;
@@ -245,6 +248,7 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
         f->f[TB_PF_TESTS_PRIM] = f->f[TB_PF_TESTS_TORUS] = f->f[TB_PF_TESTS_CSG] = f->f[TB_PF_TESTS_MESH] = 0.0;
         f->f[TB_PF_HITS] = 0.0;
         f->f[TB_PF_LEAF_TESTS] = f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_HIT_CHANNELS] = 0.0;
+        f->f[TB_PF_NOISE_OCTAVES] = 0.0;
         double rays = scale * tb__count("Radiosity/rays (receivers x samples)");
         double shafts = tb__count("Form factors/shafts");
         f->f[TB_PF_RAD_RAYS] += rays;
@@ -266,7 +270,7 @@ void tb_predict_stats_sub_work(tb_predict_stats *f, const tb_predict_stats *load
 {
     static const tb_pfeat work[] = {TB_PF_SAMPLES,    TB_PF_RAYS,      TB_PF_OCC_RAYS, TB_PF_NODES,
                                     TB_PF_TESTS_PRIM, TB_PF_TESTS_TORUS, TB_PF_TESTS_CSG, TB_PF_TESTS_MESH,
-                                    TB_PF_HITS,       TB_PF_LEAF_TESTS};
+                                    TB_PF_HITS,       TB_PF_LEAF_TESTS,  TB_PF_NOISE_OCTAVES};
     for (size_t i = 0; i < sizeof work / sizeof work[0]; i++)
         f->f[work[i]] = fmax(0.0, f->f[work[i]] - load->f[work[i]]);
     double ch = f->channels > 0 ? f->channels : 3.0;

@@ -60,6 +60,7 @@ typedef enum tb_pfeat {
     TB_PF_TESTS_MESH,      /* intersection tests of polygons objects (their inner BVH walk included) */
     TB_PF_HITS,            /* surface records made (shading per hit) */
     TB_PF_LEAF_TESTS,      /* references tested at BVH leaves (triangles included: BVH/primitives tested) */
+    TB_PF_NOISE_OCTAVES,   /* noise octaves evaluated by procedural patterns and bump maps (Pattern/noise octaves) */
     TB_PF_SAMPLE_CHANNELS, /* camera samples x colour channels (3 RGB, 31 spectral: film and path throughput) */
     TB_PF_HIT_CHANNELS,    /* hits x colour channels (shading evaluates every band) */
     TB_PF_PIXEL_CHANNELS,  /* pixels x colour channels (resolving and writing the image) */
