@@ -115,7 +115,7 @@ static tb_status tb__render_gpu(void *user, const tb_scene *scene, const tb_rend
         fprintf(stderr, "testbed render: backend cpu: the Vulkan path tracer does not take this scene: %s\n", why);
         return TB_OK;
     }
-    /* opening Vulkan loads the driver's libraries (lavapipe: ~50 MiB, ~0.5 s) even when auto then
+    /* opening Vulkan loads the driver's libraries (lavapipe: ~50 MiB, a fraction of a second) even when auto then
      * renders on the CPU: --stats says so, for the cost model (docs/predict.md) */
     if (c->mode != TB_GPU_MODE_CPU)
         tb_stats_set_value(TB_VULKAN_PROBE_KEY, 1.0);
