@@ -256,7 +256,10 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
             goto done;
         double nodes = (double)tb_stats_counter("BVH/nodes visited");
         double depth = log2(full_elems + 2.0) / log2((double)mesh.nelems + 2.0);
-        f->f[TB_PF_RAD_PIXEL_NODES] = nodes * ((double)W * H) / ((double)pw * ph) * depth;
+        double px_ratio = ((double)W * H) / ((double)pw * ph);
+        f->f[TB_PF_RAD_PIXEL_NODES] = nodes * px_ratio * depth;
+        /* a leaf holds a few elements however fine the mesh: the tests per ray follow what the rays hit */
+        f->f[TB_PF_RAD_PIXEL_LEAF_TESTS] = (double)tb_stats_counter("BVH/primitives tested") * px_ratio;
     }
     f->rad_shots = shots;
     f->f[TB_PF_RAD_SHOT_ELEMS] = shots * full_elems;

@@ -46,6 +46,12 @@ static double tb__rad_nodes_visited(void)
     return tb_stats_enabled() ? (double)tb_stats_counter("BVH/nodes visited") : 0.0;
 }
 
+/* The same for the elements tested at BVH leaves. */
+static double tb__rad_leaf_tests(void)
+{
+    return tb_stats_enabled() ? (double)tb_stats_counter("BVH/primitives tested") : 0.0;
+}
+
 static tb_status tb__rad_report_row(void *user, const tb_rad_solver *s)
 {
     tb__rad_report *r = user;
@@ -429,12 +435,14 @@ tb_status tb_rad_render(const char *scene_path, const tb_rad_render_options *opt
     if ((st = tb__rad_provenance(&r, scene_path, &ro, &mo, opt, nthreads)))
         goto done;
     if (opt->image_path) {
-        double nodes0 = tb__rad_nodes_visited();
+        double nodes0 = tb__rad_nodes_visited(), leaves0 = tb__rad_leaf_tests();
         if ((st = tb_rad_render_image(r.solver, r.scene, opt->spp, &r.img)) ||
             (st = tb_provenance_to_attrs(&r.prov, r.img)))
             goto done;
-        if (tb_stats_enabled())
+        if (tb_stats_enabled()) {
             tb_stats_set_value(TB_RAD_IMAGE_NODES_KEY, tb__rad_nodes_visited() - nodes0);
+            tb_stats_set_value(TB_RAD_IMAGE_LEAF_KEY, tb__rad_leaf_tests() - leaves0);
+        }
     }
     tb__rad_where where = tb__rad_where_of(opt, &ro, r.scene->nlights);
     if (opt->stats_path && (st = tb__rad_stats(&r, opt->stats_path, t_mesh, nthreads, &as, &where)))

@@ -56,6 +56,7 @@ static const tb_cost_term tb__terms[] = {
     {"raytrace.test_mesh", TB_PM_RAYTRACE, TB_PF_TESTS_MESH, "s/test"},
     {"raytrace.hit", TB_PM_RAYTRACE, TB_PF_HITS, "s/hit shaded"},
     {"raytrace.leaf_test", TB_PM_RAYTRACE, TB_PF_LEAF_TESTS, "s/reference tested"},
+    {"raytrace.noise_octave", TB_PM_RAYTRACE, TB_PF_NOISE_OCTAVES, "s/noise octave (patterns, bump maps)"},
     {"raytrace.sample_channel", TB_PM_RAYTRACE, TB_PF_SAMPLE_CHANNELS, "s/(camera sample x channel)"},
     {"raytrace.hit_channel", TB_PM_RAYTRACE, TB_PF_HIT_CHANNELS, "s/(hit x channel)"},
     {"path.sample", TB_PM_PATH, TB_PF_SAMPLES, "s/camera sample"},
@@ -68,6 +69,7 @@ static const tb_cost_term tb__terms[] = {
     {"path.test_mesh", TB_PM_PATH, TB_PF_TESTS_MESH, "s/test"},
     {"path.hit", TB_PM_PATH, TB_PF_HITS, "s/hit shaded"},
     {"path.leaf_test", TB_PM_PATH, TB_PF_LEAF_TESTS, "s/reference tested"},
+    {"path.noise_octave", TB_PM_PATH, TB_PF_NOISE_OCTAVES, "s/noise octave (patterns, bump maps)"},
     {"path.sample_channel", TB_PM_PATH, TB_PF_SAMPLE_CHANNELS, "s/(camera sample x channel)"},
     {"path.hit_channel", TB_PM_PATH, TB_PF_HIT_CHANNELS, "s/(hit x channel)"},
     {"radiosity.ray", TB_PM_RADIOSITY, TB_PF_RAD_RAYS, "s/form-factor ray"},
@@ -84,7 +86,9 @@ static const tb_cost_term tb__terms[] = {
     {"process.pixel", TB_PM_PROCESS, TB_PF_PIXELS, "s/pixel"},
     {"process.pixel_channel", TB_PM_PROCESS, TB_PF_PIXEL_CHANNELS, "s/(pixel x channel)"},
     {"process.radiosity_pixel_ray", TB_PM_PROCESS, TB_PF_RAD_PIXEL_RAYS, "s/image ray"},
+    {"process.vulkan_probe", TB_PM_PROCESS, TB_PF_VULKAN_PROBE, "s (loading and asking the Vulkan driver)"},
     {"process.radiosity_pixel_node", TB_PM_PROCESS, TB_PF_RAD_PIXEL_NODES, "s/image ray's BVH node visited"},
+    {"process.radiosity_pixel_leaf_test", TB_PM_PROCESS, TB_PF_RAD_PIXEL_LEAF_TESTS, "s/element an image ray tested"},
     {"memory.raytrace", TB_PM_MEMORY, TB_PF_IS_RAYTRACE, "bytes"},
     {"memory.path", TB_PM_MEMORY, TB_PF_IS_PATH, "bytes"},
     {"memory.radiosity", TB_PM_MEMORY, TB_PF_IS_RADIOSITY, "bytes"},
@@ -92,6 +96,7 @@ static const tb_cost_term tb__terms[] = {
     {"memory.mesh_byte", TB_PM_MEMORY, TB_PF_MEM_MESHES, "bytes/accounted byte"},
     {"memory.emitter_byte", TB_PM_MEMORY, TB_PF_MEM_EMITTERS, "bytes/accounted byte"},
     {"memory.accel_byte", TB_PM_MEMORY, TB_PF_MEM_ACCEL, "bytes/accounted byte"},
+    {"memory.vulkan_probe", TB_PM_MEMORY, TB_PF_VULKAN_PROBE, "bytes (the Vulkan driver's libraries)"},
     {"memory.film_byte", TB_PM_MEMORY, TB_PF_FILM_BYTES, "bytes/(pixel x channel x 4)"},
     {"memory.pixel", TB_PM_MEMORY, TB_PF_PIXELS, "bytes/pixel (the images made from the film)"},
     {"memory.element", TB_PM_MEMORY, TB_PF_RAD_ELEMENTS, "bytes/element"},
@@ -116,10 +121,10 @@ const char *tb_pfeat_name(tb_pfeat k)
         "bytes", "primitives", "csg_nodes", "meshes", "triangles", "emitter_bytes", "emitter_faces", "csg_probes",
         "references",
         "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive", "tests_torus",
-        "tests_csg", "tests_mesh", "hits", "leaf_tests", "sample_channels", "hit_channels", "pixel_channels",
+        "tests_csg", "tests_mesh", "hits", "leaf_tests", "noise_octaves", "sample_channels", "hit_channels", "pixel_channels",
         "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays", "rad_nodes",
-        "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_pixel_nodes", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
-        "mem_accel", "film_bytes", "is_raytrace", "is_path", "is_radiosity", "one"};
+        "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_pixel_nodes", "rad_pixel_leaf_tests", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
+        "mem_accel", "film_bytes", "vulkan_probe", "is_raytrace", "is_path", "is_radiosity", "one"};
     _Static_assert(sizeof fname / sizeof fname[0] == TB_PF_COUNT, "a name per statistic");
     return (unsigned)k < TB_PF_COUNT ? fname[k] : "?";
 }
@@ -164,7 +169,9 @@ void tb_predict_stats_init(tb_predict_stats *f, tb_predict_method m, double file
     f->f[TB_PF_FILM_BYTES] = px * (double)nchannels * 4.0;
     f->f[TB_PF_PIXEL_CHANNELS] = px * (double)nchannels;
     f->channels = nchannels;
-    f->f[TB_PF_RAD_PIXEL_RAYS] = m == TB_PREDICT_RADIOSITY ? px * (double)rad_spp : 0.0;
+    /* the radiosity image traces a side x side grid per pixel, side = ceil(sqrt(spp)) (display.c) */
+    double side = ceil(sqrt((double)(rad_spp > 0 ? rad_spp : 0)));
+    f->f[TB_PF_RAD_PIXEL_RAYS] = m == TB_PREDICT_RADIOSITY ? px * side * side : 0.0;
     f->f[TB_PF_IS_RAYTRACE] = m == TB_PREDICT_RAYTRACE;
     f->f[TB_PF_IS_PATH] = m == TB_PREDICT_PATH;
     f->f[TB_PF_IS_RADIOSITY] = m == TB_PREDICT_RADIOSITY;
@@ -220,6 +227,7 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
     f->f[TB_PF_TESTS_MESH] += scale * tb__count("Intersect/polygons");
     f->f[TB_PF_HITS] += scale * tb__count("Surface/hits shaded");
     f->f[TB_PF_LEAF_TESTS] += scale * tb__count("BVH/primitives tested");
+    f->f[TB_PF_NOISE_OCTAVES] += scale * tb__count("Pattern/noise octaves");
     double ch = f->channels > 0 ? f->channels : 3.0;
     f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_SAMPLES] * ch;
     f->f[TB_PF_HIT_CHANNELS] = f->f[TB_PF_HITS] * ch;
@@ -232,6 +240,7 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
         if (img_nodes > 0 && img_nodes <= nodes) { /* the render measured the image's share */
             f->f[TB_PF_RAD_NODES] += scale * (nodes - img_nodes);
             f->f[TB_PF_RAD_PIXEL_NODES] += scale * img_nodes;
+            f->f[TB_PF_RAD_PIXEL_LEAF_TESTS] += scale * tb__value(TB_RAD_IMAGE_LEAF_KEY);
         } else if (occ > 0) {
             f->f[TB_PF_RAD_NODES] += scale * nodes * occ / (occ + img);
         }
@@ -239,6 +248,7 @@ void tb_predict_stats_add_work(tb_predict_stats *f, double scale)
         f->f[TB_PF_TESTS_PRIM] = f->f[TB_PF_TESTS_TORUS] = f->f[TB_PF_TESTS_CSG] = f->f[TB_PF_TESTS_MESH] = 0.0;
         f->f[TB_PF_HITS] = 0.0;
         f->f[TB_PF_LEAF_TESTS] = f->f[TB_PF_SAMPLE_CHANNELS] = f->f[TB_PF_HIT_CHANNELS] = 0.0;
+        f->f[TB_PF_NOISE_OCTAVES] = 0.0;
         double rays = scale * tb__count("Radiosity/rays (receivers x samples)");
         double shafts = tb__count("Form factors/shafts");
         f->f[TB_PF_RAD_RAYS] += rays;
@@ -260,7 +270,7 @@ void tb_predict_stats_sub_work(tb_predict_stats *f, const tb_predict_stats *load
 {
     static const tb_pfeat work[] = {TB_PF_SAMPLES,    TB_PF_RAYS,      TB_PF_OCC_RAYS, TB_PF_NODES,
                                     TB_PF_TESTS_PRIM, TB_PF_TESTS_TORUS, TB_PF_TESTS_CSG, TB_PF_TESTS_MESH,
-                                    TB_PF_HITS,       TB_PF_LEAF_TESTS};
+                                    TB_PF_HITS,       TB_PF_LEAF_TESTS,  TB_PF_NOISE_OCTAVES};
     for (size_t i = 0; i < sizeof work / sizeof work[0]; i++)
         f->f[work[i]] = fmax(0.0, f->f[work[i]] - load->f[work[i]]);
     double ch = f->channels > 0 ? f->channels : 3.0;
@@ -293,6 +303,7 @@ tb_status tb_predict_scene(const char *path, const tb_predict_options *o, tb_pre
     const int W = s->camera.width, H = s->camera.height;
     tb_predict_stats_init(f, o->method, (double)sb.st_size, W, H, s->nchannels, 0, o->render.threads);
     tb_predict_stats_add_scene(f);
+    f->f[TB_PF_VULKAN_PROBE] = o->vulkan_probe && o->vulkan_probe(s, o->vulkan_probe_user) ? 1.0 : 0.0;
     /* the pilot: the same render over a sparse, regular subset of the image */
     int pw = W / o->pilot_divisor, ph = H / o->pilot_divisor;
     pw = pw < 1 ? 1 : pw, ph = ph < 1 ? 1 : ph;

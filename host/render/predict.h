@@ -60,6 +60,7 @@ typedef enum tb_pfeat {
     TB_PF_TESTS_MESH,      /* intersection tests of polygons objects (their inner BVH walk included) */
     TB_PF_HITS,            /* surface records made (shading per hit) */
     TB_PF_LEAF_TESTS,      /* references tested at BVH leaves (triangles included: BVH/primitives tested) */
+    TB_PF_NOISE_OCTAVES,   /* noise octaves evaluated by procedural patterns and bump maps (Pattern/noise octaves) */
     TB_PF_SAMPLE_CHANNELS, /* camera samples x colour channels (3 RGB, 31 spectral: film and path throughput) */
     TB_PF_HIT_CHANNELS,    /* hits x colour channels (shading evaluates every band) */
     TB_PF_PIXEL_CHANNELS,  /* pixels x colour channels (resolving and writing the image) */
@@ -74,9 +75,11 @@ typedef enum tb_pfeat {
     TB_PF_RAD_SHAFT_TESTS, /* radiosity: form-factor rays x occluders listed per shaft (rays tested against
                               a shaft's occluder list) */
     TB_PF_RAD_VERTICES,    /* radiosity: vertices of the mesh */
-    TB_PF_RAD_PIXEL_RAYS,  /* radiosity: image rays (pixels x --spp) */
+    TB_PF_RAD_PIXEL_RAYS,  /* radiosity: image rays (pixels x ceil(sqrt(--spp))^2: a square grid per pixel) */
     TB_PF_RAD_PIXEL_NODES, /* radiosity: BVH nodes the image rays visit (an image that sees mostly sky costs
                             * little per ray: a pilot image measures it) */
+    TB_PF_RAD_PIXEL_LEAF_TESTS, /* radiosity: elements the image rays test at BVH leaves (a ray that hits tests
+                                   several, a sky ray few: a pilot image measures it) */
     TB_PF_RAD_MESH_PROBES, /* radiosity: CSG probe rays of meshing (Polygonize/CSG probes after the load) */
     TB_PF_RAD_CACHE_BYTES, /* radiosity: form factors cached, (distinct shooters) x (vertices + elements) x 4,
                               at most the solver's 512 MiB */
@@ -85,6 +88,8 @@ typedef enum tb_pfeat {
     TB_PF_MEM_EMITTERS,    /* bytes of emitters (tb_scene_memory) */
     TB_PF_MEM_ACCEL,       /* bytes of references and acceleration structure (tb_scene_memory) */
     TB_PF_FILM_BYTES,      /* pixels x channels x 4: the film and the images made from it */
+    TB_PF_VULKAN_PROBE,    /* 1 if the render probes the Vulkan device (--backend auto: the ray tracer always, the
+                              path tracer on a scene its Vulkan kernel takes; the driver's libraries load) */
     TB_PF_IS_RAYTRACE,     /* 1 for the ray tracer, else 0 (fixed costs per method) */
     TB_PF_IS_PATH,         /* 1 for the path tracer */
     TB_PF_IS_RADIOSITY,    /* 1 for radiosity */
@@ -122,7 +127,7 @@ typedef struct tb_cost_term {
 const tb_cost_term *tb_cost_terms(int *n);
 
 /* Most terms. */
-#define TB_COST_MAX_TERMS 64
+#define TB_COST_MAX_TERMS 96
 
 /* How well one module's fit went. */
 typedef struct tb_cost_fit {
@@ -193,6 +198,11 @@ typedef struct tb_predict_options {
     tb_accel_kind accel;        /* the acceleration structure */
     const tb_pt_options *path_options; /* path: its options (NULL: defaults) */
     int pilot_divisor;          /* pilot image: width and height / this (>= 1; 1: the whole image) */
+    /* Whether the render would probe the Vulkan device on the loaded scene
+     * (host/render may not use host/gpu: the command knows its rule); NULL:
+     * it would not. */
+    bool (*vulkan_probe)(const tb_scene *s, void *user);
+    void *vulkan_probe_user;    /* vulkan_probe's argument */
 } tb_predict_options;
 
 /* Loads the scene at `path` once, gathers its statistics and runs the
@@ -214,11 +224,19 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
 
 /* The schema COSTS.json is written with and the only one read: bumped
  * whenever the terms change, so an older file is refused. */
-#define TB_COSTS_SCHEMA "testbed-costs-3"
+#define TB_COSTS_SCHEMA "testbed-costs-4"
 
 /* The --stats value in which the radiosity renderer puts the BVH nodes its
  * image rays visited (the form factors' nodes are the rest of the counter). */
 #define TB_RAD_IMAGE_NODES_KEY "image_bvh_nodes"
+
+/* The --stats value in which the radiosity renderer puts the elements its
+ * image rays tested at BVH leaves (BVH/primitives tested during the image). */
+#define TB_RAD_IMAGE_LEAF_KEY "image_leaf_tests"
+
+/* The --stats value `testbed render` sets to 1 when it probes the Vulkan
+ * device (--backend auto or vulkan), which calibration reads. */
+#define TB_VULKAN_PROBE_KEY "vulkan_probed"
 
 /* Writes COSTS.json (whole or not at all). */
 tb_status tb_costs_write(const char *path, const tb_costs *c);

@@ -7,6 +7,10 @@
 #include <string.h>
 
 #include "util/math/float.h"
+#include "util/stats/stats.h"
+
+/* What a procedural pattern or bump map costs per hit (the cost model counts it: docs/predict.md). */
+TB_STAT_COUNTER(tb__noise_octaves, "Pattern/noise octaves");
 
 /* ---------------------------------------------------------------- noise */
 
@@ -114,6 +118,7 @@ static double tb__octave_sum(tb_dvec3 p, tb_dvec3 dpdx, tb_dvec3 dpdy, double om
     }
     /* the partial octave fades in rather than popping */
     double part = n - ni;
+    tb_stat_add(&tb__noise_octaves, (uint64_t)ni + (part > 0.0 && ni < 32));
     if (part > 0.0 && ni < 32) {
         double v = tb_noise3(p.x * freq, p.y * freq, p.z * freq);
         sum += amp * tb__smoothstep(0.3, 0.7, part) * (absolute ? fabs(v) : v);

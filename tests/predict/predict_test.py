@@ -71,7 +71,7 @@ def main():
     run("calibrate", "--set", "quick", "--runs", runs_csv)
     check(os.path.exists(default), "calibrate without -o writes " + default)
     costs = json.load(open(default))
-    check(costs["schema"] == "testbed-costs-3" and costs["threads"] >= 1, "COSTS.json schema and threads")
+    check(costs["schema"] == "testbed-costs-4" and costs["threads"] >= 1, "COSTS.json schema and threads")
     check(len(costs["costs"]) >= 40, "COSTS.json has every term")
     for k, v in costs["costs"].items():
         check(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0, "cost %s = %r is finite and >= 0" % (k, v))
@@ -79,6 +79,13 @@ def main():
     with open(runs_csv) as f:
         lines = f.read().splitlines()
     check(len(lines) == 17 and lines[0].startswith("run,method,kind"), "runs CSV: a header and 16 runs")
+    # the renders record whether they probed the Vulkan device (--backend auto): the ray tracer always,
+    # radiosity never
+    import csv
+    for r in csv.DictReader(lines):
+        want = {"raytrace": "1", "radiosity": "0"}.get(r["method"])
+        check(want is None or r["vulkan_probe"] == want,
+              "run %s (%s): vulkan_probe %s, expected %s" % (r["run"], r["method"], r["vulkan_probe"], want))
 
     # 3. predict --json for every method, and the text output
     for method, extra in (("raytrace", []), ("path", ["--spp", "2"]), ("radiosity", ["--max-edge", "3"])):
@@ -107,6 +114,26 @@ def main():
               and abs(s["pixel_channels"] - ch * s["pixels"]) <= 1e-6 * s["pixel_channels"],
               "%s: %d channels per sample, hit and pixel: %r" % (name, ch, s))
         check(s["leaf_tests"] > 0, "%s: leaf tests (triangles) counted" % name)
+        # Lambert and area lights only: the Vulkan path tracer takes the box, so auto probes the device
+        check(s["vulkan_probe"] == 1 and s["noise_octaves"] == 0, "%s: probes Vulkan, no noise: %r" % (name, s))
+    def stats(path, *args):
+        return json.loads(run("predict", path, "--pilot", "16", *args, "--json").stdout)["statistics"]
+    box = os.path.join(here, "..", "..", "scenes", "cornell-box-rgb.mid")
+    check(stats(box, "--method", "path", "--spp", "1", "--backend", "cpu")["vulkan_probe"] == 0,
+          "--backend cpu: no Vulkan probe")
+    check(stats(box, "--method", "path", "--spp", "1", "--adaptive")["vulkan_probe"] == 0,
+          "adaptive path tracing renders on the CPU without asking Vulkan")
+    check(stats(scene, "--method", "raytrace")["vulkan_probe"] == 1, "the ray tracer probes with auto")
+    check(stats(scene, "--method", "raytrace", "--backend", "cpu")["vulkan_probe"] == 0, "... not with cpu")
+    check("is not modelled" in run("predict", scene, "--backend", "vulkan", expect=2).stderr,
+          "--backend vulkan is refused")
+    # materials.mid: point lights and GGX (the kernel refuses it: no probe); noise patterns and bump maps
+    s = stats(os.path.join(here, "..", "..", "scenes", "materials.mid"), "--method", "path", "--spp", "1")
+    check(s["vulkan_probe"] == 0 and s["noise_octaves"] > s["hits"], "materials: noise octaves counted: %r" % s)
+    # the radiosity image traces ceil(sqrt(spp))^2 rays per pixel; the pilot image counts its leaf tests
+    s = stats(scene, "--method", "radiosity", "--max-edge", "3", "--spp", "2")
+    check(abs(s["rad_pixel_rays"] - 4 * s["pixels"]) <= 1e-5 * s["rad_pixel_rays"] and s["rad_pixel_leaf_tests"] > 0 and s["vulkan_probe"] == 0,
+          "radiosity image rays and leaf tests: %r" % s)
     p = run("predict", scene, "--costs", default)
     for m in ("load", "raytrace", "process", "memory"):
         check(m in p.stdout, "text output names module %s: %r" % (m, p.stdout))
@@ -114,7 +141,7 @@ def main():
     # 4b. a broken COSTS.json: located error, exit 1
     bad = os.path.join(TMP, "bad.json")
     with open(bad, "w") as f:
-        f.write('{\n  "schema": "testbed-costs-3",\n  "threads": 2,\n  "costs": {"load.fixed": oops}\n}\n')
+        f.write('{\n  "schema": "testbed-costs-4",\n  "threads": 2,\n  "costs": {"load.fixed": oops}\n}\n')
     p = run("predict", scene, "--costs", bad, expect=1)
     check(bad + ":4:27: error: expected a number" in p.stderr, "bad COSTS.json located: %r" % p.stderr)
 

@@ -222,6 +222,73 @@ static void test_fit_outliers(void **state)
     assert_true(got.fit[TB_PM_RAYTRACE].rel_rms > 0.15);
 }
 
+/* Runs shaped like the calibration's: the ray tracer always probes the
+ * Vulkan device (--backend auto) but for a few --backend cpu runs, the path
+ * tracer only on some scenes (Lambert, area lights), radiosity never. The
+ * probe's time and memory come back apart from each method's fixed cost,
+ * and a probing path run is predicted that much dearer than its twin. */
+static void test_fit_vulkan_probe(void **state)
+{
+    (void)state;
+    enum { N = 36 };
+    tb_costs truth, got;
+    memset(&truth, 0, sizeof truth);
+    truth.threads = 1;
+    truth.c[term("process.raytrace")] = 0.04;
+    truth.c[term("process.path")] = 0.05;
+    truth.c[term("process.radiosity")] = 0.06;
+    truth.c[term("process.vulkan_probe")] = 0.45;
+    truth.c[term("process.pixel")] = 2e-8;
+    truth.c[term("memory.raytrace")] = 3e7;
+    truth.c[term("memory.path")] = 1.5e7;
+    truth.c[term("memory.radiosity")] = 2e7;
+    truth.c[term("memory.vulkan_probe")] = 5.2e7;
+    truth.c[term("memory.film_byte")] = 1.2;
+    tb_predict_stats f[N];
+    tb_predict_measured y[N];
+    for (int r = 0; r < N; r++) {
+        tb_predict_method m = (tb_predict_method)(r % 3);
+        tb_predict_stats_init(&f[r], m, 1e4, 160 + 40 * r, 120 + 30 * r, r % 2 ? 31 : 3, 4, 1);
+        bool probe = m == TB_PREDICT_RAYTRACE ? r % 4 != 0 : m == TB_PREDICT_PATH ? r % 5 < 2 : false;
+        f[r].f[TB_PF_VULKAN_PROBE] = probe;
+        tb_prediction p;
+        tb_predict_eval(&truth, &f[r], &p);
+        memset(&y[r], 0, sizeof y[r]);
+        y[r].module[TB_PM_PROCESS] = p.module[TB_PM_PROCESS];
+        y[r].module[TB_PM_MEMORY] = p.module[TB_PM_MEMORY];
+    }
+    assert_int_equal(tb_costs_fit(f, y, N, 1, &got), TB_OK);
+    static const char *const names[] = {"process.raytrace", "process.path", "process.vulkan_probe",
+                                        "memory.raytrace",  "memory.path",  "memory.vulkan_probe"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (fabs(got.c[term(names[i])] / truth.c[term(names[i])] - 1.0) > 1e-6)
+            fail_msg("%s: fitted %g, true %g", names[i], got.c[term(names[i])], truth.c[term(names[i])]);
+    tb_predict_stats g = f[1]; /* a path run */
+    tb_prediction with, without;
+    g.f[TB_PF_VULKAN_PROBE] = 1.0;
+    tb_predict_eval(&got, &g, &with);
+    g.f[TB_PF_VULKAN_PROBE] = 0.0;
+    tb_predict_eval(&got, &g, &without);
+    tb_assert_near(with.peak_rss_bytes - without.peak_rss_bytes, 5.2e7, 1.0);
+    tb_assert_near(with.seconds - without.seconds, 0.45, 1e-6);
+}
+
+/* The radiosity image traces ceil(sqrt(spp))^2 rays per pixel (a square
+ * grid), so --spp 2 and 3 cost what --spp 4 does. */
+static void test_radiosity_image_rays(void **state)
+{
+    (void)state;
+    static const int spp[] = {1, 2, 3, 4, 5, 9};
+    static const double rays[] = {1, 4, 4, 4, 9, 9};
+    for (size_t i = 0; i < sizeof spp / sizeof spp[0]; i++) {
+        tb_predict_stats f;
+        tb_predict_stats_init(&f, TB_PREDICT_RADIOSITY, 1e4, 64, 32, 3, spp[i], 1);
+        tb_assert_near(f.f[TB_PF_RAD_PIXEL_RAYS], 64.0 * 32.0 * rays[i], 0.0);
+        tb_predict_stats_init(&f, TB_PREDICT_PATH, 1e4, 64, 32, 3, spp[i], 1);
+        tb_assert_near(f.f[TB_PF_RAD_PIXEL_RAYS], 0.0, 0.0);
+    }
+}
+
 static void test_eval_modules(void **state)
 {
     (void)state;
@@ -314,15 +381,15 @@ static void test_costs_bad_files(void **state)
 
     expect_bad("empty.json", "", TB_ERR_FORMAT, "predict-model-empty.json:1:1: error: expected a JSON object");
     expect_bad("array.json", "[1, 2]", TB_ERR_FORMAT, ":1:1: error: expected a JSON object");
-    expect_bad("trunc.json", "{\"schema\": \"testbed-costs-3\",\n  \"threads\": 2,\n  \"costs\": {\"load.fixed\": 1",
+    expect_bad("trunc.json", "{\"schema\": \"testbed-costs-4\",\n  \"threads\": 2,\n  \"costs\": {\"load.fixed\": 1",
                TB_ERR_FORMAT, ":3:28: error: expected ',' or '}'");
     expect_bad("schema.json", "{\"schema\": \"other\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
-               ":1:12: error: schema is not \"testbed-costs-3\"");
+               ":1:12: error: schema is not \"testbed-costs-4\"");
     /* a file of the previous model (other terms) is refused by its schema, with what to do */
-    expect_bad("old.json", "{\"schema\": \"testbed-costs-1\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
-               "schema is not \"testbed-costs-3\" (a COSTS.json of another version: re-run testbed calibrate)");
+    expect_bad("old.json", "{\"schema\": \"testbed-costs-3\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
+               "schema is not \"testbed-costs-4\" (a COSTS.json of another version: re-run testbed calibrate)");
     expect_bad("noschema.json", "{\"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT, "no \"schema\"");
-    expect_bad("missing.json", "{\"schema\": \"testbed-costs-3\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
+    expect_bad("missing.json", "{\"schema\": \"testbed-costs-4\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
                "cost term \"load.parse_byte\" is missing");
     /* an unknown term, a negative and a non-number cost, a duplicate, text after */
     char *p = strstr(strcpy(bad, good), "\"load.primitive\"");
@@ -355,6 +422,8 @@ int main(void)
         cmocka_unit_test(test_fit_recovers_costs),
         cmocka_unit_test(test_fit_channels),
         cmocka_unit_test(test_fit_outliers),
+        cmocka_unit_test(test_fit_vulkan_probe),
+        cmocka_unit_test(test_radiosity_image_rays),
         cmocka_unit_test(test_eval_modules),
         cmocka_unit_test(test_costs_round_trip),
         cmocka_unit_test(test_costs_bad_files),

@@ -130,7 +130,7 @@ for term in "pngcairo size 1100,500" "svg size 1100,500"; do
     gnuplot <<EOF
 set terminal $term
 set output "$out/predict-accuracy.$ext"
-set multiplot layout 1,2
+set multiplot layout 1,2 title "testbed predict: predicted against measured (load average $load_before before, $load_after after)"
 set logscale xy
 set key top left
 set grid

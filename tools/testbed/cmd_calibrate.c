@@ -27,6 +27,15 @@
 #include "util/stats/provenance.h"
 #include "util/stats/stats.h"
 
+/* What the calibration does to the generated materials. */
+enum {
+    TB__LOOK_AS_MADE = 0, /* the generator's palette */
+    TB__LOOK_LAMBERT,     /* every material Lambert (no specular, no transmission): with env 3 and no CSG, a scene
+                             the Vulkan path tracer takes, so --backend auto probes the device */
+    TB__LOOK_PATTERNED,   /* every material with a noise diffuse pattern and a noise bump map (per-hit noise
+                             octaves, as in scenes/materials.mid) */
+};
+
 /* One calibration run: a generated scene and the render's options. */
 typedef struct tb__cal_run {
     tb_gen_kind kind;
@@ -40,6 +49,7 @@ typedef struct tb__cal_run {
     bool spectral;       /* the floor / room is spectral, so the scene renders 31 bands */
     int tori;            /* top-level objects kept: 0 all, 1 all but tori, 2 tori only (a torus test costs
                             several times another primitive's: this separates them) */
+    int look;            /* the materials: TB__LOOK_* */
 } tb__cal_run;
 
 /* The quick set (seconds; the tests use it), the default set (about two
@@ -49,100 +59,112 @@ typedef struct tb__cal_run {
  * (samples, pixels, film), depth (rays per sample), radiosity mesh size,
  * sample points and shots. */
 static const tb__cal_run tb__cal_quick[] = {
-    {TB_GEN_GRID, 8, 64, 48, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0},
-    {TB_GEN_MESH, 4, 96, 72, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0},
-    {TB_GEN_CSG, 3, 200, 150, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0},
-    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0},
-    {TB_GEN_CSG, 6, 64, 48, TB_PREDICT_PATH, "", 1, 0, false, 0},
-    {TB_GEN_MESH, 2, 48, 36, TB_PREDICT_PATH, "--spp 2", 1, 0, false, 0},
-    {TB_GEN_MESH, 8, 320, 240, TB_PREDICT_PATH, "", 1, 0, false, 0},
-    {TB_GEN_GRID, 12, 480, 360, TB_PREDICT_PATH, "", 1, 0, false, 0},
-    {TB_GEN_GRID, 4, 1024, 768, TB_PREDICT_PATH, "", 2, 0, false, 0},
-    {TB_GEN_MESH, 6, 800, 600, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 0, false, 0},
-    {TB_GEN_GRID, 6, 64, 48, TB_PREDICT_RAYTRACE, "", 1, 2, true, 0},
-    {TB_GEN_GRID, 6, 64, 48, TB_PREDICT_PATH, "", 1, 3, false, 0},
-    {TB_GEN_GRID, 2, 48, 36, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 8 --samples 2 --spp 1", 1, 0, false, 0},
-    {TB_GEN_GRID, 3, 64, 48, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 12 --samples 1 --spp 2", 1, 0, false, 0},
-    {TB_GEN_MESH, 1, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 6 --samples 1", 1, 0, false, 0},
-    {TB_GEN_CSG, 2, 96, 72, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 4 --samples 1 --spp 1", 1, 0, false, 0},
+    {TB_GEN_GRID, 8, 64, 48, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_MESH, 4, 96, 72, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_CSG, 3, 200, 150, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_CSG, 6, 64, 48, TB_PREDICT_PATH, "", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_MESH, 2, 48, 36, TB_PREDICT_PATH, "--spp 2", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_MESH, 8, 320, 240, TB_PREDICT_PATH, "", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 12, 480, 360, TB_PREDICT_PATH, "", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 4, 1024, 768, TB_PREDICT_PATH, "", 2, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_MESH, 6, 800, 600, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 6, 64, 48, TB_PREDICT_RAYTRACE, "", 1, 2, true, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 6, 64, 48, TB_PREDICT_PATH, "", 1, 3, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 2, 48, 36, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 8 --samples 2 --spp 1", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 3, 64, 48, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 12 --samples 1 --spp 2", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_MESH, 1, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 6 --samples 1", 1, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_CSG, 2, 96, 72, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 4 --samples 1 --spp 1", 1, 0, false, 0, TB__LOOK_AS_MADE},
 };
 
 /* The default set's runs; the long set adds larger scenes to them. */
 #define TB__CAL_DEFAULT_RUNS \
     /* raytrace: open grids (rays to the sky), floors and closed rooms (every ray hits), RGB and spectral */                       \
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},                                                          \
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},                                                         \
-    {TB_GEN_GRID, 60, 320, 240, TB_PREDICT_RAYTRACE, "--spp 4", 4, 2, false, 0},                                                   \
-    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},                                                           \
-    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},                                                         \
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "--max-depth 2", 2, 2, false, 0},                                             \
-    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RAYTRACE, "--spp 4", 2, 2, true, 0},                                                     \
-    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, false, 0},                                                            \
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},                                                           \
-    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 2, true, 0},                                                      \
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},                                                          \
-    {TB_GEN_MESH, 50, 320, 240, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 2, false, 0},                                         \
-    {TB_GEN_MESH, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0},                                                            \
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 1, false, 0},                                                          \
-    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},                                                          \
-    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},                                                     \
-    {TB_GEN_CSG, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0},                                                            \
-    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},                                                          \
-    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 2, true, 0},                                                            \
-    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0},                                                            \
-    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0},                                                           \
-    {TB_GEN_CSG, 9, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0},                                                      \
-    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0},                                                          \
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 1},                                                         \
-    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 2, false, 2},                                                         \
-    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 2},                                                         \
-    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_RAYTRACE, "", 3, 3, false, 1},                                                         \
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0, TB__LOOK_AS_MADE},                                                          \
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "--backend cpu", 2, 0, false, 0, TB__LOOK_AS_MADE}, /* no Vulkan probe */ \
+    /* noise patterns and bump maps on every material (per-hit noise octaves) */                               \
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, false, 0, TB__LOOK_PATTERNED},                     \
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0, TB__LOOK_PATTERNED},                      \
+    {TB_GEN_MESH, 20, 480, 360, TB_PREDICT_RAYTRACE, "--backend cpu", 2, 2, false, 0, TB__LOOK_AS_MADE},                     \
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_GRID, 60, 320, 240, TB_PREDICT_RAYTRACE, "--spp 4", 4, 2, false, 0, TB__LOOK_AS_MADE},                                                   \
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0, TB__LOOK_AS_MADE},                                                           \
+    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_RAYTRACE, "--max-depth 2", 2, 2, false, 0, TB__LOOK_AS_MADE},                                             \
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RAYTRACE, "--spp 4", 2, 2, true, 0, TB__LOOK_AS_MADE},                                                     \
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, false, 0, TB__LOOK_AS_MADE},                                                            \
+    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0, TB__LOOK_AS_MADE},                                                           \
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 2, true, 0, TB__LOOK_AS_MADE},                                                      \
+    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0, TB__LOOK_AS_MADE},                                                          \
+    {TB_GEN_MESH, 50, 320, 240, TB_PREDICT_RAYTRACE, "--light-samples 1", 2, 2, false, 0, TB__LOOK_AS_MADE},                                         \
+    {TB_GEN_MESH, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 2, true, 0, TB__LOOK_AS_MADE},                                                            \
+    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 1, false, 0, TB__LOOK_AS_MADE},                                                          \
+    {TB_GEN_GRID, 20, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0, TB__LOOK_AS_MADE},                                                          \
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0, TB__LOOK_AS_MADE},                                                     \
+    {TB_GEN_CSG, 4, 240, 180, TB_PREDICT_RAYTRACE, "", 2, 3, false, 0, TB__LOOK_AS_MADE},                                                            \
+    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0, TB__LOOK_AS_MADE},                                                          \
+    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 2, true, 0, TB__LOOK_AS_MADE},                                                            \
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 0, false, 0, TB__LOOK_AS_MADE},                                                            \
+    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_RAYTRACE, "", 2, 1, false, 0, TB__LOOK_AS_MADE},                                                           \
+    {TB_GEN_CSG, 9, 240, 180, TB_PREDICT_RAYTRACE, "--spp 2", 2, 3, true, 0, TB__LOOK_AS_MADE},                                                      \
+    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_RAYTRACE, "", 3, 0, false, 0, TB__LOOK_AS_MADE},                                                          \
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 1, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_RAYTRACE, "", 3, 2, false, 2, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_RAYTRACE, "", 3, 0, false, 2, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_RAYTRACE, "", 3, 3, false, 1, TB__LOOK_AS_MADE},                                                         \
     /* path */                                                                                                                     \
-    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},                                                       \
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 0},                                                             \
-    {TB_GEN_GRID, 60, 240, 180, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 0},                                                       \
-    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_PATH, "", 3, 2, true, 0},                                                               \
-    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_PATH, "", 2, 1, false, 0},                                                             \
-    {TB_GEN_GRID, 30, 240, 180, TB_PREDICT_PATH, "--max-depth 3", 2, 2, false, 0},                                                 \
-    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 2, true, 0},                                                         \
-    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},                                                                \
-    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 0, false, 0},                                                        \
-    {TB_GEN_CSG, 6, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},                                                          \
-    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},                                                       \
-    {TB_GEN_MESH, 50, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0},                                                              \
-    {TB_GEN_MESH, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0},                                                         \
-    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3, 1, false, 0},                                                 \
-    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 0},                                                              \
-    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, true, 0},                                                                \
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false, 0},                                                         \
-    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 3, true, 0},                                                         \
-    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_PATH, "", 3, 0, false, 0},                                                              \
-    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_PATH, "", 4, 2, true, 0},                                                                \
-    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0},                                                         \
-    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_PATH, "", 3, 1, false, 0},                                                               \
-    {TB_GEN_CSG, 9, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, true, 0},                                                          \
-    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_PATH, "", 3, 0, false, 0},                                                              \
-    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 1},                                                             \
-    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 2},                                                      \
-    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 2},                                                             \
-    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 1},                                                             \
+    {TB_GEN_GRID, 30, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0, TB__LOOK_AS_MADE},                                                       \
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 0, TB__LOOK_AS_MADE},                                                             \
+    {TB_GEN_GRID, 60, 240, 180, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 0, TB__LOOK_AS_MADE},                                                       \
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_PATH, "", 3, 2, true, 0, TB__LOOK_AS_MADE},                                                               \
+    {TB_GEN_GRID, 100, 320, 240, TB_PREDICT_PATH, "", 2, 1, false, 0, TB__LOOK_AS_MADE},                                                             \
+    {TB_GEN_GRID, 30, 240, 180, TB_PREDICT_PATH, "--max-depth 3", 2, 2, false, 0, TB__LOOK_AS_MADE},                                                 \
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 2, true, 0, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_CSG, 6, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0, TB__LOOK_AS_MADE},                                                                \
+    {TB_GEN_CSG, 20, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 0, false, 0, TB__LOOK_AS_MADE},                                                        \
+    {TB_GEN_CSG, 6, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0, TB__LOOK_AS_MADE},                                                          \
+    {TB_GEN_MESH, 10, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0, TB__LOOK_AS_MADE},                                                       \
+    {TB_GEN_MESH, 50, 240, 180, TB_PREDICT_PATH, "", 3, 2, false, 0, TB__LOOK_AS_MADE},                                                              \
+    {TB_GEN_MESH, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 2, true, 0, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_MESH, 80, 480, 360, TB_PREDICT_PATH, "--max-depth 3", 3, 1, false, 0, TB__LOOK_AS_MADE},                                                 \
+    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 0, TB__LOOK_AS_MADE},                                                              \
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, true, 0, TB__LOOK_AS_MADE},                                                                \
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false, 0, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_PATH, "--spp 4", 3, 3, true, 0, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_GRID, 30, 800, 600, TB_PREDICT_PATH, "", 3, 0, false, 0, TB__LOOK_AS_MADE},                                                              \
+    {TB_GEN_GRID, 9, 480, 360, TB_PREDICT_PATH, "", 4, 2, true, 0, TB__LOOK_AS_MADE},                                                                \
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_PATH, "--spp 2", 2, 0, false, 0, TB__LOOK_AS_MADE},                                                         \
+    {TB_GEN_CSG, 12, 320, 240, TB_PREDICT_PATH, "", 3, 1, false, 0, TB__LOOK_AS_MADE},                                                               \
+    {TB_GEN_CSG, 9, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, true, 0, TB__LOOK_AS_MADE},                                                          \
+    {TB_GEN_MESH, 20, 640, 480, TB_PREDICT_PATH, "", 3, 0, false, 0, TB__LOOK_AS_MADE},                                                              \
+    {TB_GEN_GRID, 300, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 1, TB__LOOK_AS_MADE},                                                             \
+    {TB_GEN_GRID, 300, 320, 240, TB_PREDICT_PATH, "--spp 2", 3, 2, false, 2, TB__LOOK_AS_MADE},                                                      \
+    {TB_GEN_GRID, 200, 480, 360, TB_PREDICT_PATH, "", 3, 0, false, 2, TB__LOOK_AS_MADE},                                                             \
+    {TB_GEN_GRID, 100, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 1, TB__LOOK_AS_MADE},                                                             \
+    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_PATH, "", 3, 2, false, 0, TB__LOOK_PATTERNED},                        \
+    {TB_GEN_MESH, 6, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 0, TB__LOOK_PATTERNED},                         \
+    /* Lambert, panel-lit: the Vulkan path tracer takes them, so --backend auto probes the device (its driver's \
+     * libraries: resident memory and time no other path run has) */                                             \
+    {TB_GEN_GRID, 20, 240, 180, TB_PREDICT_PATH, "", 3, 3, false, 0, TB__LOOK_LAMBERT},                                      \
+    {TB_GEN_MESH, 6, 320, 240, TB_PREDICT_PATH, "", 3, 3, true, 0, TB__LOOK_LAMBERT},                                        \
+    {TB_GEN_GRID, 60, 160, 120, TB_PREDICT_PATH, "--spp 2", 3, 3, false, 0, TB__LOOK_LAMBERT},                               \
     /* radiosity */                                                                                                                \
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3, 0, false, 0},                   \
-    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4, 0, false, 0},               \
-    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4, 0, false, 0},                \
-    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3, 0, false, 0},       \
-    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4, 0, false, 0},              \
-    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80 --samples 16", 8, 0, false, 0},             \
-    {TB_GEN_MESH, 4, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 8", 8, 0, false, 0},              \
-    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8, 0, false, 0},              \
-    {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false, 0},              \
-    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false, 0}, \
-    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false, 0},              \
-    {TB_GEN_GRID, 9, 800, 600, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 4", 4, 0, false, 0},       \
-    {TB_GEN_MESH, 4, 1024, 768, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 1", 3, 0, false, 0},      \
-    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 8", 6, 3, false, 0},              \
-    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 4", 6, 2, false, 0},             \
-    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4", 6, 3, true, 0},
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --spp 2", 3, 0, false, 0, TB__LOOK_AS_MADE},                   \
+    {TB_GEN_GRID, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 4", 4, 0, false, 0, TB__LOOK_AS_MADE},               \
+    {TB_GEN_CSG, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 40 --samples 8", 4, 0, false, 0, TB__LOOK_AS_MADE},                \
+    {TB_GEN_MESH, 2, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 60 --samples 4 --spp 1", 3, 0, false, 0, TB__LOOK_AS_MADE},       \
+    {TB_GEN_GRID, 6, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 2", 4, 0, false, 0, TB__LOOK_AS_MADE},              \
+    {TB_GEN_GRID, 16, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 80 --samples 16", 8, 0, false, 0, TB__LOOK_AS_MADE},             \
+    {TB_GEN_MESH, 4, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 8", 8, 0, false, 0, TB__LOOK_AS_MADE},              \
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 1", 8, 0, false, 0, TB__LOOK_AS_MADE},              \
+    {TB_GEN_GRID, 4, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 300 --samples 2", 6, 2, false, 0, TB__LOOK_AS_MADE},              \
+    {TB_GEN_GRID, 9, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4 --max-edge 4", 6, 2, false, 0, TB__LOOK_AS_MADE}, \
+    {TB_GEN_GRID, 4, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 6, 3, false, 0, TB__LOOK_AS_MADE},              \
+    {TB_GEN_GRID, 9, 800, 600, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 4", 4, 0, false, 0, TB__LOOK_AS_MADE},       \
+    {TB_GEN_MESH, 4, 1024, 768, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 10 --samples 1 --spp 1", 3, 0, false, 0, TB__LOOK_AS_MADE},      \
+    {TB_GEN_GRID, 9, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 8", 6, 3, false, 0, TB__LOOK_AS_MADE},              \
+    {TB_GEN_GRID, 16, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 150 --samples 4", 6, 2, false, 0, TB__LOOK_AS_MADE},             \
+    {TB_GEN_GRID, 6, 160, 120, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 200 --samples 4", 6, 3, true, 0, TB__LOOK_AS_MADE},
 
 static const tb__cal_run tb__cal_default[] = {
     TB__CAL_DEFAULT_RUNS
@@ -151,17 +173,17 @@ static const tb__cal_run tb__cal_default[] = {
 static const tb__cal_run tb__cal_long[] = {
     TB__CAL_DEFAULT_RUNS
     /* larger scenes */
-    {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_RAYTRACE, "", 8, 0, false, 0},
-    {TB_GEN_GRID, 400, 480, 360, TB_PREDICT_RAYTRACE, "", 6, 2, true, 0},
-    {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_RAYTRACE, "", 8, 2, false, 0},
-    {TB_GEN_CSG, 60, 480, 360, TB_PREDICT_RAYTRACE, "", 8, 1, false, 0},
-    {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_PATH, "--spp 2", 8, 0, false, 0},
-    {TB_GEN_GRID, 400, 480, 360, TB_PREDICT_PATH, "--spp 2", 8, 2, true, 0},
-    {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_PATH, "", 8, 2, false, 0},
-    {TB_GEN_CSG, 60, 480, 360, TB_PREDICT_PATH, "", 8, 1, false, 0},
-    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 4", 8, 0, false, 0},
-    {TB_GEN_MESH, 6, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 8", 8, 0, false, 0},
-    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 10, 2, false, 0},
+    {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_RAYTRACE, "", 8, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 400, 480, 360, TB_PREDICT_RAYTRACE, "", 6, 2, true, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_RAYTRACE, "", 8, 2, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_CSG, 60, 480, 360, TB_PREDICT_RAYTRACE, "", 8, 1, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 1500, 800, 600, TB_PREDICT_PATH, "--spp 2", 8, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 400, 480, 360, TB_PREDICT_PATH, "--spp 2", 8, 2, true, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_MESH, 300, 640, 480, TB_PREDICT_PATH, "", 8, 2, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_CSG, 60, 480, 360, TB_PREDICT_PATH, "", 8, 1, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_CSG, 9, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 4", 8, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_MESH, 6, 320, 240, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 100 --samples 8", 8, 0, false, 0, TB__LOOK_AS_MADE},
+    {TB_GEN_GRID, 16, 240, 180, TB_PREDICT_RADIOSITY, "--threshold 1e-9 --max-shots 400 --samples 2", 10, 2, false, 0, TB__LOOK_AS_MADE},
 };
 
 /* tb_gen_sink: writes every item, the camera with the run's resolution. */
@@ -170,6 +192,7 @@ typedef struct tb__cal_writer {
     int width, height;
     bool no_lights; /* leave the generator's lights out */
     int tori;       /* tb__cal_run.tori */
+    int look;       /* tb__cal_run.look */
 } tb__cal_writer;
 
 static tb_status tb__cal_sink(void *user, const tb_mid_item *item)
@@ -179,6 +202,22 @@ static tb_status tb__cal_sink(void *user, const tb_mid_item *item)
         return TB_OK;
     if (item->type == TB_MID_ITEM_OBJECT && w->tori && (item->object->kind == TB_PRIM_TORUS) != (w->tori == 2))
         return TB_OK;
+    if (item->type == TB_MID_ITEM_MATERIAL && w->look != TB__LOOK_AS_MADE) {
+        tb_mid_material m = *item->material;
+        if (w->look == TB__LOOK_LAMBERT) {
+            m.specular = m.transmission = tb_mid_color_grey(0.0f);
+            m.set &= ~(unsigned)(TB_MID_SET_SPECULAR | TB_MID_SET_EXPONENT | TB_MID_SET_TRANSMISSION | TB_MID_SET_IOR);
+        } else {
+            /* fBm of 4 and 5 octaves in (u, v), as the bundled materials scene's plaster and hammered metal */
+            m.diffuse_pattern = (tb_mid_pattern){.kind = TB_MID_PATTERN_NOISE, .scale = 12, .scale_v = 12,
+                                                 .octaves = 4, .a = tb_mid_color_grey(0.2f), .b = m.diffuse};
+            m.bump = (tb_mid_pattern){.kind = TB_MID_PATTERN_NOISE, .scale = 30, .scale_v = 30, .octaves = 5,
+                                      .height = 0.005};
+            m.set |= TB_MID_SET_DIFFUSE_PATTERN | TB_MID_SET_BUMP;
+        }
+        tb_mid_item copy = {.type = TB_MID_ITEM_MATERIAL, .material = &m};
+        return tb_mid_write_item(w->fp, &copy);
+    }
     if (item->type != TB_MID_ITEM_CAMERA)
         return tb_mid_write_item(w->fp, item);
     tb_mid_camera cam = *item->camera;
@@ -223,6 +262,13 @@ static void tb__cal_room(FILE *fp, const tb__cal_run *r)
     }
 }
 
+/* The file of run r's scene in dir (runs that differ only in options share it). */
+static void tb__cal_scene_path(const tb__cal_run *r, const char *dir, char *buf, size_t n)
+{
+    snprintf(buf, n, "%s/%s-%d-%dx%d-%s%d-t%d%s.mid", dir, tb_gen_kind_name(r->kind), r->count, r->width, r->height,
+             r->spectral ? "s" : "e", r->env, r->tori, r->look == TB__LOOK_LAMBERT ? "-lambert" : r->look ? "-patterned" : "");
+}
+
 /* Writes run r's scene to path. */
 static tb_status tb__cal_scene(const tb__cal_run *r, const char *path)
 {
@@ -230,7 +276,7 @@ static tb_status tb__cal_scene(const tb__cal_run *r, const char *path)
     tb_status st = tb_outfile_open(&of, path);
     if (st)
         return st;
-    tb__cal_writer w = {of.fp, r->width, r->height, r->env == 3, r->tori};
+    tb__cal_writer w = {of.fp, r->width, r->height, r->env == 3, r->tori, r->look};
     tb_gen_options go = {.kind = r->kind, .count = r->count, .seed = 1};
     st = tb_mid_write_header(of.fp);
     if (!st)
@@ -413,6 +459,7 @@ static void tb__cal_child(const tb__cal_run *r, const char *scene, const char *d
     tb_predict_stats_add_work(&out->f, 1.0);
     if (r->method != TB_PREDICT_RADIOSITY)
         tb_predict_stats_sub_work(&out->f, &load);
+    out->f.f[TB_PF_VULKAN_PROBE] = tb__cal_value(TB_VULKAN_PROBE_KEY) > 0.0; /* as the render did */
     tb_predict_measured *y = &out->y;
     y->wall = wall;
     y->module[TB_PM_LOAD] = tb__cal_timer("Scene/load");
@@ -568,8 +615,7 @@ int tb_cmd_calibrate(int argc, char **argv)
     for (int k = 0; k < nruns && rc == TB_EXIT_OK; k++) {
         int i = order[k];
         char scene[4096], why[4200];
-        snprintf(scene, sizeof scene, "%s/%s-%d-%dx%d-%s%d-t%d.mid", dir, tb_gen_kind_name(runs[i].kind), runs[i].count,
-                 runs[i].width, runs[i].height, runs[i].spectral ? "s" : "e", runs[i].env, runs[i].tori);
+        tb__cal_scene_path(&runs[i], dir, scene, sizeof scene);
         struct stat sb;
         if (stat(scene, &sb) != 0 && tb__cal_scene(&runs[i], scene)) {
             snprintf(why, sizeof why, "%s", tb_last_error());
@@ -659,8 +705,7 @@ done:
         /* the scenes, the last image and log: all ours, in our own folder */
         for (int i = 0; i < nruns; i++) {
             char scene[4096];
-            snprintf(scene, sizeof scene, "%s/%s-%d-%dx%d-%s%d-t%d.mid", dir, tb_gen_kind_name(runs[i].kind), runs[i].count,
-                     runs[i].width, runs[i].height, runs[i].spectral ? "s" : "e", runs[i].env, runs[i].tori);
+            tb__cal_scene_path(&runs[i], dir, scene, sizeof scene);
             unlink(scene);
         }
         char p[4200];

@@ -11,6 +11,8 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "host/gpu/gpu.h"
+#include "host/gpu/pathtrace.h"
 #include "host/radiosity/predict.h"
 #include "host/render/pathtrace.h"
 #include "host/render/predict.h"
@@ -50,6 +52,25 @@ static void tb__predict_print(const char *scene, const tb_costs *c, const tb_pre
                f->f[TB_PF_OCC_RAYS] / f->f[TB_PF_PIXELS], f->f[TB_PF_HITS] / f->f[TB_PF_PIXELS], f->pilot_seconds);
 }
 
+/* What decides whether `testbed render` probes the Vulkan device (cmd_render.c,
+ * tb__render_gpu): any backend but cpu, for the ray tracer always, for the path
+ * tracer (not adaptive) when its Vulkan kernel takes the scene. */
+typedef struct tb__predict_backend {
+    int mode;      /* tb_gpu_mode */
+    bool path;     /* --method path */
+    bool adaptive; /* path: --adaptive (rendered on the CPU without asking) */
+} tb__predict_backend;
+
+static bool tb__predict_probes(const tb_scene *s, void *user)
+{
+    const tb__predict_backend *b = user;
+    if (b->mode == TB_GPU_MODE_CPU)
+        return false;
+    if (!b->path)
+        return true;
+    return !b->adaptive && tb_gpu_pt_unsupported(s) == NULL;
+}
+
 int tb_cmd_predict(int argc, char **argv)
 {
     const char *scene_path = NULL, *costs_path = NULL, *ignored = NULL;
@@ -67,7 +88,7 @@ int tb_cmd_predict(int argc, char **argv)
     tb_rad_render_options rad = tb_rad_render_defaults();
     rad.solver.samples = TB_RAD_DEFAULT_SAMPLES;
     rad.solver.hemicube_res = TB_RAD_DEFAULT_HEMICUBE_RES;
-    int threads = 0;
+    int threads = 0, backend = TB_GPU_MODE_AUTO;
     const tb_opt opts[] = {
         {"method", .type = TB_OPT_CHOICE, .dest = &method, .choices = methods, .metavar = "M",
          .help = "raytrace (default), path or radiosity, as testbed render"},
@@ -93,6 +114,9 @@ int tb_cmd_predict(int argc, char **argv)
         {"max-spp", .type = TB_OPT_INT, .dest = &ro->aa.max_spp, .min = 1, .max = TB_AA_MAX_SPP, .metavar = "N",
          .help = "adaptive: most samples per pixel"},
         {"seed", .type = TB_OPT_UINT64, .dest = &ro->aa.seed, .metavar = "N", .help = "sample seed"},
+        {"backend", .type = TB_OPT_CHOICE, .dest = &backend, .choices = tb_cli_backends, .metavar = "B",
+         .help = "auto (default) or cpu: auto probes the Vulkan device first (a real GPU is\n"
+                 "not modelled: the prediction is the CPU render's)"},
         {"accel", .type = TB_OPT_CHOICE, .dest = &accel, .choices = tb_cli_accels,
          .help = "acceleration structure (the costs are fitted with bvh)"},
         {"max-depth", .type = TB_OPT_INT, .dest = &max_depth, .min = 0, .max = TB_PT_MAX_BOUNCES, .metavar = "N",
@@ -152,6 +176,8 @@ int tb_cmd_predict(int argc, char **argv)
             return tb_cli_usage_error(&cli, "no --costs given and neither XDG_CACHE_HOME nor HOME is set");
         costs_path = def;
     }
+    if (backend == TB_GPU_MODE_VULKAN)
+        return tb_cli_usage_error(&cli, "--backend vulkan is not modelled (the costs are the CPU renderers')");
     tb_costs costs;
     if (tb_costs_read(costs_path, &costs)) {
         fprintf(stderr, "testbed predict: %s\n", tb_last_error());
@@ -185,11 +211,14 @@ int tb_cmd_predict(int argc, char **argv)
             ro->rt.light_samples = light_samples;
             ro->rt.glossy_samples = glossy_samples;
         }
+        tb__predict_backend be = {.mode = backend, .path = method == TB__PATH, .adaptive = ro->aa.adaptive};
         tb_predict_options o = {.method = method == TB__PATH ? TB_PREDICT_PATH : TB_PREDICT_RAYTRACE,
                                 .render = *ro,
                                 .accel = (tb_accel_kind)accel,
                                 .path_options = &po,
-                                .pilot_divisor = pilot};
+                                .pilot_divisor = pilot,
+                                .vulkan_probe = tb__predict_probes,
+                                .vulkan_probe_user = &be};
         st = tb_predict_scene(scene_path, &o, &f);
     }
     if (st) {

@@ -20,6 +20,7 @@
 #include "host/gpu/pathtrace.h"
 #include "host/gpu/render.h"
 #include "host/render/pathtrace.h"
+#include "host/render/predict.h"
 #include "host/render/render_file.h"
 #include "util/image/image.h"
 #include "util/stats/stats.h"
@@ -114,6 +115,10 @@ static tb_status tb__render_gpu(void *user, const tb_scene *scene, const tb_rend
         fprintf(stderr, "testbed render: backend cpu: the Vulkan path tracer does not take this scene: %s\n", why);
         return TB_OK;
     }
+    /* opening Vulkan loads the driver's libraries (lavapipe: ~50 MiB, a fraction of a second) even when auto then
+     * renders on the CPU: --stats says so, for the cost model (docs/predict.md) */
+    if (c->mode != TB_GPU_MODE_CPU)
+        tb_stats_set_value(TB_VULKAN_PROBE_KEY, 1.0);
     tb_gpu_session gsess;
     tb_status st = tb_gpu_backend_choose(c->mode, c->device, false, &gsess);
     if (st)
