@@ -13,6 +13,7 @@
 #   TESTBED      the testbed binary (default: build/rel/testbed, a Release build)
 #   GRID_COUNT   objects of the grid scene (default 10000000)
 #   MESH_COUNT   objects of the mesh scene (default 14000: about 10^7 triangles)
+#   KINDS        which runs (default "grid mesh")
 #   THREADS      threads (default 2)
 #   BENCH        0: skip `testbed bench scale` (one load per scene instead of two; the
 #                render's Scene/load + Scene/accel build timers then stand for the time
@@ -35,6 +36,7 @@ run() { # KIND COUNT
     fi
     /usr/bin/time -f "generate: %e s wall, %M KB peak" "$tb" generate "$kind" --count "$count" -o "$mid"
     ls -l "$mid" | awk '{printf "MID: %.2f GB\n", $5 / 1e9}'
+    rm -f "$dir/scale-10m-$kind.json"
     /usr/bin/time -v "$tb" render "$mid" -o "$dir/scale-10m-$kind.png" --spp 1 --threads "$threads" \
         --stats "$dir/scale-10m-$kind.json" 2>"$dir/scale-10m-$kind.time" || echo "render FAILED (exit $?)"
     grep -E "Elapsed|Maximum resident|Exit status|User time|System time" "$dir/scale-10m-$kind.time"
@@ -57,5 +59,10 @@ PY
     echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
 }
 
-run grid "${GRID_COUNT:-10000000}"
-run mesh "${MESH_COUNT:-14000}"
+for kind in ${KINDS:-grid mesh}; do
+    case $kind in
+    grid) run grid "${GRID_COUNT:-10000000}" ;;
+    mesh) run mesh "${MESH_COUNT:-14000}" ;;
+    *) echo "scale-10m.sh: unknown kind $kind" >&2; exit 2 ;;
+    esac
+done
