@@ -2,12 +2,14 @@
  * emitters for area-light sampling (docs/rendering.md, "Emissive objects";
  * docs/lights.md): exact ones for polygons and spheres under a similarity,
  * an analytic surface emitter (emit_surface.h) for every other primitive,
- * triangles of the world-space tessellation for CSG objects (and for every
- * curved primitive when a renderer asks for tessellated emitters). */
+ * a lazily tessellated emitter (emit_csg.h) for CSG objects; triangles of
+ * the world-space tessellation for CSG objects and every curved primitive
+ * when a renderer asks for tessellated emitters. */
 #include <math.h>
 #include <stdlib.h>
 
 #include "host/object/polygonize.h"
+#include "host/render/emit_csg.h"
 #include "host/render/emit_surface.h"
 #include "host/render/scene_internal.h"
 #include "util/base/error.h"
@@ -158,14 +160,14 @@ static bool tb__similarity(const tb_transform *t, double *s)
 #define TB__EMIT_CSG_EDGE 0.02
 
 /* Emitters from the world-space tessellation of o (a primitive other than
- * polygons, or a CSG tree): every face triangulated, triangles keeping the
- * face's outward (front) orientation. On a curved surface the inscribed
- * triangles lie up to a sagitta inside the exact surface, where shadow rays
- * aimed at them would be stopped by the exact surface itself; each is moved
- * out along its normal by a bound on that gap, half its longest edge times
- * tan(angle / 2). Writes the count to *count (0 if the shape cannot be
- * tessellated). TB_ERR_NOMEM. */
-static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_array *out, int *count)
+ * polygons, or a CSG tree; scene_internal.h): every face triangulated,
+ * triangles keeping the face's outward (front) orientation. On a curved
+ * surface the inscribed triangles lie up to a sagitta inside the exact
+ * surface, where shadow rays aimed at them would be stopped by the exact
+ * surface itself; each is moved out along its normal by a bound on that
+ * gap, half its longest edge times tan(angle / 2). */
+tb_status tb__scene_tess_emitters(const tb_object *o, tb_channels L, double angle, double edge, int segments,
+                                  tb_array *out, int *count)
 {
     *count = 0;
     /* As for areas (scene.c), a shape that cannot be tessellated is not worth
@@ -181,16 +183,16 @@ static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_array *
     if (!(diag > 0.0) || !isfinite(diag))
         return TB_OK;
     tb_poly_options po = {0};
-    po.max_angle = TB__EMIT_ANGLE;
-    po.max_segments = TB_POLY_DEFAULT_SEGMENTS;
+    po.max_angle = angle;
+    po.max_segments = segments;
     tb_fed *fed;
-    if ((st = tb_polygonize_object(o, &po, TB__EMIT_CSG_EDGE * diag, &fed))) {
+    if ((st = tb_polygonize_object(o, &po, edge * diag, &fed))) {
         if (st != TB_ERR_NOMEM)
             tb_clear_error();
         return st == TB_ERR_NOMEM ? st : TB_OK;
     }
     bool curved = !tb__tree_flat(o);
-    double lift_k = curved ? 0.5 * tan(0.5 * TB__EMIT_ANGLE) : 0.0;
+    double lift_k = curved ? 0.5 * tan(0.5 * angle) : 0.0;
     tb_array tris, pts, sizes;
     tb_array_init(&tris, sizeof(tb_tri));
     tb_array_init(&pts, sizeof(tb_vec3));
@@ -254,6 +256,40 @@ static tb_status tb__tess_emitters(const tb_object *o, tb_channels L, tb_array *
     return TB_OK;
 }
 
+/* The tessellated emitters at the eager tolerances (tessellated_emitters). */
+static tb_status tb__tess_default(const tb_object *o, tb_channels L, tb_array *out, int *count)
+{
+    return tb__scene_tess_emitters(o, L, TB__EMIT_ANGLE, TB__EMIT_CSG_EDGE, TB_POLY_DEFAULT_SEGMENTS, out, count);
+}
+
+/* The lazily tessellated emitter of CSG object o (emit_csg.h): appended to
+ * out (when not NULL), else only measured; *bytes gets its unbuilt size.
+ * A tree without finite bounds gets no emitter. */
+static tb_status tb__csg_emitter(const tb_object *o, tb_channels L, tb_array *out, int *count, size_t *bytes)
+{
+    tb_csg_emitter *ce;
+    tb_status st = tb_csg_emitter_make(o, L, &ce);
+    if (st) {
+        if (st != TB_ERR_NOMEM)
+            tb_clear_error();
+        return st == TB_ERR_NOMEM ? st : TB_OK;
+    }
+    if (bytes)
+        *bytes += tb_csg_emitter_bytes(ce) + TB_SCENE_MALLOC_OVERHEAD;
+    *count = 1;
+    if (!out) {
+        tb_csg_emitter_free(ce);
+        return TB_OK;
+    }
+    tb_emitter e = tb_emitter_csg(ce);
+    if (tb_array_push(out, &e)) {
+        tb_csg_emitter_free(ce);
+        *count = 0;
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for emitters");
+    }
+    return TB_OK;
+}
+
 /* The analytic emitter of primitive `leaf` (emit_surface.h): appended to
  * out (when not NULL) with its table, else only measured; *bytes gets the
  * table's bytes. A surface that cannot have one (no area) gets no emitter. */
@@ -298,7 +334,7 @@ tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, bool tes
     if (leaf->kind == TB_PRIM_SPHERE) {
         double s;
         if (!tb__similarity(&leaf->to_world, &s))
-            return tessellate ? tb__tess_emitters(leaf, L, out, count) : tb__surface_emitter(leaf, L, out, count, bytes);
+            return tessellate ? tb__tess_default(leaf, L, out, count) : tb__surface_emitter(leaf, L, out, count, bytes);
         if (out) {
             tb_dvec3 c = tb_transform_dpoint(&leaf->to_world, (tb_dvec3){0.0, 0.0, 0.0});
             tb_emitter e = tb_emitter_sphere(tb_dvec3_to_f(c), (float)s, L);
@@ -310,8 +346,10 @@ tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, bool tes
         *count = 1;
         return TB_OK;
     }
+    if (tb_prim_is_csg(leaf->kind) && !tessellate)
+        return tb__csg_emitter(leaf, L, out, count, bytes);
     if (tb_prim_is_csg(leaf->kind) || (tessellate && leaf->kind != TB_PRIM_POLYGONS))
-        return tb__tess_emitters(leaf, L, out, count);
+        return tb__tess_default(leaf, L, out, count);
     if (leaf->kind != TB_PRIM_POLYGONS)
         return tb__surface_emitter(leaf, L, out, count, bytes);
     if (!leaf->mesh)
@@ -343,6 +381,9 @@ void tb__scene_free_emitter(tb_emitter *e)
 {
     if (tb_emitter_is_surface(e)) {
         tb_surface_emitter_free(e->ctx);
+        e->ctx = NULL;
+    } else if (tb_emitter_is_csg(e)) {
+        tb_csg_emitter_free(e->ctx);
         e->ctx = NULL;
     }
 }

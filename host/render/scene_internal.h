@@ -50,16 +50,28 @@ tb_status tb__scene_leaf_area(const tb_object *leaf, double *area);
 /* The emitters of object `leaf` (a primitive or a CSG tree) with radiance L:
  * one triangle per triangle of a polygons object, one sphere for a sphere
  * under a similarity transform, one analytic surface emitter
- * (emit_surface.h) for every other primitive, the triangles of the
- * world-space tessellation for a CSG tree, and with `tessellate` for every
- * primitive other than polygons and similarity spheres too (scene_emit.c).
+ * (emit_surface.h) for every other primitive, one lazily tessellated
+ * emitter (emit_csg.h) for a CSG tree, and with `tessellate` the triangles
+ * of the world-space tessellation for a CSG tree and for every primitive
+ * other than polygons and similarity spheres (scene_emit.c).
  * Appends them to out (a tb_array of tb_emitter, when not NULL; a surface
  * emitter's table is then owned by the emitter: tb__scene_free_emitter)
  * and writes their count to *n (none if the shape has no area or the
- * tessellation fails); adds the bytes of surface emitter tables to *bytes
+ * tessellation fails); adds the bytes of surface emitter tables and of
+ * unbuilt CSG emitters to *bytes
  * (may be NULL). TB_ERR_NOMEM only. */
 tb_status tb__scene_leaf_emitters(const tb_object *leaf, tb_channels L, bool tessellate, tb_array *out, int *n,
                                   size_t *bytes);
+
+/* Emitters from the world-space tessellation of o (a primitive other than
+ * polygons, or a CSG tree) at angular tolerance `angle` (radians), CSG
+ * refinement edge `edge` (a fraction of o's world box diagonal) and at most
+ * `segments` per parametric direction of a face: one triangle emitter each,
+ * lifted off curved surfaces (scene_emit.c), appended to out (when not
+ * NULL); *count gets their number (0 if the shape cannot be tessellated).
+ * TB_ERR_NOMEM only. */
+tb_status tb__scene_tess_emitters(const tb_object *o, tb_channels L, double angle, double edge, int segments,
+                                  tb_array *out, int *count);
 
 /* Frees what emitter e owns (a surface emitter's table); e stays as it is. */
 void tb__scene_free_emitter(tb_emitter *e);

@@ -397,7 +397,7 @@ static void test_emissive(void **state)
         double area = NAN;
         if (isnan(want[i])) {
             assert_int_equal(tb_scene_emissive_area(s, i, &area), TB_ERR_UNSUPPORTED);
-            assert_true(e->nemitters > 0); /* triangles of the CSG tessellation */
+            assert_int_equal(e->nemitters, 1); /* the lazily tessellated CSG emitter */
         } else {
             /* Flat shapes and the similarity-transformed sphere exactly;
              * other curved ones by their analytic emitter's integral. */
@@ -417,8 +417,8 @@ static void test_emissive(void **state)
     assert_true(s->materials[s->emissive[8].material].emission.v[0] == 2.0f);
     /* Emitters: a sphere for the similarity-transformed sphere, one analytic
      * surface emitter for the ellipsoid, the box and the other curved
-     * primitives (their areas those of the surfaces), the triangles of the
-     * tessellation for the CSG objects, two triangles for the square. */
+     * primitives (their areas those of the surfaces), one lazily
+     * tessellated emitter per CSG object, two triangles for the square. */
     assert_int_equal(s->emissive[0].nemitters, 1);
     const tb_emitter *es = &s->emitters[s->emissive[0].first_emitter];
     assert_int_equal(es->kind, TB_EMITTER_SPHERE);
@@ -439,7 +439,7 @@ static void test_emissive(void **state)
         if (fabs(a - want[i]) > 1e-6 * want[i])
             fail_msg("emissive %d: surface emitter area %.9g, want %.9g", i, a, want[i]);
     }
-    assert_true(s->emissive[6].nemitters > 1 && s->emissive[8].nemitters > 1); /* CSG: triangles */
+    assert_true(s->emissive[6].nemitters == 1 && s->emissive[8].nemitters == 1); /* CSG: lazy emitters */
     assert_int_equal(s->emissive[7].nemitters, 2);
     assert_int_equal(s->nemitters, total);
     /* The mirrored square: its emitters face where the surface's hit normal
