@@ -67,10 +67,9 @@ const char *tb_gpu_pt_unsupported(const tb_scene *s)
             return "procedural patterns are not in the kernel";
         if (m->bump.kind != TB_MID_PATTERN_NONE)
             return "bump maps are not in the kernel";
-        if (!tb_channels_is_black(m->transmission))
-            return "transmitting (dielectric) materials are not in the kernel (Lambert only)";
-        if (m->model != TB_MID_MODEL_LAMBERT && !tb_channels_is_black(m->specular))
-            return "specular (Phong, Blinn, GGX) materials are not in the kernel (Lambert only)";
+        if (m->model == TB_MID_MODEL_GGX && tb_channels_is_black(m->transmission) &&
+            !tb_channels_is_black(m->specular))
+            return "GGX glossy materials are not in the kernel (Lambert, Phong, Blinn and smooth dielectrics only)";
     }
     for (int i = 0; i < s->nemitters; i++) {
         const tb_emitter *e = &s->emitters[i];
@@ -108,6 +107,55 @@ void tb_gpu_pt_destroy(tb_gpu_pathtracer *pt)
     free(pt);
 }
 
+/* Mean of the channels, at least 0: a lobe's selection weight, as
+ * host/render/surface.c weighs them. */
+static double tb__gpt_weight(const tb_channels *c)
+{
+    double s = 0.0;
+    for (int k = 0; k < c->n; k++)
+        s += c->v[k] > 0.0f ? (double)c->v[k] : 0.0;
+    return c->n > 0 ? s / c->n : 0.0;
+}
+
+/* Material m's scalar words (shared/pathtrace.h, TB_GPU_PT_M_*): the lobes
+ * and their selection probabilities of tb_surface_bsdf_init in
+ * TB_SURFACE_PHYSICAL mode (the kernel takes no textures or patterns, so
+ * they are the same at every point). */
+static void tb__gpt_material(const tb_material *mt, float *w)
+{
+    double pick[4] = {0, 0, 0, 0};
+    uint32_t lobes = 0, glossy = TB_GPU_PT_GLOSSY_NONE;
+    float dielectric = 0.0f;
+    if (!tb_channels_is_black(mt->diffuse)) {
+        lobes |= 1u << TB_GPU_PT_LOBE_DIFFUSE;
+        pick[TB_GPU_PT_LOBE_DIFFUSE] = tb__gpt_weight(&mt->diffuse);
+    }
+    const bool transmits = !tb_channels_is_black(mt->transmission);
+    if (!transmits && mt->model != TB_MID_MODEL_LAMBERT && !tb_channels_is_black(mt->specular)) {
+        lobes |= 1u << TB_GPU_PT_LOBE_GLOSSY;
+        pick[TB_GPU_PT_LOBE_GLOSSY] = tb__gpt_weight(&mt->specular);
+        glossy = mt->model == TB_MID_MODEL_BLINN ? TB_GPU_PT_GLOSSY_BLINN : TB_GPU_PT_GLOSSY_PHONG;
+    }
+    if (transmits) {
+        float dmax = tb_channels_max(mt->diffuse);
+        dielectric = dmax > 0.0f ? (dmax < 1.0f ? 1.0f - dmax : 0.0f) : 1.0f;
+        if (dielectric > 0.0f) {
+            lobes |= 1u << TB_GPU_PT_LOBE_DIELECTRIC;
+            pick[TB_GPU_PT_LOBE_DIELECTRIC] = dielectric * fmax(tb__gpt_weight(&mt->transmission), 0.5);
+        }
+    }
+    double sum = pick[0] + pick[1] + pick[2] + pick[3];
+    for (int k = 0; k < 4; k++)
+        w[TB_GPU_PT_M_PICK + (uint32_t)k] = sum > 0.0 ? (float)(pick[k] / sum) : 0.0f;
+    if (!(sum > 0.0))
+        lobes = 0;
+    w[TB_GPU_PT_M_DIELECTRIC] = dielectric;
+    w[TB_GPU_PT_M_EXPONENT] = (float)mt->exponent;
+    w[TB_GPU_PT_M_IOR] = (float)mt->ior;
+    memcpy(&w[TB_GPU_PT_M_GLOSSY], &glossy, sizeof glossy); /* uints in the float table */
+    memcpy(&w[TB_GPU_PT_M_LOBES], &lobes, sizeof lobes);
+}
+
 /* The emitters and the scene's table (shared/pathtrace.h; pathtrace.comp's
  * bindings 9 and 10). */
 static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
@@ -119,9 +167,10 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
     tb_status st = tb_light_set_init(&ls, s);
     if (st)
         return st;
-    const size_t eb = (size_t)2 * (size_t)nm * (size_t)nch, cb = eb + (size_t)ne * (size_t)nch,
-                 pb = cb + (size_t)ne + 1, db = pb + (size_t)ne, ob = db + (size_t)nm;
-    const size_t nt = ob + s->nobjects;
+    const size_t ms = 4 * (size_t)nch + TB_GPU_PT_M_SCALARS;
+    const size_t eb = (size_t)nm * ms, cb = eb + (size_t)ne * (size_t)nch, pb = cb + (size_t)ne + 1,
+                 xb = pb + (size_t)ne, ob = xb + (size_t)ne;
+    const size_t nt = ob + 3 * (size_t)s->nobjects;
     float *t = calloc(nt, sizeof *t);
     tb_gpu_emitter *em = calloc((size_t)(ne > 0 ? ne : 1), sizeof *em);
     if (!t || !em) {
@@ -131,11 +180,14 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
     for (int m = 0; m < nm; m++) {
         const tb_material *mt = &s->materials[m];
         tb_channels Le = mt->emits ? tb_radiance_from_exitance(mt->emission) : tb_channels_splat(nch, 0.0f);
+        float *w = t + (size_t)m * ms;
         for (int c = 0; c < nch; c++) {
-            t[(size_t)m * 2 * (size_t)nch + (size_t)c] = mt->diffuse.v[c];
-            t[(size_t)m * 2 * (size_t)nch + (size_t)nch + (size_t)c] = Le.v[c];
+            w[c] = mt->diffuse.v[c];
+            w[nch + c] = Le.v[c];
+            w[2 * nch + c] = mt->specular.v[c];
+            w[3 * nch + c] = mt->transmission.v[c];
         }
-        t[db + (size_t)m] = tb_channels_max(mt->diffuse);
+        tb__gpt_material(mt, w + 4 * nch);
     }
     *emitter_kinds = 0;
     double cdf = 0.0;
@@ -148,12 +200,18 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
         double pmf = tb_distrib1d_pmf(&ls.area.select, i);
         t[cb + (size_t)i] = (float)cdf;
         t[pb + (size_t)i] = (float)pmf;
+        memcpy(&t[xb + (size_t)i], &e->object, sizeof e->object);
         cdf += pmf;
     }
     t[cb + (size_t)ne] = 1.0f;
     for (uint32_t i = 0; i < s->nobjects; i++) {
-        uint32_t m = (uint32_t)s->objects[i]->material; /* a uint in the float table */
-        memcpy(&t[ob + i], &m, sizeof m);
+        uint32_t w[3] = {(uint32_t)s->objects[i]->material, 0, 0};
+        memcpy(&t[ob + 3 * (size_t)i], w, sizeof w);
+    }
+    for (int k = 0; k < s->nemissive; k++) {
+        const tb_scene_emissive *x = &s->emissive[k];
+        uint32_t w[2] = {(uint32_t)x->first_emitter, (uint32_t)x->nemitters};
+        memcpy(&t[ob + 3 * (size_t)x->object + 1], w, sizeof w);
     }
     pt->b_table = tb_gpu_buffer_create(pt->dev, nt * sizeof *t);
     pt->b_emitters = tb_gpu_buffer_create(pt->dev, (size_t)(ne > 0 ? ne : 1) * sizeof *em);
@@ -287,7 +345,7 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
 {
     const int nch = pt->nch;
     for (size_t i = 0; i < n; i++)
-        pt->states[i] = (tb_gpu_pt_state){.seed0 = seeds[2 * i], .seed1 = seeds[2 * i + 1], .alive = 1};
+        pt->states[i] = (tb_gpu_pt_state){.seed0 = seeds[2 * i], .seed1 = seeds[2 * i + 1], .alive = 1, .prev_delta = 1};
     tb_status st = tb_gpu_buffer_upload(pt->b_rays, 0, rays, n * sizeof *rays);
     if (!st)
         st = tb_gpu_buffer_upload(pt->b_states, TB_GPU_PT_STATE_HEADER, pt->states, n * sizeof *pt->states);
