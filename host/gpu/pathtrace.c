@@ -30,8 +30,10 @@ TB_STAT_COUNTER(tb__gpt_submits, "GPU path tracer/command buffers");
 
 /* Paths per device batch (the buffers are sized for it once). */
 #define TB__GPT_BATCH 65536u
-/* Specialization constants of pathtrace.comp besides the stage (ids 2 .. 12). */
-#define TB__GPT_SPEC 11
+/* Most bytes of the channel-value buffer (TB_GPU_PT_NVALUES + lights arrays of nch). */
+#define TB__GPT_VALUES_MAX ((size_t)64 << 20)
+/* Specialization constants of pathtrace.comp besides the stage (ids 2 .. 13). */
+#define TB__GPT_SPEC 12
 
 struct tb_gpu_pathtracer {
     tb_gpu_device *dev;
@@ -41,6 +43,7 @@ struct tb_gpu_pathtracer {
     tb_pt_options opt;
     int nch;
     size_t cap; /* paths per batch */
+    uint32_t light_base; /* the table word of the first delta light */
     tb_gpu_buffer *b_rays, *b_states, *b_hits, *b_values, *b_shadows, *b_emitters, *b_table;
     tb_gpu_kernel *k[TB_GPU_PT_STAGES]; /* per TB_GPU_PT_STAGE_* */
     tb_gpu_pt_state *states; /* host staging of one batch */
@@ -57,8 +60,11 @@ static double tb__gpt_now(void)
 
 const char *tb_gpu_pt_unsupported(const tb_scene *s)
 {
-    if (s->nlights > 0)
-        return "point, spot and directional lights are not in the kernel (area lights only)";
+    if (s->nlights > (int)TB_GPU_PT_MAX_SLOTS - 1)
+        return "more than 31 point, spot and directional lights (the kernel has a shadow-ray slot per light)";
+    for (int i = 0; i < s->nlights; i++)
+        if (s->lights[i].ies)
+            return "IES light distributions are not in the path-tracing kernel";
     for (int i = 0; i < s->nmaterials; i++) {
         const tb_material *m = &s->materials[i];
         if (m->diffuse_texture || m->specular_texture || m->transmission_texture || m->emission_texture)
@@ -170,7 +176,9 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
     const size_t ms = 4 * (size_t)nch + TB_GPU_PT_M_SCALARS;
     const size_t eb = (size_t)nm * ms, cb = eb + (size_t)ne * (size_t)nch, pb = cb + (size_t)ne + 1,
                  xb = pb + (size_t)ne, ob = xb + (size_t)ne;
-    const size_t nt = ob + 3 * (size_t)s->nobjects;
+    const size_t lb = ob + 3 * (size_t)s->nobjects, ls_words = TB_GPU_PT_L_SCALARS + (size_t)nch;
+    const size_t nt = lb + (size_t)s->nlights * ls_words;
+    pt->light_base = (uint32_t)lb;
     float *t = calloc(nt, sizeof *t);
     tb_gpu_emitter *em = calloc((size_t)(ne > 0 ? ne : 1), sizeof *em);
     if (!t || !em) {
@@ -212,6 +220,20 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
         const tb_scene_emissive *x = &s->emissive[k];
         uint32_t w[2] = {(uint32_t)x->first_emitter, (uint32_t)x->nemitters};
         memcpy(&t[ob + 3 * (size_t)x->object + 1], w, sizeof w);
+    }
+    for (int i = 0; i < s->nlights; i++) {
+        const tb_light *l = &s->lights[i];
+        float *w = t + lb + (size_t)i * ls_words;
+        uint32_t kind = l->kind == TB_LIGHT_SPOT          ? TB_GPU_LIGHT_SPOT
+                        : l->kind == TB_LIGHT_DIRECTIONAL ? TB_GPU_LIGHT_DIRECTIONAL
+                                                          : TB_GPU_LIGHT_POINT;
+        memcpy(&w[TB_GPU_PT_L_KIND], &kind, sizeof kind);
+        const float pa[6] = {l->position.x, l->position.y, l->position.z, l->axis.x, l->axis.y, l->axis.z};
+        memcpy(&w[TB_GPU_PT_L_POSITION], pa, sizeof pa);
+        w[TB_GPU_PT_L_COS_TOTAL] = (float)l->cos_total;
+        w[TB_GPU_PT_L_COS_FALLOFF] = (float)l->cos_falloff;
+        for (int c = 0; c < nch; c++)
+            w[TB_GPU_PT_L_SCALARS + (size_t)c] = l->intensity.v[c];
     }
     pt->b_table = tb_gpu_buffer_create(pt->dev, nt * sizeof *t);
     pt->b_emitters = tb_gpu_buffer_create(pt->dev, (size_t)(ne > 0 ? ne : 1) * sizeof *em);
@@ -267,12 +289,18 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
     uint32_t kinds = 0;
     if ((st = tb__gpt_tables(pt, &kinds)))
         goto fail;
-    const size_t n = pt->cap, nv = (size_t)TB_GPU_PT_NVALUES * (size_t)pt->nch;
+    const size_t slots = 1 + (size_t)s->nlights;
+    const size_t nv = ((size_t)TB_GPU_PT_NVALUES + slots - 1) * (size_t)pt->nch;
+    /* fewer paths per batch where the channel values would pass 64 MiB
+     * (many lights and bands), well inside every device's buffer limits */
+    if (pt->cap * nv * sizeof(float) > TB__GPT_VALUES_MAX)
+        pt->cap = TB__GPT_VALUES_MAX / (nv * sizeof(float));
+    const size_t n = pt->cap;
     pt->b_rays = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_ray));
     pt->b_states = tb_gpu_buffer_create(dev, TB_GPU_PT_STATE_HEADER + n * sizeof(tb_gpu_pt_state));
     pt->b_hits = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_hit));
     pt->b_values = tb_gpu_buffer_create(dev, n * nv * sizeof(float));
-    pt->b_shadows = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_ray));
+    pt->b_shadows = tb_gpu_buffer_create(dev, slots * n * sizeof(tb_gpu_ray));
     pt->states = malloc(n * sizeof *pt->states);
     pt->L = malloc(n * (size_t)pt->nch * sizeof *pt->L);
     if (!pt->b_rays || !pt->b_states || !pt->b_hits || !pt->b_values || !pt->b_shadows) {
@@ -297,6 +325,7 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
         {10, b->has_quadrics},
         {11, b->has_planar},
         {12, b->has_tori},
+        {13, (uint32_t)s->nlights},
     };
     static const char *const names[TB_GPU_PT_STAGES] = {"pathtrace init", "pathtrace extend", "pathtrace shade",
                                                         "pathtrace shadow", "pathtrace accumulate"};
@@ -357,7 +386,8 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
                                .nnodes = pt->bind.nnodes,
                                .max_depth = (uint32_t)pt->opt.max_depth,
                                .rr_depth = (uint32_t)pt->opt.rr_depth,
-                               .max_bounces = TB_PT_MAX_BOUNCES};
+                               .max_bounces = TB_PT_MAX_BOUNCES,
+                               .light_base = pt->light_base};
     push[1] = push[0];
     push[1].count = 1;
     tb_gpu_dispatch d[2 + 3 * TB_GPU_PT_BOUNCES_PER_SUBMIT];

@@ -52,6 +52,7 @@ layout(constant_id = 9) const bool TB_HAS_CUBES = false;
 layout(constant_id = 10) const bool TB_HAS_QUADRICS = false;
 layout(constant_id = 11) const bool TB_HAS_PLANAR = false;
 layout(constant_id = 12) const bool TB_HAS_TORI = false;
+layout(constant_id = 13) const int NLIGHTS = 0;    // point, spot and directional lights (shadow slots 1..)
 
 layout(std430, binding = 0) buffer Rays { tb_gpu_ray rays[]; };
 layout(binding = 1) uniform usamplerBuffer node_texels;
@@ -81,7 +82,7 @@ layout(push_constant) uniform Push {
     uint rr_depth;
     uint max_bounces;
     uint count;
-    uint pad0;
+    uint light_base;
     uint pad1;
 } pc;
 
@@ -487,14 +488,85 @@ void stage_init()
     }
 }
 
-// Adds the path's clear light sample (its TB_GPU_PT_PENDING values).
-void add_light_sample(inout tb_gpu_pt_state st)
+// Adds the path's clear light samples (the TB_GPU_PT_PENDING values of
+// each slot marked clear).
+void add_light_samples(inout tb_gpu_pt_state st)
 {
-    if (st.shadow != TB_GPU_PT_SHADOW_CLEAR)
-        return;
-    for (int c = 0; c < NCH; c++)
-        set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + val(TB_GPU_PT_PENDING, c));
-    st.shadow = TB_GPU_PT_SHADOW_NONE;
+    for (uint k = 0u; st.clear != 0u && k <= uint(NLIGHTS); k++) {
+        if ((st.clear & (1u << k)) == 0u)
+            continue;
+        for (int c = 0; c < NCH; c++)
+            set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + val(TB_GPU_PT_PENDING + k, c));
+    }
+    st.clear = 0u;
+}
+
+// tb_spot_falloff (host/render/lights.c).
+float spot_falloff(float cos_total, float cos_falloff, float c)
+{
+    if (c <= cos_total)
+        return 0.0;
+    if (c >= cos_falloff)
+        return 1.0;
+    float t = (c - cos_total) / (cos_falloff - cos_total);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// Point, spot and directional lights at p (tb__next_event's loop): per light
+// with light, f L |cos| into its slot's pending values and its shadow ray.
+uint delta_lights(bsdf_t b, vec3 p, vec3 perr, vec3 n, vec3 ng, vec3 wo, float beta[NCH])
+{
+    uint mask = 0u;
+    for (int l = 0; l < NLIGHTS; l++) {
+        int lb = int(pc.light_base) + l * (int(TB_GPU_PT_L_SCALARS) + NCH);
+        uint kind = utab(lb + int(TB_GPU_PT_L_KIND));
+        vec3 axis = vec3(tab(lb + int(TB_GPU_PT_L_AXIS)), tab(lb + int(TB_GPU_PT_L_AXIS) + 1),
+                         tab(lb + int(TB_GPU_PT_L_AXIS) + 2));
+        vec3 wi;
+        float scale;
+        tb_gpu_ray sr;
+        sr.tmin = 0.0;
+        if (kind == TB_GPU_LIGHT_DIRECTIONAL) {
+            wi = -axis;
+            scale = 1.0;
+            sr.o = spawn_origin(p, perr, ng, wi);
+            sr.d = wi;
+            sr.tmax = 1.0 / 0.0;
+        } else {
+            vec3 q = vec3(tab(lb + int(TB_GPU_PT_L_POSITION)), tab(lb + int(TB_GPU_PT_L_POSITION) + 1),
+                          tab(lb + int(TB_GPU_PT_L_POSITION) + 2));
+            vec3 dl = q - p;
+            float dist = length(dl);
+            if (!(dist > 0.0) || isinf(dist))
+                continue;
+            wi = dl / dist;
+            float k = 1.0;
+            if (kind == TB_GPU_LIGHT_SPOT)
+                k = spot_falloff(tab(lb + int(TB_GPU_PT_L_COS_TOTAL)), tab(lb + int(TB_GPU_PT_L_COS_FALLOFF)),
+                                 dot(-wi, axis));
+            if (!(k > 0.0))
+                continue;
+            scale = k / (dist * dist);
+            sr.o = spawn_origin(p, perr, ng, wi);
+            sr.d = q - sr.o;
+            sr.tmax = 1.0 - SHADOW_EPSILON;
+        }
+        float f[NCH];
+        if (!bsdf_eval(b, n, wo, wi, f))
+            continue;
+        float s = scale * abs(dot(wi, n));
+        bool any = false;
+        for (int c = 0; c < NCH; c++) {
+            float x = beta[c] * f[c] * tab(lb + int(TB_GPU_PT_L_SCALARS) + c) * s;
+            set_val(TB_GPU_PT_PENDING + uint(1 + l), c, x);
+            any = any || x > 0.0;
+        }
+        if (!any)
+            continue;
+        shadows[uint(1 + l) * g_n + g_i] = sr;
+        mask |= 1u << uint(1 + l);
+    }
+    return mask;
 }
 
 void stage_shade()
@@ -502,7 +574,7 @@ void stage_shade()
     tb_gpu_pt_state st = states[g_i];
     if (st.alive == 0u)
         return;
-    add_light_sample(st);
+    add_light_samples(st);
     tb_gpu_ray r = rays[g_i];
     tb_gpu_hit h = hits[g_i];
     vec3 ng = vec3(h.ng[0], h.ng[1], h.ng[2]);
@@ -543,10 +615,13 @@ void stage_shade()
     vec3 n = front ? ng : -ng; // the normal facing the incoming ray
     vec3 wo = -d;
 
-    // One sample of the area light at vertices with a non-delta lobe,
-    // weighted against the BSDF's sampling of the same direction; its shadow
-    // ray is traced by the shadow stage, its contribution kept as pending.
-    bool pending = false;
+    // Next-event estimation at vertices with a non-delta lobe: every delta
+    // light, then one sample of the area light, weighted against the BSDF's
+    // sampling of the same direction; the shadow rays are traced by the
+    // shadow stage, the contributions kept as pending per slot.
+    uint pending = 0u;
+    if (NLIGHTS > 0 && (b.lobes & NONDELTA) != 0u)
+        pending = delta_lights(b, p, perr, n, ng, wo, beta);
     if (NEMIT > 0 && (b.lobes & NONDELTA) != 0u) {
         float u1 = rnd(st), u2 = rnd(st);
         float pmf, ur;
@@ -572,12 +647,12 @@ void stage_shade()
                     sr.d = q - o;
                     sr.tmax = 1.0 - SHADOW_EPSILON;
                     shadows[g_i] = sr;
-                    pending = true;
+                    pending |= 1u;
                 }
             }
         }
     }
-    st.shadow = pending ? TB_GPU_PT_SHADOW_PENDING : TB_GPU_PT_SHADOW_NONE;
+    st.shadow = pending;
 
     // The BSDF sample (three numbers: the lobe, then the direction).
     float uc = rnd(st), u1 = rnd(st), u2 = rnd(st);
@@ -628,10 +703,10 @@ void stage_shade()
 void stage_accumulate()
 {
     tb_gpu_pt_state st = states[g_i];
-    if (st.shadow != TB_GPU_PT_SHADOW_CLEAR)
+    if (st.clear == 0u)
         return;
-    add_light_sample(st);
-    states[g_i].shadow = st.shadow;
+    add_light_samples(st);
+    states[g_i].clear = 0u;
 }
 
 #ifdef TB_PT_TRACE
@@ -661,11 +736,19 @@ void stage_extend()
 
 void stage_shadow()
 {
-    if (states[g_i].shadow != TB_GPU_PT_SHADOW_PENDING)
+    uint pending = states[g_i].shadow;
+    if (pending == 0u)
         return;
-    tb_bvh_hit b;
-    bool blocked = tb_bvh_traverse(shadows[g_i], pc.nnodes, true, b);
-    states[g_i].shadow = blocked ? TB_GPU_PT_SHADOW_NONE : TB_GPU_PT_SHADOW_CLEAR;
+    uint clear = 0u;
+    for (uint k = 0u; k <= uint(NLIGHTS); k++) {
+        if ((pending & (1u << k)) == 0u)
+            continue;
+        tb_bvh_hit b;
+        if (!tb_bvh_traverse(shadows[k * g_n + g_i], pc.nnodes, true, b))
+            clear |= 1u << k;
+    }
+    states[g_i].shadow = 0u;
+    states[g_i].clear = clear;
 }
 
 #endif
