@@ -32,8 +32,8 @@ TB_STAT_COUNTER(tb__gpt_submits, "GPU path tracer/command buffers");
 #define TB__GPT_BATCH 65536u
 /* Most bytes of the channel-value buffer (TB_GPU_PT_NVALUES + lights arrays of nch). */
 #define TB__GPT_VALUES_MAX ((size_t)64 << 20)
-/* Specialization constants of pathtrace.comp besides the stage (ids 2 .. 13). */
-#define TB__GPT_SPEC 12
+/* Specialization constants of pathtrace.comp besides the stage (ids 2 .. 14). */
+#define TB__GPT_SPEC 13
 
 struct tb_gpu_pathtracer {
     tb_gpu_device *dev;
@@ -90,11 +90,18 @@ const char *tb_gpu_pt_unsupported(const tb_scene *s)
     tb_object_features(s, of);
     const char *why = NULL;
     for (uint32_t i = 0; i < s->nobjects && !why; i++) {
-        if (of[i] & (TB_OBJ_FEAT_CSG_UNION | TB_OBJ_FEAT_CSG_INTERSECTION | TB_OBJ_FEAT_CSG_DIFFERENCE))
-            why = "CSG objects are not in the kernel";
-        else if (s->objects[i]->material < 0 || s->objects[i]->material >= s->nmaterials)
+        const bool csg = (of[i] & (TB_OBJ_FEAT_CSG_UNION | TB_OBJ_FEAT_CSG_INTERSECTION |
+                                   TB_OBJ_FEAT_CSG_DIFFERENCE)) != 0;
+        if (!csg && (s->objects[i]->material < 0 || s->objects[i]->material >= s->nmaterials))
             why = "an object without a material";
     }
+    /* An emitting CSG object's emitters are facets of its tessellation,
+     * pushed off the exact surface: the CPU counts a light sample by what
+     * the exact geometry shows along its direction, which a shadow ray to
+     * the facet point does not reproduce. */
+    for (int k = 0; k < s->nemissive && !why; k++)
+        if (tb_prim_is_csg(s->objects[s->emissive[k].object]->kind))
+            why = "emitting CSG objects are not in the kernel (their area light is tessellated)";
     free(of);
     return why;
 }
@@ -111,6 +118,31 @@ void tb_gpu_pt_destroy(tb_gpu_pathtracer *pt)
     free(pt->states);
     free(pt->L);
     free(pt);
+}
+
+/* Material index m as the kernel reads it: UINT32_MAX for none (the path
+ * ends there, as tb_surface_at fails on the CPU). */
+static uint32_t tb__gpt_material_index(const tb_scene *s, int m)
+{
+    return m >= 0 && m < s->nmaterials ? (uint32_t)m : UINT32_MAX;
+}
+
+/* The leaves of CSG tree o (0 for a primitive at the top level: its
+ * material is the object's): with `range`, per leaf its first face, face
+ * count and material index (UINT32_MAX for none), in pre-order. */
+static size_t tb__gpt_leaves_rec(const tb_scene *s, const tb_object *o, uint32_t *range, size_t k)
+{
+    if (!tb_prim_is_csg(o->kind)) {
+        if (range) {
+            range[3 * k] = o->face_base;
+            range[3 * k + 1] = o->nfaces;
+            range[3 * k + 2] = tb__gpt_material_index(s, o->material);
+        }
+        return k + 1;
+    }
+    for (int i = 0; i < o->nchildren; i++)
+        k = tb__gpt_leaves_rec(s, &o->children[i], range, k);
+    return k;
 }
 
 /* Mean of the channels, at least 0: a lobe's selection weight, as
@@ -176,7 +208,11 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
     const size_t ms = 4 * (size_t)nch + TB_GPU_PT_M_SCALARS;
     const size_t eb = (size_t)nm * ms, cb = eb + (size_t)ne * (size_t)nch, pb = cb + (size_t)ne + 1,
                  xb = pb + (size_t)ne, ob = xb + (size_t)ne;
-    const size_t lb = ob + 3 * (size_t)s->nobjects, ls_words = TB_GPU_PT_L_SCALARS + (size_t)nch;
+    size_t nleaves = 0;
+    for (uint32_t i = 0; i < s->nobjects; i++)
+        nleaves += tb_prim_is_csg(s->objects[i]->kind) ? tb__gpt_leaves_rec(s, s->objects[i], NULL, 0) : 0;
+    const size_t fb = ob + TB_GPU_PT_O_WORDS * (size_t)s->nobjects;
+    const size_t lb = fb + 3 * nleaves, ls_words = TB_GPU_PT_L_SCALARS + (size_t)nch;
     const size_t nt = lb + (size_t)s->nlights * ls_words;
     pt->light_base = (uint32_t)lb;
     float *t = calloc(nt, sizeof *t);
@@ -212,14 +248,28 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
         cdf += pmf;
     }
     t[cb + (size_t)ne] = 1.0f;
+    size_t leaf = 0;
     for (uint32_t i = 0; i < s->nobjects; i++) {
-        uint32_t w[3] = {(uint32_t)s->objects[i]->material, 0, 0};
-        memcpy(&t[ob + 3 * (size_t)i], w, sizeof w);
+        const tb_object *o = s->objects[i];
+        uint32_t w[TB_GPU_PT_O_WORDS] = {tb__gpt_material_index(s, o->material), 0, 0, 0, 0};
+        if (tb_prim_is_csg(o->kind)) {
+            uint32_t *range = malloc(3 * tb__gpt_leaves_rec(s, o, NULL, 0) * sizeof *range);
+            if (!range) {
+                st = tb_error(TB_ERR_NOMEM, "GPU path tracer: out of memory");
+                goto done;
+            }
+            w[3] = (uint32_t)(fb + 3 * leaf); /* the table word of its first leaf */
+            w[4] = (uint32_t)tb__gpt_leaves_rec(s, o, range, 0);
+            memcpy(&t[fb + 3 * leaf], range, 3 * w[4] * sizeof *range);
+            leaf += w[4];
+            free(range);
+        }
+        memcpy(&t[ob + TB_GPU_PT_O_WORDS * (size_t)i], w, sizeof w);
     }
     for (int k = 0; k < s->nemissive; k++) {
         const tb_scene_emissive *x = &s->emissive[k];
         uint32_t w[2] = {(uint32_t)x->first_emitter, (uint32_t)x->nemitters};
-        memcpy(&t[ob + 3 * (size_t)x->object + 1], w, sizeof w);
+        memcpy(&t[ob + TB_GPU_PT_O_WORDS * (size_t)x->object + 1], w, sizeof w);
     }
     for (int i = 0; i < s->nlights; i++) {
         const tb_light *l = &s->lights[i];
@@ -326,6 +376,7 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
         {11, b->has_planar},
         {12, b->has_tori},
         {13, (uint32_t)s->nlights},
+        {14, b->has_csg},
     };
     static const char *const names[TB_GPU_PT_STAGES] = {"pathtrace init", "pathtrace extend", "pathtrace shade",
                                                         "pathtrace shadow", "pathtrace accumulate"};

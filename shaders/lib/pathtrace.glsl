@@ -53,6 +53,7 @@ layout(constant_id = 10) const bool TB_HAS_QUADRICS = false;
 layout(constant_id = 11) const bool TB_HAS_PLANAR = false;
 layout(constant_id = 12) const bool TB_HAS_TORI = false;
 layout(constant_id = 13) const int NLIGHTS = 0;    // point, spot and directional lights (shadow slots 1..)
+layout(constant_id = 14) const bool HAS_CSG = false;
 
 layout(std430, binding = 0) buffer Rays { tb_gpu_ray rays[]; };
 layout(binding = 1) uniform usamplerBuffer node_texels;
@@ -97,7 +98,7 @@ layout(push_constant) uniform Push {
 #define TB_BVH_HAS_QUADRICS TB_HAS_QUADRICS
 #define TB_BVH_HAS_PLANAR TB_HAS_PLANAR
 #define TB_BVH_HAS_TORI TB_HAS_TORI
-#define TB_BVH_HAS_CSG false
+#define TB_BVH_HAS_CSG HAS_CSG
 #define TB_BVH_STACK TB_STACK
 #include "lib/bvh_traverse.glsl"
 #endif
@@ -111,7 +112,7 @@ const int EMIT_BASE = NMAT * MSTRIDE;  // first emitter radiance in the table
 const int CDF_BASE = EMIT_BASE + NEMIT * NCH;
 const int PMF_BASE = CDF_BASE + NEMIT + 1;
 const int EOBJ_BASE = PMF_BASE + NEMIT; // per emitter its top-level object
-const int OBJ_BASE = EOBJ_BASE + NEMIT; // per object: material, first emitter, emitter count
+const int OBJ_BASE = EOBJ_BASE + NEMIT; // per object TB_GPU_PT_O_WORDS words
 
 uint g_i;  // this invocation's path
 uint g_n;  // paths
@@ -163,6 +164,21 @@ int pick_emitter(float u, out float pmf, out float ur)
     ur = pmf > 0.0 ? min((u - tab(CDF_BASE + lo)) / pmf, uintBitsToFloat(0x3f7fffffu)) : 0.0;
     ur = max(ur, 0.0);
     return lo;
+}
+
+// The material of the hit: the object's, or for a CSG tree that of the leaf
+// whose face range holds the hit's face (tb_scene_hit_material).
+uint hit_material(uint obj, uint face)
+{
+    int ob = OBJ_BASE + int(TB_GPU_PT_O_WORDS) * int(obj);
+    uint nr = HAS_CSG ? utab(ob + 4) : 0u;
+    if (nr == 0u)
+        return utab(ob);
+    int lb = int(utab(ob + 3));
+    for (int r = 0; r < int(nr); r++)
+        if (face >= utab(lb + 3 * r) && face - utab(lb + 3 * r) < utab(lb + 3 * r + 1))
+            return utab(lb + 3 * r + 2);
+    return 0xffffffffu;
 }
 
 // ------------------------------------------------------------- emitter pdf
@@ -225,7 +241,8 @@ float object_pdf(uint obj, vec3 p, vec3 w)
 {
     if (NEMIT == 0)
         return 0.0;
-    int first = int(utab(OBJ_BASE + 3 * int(obj) + 1)), count = int(utab(OBJ_BASE + 3 * int(obj) + 2));
+    int ob = OBJ_BASE + int(TB_GPU_PT_O_WORDS) * int(obj);
+    int first = int(utab(ob + 1)), count = int(utab(ob + 2));
     float pdf = 0.0;
     for (int i = first; i < first + count; i++) {
         tb_gpu_emitter e = emitters[i];
@@ -578,7 +595,13 @@ void stage_shade()
     tb_gpu_ray r = rays[g_i];
     tb_gpu_hit h = hits[g_i];
     vec3 ng = vec3(h.ng[0], h.ng[1], h.ng[2]);
-    int m = int(utab(OBJ_BASE + 3 * int(h.object)));
+    uint mi = hit_material(h.object, h.face);
+    if (mi == 0xffffffffu) {
+        st.alive = 0u; // no material: the CPU's tb_surface_at fails there and ends the path
+        states[g_i] = st;
+        return;
+    }
+    int m = int(mi);
     bsdf_t b = bsdf_load(m);
     vec3 d = normalize(r.d);
     bool front = dot(r.d, ng) < 0.0;

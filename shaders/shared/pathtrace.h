@@ -10,8 +10,8 @@
  * per material its diffuse, emitted radiance, specular and transmission
  * colours (nch each) and TB_GPU_PT_M_SCALARS words; per emitter its radiance
  * (nch); the emitters' CDF (nemitters + 1), pmf (nemitters) and top-level
- * object (nemitters, uints); per object three uints: its material, its first
- * emitter and its emitter count; per delta light TB_GPU_PT_L_SCALARS words
+ * object (nemitters, uints); per object TB_GPU_PT_O_WORDS uints; the CSG
+ * leaf records (3 uints each); per delta light TB_GPU_PT_L_SCALARS words
  * and its intensity (nch). The shadow rays: slot k of path i at k * n + i. See shared/types.h for the rules. */
 #ifndef TB_SHADERS_SHARED_PATHTRACE_H
 #define TB_SHADERS_SHARED_PATHTRACE_H
@@ -51,6 +51,12 @@
 #define TB_GPU_PT_M_GLOSSY 7u
 #define TB_GPU_PT_M_LOBES 8u
 #define TB_GPU_PT_M_SCALARS 9u
+/* The scene table's words per object: its material (UINT32_MAX: none),
+ * first emitter, emitter count, and for a CSG tree the table word of its
+ * first leaf record and its leaf count (a leaf record: first face, face
+ * count, material; the hit's face picks the leaf, as tb_scene_hit_leaf). */
+#define TB_GPU_PT_O_WORDS 5u
+
 /* Lobe slots (the order of host/render/surface.c's tb_surface_bsdf.pick). */
 #define TB_GPU_PT_LOBE_DIFFUSE 0u
 #define TB_GPU_PT_LOBE_GLOSSY 1u
