@@ -73,9 +73,6 @@ const char *tb_gpu_pt_unsupported(const tb_scene *s)
             return "procedural patterns are not in the kernel";
         if (m->bump.kind != TB_MID_PATTERN_NONE)
             return "bump maps are not in the kernel";
-        if (m->model == TB_MID_MODEL_GGX && tb_channels_is_black(m->transmission) &&
-            !tb_channels_is_black(m->specular))
-            return "GGX glossy materials are not in the kernel (Lambert, Phong, Blinn and smooth dielectrics only)";
     }
     for (int i = 0; i < s->nemitters; i++) {
         const tb_emitter *e = &s->emitters[i];
@@ -145,53 +142,43 @@ static size_t tb__gpt_leaves_rec(const tb_scene *s, const tb_object *o, uint32_t
     return k;
 }
 
-/* Mean of the channels, at least 0: a lobe's selection weight, as
- * host/render/surface.c weighs them. */
-static double tb__gpt_weight(const tb_channels *c)
+/* Material mt's scalar words (shared/pathtrace.h, TB_GPU_PT_M_*): the lobes
+ * and selection probabilities of tb_surface_bsdf_init in TB_SURFACE_PHYSICAL
+ * mode (the kernel takes no textures, patterns or bump maps, so they are the
+ * same at every point of the material). */
+static void tb__gpt_material(const tb_scene *s, const tb_material *mt, float *w)
 {
-    double s = 0.0;
-    for (int k = 0; k < c->n; k++)
-        s += c->v[k] > 0.0f ? (double)c->v[k] : 0.0;
-    return c->n > 0 ? s / c->n : 0.0;
-}
-
-/* Material m's scalar words (shared/pathtrace.h, TB_GPU_PT_M_*): the lobes
- * and their selection probabilities of tb_surface_bsdf_init in
- * TB_SURFACE_PHYSICAL mode (the kernel takes no textures or patterns, so
- * they are the same at every point). */
-static void tb__gpt_material(const tb_material *mt, float *w)
-{
-    double pick[4] = {0, 0, 0, 0};
-    uint32_t lobes = 0, glossy = TB_GPU_PT_GLOSSY_NONE;
-    float dielectric = 0.0f;
-    if (!tb_channels_is_black(mt->diffuse)) {
-        lobes |= 1u << TB_GPU_PT_LOBE_DIFFUSE;
-        pick[TB_GPU_PT_LOBE_DIFFUSE] = tb__gpt_weight(&mt->diffuse);
-    }
-    const bool transmits = !tb_channels_is_black(mt->transmission);
-    if (!transmits && mt->model != TB_MID_MODEL_LAMBERT && !tb_channels_is_black(mt->specular)) {
-        lobes |= 1u << TB_GPU_PT_LOBE_GLOSSY;
-        pick[TB_GPU_PT_LOBE_GLOSSY] = tb__gpt_weight(&mt->specular);
-        glossy = mt->model == TB_MID_MODEL_BLINN ? TB_GPU_PT_GLOSSY_BLINN : TB_GPU_PT_GLOSSY_PHONG;
-    }
-    if (transmits) {
-        float dmax = tb_channels_max(mt->diffuse);
-        dielectric = dmax > 0.0f ? (dmax < 1.0f ? 1.0f - dmax : 0.0f) : 1.0f;
-        if (dielectric > 0.0f) {
-            lobes |= 1u << TB_GPU_PT_LOBE_DIELECTRIC;
-            pick[TB_GPU_PT_LOBE_DIELECTRIC] = dielectric * fmax(tb__gpt_weight(&mt->transmission), 0.5);
-        }
-    }
-    double sum = pick[0] + pick[1] + pick[2] + pick[3];
+    tb_surface sf;
+    memset(&sf, 0, sizeof sf);
+    sf.n = sf.nv = sf.ng = (tb_vec3){0.0f, 0.0f, 1.0f};
+    sf.model = mt->model;
+    sf.exponent = mt->exponent;
+    sf.roughness = mt->roughness;
+    sf.ior = mt->ior;
+    sf.diffuse = mt->diffuse;
+    /* as tb_surface_at: model lambert has no specular lobe */
+    sf.specular = mt->model == TB_MID_MODEL_LAMBERT ? tb_channels_splat(s->nchannels, 0.0f) : mt->specular;
+    sf.transmission = mt->transmission;
+    tb_surface_bsdf b;
+    tb_surface_bsdf_init(&sf, TB_SURFACE_PHYSICAL, &b);
+    _Static_assert(TB_LOBE_DIFFUSE == 1u << TB_GPU_PT_LOBE_DIFFUSE && TB_LOBE_GLOSSY == 1u << TB_GPU_PT_LOBE_GLOSSY &&
+                       TB_LOBE_MIRROR == 1u << TB_GPU_PT_LOBE_MIRROR &&
+                       TB_LOBE_DIELECTRIC == 1u << TB_GPU_PT_LOBE_DIELECTRIC,
+                   "the kernel's lobe bits are tb_lobe's");
+    uint32_t lobes = b.lobes, glossy = TB_GPU_PT_GLOSSY_NONE;
+    if (lobes & TB_LOBE_GLOSSY)
+        glossy = b.glossy.kind == TB_BSDF_BLINN_NORMALIZED_EXACT ? TB_GPU_PT_GLOSSY_BLINN
+                 : b.glossy.kind == TB_BSDF_PHONG_NORMALIZED     ? TB_GPU_PT_GLOSSY_PHONG
+                 : b.glossy.kind == TB_BSDF_GGX                  ? TB_GPU_PT_GLOSSY_GGX
+                                                                 : TB_GPU_PT_GLOSSY_NONE;
     for (int k = 0; k < 4; k++)
-        w[TB_GPU_PT_M_PICK + (uint32_t)k] = sum > 0.0 ? (float)(pick[k] / sum) : 0.0f;
-    if (!(sum > 0.0))
-        lobes = 0;
-    w[TB_GPU_PT_M_DIELECTRIC] = dielectric;
+        w[TB_GPU_PT_M_PICK + (uint32_t)k] = b.pick[k];
+    w[TB_GPU_PT_M_DIELECTRIC] = b.dielectric;
     w[TB_GPU_PT_M_EXPONENT] = (float)mt->exponent;
     w[TB_GPU_PT_M_IOR] = (float)mt->ior;
     memcpy(&w[TB_GPU_PT_M_GLOSSY], &glossy, sizeof glossy); /* uints in the float table */
     memcpy(&w[TB_GPU_PT_M_LOBES], &lobes, sizeof lobes);
+    w[TB_GPU_PT_M_ALPHA] = (float)fmax(mt->roughness, TB_GGX_ALPHA_MIN); /* tb__alpha of shading.c */
 }
 
 /* The emitters and the scene's table (shared/pathtrace.h; pathtrace.comp's
@@ -231,7 +218,7 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
             w[2 * nch + c] = mt->specular.v[c];
             w[3 * nch + c] = mt->transmission.v[c];
         }
-        tb__gpt_material(mt, w + 4 * nch);
+        tb__gpt_material(s, mt, w + 4 * nch);
     }
     *emitter_kinds = 0;
     double cdf = 0.0;

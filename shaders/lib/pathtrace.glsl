@@ -14,7 +14,7 @@
 // The estimator is the CPU path tracer's (host/render/pathtrace.c) for the
 // materials and lights this kernel takes: the composite BSDF of
 // host/render/surface.c with Lambert, normalised Phong, exactly normalised
-// Blinn and smooth dielectric lobes (the same lobe choice, sampling and
+// Blinn, GGX (Schlick) and smooth dielectric lobes (the same lobe choice, sampling and
 // densities), and area lights (triangle, parallelogram, disc and one-sided
 // sphere emitters, chosen by the area light's power CDF). Per vertex: the
 // emission of a front face, weighted by the power heuristic against the
@@ -106,6 +106,7 @@ layout(push_constant) uniform Push {
 const float INV_PI = 0.318309886183790671537767526745028724;
 const float SHADOW_EPSILON = 1e-4; // TB_SHADOW_EPSILON
 #include "emitter.glsl"
+#include "ggx.glsl"
 
 const int MSTRIDE = 4 * NCH + int(TB_GPU_PT_M_SCALARS); // table words per material
 const int EMIT_BASE = NMAT * MSTRIDE;  // first emitter radiance in the table
@@ -275,7 +276,7 @@ float power_heuristic(float a, float b) { return a > 0.0 ? a * a / (a * a + b * 
 // -------------------------------------------------------------------- BSDF
 // The composite BSDF of host/render/surface.c (tb_surface_bsdf_*, mode
 // TB_SURFACE_PHYSICAL) for the lobes the kernel takes: Lambert, normalised
-// Phong, exactly normalised Blinn and the smooth dielectric; n is the normal
+// Phong, exactly normalised Blinn, GGX (lib/ggx.glsl) and the smooth dielectric; n is the normal
 // facing wo (no bump maps), ng the geometric one.
 
 struct bsdf_t {
@@ -283,7 +284,7 @@ struct bsdf_t {
     uint lobes;    // bit per TB_GPU_PT_LOBE_*
     uint glossy;   // TB_GPU_PT_GLOSSY_*
     float pick[4]; // selection probabilities per slot
-    float dielectric, expo, ior;
+    float dielectric, expo, ior, alpha;
 };
 
 bsdf_t bsdf_load(int m)
@@ -298,6 +299,7 @@ bsdf_t bsdf_load(int m)
     b.ior = tab(sc + int(TB_GPU_PT_M_IOR));
     b.glossy = utab(sc + int(TB_GPU_PT_M_GLOSSY));
     b.lobes = utab(sc + int(TB_GPU_PT_M_LOBES));
+    b.alpha = tab(sc + int(TB_GPU_PT_M_ALPHA));
     return b;
 }
 
@@ -308,14 +310,29 @@ const uint NONDELTA = (1u << TB_GPU_PT_LOBE_DIFFUSE) | (1u << TB_GPU_PT_LOBE_GLO
 // tb_bsdf_lobe_norm of the exactly normalised Blinn lobe.
 float blinn_norm(float n) { return (n + 2.0) * (n + 4.0) / (8.0 * 3.14159265358979323846 * (exp2(-0.5 * n) + n)); }
 
-// The glossy lobe at (wo, wi), both on n's side: its scalar (f = specular
-// colour x scalar) and its sampling density (tb_bsdf evaluate).
-void glossy_eval(bsdf_t b, vec3 n, vec3 wo, vec3 wi, out float scalar, out float pdf)
+// w in the shading frame of n (tb_frame_from_normal: the basis of n).
+vec3 to_local(vec3 n, vec3 w)
+{
+    vec3 b1, b2;
+    basis(n, b1, b2);
+    return vec3(dot(w, b1), dot(w, b2), dot(w, n));
+}
+
+// The glossy lobe at (wo, wi), both on n's side: its scalar, Schlick's
+// weight y (f = (specular colour (1 - y) + y) x scalar; y = 0 but for GGX)
+// and its sampling density (tb_bsdf evaluate).
+void glossy_eval(bsdf_t b, vec3 n, vec3 wo, vec3 wi, out float scalar, out float y, out float pdf)
 {
     scalar = 0.0;
+    y = 0.0;
     pdf = 0.0;
     float nn = b.expo;
-    if (b.glossy == TB_GPU_PT_GLOSSY_PHONG) {
+    if (b.glossy == TB_GPU_PT_GLOSSY_GGX) {
+        vec3 e = tb_ggx_eval(b.alpha, normalize(to_local(n, wo)), normalize(to_local(n, wi)));
+        scalar = e.x;
+        y = e.y;
+        pdf = e.z;
+    } else if (b.glossy == TB_GPU_PT_GLOSSY_PHONG) {
         // cos alpha = the mirror of wo about the tangent plane . wi
         float c = min(1.0, 2.0 * dot(wo, n) * dot(wi, n) - dot(wo, wi));
         if (!(c > 0.0))
@@ -346,8 +363,8 @@ float bsdf_pdf(bsdf_t b, vec3 n, vec3 wo, vec3 wi)
     if (has_lobe(b, TB_GPU_PT_LOBE_DIFFUSE))
         pdf += b.pick[TB_GPU_PT_LOBE_DIFFUSE] * abs(dot(wi, n)) * INV_PI;
     if (has_lobe(b, TB_GPU_PT_LOBE_GLOSSY)) {
-        float sc, gp;
-        glossy_eval(b, n, wo, wi, sc, gp);
+        float sc, y, gp;
+        glossy_eval(b, n, wo, wi, sc, y, gp);
         pdf += b.pick[TB_GPU_PT_LOBE_GLOSSY] * gp;
     }
     return pdf;
@@ -361,12 +378,12 @@ bool bsdf_eval(bsdf_t b, vec3 n, vec3 wo, vec3 wi, out float f[NCH])
         f[c] = 0.0;
     if ((b.lobes & NONDELTA) == 0u || (dot(wo, n) > 0.0) != (dot(wi, n) > 0.0) || dot(wi, n) == 0.0)
         return false;
-    float kd = has_lobe(b, TB_GPU_PT_LOBE_DIFFUSE) ? INV_PI : 0.0, ks = 0.0, gp;
+    float kd = has_lobe(b, TB_GPU_PT_LOBE_DIFFUSE) ? INV_PI : 0.0, ks = 0.0, y = 0.0, gp;
     if (has_lobe(b, TB_GPU_PT_LOBE_GLOSSY))
-        glossy_eval(b, n, wo, wi, ks, gp);
+        glossy_eval(b, n, wo, wi, ks, y, gp);
     bool any = false;
     for (int c = 0; c < NCH; c++) {
-        f[c] = tab(b.mb + c) * kd + tab(b.mb + 2 * NCH + c) * ks;
+        f[c] = tab(b.mb + c) * kd + (tab(b.mb + 2 * NCH + c) * (1.0 - y) + y) * ks;
         any = any || f[c] > 0.0;
     }
     return any;
@@ -467,6 +484,11 @@ bool bsdf_sample(bsdf_t b, vec3 n, vec3 ng, vec3 wo, float uc, float u1, float u
         vec2 dk = tb_concentric_disc(u1, u2);
         float z = sqrt(max(0.0, 1.0 - dot(dk, dk)));
         wi = to_world(n, vec3(dk, z * side));
+    } else if (b.glossy == TB_GPU_PT_GLOSSY_GGX) {
+        // the sampler flips wo below the surface: flip m back the same way
+        vec3 lo = normalize(to_local(n, wo));
+        vec3 mh = tb_ggx_sample_vndf(b.alpha, lo, u1, u2) * side;
+        wi = to_world(n, 2.0 * dot(lo, mh) * mh - lo);
     } else if (b.glossy == TB_GPU_PT_GLOSSY_PHONG) {
         vec3 r = 2.0 * dot(wo, n) * n - wo;
         wi = to_world(normalize(r), power_cosine(u1, u2, b.expo));

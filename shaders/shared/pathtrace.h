@@ -43,14 +43,16 @@
  * emitted radiance, specular, transmission; nch each): the lobe selection
  * probabilities (TB_GPU_PT_M_PICK + slot of TB_GPU_PT_LOBE_*), the
  * dielectric's weight, the exponent, the index of refraction, the glossy
- * lobe's kind (TB_GPU_PT_GLOSSY_*) and the lobes present (bit per slot). */
+ * lobe's kind (TB_GPU_PT_GLOSSY_*), the lobes present (bit per slot) and
+ * the GGX roughness. */
 #define TB_GPU_PT_M_PICK 0u
 #define TB_GPU_PT_M_DIELECTRIC 4u
 #define TB_GPU_PT_M_EXPONENT 5u
 #define TB_GPU_PT_M_IOR 6u
 #define TB_GPU_PT_M_GLOSSY 7u
 #define TB_GPU_PT_M_LOBES 8u
-#define TB_GPU_PT_M_SCALARS 9u
+#define TB_GPU_PT_M_ALPHA 9u /* GGX: the roughness, at least TB_GGX_ALPHA_MIN */
+#define TB_GPU_PT_M_SCALARS 10u
 /* The scene table's words per object: its material (UINT32_MAX: none),
  * first emitter, emitter count, and for a CSG tree the table word of its
  * first leaf record and its leaf count (a leaf record: first face, face
@@ -66,6 +68,7 @@
 #define TB_GPU_PT_GLOSSY_NONE 0u
 #define TB_GPU_PT_GLOSSY_PHONG 1u /* normalised Phong (TB_BSDF_PHONG_NORMALIZED) */
 #define TB_GPU_PT_GLOSSY_BLINN 2u /* exactly normalised Blinn (TB_BSDF_BLINN_NORMALIZED_EXACT) */
+#define TB_GPU_PT_GLOSSY_GGX 3u   /* GGX with Schlick's Fresnel of the specular colour (TB_BSDF_GGX) */
 
 /* Kernel stages (specialization constant 1 of pathtrace.comp). */
 #define TB_GPU_PT_STAGE_INIT 0u       /* radiance 0 */

@@ -322,10 +322,11 @@ static void test_cornell_box_spheres(void **state)
 static void test_showcase(void **state) { tb__equivalent(*state, "showcase.mid", TB__SPP); }
 
 /* Every lobe and emitter kind the kernel takes, where MIS matters: a
- * Lambert + Blinn floor (exponent 20) and a Lambert + Phong sphere under a
+ * Lambert + Blinn floor (exponent 20), a Lambert + GGX wall (alpha 0.3), a
+ * GGX metal sphere (alpha 0.2) and a Lambert + Phong sphere under a
  * quad and a small sphere emitter (the cone density in the emission
  * weight), a glass sphere with a diffuse part (Lambert beside a smooth
- * dielectric: lobe choice by weight), a Lambert wall. */
+ * dielectric: lobe choice by weight). */
 static void test_lobes(void **state)
 {
     static const char text[] =
@@ -334,16 +335,18 @@ static void test_lobes(void **state)
         "polygons \"floor\" { geometry = { vertices = [[-4 -4 0] [4 -4 0] [4 4 0] [-4 4 0]] faces = [[0 1 2 3]] }\n"
         "  rendering = { diffuse = [0.4 0.35 0.3] specular = 0.3 exponent = 20 model = blinn } }\n"
         "polygons \"wall\" { geometry = { vertices = [[-4 3 0] [4 3 0] [4 3 5] [-4 3 5]] faces = [[0 1 2 3]] }\n"
-        "  rendering = { diffuse = [0.3 0.5 0.3] } }\n"
+        "  rendering = { diffuse = [0.3 0.5 0.3] specular = 0.1 model = ggx roughness = 0.3 } }\n"
         "polygons \"lamp\" { geometry = { vertices = [[-1 -1 4] [-1 1 4] [1 1 4] [1 -1 4]] faces = [[0 1 2 3]] }\n"
         "  rendering = { diffuse = 0 emission = [6 6 5] } }\n"
         "sphere \"bulb\" { transform = [scale(0.2) translate([0 1.5 1.8])] rendering = { diffuse = 0 emission = [20 15 10] } }\n"
         "sphere \"phong\" { transform = [scale(0.7) translate([-1.2 0.5 0.7])]\n"
         "  rendering = { diffuse = 0.15 specular = 0.7 exponent = 60 model = phong } }\n"
         "sphere \"glass\" { transform = [scale(0.6) translate([1.2 -0.3 0.6])]\n"
-        "  rendering = { diffuse = 0.1 specular = 0.04 exponent = 1000 transmission = [0.9 0.95 1] ior = 1.5 } }\n";
+        "  rendering = { diffuse = 0.1 specular = 0.04 exponent = 1000 transmission = [0.9 0.95 1] ior = 1.5 } }\n"
+        "sphere \"metal\" { transform = [scale(0.5) translate([0 -1.5 0.5])]\n"
+        "  rendering = { diffuse = 0 specular = [0.95 0.64 0.54] model = ggx roughness = 0.2 } }\n";
     tb_scene *s = gpu_test_load(text, "lobes", NULL);
-    tb__equivalent_scene(*state, s, "lobes (Blinn, Phong, glass, sphere lamp)", 2 * TB__SPP);
+    tb__equivalent_scene(*state, s, "lobes (Blinn, Phong, GGX, glass, sphere lamp)", 2 * TB__SPP);
 }
 
 /* Point, spot (inside and across its smoothstep falloff) and directional
