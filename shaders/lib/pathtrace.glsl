@@ -270,9 +270,6 @@ float object_pdf(uint obj, vec3 p, vec3 w)
     return pdf;
 }
 
-// Veach's power heuristic (tb_power_heuristic).
-float power_heuristic(float a, float b) { return a > 0.0 ? a * a / (a * a + b * b) : 0.0; }
-
 // -------------------------------------------------------------------- BSDF
 // The composite BSDF of host/render/surface.c (tb_surface_bsdf_*, mode
 // TB_SURFACE_PHYSICAL) for the lobes the kernel takes: Lambert, normalised
@@ -411,24 +408,6 @@ vec3 to_world(vec3 n, vec3 l)
     return b1 * l.x + b2 * l.y + n * l.z;
 }
 
-// The Fresnel reflectance of a smooth dielectric (tb_fresnel_dielectric).
-float fresnel_dielectric(float ci, float eta)
-{
-    if (eta == 1.0)
-        return 0.0;
-    ci = clamp(ci, -1.0, 1.0);
-    if (ci < 0.0) {
-        eta = 1.0 / eta;
-        ci = -ci;
-    }
-    float s2t = (1.0 - ci) * (1.0 + ci) / (eta * eta);
-    if (s2t >= 1.0)
-        return 1.0;
-    float ct = sqrt(1.0 - s2t);
-    float rpa = (eta * ci - ct) / (eta * ci + ct), rpe = (ci - eta * ct) / (ci + eta * ct);
-    return 0.5 * (rpa * rpa + rpe * rpe);
-}
-
 // One sample of the mixture (tb_surface_bsdf_sample): direction, weight
 // f |cos| / pdf per channel (or the delta lobe's), density, delta flag.
 bool bsdf_sample(bsdf_t b, vec3 n, vec3 ng, vec3 wo, float uc, float u1, float u2, out vec3 wi, out float w[NCH],
@@ -538,17 +517,6 @@ void add_light_samples(inout tb_gpu_pt_state st)
             set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + val(TB_GPU_PT_PENDING + k, c));
     }
     st.clear = 0u;
-}
-
-// tb_spot_falloff (host/render/lights.c).
-float spot_falloff(float cos_total, float cos_falloff, float c)
-{
-    if (c <= cos_total)
-        return 0.0;
-    if (c >= cos_falloff)
-        return 1.0;
-    float t = (c - cos_total) / (cos_falloff - cos_total);
-    return t * t * (3.0 - 2.0 * t);
 }
 
 // Point, spot and directional lights at p (tb__next_event's loop): per light
