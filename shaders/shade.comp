@@ -90,17 +90,6 @@ float tb_texel(uint i) { return texels[i]; }
 #include "lib/texture.glsl"
 #include "lib/emitter.glsl"
 
-// tb_spot_falloff (host/render/lights.c).
-float spot_falloff(float cos_total, float cos_falloff, float c)
-{
-    if (c <= cos_total)
-        return 0.0;
-    if (c >= cos_falloff)
-        return 1.0;
-    float t = (c - cos_total) / (cos_falloff - cos_total);
-    return t * t * (3.0 - 2.0 * t);
-}
-
 // The interval i of a[base .. base + n) with a[i] <= x (tb__interval in host/render/ies.c).
 int ies_interval(uint base, int n, float x)
 {
@@ -159,27 +148,6 @@ float ies_normalized(uint rec, vec3 w)
     return ((1.0 - sj) * lo + sj * hi) * inv_max;
 }
 
-// tb_fresnel_dielectric (host/render/shading.c), in float.
-float fresnel_dielectric(float cos_i, float eta)
-{
-    if (eta == 1.0)
-        return 0.0;
-    cos_i = clamp(cos_i, -1.0, 1.0);
-    if (cos_i < 0.0) {
-        eta = 1.0 / eta;
-        cos_i = -cos_i;
-    }
-    float sin2_t = (1.0 - cos_i) * (1.0 + cos_i) / (eta * eta);
-    if (sin2_t >= 1.0)
-        return 1.0;
-    float cos_t = sqrt(1.0 - sin2_t);
-    float r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    float r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return 0.5 * (r_parl * r_parl + r_perp * r_perp);
-}
-
-// The power heuristic (raytrace.c's tb__power).
-float power_heuristic(float a, float b) { return a > 0.0 ? a * a / (a * a + b * b) : 0.0; }
 
 // Outputs are stored slot-major (slot k of item i at k * items + i), so that
 // neighbouring invocations write neighbouring words: contiguous stores on a

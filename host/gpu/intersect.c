@@ -698,7 +698,8 @@ void tb_gpu_scene_get_bindings(const tb_gpu_scene *g, tb_gpu_scene_bindings *out
 {
     *out = (tb_gpu_scene_bindings){g->nodes,          g->tris,          g->placed,        g->refs,
                                    g->nnodes,         g->stack,         g->ntris > 0,     g->nspheres > 0,
-                                   g->ncubes > 0,     g->nquadrics > 0, g->nplanar > 0,   g->ntori > 0};
+                                   g->ncubes > 0,     g->nquadrics > 0, g->nplanar > 0,   g->ntori > 0,
+                                   g->ncsg > 0};
 }
 
 bool tb_gpu_scene_object_on_gpu(const tb_gpu_scene *g, uint32_t object)

@@ -120,6 +120,7 @@ typedef struct tb_gpu_scene_bindings {
     uint32_t stack;                              /* traversal stack entries enough for this BVH */
     bool has_triangles, has_spheres, has_cubes, has_quadrics; /* kinds present (quadrics: cylinders, cones, conics) */
     bool has_planar, has_tori;                                /* pyramids, prisms, arches; tori */
+    bool has_csg;                                             /* CSG trees */
 } tb_gpu_scene_bindings;
 
 /* Fills `out` with the scene's device buffers (owned by the scene: valid until

@@ -30,8 +30,10 @@ TB_STAT_COUNTER(tb__gpt_submits, "GPU path tracer/command buffers");
 
 /* Paths per device batch (the buffers are sized for it once). */
 #define TB__GPT_BATCH 65536u
-/* Specialization constants of pathtrace.comp besides the stage (ids 2 .. 12). */
-#define TB__GPT_SPEC 11
+/* Most bytes of the channel-value buffer (TB_GPU_PT_NVALUES + lights arrays of nch). */
+#define TB__GPT_VALUES_MAX ((size_t)64 << 20)
+/* Specialization constants of pathtrace.comp besides the stage (ids 2 .. 14). */
+#define TB__GPT_SPEC 13
 
 struct tb_gpu_pathtracer {
     tb_gpu_device *dev;
@@ -41,6 +43,7 @@ struct tb_gpu_pathtracer {
     tb_pt_options opt;
     int nch;
     size_t cap; /* paths per batch */
+    uint32_t light_base; /* the table word of the first delta light */
     tb_gpu_buffer *b_rays, *b_states, *b_hits, *b_values, *b_shadows, *b_emitters, *b_table;
     tb_gpu_kernel *k[TB_GPU_PT_STAGES]; /* per TB_GPU_PT_STAGE_* */
     tb_gpu_pt_state *states; /* host staging of one batch */
@@ -57,8 +60,11 @@ static double tb__gpt_now(void)
 
 const char *tb_gpu_pt_unsupported(const tb_scene *s)
 {
-    if (s->nlights > 0)
-        return "point, spot and directional lights are not in the kernel (area lights only)";
+    if (s->nlights > (int)TB_GPU_PT_MAX_SLOTS - 1)
+        return "more than 31 point, spot and directional lights (the kernel has a shadow-ray slot per light)";
+    for (int i = 0; i < s->nlights; i++)
+        if (s->lights[i].ies)
+            return "IES light distributions are not in the path-tracing kernel";
     for (int i = 0; i < s->nmaterials; i++) {
         const tb_material *m = &s->materials[i];
         if (m->diffuse_texture || m->specular_texture || m->transmission_texture || m->emission_texture)
@@ -67,10 +73,6 @@ const char *tb_gpu_pt_unsupported(const tb_scene *s)
             return "procedural patterns are not in the kernel";
         if (m->bump.kind != TB_MID_PATTERN_NONE)
             return "bump maps are not in the kernel";
-        if (!tb_channels_is_black(m->transmission))
-            return "transmitting (dielectric) materials are not in the kernel (Lambert only)";
-        if (m->model != TB_MID_MODEL_LAMBERT && !tb_channels_is_black(m->specular))
-            return "specular (Phong, Blinn, GGX) materials are not in the kernel (Lambert only)";
     }
     for (int i = 0; i < s->nemitters; i++) {
         const tb_emitter *e = &s->emitters[i];
@@ -85,11 +87,18 @@ const char *tb_gpu_pt_unsupported(const tb_scene *s)
     tb_object_features(s, of);
     const char *why = NULL;
     for (uint32_t i = 0; i < s->nobjects && !why; i++) {
-        if (of[i] & (TB_OBJ_FEAT_CSG_UNION | TB_OBJ_FEAT_CSG_INTERSECTION | TB_OBJ_FEAT_CSG_DIFFERENCE))
-            why = "CSG objects are not in the kernel";
-        else if (s->objects[i]->material < 0 || s->objects[i]->material >= s->nmaterials)
+        const bool csg = (of[i] & (TB_OBJ_FEAT_CSG_UNION | TB_OBJ_FEAT_CSG_INTERSECTION |
+                                   TB_OBJ_FEAT_CSG_DIFFERENCE)) != 0;
+        if (!csg && (s->objects[i]->material < 0 || s->objects[i]->material >= s->nmaterials))
             why = "an object without a material";
     }
+    /* An emitting CSG object's emitters are facets of its tessellation,
+     * pushed off the exact surface: the CPU counts a light sample by what
+     * the exact geometry shows along its direction, which a shadow ray to
+     * the facet point does not reproduce. */
+    for (int k = 0; k < s->nemissive && !why; k++)
+        if (tb_prim_is_csg(s->objects[s->emissive[k].object]->kind))
+            why = "emitting CSG objects are not in the kernel (their area light is tessellated)";
     free(of);
     return why;
 }
@@ -108,6 +117,70 @@ void tb_gpu_pt_destroy(tb_gpu_pathtracer *pt)
     free(pt);
 }
 
+/* Material index m as the kernel reads it: UINT32_MAX for none (the path
+ * ends there, as tb_surface_at fails on the CPU). */
+static uint32_t tb__gpt_material_index(const tb_scene *s, int m)
+{
+    return m >= 0 && m < s->nmaterials ? (uint32_t)m : UINT32_MAX;
+}
+
+/* The leaves of CSG tree o (0 for a primitive at the top level: its
+ * material is the object's): with `range`, per leaf its first face, face
+ * count and material index (UINT32_MAX for none), in pre-order. */
+static size_t tb__gpt_leaves_rec(const tb_scene *s, const tb_object *o, uint32_t *range, size_t k)
+{
+    if (!tb_prim_is_csg(o->kind)) {
+        if (range) {
+            range[3 * k] = o->face_base;
+            range[3 * k + 1] = o->nfaces;
+            range[3 * k + 2] = tb__gpt_material_index(s, o->material);
+        }
+        return k + 1;
+    }
+    for (int i = 0; i < o->nchildren; i++)
+        k = tb__gpt_leaves_rec(s, &o->children[i], range, k);
+    return k;
+}
+
+/* Material mt's scalar words (shared/pathtrace.h, TB_GPU_PT_M_*): the lobes
+ * and selection probabilities of tb_surface_bsdf_init in TB_SURFACE_PHYSICAL
+ * mode (the kernel takes no textures, patterns or bump maps, so they are the
+ * same at every point of the material). */
+static void tb__gpt_material(const tb_scene *s, const tb_material *mt, float *w)
+{
+    tb_surface sf;
+    memset(&sf, 0, sizeof sf);
+    sf.n = sf.nv = sf.ng = (tb_vec3){0.0f, 0.0f, 1.0f};
+    sf.model = mt->model;
+    sf.exponent = mt->exponent;
+    sf.roughness = mt->roughness;
+    sf.ior = mt->ior;
+    sf.diffuse = mt->diffuse;
+    /* as tb_surface_at: model lambert has no specular lobe */
+    sf.specular = mt->model == TB_MID_MODEL_LAMBERT ? tb_channels_splat(s->nchannels, 0.0f) : mt->specular;
+    sf.transmission = mt->transmission;
+    tb_surface_bsdf b;
+    tb_surface_bsdf_init(&sf, TB_SURFACE_PHYSICAL, &b);
+    _Static_assert(TB_LOBE_DIFFUSE == 1u << TB_GPU_PT_LOBE_DIFFUSE && TB_LOBE_GLOSSY == 1u << TB_GPU_PT_LOBE_GLOSSY &&
+                       TB_LOBE_MIRROR == 1u << TB_GPU_PT_LOBE_MIRROR &&
+                       TB_LOBE_DIELECTRIC == 1u << TB_GPU_PT_LOBE_DIELECTRIC,
+                   "the kernel's lobe bits are tb_lobe's");
+    uint32_t lobes = b.lobes, glossy = TB_GPU_PT_GLOSSY_NONE;
+    if (lobes & TB_LOBE_GLOSSY)
+        glossy = b.glossy.kind == TB_BSDF_BLINN_NORMALIZED_EXACT ? TB_GPU_PT_GLOSSY_BLINN
+                 : b.glossy.kind == TB_BSDF_PHONG_NORMALIZED     ? TB_GPU_PT_GLOSSY_PHONG
+                 : b.glossy.kind == TB_BSDF_GGX                  ? TB_GPU_PT_GLOSSY_GGX
+                                                                 : TB_GPU_PT_GLOSSY_NONE;
+    for (int k = 0; k < 4; k++)
+        w[TB_GPU_PT_M_PICK + (uint32_t)k] = b.pick[k];
+    w[TB_GPU_PT_M_DIELECTRIC] = b.dielectric;
+    w[TB_GPU_PT_M_EXPONENT] = (float)mt->exponent;
+    w[TB_GPU_PT_M_IOR] = (float)mt->ior;
+    memcpy(&w[TB_GPU_PT_M_GLOSSY], &glossy, sizeof glossy); /* uints in the float table */
+    memcpy(&w[TB_GPU_PT_M_LOBES], &lobes, sizeof lobes);
+    w[TB_GPU_PT_M_ALPHA] = (float)fmax(mt->roughness, TB_GGX_ALPHA_MIN); /* tb__alpha of shading.c */
+}
+
 /* The emitters and the scene's table (shared/pathtrace.h; pathtrace.comp's
  * bindings 9 and 10). */
 static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
@@ -119,9 +192,16 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
     tb_status st = tb_light_set_init(&ls, s);
     if (st)
         return st;
-    const size_t eb = (size_t)2 * (size_t)nm * (size_t)nch, cb = eb + (size_t)ne * (size_t)nch,
-                 pb = cb + (size_t)ne + 1, db = pb + (size_t)ne, ob = db + (size_t)nm;
-    const size_t nt = ob + s->nobjects;
+    const size_t ms = 4 * (size_t)nch + TB_GPU_PT_M_SCALARS;
+    const size_t eb = (size_t)nm * ms, cb = eb + (size_t)ne * (size_t)nch, pb = cb + (size_t)ne + 1,
+                 xb = pb + (size_t)ne, ob = xb + (size_t)ne;
+    size_t nleaves = 0;
+    for (uint32_t i = 0; i < s->nobjects; i++)
+        nleaves += tb_prim_is_csg(s->objects[i]->kind) ? tb__gpt_leaves_rec(s, s->objects[i], NULL, 0) : 0;
+    const size_t fb = ob + TB_GPU_PT_O_WORDS * (size_t)s->nobjects;
+    const size_t lb = fb + 3 * nleaves, ls_words = TB_GPU_PT_L_SCALARS + (size_t)nch;
+    const size_t nt = lb + (size_t)s->nlights * ls_words;
+    pt->light_base = (uint32_t)lb;
     float *t = calloc(nt, sizeof *t);
     tb_gpu_emitter *em = calloc((size_t)(ne > 0 ? ne : 1), sizeof *em);
     if (!t || !em) {
@@ -131,11 +211,14 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
     for (int m = 0; m < nm; m++) {
         const tb_material *mt = &s->materials[m];
         tb_channels Le = mt->emits ? tb_radiance_from_exitance(mt->emission) : tb_channels_splat(nch, 0.0f);
+        float *w = t + (size_t)m * ms;
         for (int c = 0; c < nch; c++) {
-            t[(size_t)m * 2 * (size_t)nch + (size_t)c] = mt->diffuse.v[c];
-            t[(size_t)m * 2 * (size_t)nch + (size_t)nch + (size_t)c] = Le.v[c];
+            w[c] = mt->diffuse.v[c];
+            w[nch + c] = Le.v[c];
+            w[2 * nch + c] = mt->specular.v[c];
+            w[3 * nch + c] = mt->transmission.v[c];
         }
-        t[db + (size_t)m] = tb_channels_max(mt->diffuse);
+        tb__gpt_material(s, mt, w + 4 * nch);
     }
     *emitter_kinds = 0;
     double cdf = 0.0;
@@ -148,12 +231,46 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
         double pmf = tb_distrib1d_pmf(&ls.area.select, i);
         t[cb + (size_t)i] = (float)cdf;
         t[pb + (size_t)i] = (float)pmf;
+        memcpy(&t[xb + (size_t)i], &e->object, sizeof e->object);
         cdf += pmf;
     }
     t[cb + (size_t)ne] = 1.0f;
+    size_t leaf = 0;
     for (uint32_t i = 0; i < s->nobjects; i++) {
-        uint32_t m = (uint32_t)s->objects[i]->material; /* a uint in the float table */
-        memcpy(&t[ob + i], &m, sizeof m);
+        const tb_object *o = s->objects[i];
+        uint32_t w[TB_GPU_PT_O_WORDS] = {tb__gpt_material_index(s, o->material), 0, 0, 0, 0};
+        if (tb_prim_is_csg(o->kind)) {
+            uint32_t *range = malloc(3 * tb__gpt_leaves_rec(s, o, NULL, 0) * sizeof *range);
+            if (!range) {
+                st = tb_error(TB_ERR_NOMEM, "GPU path tracer: out of memory");
+                goto done;
+            }
+            w[3] = (uint32_t)(fb + 3 * leaf); /* the table word of its first leaf */
+            w[4] = (uint32_t)tb__gpt_leaves_rec(s, o, range, 0);
+            memcpy(&t[fb + 3 * leaf], range, 3 * w[4] * sizeof *range);
+            leaf += w[4];
+            free(range);
+        }
+        memcpy(&t[ob + TB_GPU_PT_O_WORDS * (size_t)i], w, sizeof w);
+    }
+    for (int k = 0; k < s->nemissive; k++) {
+        const tb_scene_emissive *x = &s->emissive[k];
+        uint32_t w[2] = {(uint32_t)x->first_emitter, (uint32_t)x->nemitters};
+        memcpy(&t[ob + TB_GPU_PT_O_WORDS * (size_t)x->object + 1], w, sizeof w);
+    }
+    for (int i = 0; i < s->nlights; i++) {
+        const tb_light *l = &s->lights[i];
+        float *w = t + lb + (size_t)i * ls_words;
+        uint32_t kind = l->kind == TB_LIGHT_SPOT          ? TB_GPU_LIGHT_SPOT
+                        : l->kind == TB_LIGHT_DIRECTIONAL ? TB_GPU_LIGHT_DIRECTIONAL
+                                                          : TB_GPU_LIGHT_POINT;
+        memcpy(&w[TB_GPU_PT_L_KIND], &kind, sizeof kind);
+        const float pa[6] = {l->position.x, l->position.y, l->position.z, l->axis.x, l->axis.y, l->axis.z};
+        memcpy(&w[TB_GPU_PT_L_POSITION], pa, sizeof pa);
+        w[TB_GPU_PT_L_COS_TOTAL] = (float)l->cos_total;
+        w[TB_GPU_PT_L_COS_FALLOFF] = (float)l->cos_falloff;
+        for (int c = 0; c < nch; c++)
+            w[TB_GPU_PT_L_SCALARS + (size_t)c] = l->intensity.v[c];
     }
     pt->b_table = tb_gpu_buffer_create(pt->dev, nt * sizeof *t);
     pt->b_emitters = tb_gpu_buffer_create(pt->dev, (size_t)(ne > 0 ? ne : 1) * sizeof *em);
@@ -209,12 +326,18 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
     uint32_t kinds = 0;
     if ((st = tb__gpt_tables(pt, &kinds)))
         goto fail;
-    const size_t n = pt->cap, nv = (size_t)TB_GPU_PT_NVALUES * (size_t)pt->nch;
+    const size_t slots = 1 + (size_t)s->nlights;
+    const size_t nv = ((size_t)TB_GPU_PT_NVALUES + slots - 1) * (size_t)pt->nch;
+    /* fewer paths per batch where the channel values would pass 64 MiB
+     * (many lights and bands), well inside every device's buffer limits */
+    if (pt->cap * nv * sizeof(float) > TB__GPT_VALUES_MAX)
+        pt->cap = TB__GPT_VALUES_MAX / (nv * sizeof(float));
+    const size_t n = pt->cap;
     pt->b_rays = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_ray));
     pt->b_states = tb_gpu_buffer_create(dev, TB_GPU_PT_STATE_HEADER + n * sizeof(tb_gpu_pt_state));
     pt->b_hits = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_hit));
     pt->b_values = tb_gpu_buffer_create(dev, n * nv * sizeof(float));
-    pt->b_shadows = tb_gpu_buffer_create(dev, n * sizeof(tb_gpu_ray));
+    pt->b_shadows = tb_gpu_buffer_create(dev, slots * n * sizeof(tb_gpu_ray));
     pt->states = malloc(n * sizeof *pt->states);
     pt->L = malloc(n * (size_t)pt->nch * sizeof *pt->L);
     if (!pt->b_rays || !pt->b_states || !pt->b_hits || !pt->b_values || !pt->b_shadows) {
@@ -239,6 +362,8 @@ tb_status tb_gpu_pt_create(tb_gpu_device *dev, const tb_scene *s, const tb_pt_op
         {10, b->has_quadrics},
         {11, b->has_planar},
         {12, b->has_tori},
+        {13, (uint32_t)s->nlights},
+        {14, b->has_csg},
     };
     static const char *const names[TB_GPU_PT_STAGES] = {"pathtrace init", "pathtrace extend", "pathtrace shade",
                                                         "pathtrace shadow", "pathtrace accumulate"};
@@ -287,7 +412,7 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
 {
     const int nch = pt->nch;
     for (size_t i = 0; i < n; i++)
-        pt->states[i] = (tb_gpu_pt_state){.seed0 = seeds[2 * i], .seed1 = seeds[2 * i + 1], .alive = 1};
+        pt->states[i] = (tb_gpu_pt_state){.seed0 = seeds[2 * i], .seed1 = seeds[2 * i + 1], .alive = 1, .prev_delta = 1};
     tb_status st = tb_gpu_buffer_upload(pt->b_rays, 0, rays, n * sizeof *rays);
     if (!st)
         st = tb_gpu_buffer_upload(pt->b_states, TB_GPU_PT_STATE_HEADER, pt->states, n * sizeof *pt->states);
@@ -299,7 +424,8 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
                                .nnodes = pt->bind.nnodes,
                                .max_depth = (uint32_t)pt->opt.max_depth,
                                .rr_depth = (uint32_t)pt->opt.rr_depth,
-                               .max_bounces = TB_PT_MAX_BOUNCES};
+                               .max_bounces = TB_PT_MAX_BOUNCES,
+                               .light_base = pt->light_base};
     push[1] = push[0];
     push[1].count = 1;
     tb_gpu_dispatch d[2 + 3 * TB_GPU_PT_BOUNCES_PER_SUBMIT];

@@ -2,13 +2,14 @@
  * docs/gpu.md, "Path tracer"): a wavefront over device buffers
  * (shaders/pathtrace.comp, layouts in shaders/shared/pathtrace.h) that
  * computes the CPU path tracer's radiance (host/render/pathtrace.h) for the
- * scenes whose materials and lights it implements: Lambert materials (and
- * emission) lit by area lights. The path state stays on the device; the host
- * records init, then extend -> shade -> shadow per bounce,
+ * scenes whose materials and lights it implements: the composite BSDF's
+ * Lambert, Phong, Blinn, GGX and smooth dielectric lobes, emission, point,
+ * spot, directional and area lights, CSG trees. The path state stays on the
+ * device; the host records init, then extend -> shade -> shadow per bounce,
  * TB_GPU_PT_BOUNCES_PER_SUBMIT bounces to a command buffer, and reads back
  * one word (the live paths) between command buffers, not per bounce.
  * Statistically equal to the CPU path tracer, not sample by sample (another
- * random stream and no MIS: see pathtrace.comp); tests/gpu/pt_equivalence.c
+ * random stream, the same estimator: see lib/pathtrace.glsl); tests/gpu/pt_equivalence.c
  * tests that per pixel.
  *
  *     const char *why = tb_gpu_pt_unsupported(scene);   (NULL: the kernel takes it)
@@ -41,8 +42,8 @@ typedef struct tb_gpu_pt_stats {
 } tb_gpu_pt_stats;
 
 /* Why the kernel cannot render `s` (a phrase naming the first missing
- * feature: a non-Lambert material, a texture or pattern, a delta light, a
- * CSG object, an emitter kind), or NULL when it can. */
+ * feature: a texture, pattern or bump map, an IES light, more than 31 delta
+ * lights, an emitter kind, an emitting CSG object), or NULL when it can. */
 const char *tb_gpu_pt_unsupported(const tb_scene *s);
 
 /* A scene prepared for the device path tracer (opaque). */

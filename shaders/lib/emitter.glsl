@@ -1,6 +1,7 @@
 // Routines the Vulkan renderers' kernels share (shaders/shade.comp,
 // lib/pathtrace.glsl): spawn points off a surface, an orthonormal basis, the
-// concentric disc map and points on area-light emitters, each the GLSL twin
+// concentric disc map, points on area-light emitters, the spot falloff, the
+// dielectric Fresnel reflectance and the power heuristic, each the GLSL twin
 // of a C routine named at it. The includer defines EMITTER_KINDS first (a
 // const uint, bit k: an emitter of kind k, TB_GPU_EMITTER_*, exists; the
 // others are compiled out) and includes shared/shade.h (tb_gpu_emitter).
@@ -119,5 +120,38 @@ bool sample_emitter(tb_gpu_emitter e, vec3 p, float u1, float u2, out vec3 q, ou
     pdf_sa = pdf_a * d2 / abs(cq);
     return !isinf(pdf_sa) && !isnan(pdf_sa);
 }
+
+// tb_spot_falloff (host/render/lights.c).
+float spot_falloff(float cos_total, float cos_falloff, float c)
+{
+    if (c <= cos_total)
+        return 0.0;
+    if (c >= cos_falloff)
+        return 1.0;
+    float t = (c - cos_total) / (cos_falloff - cos_total);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// tb_fresnel_dielectric (host/render/shading.c), in float.
+float fresnel_dielectric(float cos_i, float eta)
+{
+    if (eta == 1.0)
+        return 0.0;
+    cos_i = clamp(cos_i, -1.0, 1.0);
+    if (cos_i < 0.0) {
+        eta = 1.0 / eta;
+        cos_i = -cos_i;
+    }
+    float sin2_t = (1.0 - cos_i) * (1.0 + cos_i) / (eta * eta);
+    if (sin2_t >= 1.0)
+        return 1.0;
+    float cos_t = sqrt(1.0 - sin2_t);
+    float r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    float r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5 * (r_parl * r_parl + r_perp * r_perp);
+}
+
+// The power heuristic (raytrace.c's tb__power).
+float power_heuristic(float a, float b) { return a > 0.0 ? a * a / (a * a + b * b) : 0.0; }
 
 #endif

@@ -12,16 +12,19 @@
 // values.
 //
 // The estimator is the CPU path tracer's (host/render/pathtrace.c) for the
-// materials and lights this kernel takes: Lambert surfaces (two-sided, the
-// normal facing the incoming ray) and area lights (triangle, parallelogram,
-// disc and one-sided sphere emitters, chosen by the area light's power CDF).
-// Per vertex: the emission of a front face seen by the camera ray, one light
-// sample with a shadow ray, a cosine-weighted BSDF sample and Russian roulette
-// from rr_depth on (continue with q = min(1, max throughput), divide by q).
-// The CPU weights its light sample against BSDF sampling (MIS); on Lambert
-// surfaces without delta lights this kernel takes the light from the light
-// samples alone and counts emission only at the camera ray's hit: another
-// unbiased estimator of the same radiance, so the images agree statistically
+// materials and lights this kernel takes: the composite BSDF of
+// host/render/surface.c with Lambert, normalised Phong, exactly normalised
+// Blinn, GGX (Schlick) and smooth dielectric lobes (the same lobe choice, sampling and
+// densities), and area lights (triangle, parallelogram, disc and one-sided
+// sphere emitters, chosen by the area light's power CDF). Per vertex: the
+// emission of a front face, weighted by the power heuristic against the
+// previous vertex's light sample unless the ray left the camera or a delta
+// lobe; at vertices with a non-delta lobe one light sample with a shadow
+// ray, weighted against the BSDF's density of its direction (MIS, the
+// densities summed over the emitters of the object the line crosses, as
+// tb_light_set's); a BSDF sample; Russian roulette from rr_depth on
+// (continue with q = min(1, max throughput), divide by q). Only the random
+// stream differs, so the images agree statistically
 // (tests/gpu/pt_equivalence.c), not sample by sample.
 //
 // Random numbers: a counter-based stream per path, draw k = the pcg4d hash
@@ -49,6 +52,8 @@ layout(constant_id = 9) const bool TB_HAS_CUBES = false;
 layout(constant_id = 10) const bool TB_HAS_QUADRICS = false;
 layout(constant_id = 11) const bool TB_HAS_PLANAR = false;
 layout(constant_id = 12) const bool TB_HAS_TORI = false;
+layout(constant_id = 13) const int NLIGHTS = 0;    // point, spot and directional lights (shadow slots 1..)
+layout(constant_id = 14) const bool HAS_CSG = false;
 
 layout(std430, binding = 0) buffer Rays { tb_gpu_ray rays[]; };
 layout(binding = 1) uniform usamplerBuffer node_texels;
@@ -78,7 +83,7 @@ layout(push_constant) uniform Push {
     uint rr_depth;
     uint max_bounces;
     uint count;
-    uint pad0;
+    uint light_base;
     uint pad1;
 } pc;
 
@@ -93,7 +98,7 @@ layout(push_constant) uniform Push {
 #define TB_BVH_HAS_QUADRICS TB_HAS_QUADRICS
 #define TB_BVH_HAS_PLANAR TB_HAS_PLANAR
 #define TB_BVH_HAS_TORI TB_HAS_TORI
-#define TB_BVH_HAS_CSG false
+#define TB_BVH_HAS_CSG HAS_CSG
 #define TB_BVH_STACK TB_STACK
 #include "lib/bvh_traverse.glsl"
 #endif
@@ -101,17 +106,20 @@ layout(push_constant) uniform Push {
 const float INV_PI = 0.318309886183790671537767526745028724;
 const float SHADOW_EPSILON = 1e-4; // TB_SHADOW_EPSILON
 #include "emitter.glsl"
+#include "ggx.glsl"
 
-const int EMIT_BASE = 2 * NMAT * NCH; // first emitter radiance in the table
+const int MSTRIDE = 4 * NCH + int(TB_GPU_PT_M_SCALARS); // table words per material
+const int EMIT_BASE = NMAT * MSTRIDE;  // first emitter radiance in the table
 const int CDF_BASE = EMIT_BASE + NEMIT * NCH;
 const int PMF_BASE = CDF_BASE + NEMIT + 1;
-const int DMAX_BASE = PMF_BASE + NEMIT; // per material its largest diffuse channel
-const int OBJ_BASE = DMAX_BASE + NMAT;  // per object its material
+const int EOBJ_BASE = PMF_BASE + NEMIT; // per emitter its top-level object
+const int OBJ_BASE = EOBJ_BASE + NEMIT; // per object TB_GPU_PT_O_WORDS words
 
 uint g_i;  // this invocation's path
 uint g_n;  // paths
 
 float tab(int i) { return uintBitsToFloat(texelFetch(table_texels, i).x); }
+uint utab(int i) { return texelFetch(table_texels, i).x; }
 float val(uint v, int c) { return uintBitsToFloat(texelFetch(value_texels, int((v * uint(NCH) + uint(c)) * g_n + g_i)).x); }
 void set_val(uint v, int c, float x) { values[(v * uint(NCH) + uint(c)) * g_n + g_i] = x; }
 
@@ -159,21 +167,413 @@ int pick_emitter(float u, out float pmf, out float ur)
     return lo;
 }
 
-void stage_init()
+// The material of the hit: the object's, or for a CSG tree that of the leaf
+// whose face range holds the hit's face (tb_scene_hit_material).
+uint hit_material(uint obj, uint face)
 {
-    for (int c = 0; c < NCH; c++)
-        set_val(TB_GPU_PT_L, c, 0.0);
+    int ob = OBJ_BASE + int(TB_GPU_PT_O_WORDS) * int(obj);
+    uint nr = HAS_CSG ? utab(ob + 4) : 0u;
+    if (nr == 0u)
+        return utab(ob);
+    int lb = int(utab(ob + 3));
+    for (int r = 0; r < int(nr); r++)
+        if (face >= utab(lb + 3 * r) && face - utab(lb + 3 * r) < utab(lb + 3 * r + 1))
+            return utab(lb + 3 * r + 2);
+    return 0xffffffffu;
 }
 
-// Adds the path's clear light sample: throughput x radiance x scale.
-void add_light_sample(inout tb_gpu_pt_state st)
+// ------------------------------------------------------------- emitter pdf
+
+// The point where the line p + t w (t > 0) meets emitter e, and the
+// emitter's normal there (tb_emitter_intersect, host/render/lights.c).
+bool emitter_hit(tb_gpu_emitter e, vec3 p, vec3 w, out vec3 q, out vec3 nq)
 {
-    if (st.shadow != TB_GPU_PT_SHADOW_CLEAR)
-        return;
-    int eb = EMIT_BASE + int(st.emitter) * NCH;
+    float t;
+    if (e.kind == TB_GPU_EMITTER_TRIANGLE || e.kind == TB_GPU_EMITTER_PARALLELOGRAM) {
+        vec3 e1 = e.v1 - e.v0, e2 = e.v2 - e.v0;
+        vec3 pv = cross(w, e2);
+        float det = dot(e1, pv);
+        if (det == 0.0)
+            return false;
+        vec3 tv = p - e.v0;
+        float a = dot(tv, pv) / det;
+        vec3 qv = cross(tv, e1);
+        float b = dot(w, qv) / det;
+        t = dot(e2, qv) / det;
+        if (a < 0.0 || b < 0.0 || a > 1.0 || b > 1.0 || (e.kind == TB_GPU_EMITTER_TRIANGLE && a + b > 1.0))
+            return false;
+        nq = e.normal;
+    } else if (e.kind == TB_GPU_EMITTER_DISC) {
+        float dn = dot(w, e.v1);
+        if (dn == 0.0)
+            return false;
+        t = dot(e.v0 - p, e.v1) / dn;
+        vec3 x = p + w * t - e.v0;
+        if (dot(x, x) > e.radius * e.radius)
+            return false;
+        nq = e.v1;
+    } else if (e.kind == TB_GPU_EMITTER_SPHERE) {
+        vec3 oc = p - e.v0;
+        float a = dot(w, w), b = dot(oc, w);
+        vec3 perp = oc - w * (b / a);
+        float disc = e.radius * e.radius - dot(perp, perp);
+        if (disc < 0.0)
+            return false;
+        float h = sqrt(a * disc);
+        float q1 = -(b + (b < 0.0 ? -h : h));
+        float t0 = q1 / a, t1 = q1 != 0.0 ? (dot(oc, oc) - e.radius * e.radius) / q1 : t0;
+        float lo = min(t0, t1), hi = max(t0, t1);
+        t = lo > 0.0 ? lo : hi;
+        nq = normalize(p + w * t - e.v0);
+    } else {
+        return false;
+    }
+    if (!(t > 0.0) || isinf(t))
+        return false;
+    q = p + w * t;
+    return true;
+}
+
+// The solid-angle density with which the area light, sampled at p, returns
+// direction w through the emitters of top-level object `obj`: the sum over
+// those the line crosses (tb_light_set's object pdf: selection probability
+// times the cone density of a sphere, or 1 / area times d^2 / |cos|).
+float object_pdf(uint obj, vec3 p, vec3 w)
+{
+    if (NEMIT == 0)
+        return 0.0;
+    int ob = OBJ_BASE + int(TB_GPU_PT_O_WORDS) * int(obj);
+    int first = int(utab(ob + 1)), count = int(utab(ob + 2));
+    float pdf = 0.0;
+    for (int i = first; i < first + count; i++) {
+        tb_gpu_emitter e = emitters[i];
+        float pmf = tab(PMF_BASE + i);
+        vec3 q, nq;
+        if (!(pmf > 0.0) || !emitter_hit(e, p, w, q, nq))
+            continue;
+        if (e.kind == TB_GPU_EMITTER_SPHERE) {
+            float dc = length(p - e.v0);
+            if (dc > e.radius * (1.0 + 1e-6)) {
+                float s2max = (e.radius / dc) * (e.radius / dc);
+                float omc_max = s2max / (1.0 + sqrt(max(0.0, 1.0 - s2max)));
+                pdf += pmf / (TB_EMITTER_TWO_PI * omc_max);
+            }
+            continue; // inside a one-sided sphere: 0 (two-sided ones are refused)
+        }
+        vec3 d = q - p;
+        float d2 = dot(d, d);
+        float cq = -dot(nq, d) / sqrt(d2);
+        if (!(d2 > 0.0) || cq == 0.0 || (cq < 0.0 && e.two_sided == 0u))
+            continue;
+        pdf += pmf * e.inv_area * d2 / abs(cq);
+    }
+    return pdf;
+}
+
+// -------------------------------------------------------------------- BSDF
+// The composite BSDF of host/render/surface.c (tb_surface_bsdf_*, mode
+// TB_SURFACE_PHYSICAL) for the lobes the kernel takes: Lambert, normalised
+// Phong, exactly normalised Blinn, GGX (lib/ggx.glsl) and the smooth dielectric; n is the normal
+// facing wo (no bump maps), ng the geometric one.
+
+struct bsdf_t {
+    int mb;        // the material's first table word
+    uint lobes;    // bit per TB_GPU_PT_LOBE_*
+    uint glossy;   // TB_GPU_PT_GLOSSY_*
+    float pick[4]; // selection probabilities per slot
+    float dielectric, expo, ior, alpha;
+};
+
+bsdf_t bsdf_load(int m)
+{
+    bsdf_t b;
+    b.mb = m * MSTRIDE;
+    int sc = b.mb + 4 * NCH;
+    for (int k = 0; k < 4; k++)
+        b.pick[k] = tab(sc + int(TB_GPU_PT_M_PICK) + k);
+    b.dielectric = tab(sc + int(TB_GPU_PT_M_DIELECTRIC));
+    b.expo = tab(sc + int(TB_GPU_PT_M_EXPONENT));
+    b.ior = tab(sc + int(TB_GPU_PT_M_IOR));
+    b.glossy = utab(sc + int(TB_GPU_PT_M_GLOSSY));
+    b.lobes = utab(sc + int(TB_GPU_PT_M_LOBES));
+    b.alpha = tab(sc + int(TB_GPU_PT_M_ALPHA));
+    return b;
+}
+
+bool has_lobe(bsdf_t b, uint k) { return (b.lobes & (1u << k)) != 0u; }
+
+const uint NONDELTA = (1u << TB_GPU_PT_LOBE_DIFFUSE) | (1u << TB_GPU_PT_LOBE_GLOSSY);
+
+// tb_bsdf_lobe_norm of the exactly normalised Blinn lobe.
+float blinn_norm(float n) { return (n + 2.0) * (n + 4.0) / (8.0 * 3.14159265358979323846 * (exp2(-0.5 * n) + n)); }
+
+// w in the shading frame of n (tb_frame_from_normal: the basis of n).
+vec3 to_local(vec3 n, vec3 w)
+{
+    vec3 b1, b2;
+    basis(n, b1, b2);
+    return vec3(dot(w, b1), dot(w, b2), dot(w, n));
+}
+
+// The glossy lobe at (wo, wi), both on n's side: its scalar, Schlick's
+// weight y (f = (specular colour (1 - y) + y) x scalar; y = 0 but for GGX)
+// and its sampling density (tb_bsdf evaluate).
+void glossy_eval(bsdf_t b, vec3 n, vec3 wo, vec3 wi, out float scalar, out float y, out float pdf)
+{
+    scalar = 0.0;
+    y = 0.0;
+    pdf = 0.0;
+    float nn = b.expo;
+    if (b.glossy == TB_GPU_PT_GLOSSY_GGX) {
+        vec3 e = tb_ggx_eval(b.alpha, normalize(to_local(n, wo)), normalize(to_local(n, wi)));
+        scalar = e.x;
+        y = e.y;
+        pdf = e.z;
+    } else if (b.glossy == TB_GPU_PT_GLOSSY_PHONG) {
+        // cos alpha = the mirror of wo about the tangent plane . wi
+        float c = min(1.0, 2.0 * dot(wo, n) * dot(wi, n) - dot(wo, wi));
+        if (!(c > 0.0))
+            return;
+        float p = pow(c, nn);
+        scalar = (nn + 2.0) * (0.5 * INV_PI) * p;
+        pdf = (nn + 1.0) * (0.5 * INV_PI) * p;
+    } else if (b.glossy == TB_GPU_PT_GLOSSY_BLINN) {
+        vec3 h = wo + wi;
+        float len = length(h);
+        if (!(len > 0.0))
+            return;
+        h /= len;
+        float p = pow(min(1.0, abs(dot(h, n))), nn);
+        scalar = blinn_norm(nn) * p;
+        float oh = dot(wo, h);
+        if (oh > 0.0)
+            pdf = (nn + 1.0) * (0.5 * INV_PI) * p / (4.0 * oh);
+    }
+}
+
+// The mixture's density of direction wi (tb_surface_bsdf_pdf).
+float bsdf_pdf(bsdf_t b, vec3 n, vec3 wo, vec3 wi)
+{
+    if ((b.lobes & NONDELTA) == 0u || (dot(wo, n) > 0.0) != (dot(wi, n) > 0.0))
+        return 0.0;
+    float pdf = 0.0;
+    if (has_lobe(b, TB_GPU_PT_LOBE_DIFFUSE))
+        pdf += b.pick[TB_GPU_PT_LOBE_DIFFUSE] * abs(dot(wi, n)) * INV_PI;
+    if (has_lobe(b, TB_GPU_PT_LOBE_GLOSSY)) {
+        float sc, y, gp;
+        glossy_eval(b, n, wo, wi, sc, y, gp);
+        pdf += b.pick[TB_GPU_PT_LOBE_GLOSSY] * gp;
+    }
+    return pdf;
+}
+
+// The mixture's value at (wo, wi) per channel (tb_surface_bsdf_eval); false
+// if it is 0.
+bool bsdf_eval(bsdf_t b, vec3 n, vec3 wo, vec3 wi, out float f[NCH])
+{
     for (int c = 0; c < NCH; c++)
-        set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + val(TB_GPU_PT_BETA, c) * tab(eb + c) * st.scale);
-    st.shadow = TB_GPU_PT_SHADOW_NONE;
+        f[c] = 0.0;
+    if ((b.lobes & NONDELTA) == 0u || (dot(wo, n) > 0.0) != (dot(wi, n) > 0.0) || dot(wi, n) == 0.0)
+        return false;
+    float kd = has_lobe(b, TB_GPU_PT_LOBE_DIFFUSE) ? INV_PI : 0.0, ks = 0.0, y = 0.0, gp;
+    if (has_lobe(b, TB_GPU_PT_LOBE_GLOSSY))
+        glossy_eval(b, n, wo, wi, ks, y, gp);
+    bool any = false;
+    for (int c = 0; c < NCH; c++) {
+        f[c] = tab(b.mb + c) * kd + (tab(b.mb + 2 * NCH + c) * (1.0 - y) + y) * ks;
+        any = any || f[c] > 0.0;
+    }
+    return any;
+}
+
+// A direction of the power-cosine lobe cos^n about +z (tb_sample_power_cosine):
+// 1 - cos = -expm1(log(u1) / (n + 1)) keeps the digits of narrow lobes.
+vec3 power_cosine(float u1, float u2, float n)
+{
+    float a = 1.0, c = 0.0;
+    if (u1 > 0.0) {
+        float lg = log(u1) / (n + 1.0);
+        a = abs(lg) < 1e-3 ? -lg * (1.0 + lg * (0.5 + lg * (1.0 / 6.0))) : 1.0 - exp(lg);
+        c = 1.0 - a;
+    }
+    float s = sqrt(max(0.0, a * (2.0 - a)));
+    float phi = TB_EMITTER_TWO_PI * u2;
+    return vec3(s * cos(phi), s * sin(phi), c);
+}
+
+vec3 to_world(vec3 n, vec3 l)
+{
+    vec3 b1, b2;
+    basis(n, b1, b2);
+    return b1 * l.x + b2 * l.y + n * l.z;
+}
+
+// One sample of the mixture (tb_surface_bsdf_sample): direction, weight
+// f |cos| / pdf per channel (or the delta lobe's), density, delta flag.
+bool bsdf_sample(bsdf_t b, vec3 n, vec3 ng, vec3 wo, float uc, float u1, float u2, out vec3 wi, out float w[NCH],
+                 out float pdf, out bool delta)
+{
+    for (int c = 0; c < NCH; c++)
+        w[c] = 0.0;
+    wi = n;
+    pdf = 0.0;
+    delta = false;
+    if (b.lobes == 0u)
+        return false;
+    int k = 0;
+    float lo = 0.0;
+    for (k = 0; k < 3; k++) {
+        if (uc < lo + b.pick[k])
+            break;
+        lo += b.pick[k];
+    }
+    while (k > 0 && b.pick[k] <= 0.0)
+        k--; // uc at the top end by rounding: the last lobe present
+    float pk = b.pick[k];
+    float ur = pk > 0.0 ? min((uc - lo) / pk, uintBitsToFloat(0x3f7fffffu)) : 0.0;
+    ur = max(ur, 0.0);
+    if (k == int(TB_GPU_PT_LOBE_DIELECTRIC)) {
+        delta = true;
+        float ci = dot(wo, ng); // the frame of the unflipped geometric normal
+        float R = fresnel_dielectric(ci, b.ior);
+        float eta = ci < 0.0 ? 1.0 / b.ior : b.ior;
+        vec3 nn = ci < 0.0 ? -ng : ng;
+        float c = abs(ci);
+        float s2t = max(0.0, (1.0 - c) * (1.0 + c)) / (eta * eta);
+        bool refracts = s2t < 1.0;
+        if (!refracts)
+            R = 1.0;
+        if (ur < R || !refracts) {
+            if (!(R > 0.0))
+                return false;
+            wi = 2.0 * ci * ng - wo;
+            pdf = pk * R;
+            for (int q = 0; q < NCH; q++)
+                w[q] = b.dielectric / pk;
+            return true;
+        }
+        wi = normalize(-wo / eta + (c / eta - sqrt(1.0 - s2t)) * nn);
+        pdf = pk * (1.0 - R);
+        for (int q = 0; q < NCH; q++)
+            w[q] = tab(b.mb + 3 * NCH + q) * b.dielectric / pk;
+        return true;
+    }
+    float side = dot(wo, n) > 0.0 ? 1.0 : -1.0;
+    if (k == int(TB_GPU_PT_LOBE_DIFFUSE)) {
+        vec2 dk = tb_concentric_disc(u1, u2);
+        float z = sqrt(max(0.0, 1.0 - dot(dk, dk)));
+        wi = to_world(n, vec3(dk, z * side));
+    } else if (b.glossy == TB_GPU_PT_GLOSSY_GGX) {
+        // the sampler flips wo below the surface: flip m back the same way
+        vec3 lo = normalize(to_local(n, wo));
+        vec3 mh = tb_ggx_sample_vndf(b.alpha, lo, u1, u2) * side;
+        wi = to_world(n, 2.0 * dot(lo, mh) * mh - lo);
+    } else if (b.glossy == TB_GPU_PT_GLOSSY_PHONG) {
+        vec3 r = 2.0 * dot(wo, n) * n - wo;
+        wi = to_world(normalize(r), power_cosine(u1, u2, b.expo));
+    } else {
+        vec3 h = to_world(n, power_cosine(u1, u2, b.expo) * vec3(1.0, 1.0, side));
+        float oh = dot(wo, h);
+        if (!(oh > 0.0))
+            return false;
+        wi = 2.0 * oh * h - wo;
+    }
+    wi = normalize(wi);
+    float ci = dot(wi, n);
+    if (ci == 0.0 || (ci > 0.0) != (dot(wo, n) > 0.0))
+        return false;
+    pdf = bsdf_pdf(b, n, wo, wi);
+    if (!(pdf > 0.0) || isinf(pdf))
+        return false;
+    float f[NCH];
+    if (!bsdf_eval(b, n, wo, wi, f))
+        return false;
+    bool any = false;
+    for (int q = 0; q < NCH; q++) {
+        w[q] = f[q] * abs(ci) / pdf;
+        any = any || w[q] > 0.0;
+    }
+    return any;
+}
+
+// ------------------------------------------------------------------ stages
+
+void stage_init()
+{
+    for (int c = 0; c < NCH; c++) {
+        set_val(TB_GPU_PT_L, c, 0.0);
+        set_val(TB_GPU_PT_BETA, c, 1.0);
+    }
+}
+
+// Adds the path's clear light samples (the TB_GPU_PT_PENDING values of
+// each slot marked clear).
+void add_light_samples(inout tb_gpu_pt_state st)
+{
+    for (uint k = 0u; st.clear != 0u && k <= uint(NLIGHTS); k++) {
+        if ((st.clear & (1u << k)) == 0u)
+            continue;
+        for (int c = 0; c < NCH; c++)
+            set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + val(TB_GPU_PT_PENDING + k, c));
+    }
+    st.clear = 0u;
+}
+
+// Point, spot and directional lights at p (tb__next_event's loop): per light
+// with light, f L |cos| into its slot's pending values and its shadow ray.
+uint delta_lights(bsdf_t b, vec3 p, vec3 perr, vec3 n, vec3 ng, vec3 wo, float beta[NCH])
+{
+    uint mask = 0u;
+    for (int l = 0; l < NLIGHTS; l++) {
+        int lb = int(pc.light_base) + l * (int(TB_GPU_PT_L_SCALARS) + NCH);
+        uint kind = utab(lb + int(TB_GPU_PT_L_KIND));
+        vec3 axis = vec3(tab(lb + int(TB_GPU_PT_L_AXIS)), tab(lb + int(TB_GPU_PT_L_AXIS) + 1),
+                         tab(lb + int(TB_GPU_PT_L_AXIS) + 2));
+        vec3 wi;
+        float scale;
+        tb_gpu_ray sr;
+        sr.tmin = 0.0;
+        if (kind == TB_GPU_LIGHT_DIRECTIONAL) {
+            wi = -axis;
+            scale = 1.0;
+            sr.o = spawn_origin(p, perr, ng, wi);
+            sr.d = wi;
+            sr.tmax = 1.0 / 0.0;
+        } else {
+            vec3 q = vec3(tab(lb + int(TB_GPU_PT_L_POSITION)), tab(lb + int(TB_GPU_PT_L_POSITION) + 1),
+                          tab(lb + int(TB_GPU_PT_L_POSITION) + 2));
+            vec3 dl = q - p;
+            float dist = length(dl);
+            if (!(dist > 0.0) || isinf(dist))
+                continue;
+            wi = dl / dist;
+            float k = 1.0;
+            if (kind == TB_GPU_LIGHT_SPOT)
+                k = spot_falloff(tab(lb + int(TB_GPU_PT_L_COS_TOTAL)), tab(lb + int(TB_GPU_PT_L_COS_FALLOFF)),
+                                 dot(-wi, axis));
+            if (!(k > 0.0))
+                continue;
+            scale = k / (dist * dist);
+            sr.o = spawn_origin(p, perr, ng, wi);
+            sr.d = q - sr.o;
+            sr.tmax = 1.0 - SHADOW_EPSILON;
+        }
+        float f[NCH];
+        if (!bsdf_eval(b, n, wo, wi, f))
+            continue;
+        float s = scale * abs(dot(wi, n));
+        bool any = false;
+        for (int c = 0; c < NCH; c++) {
+            float x = beta[c] * f[c] * tab(lb + int(TB_GPU_PT_L_SCALARS) + c) * s;
+            set_val(TB_GPU_PT_PENDING + uint(1 + l), c, x);
+            any = any || x > 0.0;
+        }
+        if (!any)
+            continue;
+        shadows[uint(1 + l) * g_n + g_i] = sr;
+        mask |= 1u << uint(1 + l);
+    }
+    return mask;
 }
 
 void stage_shade()
@@ -181,31 +581,61 @@ void stage_shade()
     tb_gpu_pt_state st = states[g_i];
     if (st.alive == 0u)
         return;
-    add_light_sample(st);
+    add_light_samples(st);
     tb_gpu_ray r = rays[g_i];
     tb_gpu_hit h = hits[g_i];
     vec3 ng = vec3(h.ng[0], h.ng[1], h.ng[2]);
-    int m = int(texelFetch(table_texels, OBJ_BASE + int(h.object)).x);
-    int mb = m * 2 * NCH;
+    uint mi = hit_material(h.object, h.face);
+    if (mi == 0xffffffffu) {
+        st.alive = 0u; // no material: the CPU's tb_surface_at fails there and ends the path
+        states[g_i] = st;
+        return;
+    }
+    int m = int(mi);
+    bsdf_t b = bsdf_load(m);
+    vec3 d = normalize(r.d);
     bool front = dot(r.d, ng) < 0.0;
-    // Emission of a front face, counted where no light sample could have
-    // found it: at the camera ray's hit (throughput 1, radiance 0 so far).
-    if (front && st.depth == 0u)
+    vec3 p = r.o + h.t * r.d;
+    vec3 perr = (abs(r.o) + abs(h.t * r.d)) * (1.0 / 131072.0);
+    float beta[NCH];
+    for (int c = 0; c < NCH; c++)
+        beta[c] = val(TB_GPU_PT_BETA, c);
+
+    // Emission of a front face, weighted against the light sample the
+    // previous vertex took of the same point unless the ray left the camera
+    // or a delta lobe.
+    if (front) {
+        bool emits = false;
         for (int c = 0; c < NCH; c++)
-            set_val(TB_GPU_PT_L, c, tab(mb + NCH + c));
-    if (!(tab(DMAX_BASE + m) > 0.0) || (pc.max_depth > 0u && st.depth >= pc.max_depth) ||
-        st.depth >= pc.max_bounces) {
+            emits = emits || tab(b.mb + NCH + c) > 0.0;
+        if (emits) {
+            float w = 1.0;
+            if (st.prev_delta == 0u) {
+                vec3 pp = vec3(st.prev_px, st.prev_py, st.prev_pz);
+                vec3 dw = p - pp;
+                float len = length(dw);
+                w = len > 0.0 ? power_heuristic(st.prev_pdf, object_pdf(h.object, pp, dw / len)) : 0.0;
+            }
+            for (int c = 0; c < NCH; c++)
+                set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + beta[c] * tab(b.mb + NCH + c) * w);
+        }
+    }
+    if ((pc.max_depth > 0u && st.depth >= pc.max_depth) || st.depth >= pc.max_bounces || b.lobes == 0u) {
         st.alive = 0u;
         states[g_i] = st;
         return;
     }
-    vec3 n = front ? ng : -ng; // Lambert is two-sided: the normal faces the ray
-    vec3 p = r.o + h.t * r.d;
-    vec3 perr = (abs(r.o) + abs(h.t * r.d)) * (1.0 / 131072.0);
+    vec3 n = front ? ng : -ng; // the normal facing the incoming ray
+    vec3 wo = -d;
 
-    // One sample of the area light, its shadow ray traced by the shadow stage.
-    float scale = 0.0;
-    if (NEMIT > 0) {
+    // Next-event estimation at vertices with a non-delta lobe: every delta
+    // light, then one sample of the area light, weighted against the BSDF's
+    // sampling of the same direction; the shadow rays are traced by the
+    // shadow stage, the contributions kept as pending per slot.
+    uint pending = 0u;
+    if (NLIGHTS > 0 && (b.lobes & NONDELTA) != 0u)
+        pending = delta_lights(b, p, perr, n, ng, wo, beta);
+    if (NEMIT > 0 && (b.lobes & NONDELTA) != 0u) {
         float u1 = rnd(st), u2 = rnd(st);
         float pmf, ur;
         int k = pick_emitter(u1, pmf, ur);
@@ -214,69 +644,68 @@ void stage_shade()
         if (pmf > 0.0 && sample_emitter(emitters[k], p, ur, u2, q, pdf_sa)) {
             vec3 dq = q - p;
             float dist = length(dq);
-            float pdf = pmf * pdf_sa;
             vec3 wi = dq / dist;
-            float cosi = dot(n, wi);
-            if (dist > 0.0 && pdf > 0.0 && cosi > 0.0) {
-                // Lambert f = diffuse / pi; the diffuse colour goes into the
-                // throughput below, so the scale holds the rest
-                scale = INV_PI * cosi / pdf;
-                vec3 o = spawn_origin(p, perr, ng, wi);
-                tb_gpu_ray sr;
-                sr.o = o;
-                sr.tmin = 0.0;
-                sr.d = q - o;
-                sr.tmax = 1.0 - SHADOW_EPSILON;
-                shadows[g_i] = sr;
-                st.emitter = uint(k);
+            float f[NCH];
+            if (dist > 0.0 && pmf * pdf_sa > 0.0 && bsdf_eval(b, n, wo, wi, f)) {
+                float pl = object_pdf(utab(EOBJ_BASE + k), p, wi);
+                if (pl > 0.0 && !isinf(pl)) {
+                    float s = abs(dot(wi, n)) * power_heuristic(pl, bsdf_pdf(b, n, wo, wi)) / pl;
+                    int eb = EMIT_BASE + k * NCH;
+                    for (int c = 0; c < NCH; c++)
+                        set_val(TB_GPU_PT_PENDING, c, beta[c] * f[c] * tab(eb + c) * s);
+                    vec3 o = spawn_origin(p, perr, ng, wi);
+                    tb_gpu_ray sr;
+                    sr.o = o;
+                    sr.tmin = 0.0;
+                    sr.d = q - o;
+                    sr.tmax = 1.0 - SHADOW_EPSILON;
+                    shadows[g_i] = sr;
+                    pending |= 1u;
+                }
             }
         }
     }
+    st.shadow = pending;
 
-    // The BSDF sample (three numbers, as the CPU's lobe choice + direction):
-    // cosine-weighted about n, weight = the diffuse colour.
-    rnd(st);
-    float u1 = rnd(st), u2 = rnd(st);
-    vec2 dk = tb_concentric_disc(u1, u2);
-    float z = sqrt(max(0.0, 1.0 - dot(dk, dk)));
-    vec3 b1, b2;
-    basis(n, b1, b2);
-    vec3 wi = normalize(b1 * dk.x + b2 * dk.y + n * z);
-    bool go = z > 0.0 && dot(wi, n) > 0.0;
-    float beta[NCH];
+    // The BSDF sample (three numbers: the lobe, then the direction).
+    float uc = rnd(st), u1 = rnd(st), u2 = rnd(st);
+    vec3 wi;
+    float w[NCH];
+    float pdf;
+    bool delta;
+    bool go = bsdf_sample(b, n, ng, wo, uc, u1, u2, wi, w, pdf, delta);
     float bmax = 0.0;
     for (int c = 0; c < NCH; c++) {
-        beta[c] = (st.depth == 0u ? 1.0 : val(TB_GPU_PT_BETA, c)) * tab(mb + c);
+        beta[c] *= w[c];
         bmax = max(bmax, beta[c]);
     }
     go = go && bmax > 0.0 && !isinf(bmax) && !isnan(bmax);
     st.depth++;
-    // Russian roulette: the throughput is divided by q, the light sample's
-    // scale multiplied by it (its contribution is before the roulette).
+    // Russian roulette: continue with q = min(1, max throughput), divide by q.
     if (go && st.depth >= pc.rr_depth) {
         float q = min(1.0, bmax);
         if (q < 1.0) {
-            if (!(rnd(st) < q)) {
+            if (!(rnd(st) < q))
                 go = false;
-            } else {
+            else
                 for (int c = 0; c < NCH; c++)
                     beta[c] *= 1.0 / q;
-                scale *= q;
-            }
         }
     }
-    st.shadow = scale > 0.0 ? TB_GPU_PT_SHADOW_PENDING : TB_GPU_PT_SHADOW_NONE;
-    st.scale = scale;
-    if (go || scale > 0.0)
+    if (go) {
         for (int c = 0; c < NCH; c++)
             set_val(TB_GPU_PT_BETA, c, beta[c]);
-    if (go) {
         tb_gpu_ray nr;
         nr.o = spawn_origin(p, perr, ng, wi);
         nr.tmin = 0.0;
         nr.d = wi;
         nr.tmax = 1.0 / 0.0;
         rays[g_i] = nr;
+        st.prev_delta = delta ? 1u : 0u;
+        st.prev_pdf = pdf;
+        st.prev_px = p.x;
+        st.prev_py = p.y;
+        st.prev_pz = p.z;
     }
     st.alive = go ? 1u : 0u;
     states[g_i] = st;
@@ -287,10 +716,10 @@ void stage_shade()
 void stage_accumulate()
 {
     tb_gpu_pt_state st = states[g_i];
-    if (st.shadow != TB_GPU_PT_SHADOW_CLEAR)
+    if (st.clear == 0u)
         return;
-    add_light_sample(st);
-    states[g_i].shadow = st.shadow;
+    add_light_samples(st);
+    states[g_i].clear = 0u;
 }
 
 #ifdef TB_PT_TRACE
@@ -320,11 +749,19 @@ void stage_extend()
 
 void stage_shadow()
 {
-    if (states[g_i].shadow != TB_GPU_PT_SHADOW_PENDING)
+    uint pending = states[g_i].shadow;
+    if (pending == 0u)
         return;
-    tb_bvh_hit b;
-    bool blocked = tb_bvh_traverse(shadows[g_i], pc.nnodes, true, b);
-    states[g_i].shadow = blocked ? TB_GPU_PT_SHADOW_NONE : TB_GPU_PT_SHADOW_CLEAR;
+    uint clear = 0u;
+    for (uint k = 0u; k <= uint(NLIGHTS); k++) {
+        if ((pending & (1u << k)) == 0u)
+            continue;
+        tb_bvh_hit b;
+        if (!tb_bvh_traverse(shadows[k * g_n + g_i], pc.nnodes, true, b))
+            clear |= 1u << k;
+    }
+    states[g_i].shadow = 0u;
+    states[g_i].clear = clear;
 }
 
 #endif

@@ -2,24 +2,73 @@
  * host/gpu/pathtrace.c; docs/gpu.md, "Path tracer"). The path state lives in
  * device buffers for the whole of a call: per path its ray (tb_gpu_ray), its
  * closest hit (tb_gpu_hit), a tb_gpu_pt_state (after a 32-byte header
- * holding the live-path count), its shadow ray, and the channel values
- * (throughput, radiance) stored word-major: value v (TB_GPU_PT_BETA, _L) of
- * channel c of path i at (v * nch + c) * n + i, so that neighbouring
- * invocations touch neighbouring words. The scene's tables are one array of
- * 32-bit words (read as texels): per material its diffuse colour and emitted
- * radiance (nch each), per emitter its radiance (nch), the emitters' CDF
- * (nemitters + 1) and pmf (nemitters), per material its largest diffuse
- * channel, then per object its material (a uint). See shared/types.h for the
- * rules. */
+ * holding the live-path count), its shadow rays, and the channel values
+ * (throughput, radiance, pending light samples) stored word-major: value v
+ * (TB_GPU_PT_BETA, _L, _PENDING + slot) of channel c of path i at
+ * (v * nch + c) * n + i, so that neighbouring invocations touch neighbouring
+ * words. The scene's tables are one array of 32-bit words (read as texels):
+ * per material its diffuse, emitted radiance, specular and transmission
+ * colours (nch each) and TB_GPU_PT_M_SCALARS words; per emitter its radiance
+ * (nch); the emitters' CDF (nemitters + 1), pmf (nemitters) and top-level
+ * object (nemitters, uints); per object TB_GPU_PT_O_WORDS uints; the CSG
+ * leaf records (3 uints each); per delta light TB_GPU_PT_L_SCALARS words
+ * and its intensity (nch). The shadow rays: slot k of path i at k * n + i. See shared/types.h for the rules. */
 #ifndef TB_SHADERS_SHARED_PATHTRACE_H
 #define TB_SHADERS_SHARED_PATHTRACE_H
 
 #include "types.h"
 
 /* The channel arrays of the value buffer. */
-#define TB_GPU_PT_BETA 0u   /* throughput */
-#define TB_GPU_PT_L 1u      /* radiance gathered */
-#define TB_GPU_PT_NVALUES 2u
+#define TB_GPU_PT_BETA 0u    /* throughput */
+#define TB_GPU_PT_L 1u       /* radiance gathered */
+#define TB_GPU_PT_PENDING 2u /* the pending light samples' contributions, one array per shadow slot (added to L
+                                if the slot's ray is clear): slot 0 the area light, slot 1 + l delta light l */
+#define TB_GPU_PT_NVALUES 3u /* arrays besides the PENDING ones of slots 1.. */
+
+/* Shadow-ray slots per path: the area light and each point, spot or
+ * directional light (the pending and clear masks are 32 bits wide). */
+#define TB_GPU_PT_MAX_SLOTS 32u
+
+/* The scene table's words per delta light before its intensity (nch):
+ * kind (TB_GPU_LIGHT_* of shared/shade.h), position, axis, cos_total,
+ * cos_falloff. */
+#define TB_GPU_PT_L_KIND 0u
+#define TB_GPU_PT_L_POSITION 1u
+#define TB_GPU_PT_L_AXIS 4u
+#define TB_GPU_PT_L_COS_TOTAL 7u
+#define TB_GPU_PT_L_COS_FALLOFF 8u
+#define TB_GPU_PT_L_SCALARS 9u
+
+/* The scene table's words per material besides its 4 colours (diffuse,
+ * emitted radiance, specular, transmission; nch each): the lobe selection
+ * probabilities (TB_GPU_PT_M_PICK + slot of TB_GPU_PT_LOBE_*), the
+ * dielectric's weight, the exponent, the index of refraction, the glossy
+ * lobe's kind (TB_GPU_PT_GLOSSY_*), the lobes present (bit per slot) and
+ * the GGX roughness. */
+#define TB_GPU_PT_M_PICK 0u
+#define TB_GPU_PT_M_DIELECTRIC 4u
+#define TB_GPU_PT_M_EXPONENT 5u
+#define TB_GPU_PT_M_IOR 6u
+#define TB_GPU_PT_M_GLOSSY 7u
+#define TB_GPU_PT_M_LOBES 8u
+#define TB_GPU_PT_M_ALPHA 9u /* GGX: the roughness, at least TB_GGX_ALPHA_MIN */
+#define TB_GPU_PT_M_SCALARS 10u
+/* The scene table's words per object: its material (UINT32_MAX: none),
+ * first emitter, emitter count, and for a CSG tree the table word of its
+ * first leaf record and its leaf count (a leaf record: first face, face
+ * count, material; the hit's face picks the leaf, as tb_scene_hit_leaf). */
+#define TB_GPU_PT_O_WORDS 5u
+
+/* Lobe slots (the order of host/render/surface.c's tb_surface_bsdf.pick). */
+#define TB_GPU_PT_LOBE_DIFFUSE 0u
+#define TB_GPU_PT_LOBE_GLOSSY 1u
+#define TB_GPU_PT_LOBE_MIRROR 2u /* the Whitted tracer's only: its probability is 0 here */
+#define TB_GPU_PT_LOBE_DIELECTRIC 3u
+/* Glossy lobe kinds. */
+#define TB_GPU_PT_GLOSSY_NONE 0u
+#define TB_GPU_PT_GLOSSY_PHONG 1u /* normalised Phong (TB_BSDF_PHONG_NORMALIZED) */
+#define TB_GPU_PT_GLOSSY_BLINN 2u /* exactly normalised Blinn (TB_BSDF_BLINN_NORMALIZED_EXACT) */
+#define TB_GPU_PT_GLOSSY_GGX 3u   /* GGX with Schlick's Fresnel of the specular colour (TB_BSDF_GGX) */
 
 /* Kernel stages (specialization constant 1 of pathtrace.comp). */
 #define TB_GPU_PT_STAGE_INIT 0u       /* radiance 0 */
@@ -30,10 +79,6 @@
 #define TB_GPU_PT_STAGE_ACCUMULATE 4u /* after the last bounce: the clear light samples of ended paths */
 #define TB_GPU_PT_STAGES 5u
 
-/* tb_gpu_pt_state.shadow */
-#define TB_GPU_PT_SHADOW_NONE 0u    /* no light sample pending */
-#define TB_GPU_PT_SHADOW_PENDING 1u /* its shadow ray is still to trace */
-#define TB_GPU_PT_SHADOW_CLEAR 2u   /* traced and clear: add throughput x the emitter's radiance x scale */
 
 /* Bytes before the first tb_gpu_pt_state in the state buffer: word 0 is
  * the live paths counted by the last shade dispatch asked to count (the
@@ -45,17 +90,22 @@ typedef struct tb_gpu_pt_state tb_gpu_pt_state;
 typedef struct tb_gpu_pt_push tb_gpu_pt_push;
 #endif
 
-/* One path's scalars; std430 size 32. The random stream is counter-based:
- * draw k of the path is a hash of (seed0, seed1, k). */
+/* One path's scalars; std430 size 48. The random stream is counter-based:
+ * draw k of the path is a hash of (seed0, seed1, k). The previous vertex
+ * (point, BSDF density, delta flag) weights emission the path's ray meets
+ * against that vertex's light sample (MIS, as tb_pt_path). */
 struct tb_gpu_pt_state {
-    TB_GPU_UINT seed0;   /* from the camera sample's CPU stream (offset 0) */
-    TB_GPU_UINT seed1;   /* offset 4 */
-    TB_GPU_UINT counter; /* numbers drawn so far (offset 8) */
-    TB_GPU_UINT depth;   /* bounces so far; the camera ray is 0 (offset 12) */
-    TB_GPU_UINT alive;   /* 1 while the path goes on (offset 16) */
-    TB_GPU_UINT shadow;  /* TB_GPU_PT_SHADOW_* (offset 20) */
-    TB_GPU_UINT emitter; /* the light sample's emitter (offset 24) */
-    float scale;         /* its contribution per unit throughput and emitter radiance (offset 28) */
+    TB_GPU_UINT seed0;      /* from the camera sample's CPU stream (offset 0) */
+    TB_GPU_UINT seed1;      /* offset 4 */
+    TB_GPU_UINT counter;    /* numbers drawn so far (offset 8) */
+    TB_GPU_UINT depth;      /* bounces so far; the camera ray is 0 (offset 12) */
+    TB_GPU_UINT alive;      /* 1 while the path goes on (offset 16) */
+    TB_GPU_UINT shadow;     /* bit k: slot k's shadow ray is still to trace (offset 20) */
+    TB_GPU_UINT prev_delta; /* 1: the ray left the camera or a delta lobe (emission weight 1) (offset 24) */
+    float prev_pdf;         /* the BSDF density of the ray's direction (offset 28) */
+    float prev_px, prev_py, prev_pz; /* the previous vertex (offset 32) */
+    TB_GPU_UINT clear;      /* bit k: slot k's shadow ray was traced and is clear: add its pending values
+                               (offset 44) */
 };
 
 /* Push constants of every stage; size 32. */
@@ -66,16 +116,18 @@ struct tb_gpu_pt_push {
     TB_GPU_UINT rr_depth;   /* bounces before Russian roulette */
     TB_GPU_UINT max_bounces; /* the hard cap (TB_PT_MAX_BOUNCES) */
     TB_GPU_UINT count;      /* shade: 1 to count the live paths into the state buffer's header */
-    TB_GPU_UINT pad0, pad1;
+    TB_GPU_UINT light_base; /* the table word of the first delta light */
+    TB_GPU_UINT pad1;
 };
 
 #ifndef TB_GPU_GLSL
-_Static_assert(sizeof(tb_gpu_pt_state) == 32 && offsetof(tb_gpu_pt_state, counter) == 8 &&
+_Static_assert(sizeof(tb_gpu_pt_state) == 48 && offsetof(tb_gpu_pt_state, counter) == 8 &&
                    offsetof(tb_gpu_pt_state, depth) == 12 && offsetof(tb_gpu_pt_state, alive) == 16 &&
-                   offsetof(tb_gpu_pt_state, shadow) == 20 && offsetof(tb_gpu_pt_state, scale) == 28,
+                   offsetof(tb_gpu_pt_state, shadow) == 20 && offsetof(tb_gpu_pt_state, prev_pdf) == 28 &&
+                   offsetof(tb_gpu_pt_state, prev_px) == 32 && offsetof(tb_gpu_pt_state, clear) == 44,
                "tb_gpu_pt_state follows the std430 offsets of its GLSL twin");
 _Static_assert(sizeof(tb_gpu_pt_push) == 32 && offsetof(tb_gpu_pt_push, max_bounces) == 16 &&
-                   offsetof(tb_gpu_pt_push, count) == 20,
+                   offsetof(tb_gpu_pt_push, count) == 20 && offsetof(tb_gpu_pt_push, light_base) == 24,
                "tb_gpu_pt_push follows the std430 offsets of its GLSL twin");
 #endif
 

@@ -13,7 +13,7 @@ scratch_dir pt_cli
 fail() { echo "FAIL: $*"; [ -f "$t/out" ] && cat "$t/out"; exit 1; }
 
 sized "$TB_SOURCE_DIR/scenes/cornell-box-rgb.mid" "$t/box.mid" 24 24
-sized "$TB_SOURCE_DIR/scenes/cornell-box-spheres.mid" "$t/spheres.mid" 24 24
+sized "$TB_SOURCE_DIR/scenes/materials.mid" "$t/refused.mid" 24 24
 
 TB_VK_VALIDATION=1 "$TESTBED" render "$t/box.mid" --method path --backend vulkan --spp 4 -o "$t/a.pfm" \
     --stats "$t/a.json" >"$t/out" 2>&1 || fail "render"
@@ -38,14 +38,14 @@ cmp -s "$t/a.pfm" "$t/b.pfm" || fail "the same seed gave another image"
 if cmp -s "$t/a.pfm" "$t/c.pfm"; then fail "another seed gave the same image"; fi
 
 # a scene the kernel does not take: vulkan refuses, auto uses the CPU
-if "$TESTBED" render "$t/spheres.mid" --method path --backend vulkan --spp 1 -o "$t/s.pfm" >"$t/out" 2>&1; then
-    fail "the spheres box (specular, glass) should be refused"
+if "$TESTBED" render "$t/refused.mid" --method path --backend vulkan --spp 1 -o "$t/s.pfm" >"$t/out" 2>&1; then
+    fail "the materials scene (patterns) should be refused"
 fi
-grep -q "does not take this scene: specular" "$t/out" || fail "refusal message"
+grep -q "does not take this scene: procedural patterns" "$t/out" || fail "refusal message"
 [ ! -e "$t/s.pfm" ] || fail "a refused render wrote an image"
-"$TESTBED" render "$t/spheres.mid" --method path --backend auto --spp 1 -o "$t/s.pfm" >"$t/out" 2>&1 || fail "auto"
+"$TESTBED" render "$t/refused.mid" --method path --backend auto --spp 1 -o "$t/s.pfm" >"$t/out" 2>&1 || fail "auto"
 grep -q "backend cpu" "$t/out" || fail "auto should say it renders on the CPU"
-if grep -q "vulkan path tracer:" "$t/out"; then fail "auto ran the kernel on the spheres box"; fi
+if grep -q "vulkan path tracer:" "$t/out"; then fail "auto ran the kernel on the materials scene"; fi
 
 "$TESTBED" render "$t/box.mid" --method path --backend vulkan --adaptive -o "$t/x.pfm" >"$t/out" 2>&1 && rc=0 || rc=$?
 [ "$rc" -eq 2 ] || fail "--adaptive with vulkan: exit $rc, expected 2"
