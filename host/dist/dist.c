@@ -10,9 +10,6 @@
 #include <time.h>
 
 #include <sys/resource.h>
-#ifdef __linux__
-#include <sys/prctl.h>
-#endif
 
 #ifdef TB_HAVE_MPI
 #include <mpi.h>
@@ -71,11 +68,6 @@ tb_status tb_dist_init(int *argc, char ***argv)
                             "MPI_THREAD_SERIALIZED (%d)", provided, MPI_THREAD_SERIALIZED);
         }
         tb__dist_mpi = 1;
-        /* the waits' short sleeps (20 us and up) as asked, not 50 us late
-         * (Linux's default timer slack); threads made later inherit it */
-#ifdef __linux__
-        (void)prctl(PR_SET_TIMERSLACK, 1000UL, 0UL, 0UL, 0UL);
-#endif
         MPI_Comm_rank(MPI_COMM_WORLD, &tb__dist_rank_v);
         MPI_Comm_size(MPI_COMM_WORLD, &tb__dist_size_v);
     }
