@@ -5,6 +5,10 @@
 #include "host/dist/dist_internal.h"
 
 #include <limits.h>
+#include <sched.h>
+#ifdef __linux__
+#include <sys/prctl.h>
+#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
@@ -13,20 +17,22 @@
 #include <mpi.h>
 #endif
 
-/* Microseconds a rank polls an exchange before it sleeps, unless
- * TB_DIST_SPIN_US says otherwise: the ranks arrive within microseconds of
- * each other after balanced work, and a sleep costs tens of microseconds of
- * timer slack. On cores of its own a rank may poll longer (a rank woken
- * late delays every rank's next shot); on shared or loaded cores polling
- * takes the core from the rank everyone waits for. */
-#define TB__RADX_SPIN_US 30
+/* Microseconds a rank polls an exchange, giving up its core between polls
+ * (sched_yield), before it sleeps, unless TB_DIST_SPIN_US says otherwise.
+ * On a core of its own the yield returns at once, so the rank answers
+ * within microseconds (a sleep costs tens of microseconds, and a rank woken
+ * late delays every rank's next shot); on shared or loaded cores the yield
+ * hands the core to whoever waits for it, the rank everyone waits for
+ * included. A poll that kept the core (no yield) made a loaded job 3-4x
+ * slower; the yielding one was the fastest there too (docs/distributed.md). */
+#define TB__RADX_SPIN_US 1000
 
 /* An exchange and its accounts. */
 typedef struct tb__radx {
     tb_rad_exchange ex;  /* handed to the solver (ex.ctx == this) */
     int *counts, *displs; /* MPI's int counts and offsets per rank */
     double last;          /* clock when the previous gather returned (work runs from there) */
-    double spin;          /* seconds an exchange is polled before sleeping (TB__RADX_SPIN_US, TB_DIST_SPIN_US) */
+    double spin;          /* seconds an exchange is polled (yielding) before sleeping (TB__RADX_SPIN_US, TB_DIST_SPIN_US) */
 #ifdef TB_HAVE_MPI
     MPI_Datatype type;    /* select: type_n contiguous doubles (type_n 0: none made) */
     size_t type_n;
@@ -36,10 +42,11 @@ typedef struct tb__radx {
 } tb__radx;
 
 #ifdef TB_HAVE_MPI
-/* Waits for req: polled without a pause for x->spin seconds, then with
- * short, growing sleeps: a rank that is done early leaves the core to one
- * still casting rays (Open MPI's blocking collectives spin, which on shared
- * or oversubscribed cores slows the very rank everyone waits for). Then the
+/* Waits for req: polled for x->spin seconds, yielding the core between
+ * polls, then with short, growing sleeps: a rank that is done early leaves
+ * the core to one still casting rays (Open MPI's blocking collectives spin
+ * without yielding, which on shared or oversubscribed cores slows the very
+ * rank everyone waits for). Then the
  * accounts: work since the previous exchange, the wait, `bytes` sent and
  * `units` (receivers). */
 static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, uint64_t bytes, uint64_t units)
@@ -47,7 +54,10 @@ static void tb__radx_wait(tb__radx *x, MPI_Request *req, double t0, uint64_t byt
     int done = 0;
     for (unsigned i = 1; !done; i++) {
         MPI_Test(req, &done, MPI_STATUS_IGNORE);
-        if (!done && i % 8 == 0 && tb__dist_now() - t0 >= x->spin) /* the clock now and then: it costs a poll */
+        if (done)
+            break;
+        sched_yield(); /* about 0.5 us when no one else wants the core */
+        if (i % 8 == 0 && tb__dist_now() - t0 >= x->spin) /* the clock now and then: it costs a poll */
             break;
     }
     for (long us = 5; !done;) {
@@ -217,6 +227,12 @@ tb_rad_exchange *tb_dist_rad_exchange_create(void)
         return NULL;
     }
     x->last = tb__dist_now();
+#if defined(TB_HAVE_MPI) && defined(__linux__)
+    /* the waits' short sleeps (5 us and up) as asked, not 50 us late
+     * (Linux's default timer slack; this thread's, and those made later) */
+    if (R > 1)
+        (void)prctl(PR_SET_TIMERSLACK, 1000UL, 0UL, 0UL, 0UL);
+#endif
     x->spin = TB__RADX_SPIN_US * 1e-6;
     const char *e = getenv("TB_DIST_SPIN_US");
     if (e && *e) {

@@ -16,8 +16,9 @@
 #include "host/radiosity/radiosity.h"
 
 /* The exchange of this job; NULL on no memory, or TB_ERR_ARG when
- * TB_DIST_SPIN_US (microseconds an exchange is polled before the rank
- * sleeps; default 30) is not a number in 0..1e7. */
+ * TB_DIST_SPIN_US (microseconds an exchange is polled, yielding the core
+ * between polls, before the rank sleeps; default 1000) is not a number in
+ * 0..1e7. */
 tb_rad_exchange *tb_dist_rad_exchange_create(void);
 
 /* Frees it; NULL is allowed. */

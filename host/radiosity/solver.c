@@ -107,6 +107,13 @@ struct tb_rad_solver {
     size_t *xcounts2;       /* values each process sends this shot: its form factors and its near vertices'
                                visible fractions */
     bool vnear_done;        /* this shot's vertices' near field is done (tb__batch did it) */
+    /* the elements' near field shared out too (the elements near a shooter
+     * are next to it, mostly one process's: computing them where they are
+     * owned left the others waiting): the k-th near element's exact form
+     * factor is computed by process k mod R and travels with the gather */
+    double *enf;            /* per element: that form factor, when enf_done */
+    uint32_t *enl;          /* this shot's near elements, in element order */
+    bool enf_done;
     /* several shooters in flight: this process's shooter's form factors,
      * everyone's, and the counts (all equal) */
     float *xsev, *xsevall; /* the form factors are floats: sent as they are, half the bytes of doubles */
@@ -338,7 +345,7 @@ void tb_rad_solver_free(tb_rad_solver *s)
     tb_hemicube_free(s->hc);
     tb_pqueue_free(&s->q);
     tb_rad_lights_free(s->lights);
-    free(s->xmine), free(s->xall), free(s->xcounts), free(s->xcounts2);
+    free(s->xmine), free(s->xall), free(s->xcounts), free(s->xcounts2), free(s->enf), free(s->enl);
     free(s->xsev), free(s->xsevall), free(s->xsevcounts);
     free(s->eabs), free(s->erec), free(s->sel), free(s->xst), free(s->xstcounts);
     free(s->lshot);
@@ -631,10 +638,13 @@ static void tb__near_vertex(tb_rad_solver *s, size_t v, const tb__near_shooter *
  * replicated data, so every process knows what each sends: its clusters'
  * values in cluster order, a near vertex's fraction after its form factor;
  * the gathered blocks come in rank order and unpack by the same rule. */
-static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex, const tb__near_shooter *near)
+static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex, const tb__near_shooter *near,
+                                     size_t nnear)
 {
     size_t nv = s->m.nverts, ncl = s->ncl, R = (size_t)ex->ranks, n = 0;
     memset(s->xcounts2, 0, R * sizeof *s->xcounts2);
+    for (size_t r = 0; r < R; r++)
+        s->xcounts2[r] = nnear / R + (r < nnear % R);
     for (size_t c = 0; c < ncl; c++) {
         size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
         for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++)
@@ -649,11 +659,13 @@ static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex
                 s->xmine[n++] = s->vvis[v];
         }
     }
+    for (size_t k = (size_t)ex->rank; k < nnear; k += R)
+        s->xmine[n++] = s->enf[s->enl[k]];
     tb_status st = ex->allgather(ex->ctx, s->xmine, n, s->xall, s->xcounts2, s->xcounts[ex->rank]);
     if (st)
         return st;
     size_t at = 0;
-    for (size_t r = 0; r < R; r++)
+    for (size_t r = 0; r < R; r++) {
         for (size_t c = r; c < ncl; c += R) {
             size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
             for (size_t q = c * TB__RAD_CLUSTER; q < q1; q++) {
@@ -662,6 +674,10 @@ static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex
                 s->vvis[v] = tb__vertex_near(s, v, near) ? s->xall[at++] : NAN;
             }
         }
+        for (size_t k = r; k < nnear; k += R)
+            s->enf[s->enl[k]] = s->xall[at++];
+    }
+    s->enf_done = true;
     return TB_OK;
 }
 
@@ -671,6 +687,9 @@ static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex
  * visibility test at all); a cluster with too many goes through tb__visible.
  * Either way a segment gets the BVH's answer, so each receiver's value
  * depends only on its own inputs: any schedule gives the same results. */
+static bool tb__near_element(const tb_rad_solver *s, size_t j, tb_vec3 cen, double rad);
+static double tb__near_element_ff(const tb_rad_solver *s, size_t sk, size_t j);
+
 static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
 {
     const tb_vec3 nrm = s->snrm[k]; /* the shooter's (a patch's, or an element's) */
@@ -718,7 +737,18 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
         }
     }
     s->vnear_done = true;
-    return ex ? tb__gather_clusters(s, ex, &near) : TB_OK;
+    if (!ex)
+        return TB_OK;
+    /* the near elements (the same list on every process), and this one's share of their form factors */
+    const tb_ff_polygon *poly = &s->spoly[k];
+    double rad = sqrt(tb__radius2(poly, s->scen[k]));
+    size_t nnear = 0;
+    for (size_t j = 0; j < s->m.nelems; j++)
+        if (s->pof[j] != k && tb__near_element(s, j, s->scen[k], rad))
+            s->enl[nnear++] = (uint32_t)j;
+    for (size_t q = (size_t)ex->rank; q < nnear; q += (size_t)ex->ranks)
+        s->enf[s->enl[q]] = tb__near_element_ff(s, k, s->enl[q]);
+    return tb__gather_clusters(s, ex, &near, nnear);
 }
 
 /* Most distinct reflectance rows the update shares dot products over. */
@@ -760,11 +790,16 @@ static void tb__reflectance_rows(tb_rad_solver *s)
 static tb_status tb__exchange_init(tb_rad_solver *s, const tb_rad_exchange *ex)
 {
     size_t nv = s->m.nverts, R = (size_t)ex->ranks;
-    s->xmine = malloc(2 * nv * sizeof *s->xmine);
-    s->xall = malloc(2 * nv * sizeof *s->xall);
+    size_t ne = s->m.nelems;
+    /* a form factor and a near vertex's visible fraction per vertex, a near
+     * element's form factor per element */
+    s->xmine = malloc((2 * nv + ne + 1) * sizeof *s->xmine);
+    s->xall = malloc((2 * nv + ne + 1) * sizeof *s->xall);
     s->xcounts = calloc(R, sizeof *s->xcounts);
     s->xcounts2 = calloc(R, sizeof *s->xcounts2);
-    if (!s->xmine || !s->xall || !s->xcounts || !s->xcounts2)
+    s->enf = malloc((ne + 1) * sizeof *s->enf);
+    s->enl = malloc((ne + 1) * sizeof *s->enl);
+    if (!s->xmine || !s->xall || !s->xcounts || !s->xcounts2 || !s->enf || !s->enl)
         return tb_error(TB_ERR_NOMEM, "radiosity: out of memory for the exchange");
     for (size_t c = 0; c < s->ncl; c++) {
         size_t q1 = (c + 1) * TB__RAD_CLUSTER < nv ? (c + 1) * TB__RAD_CLUSTER : nv;
@@ -1165,7 +1200,7 @@ static tb_status tb__shot_formfactors(tb_rad_solver *s, size_t k, bool share)
         tb_stat_add(&tb__rad_rays, (int64_t)s->m.nverts * s->opt.samples);
         if (!st)
             tb__near_field(s, k);
-        s->vnear_done = false;
+        s->vnear_done = s->enf_done = false;
     }
     tb_stat_add(&tb__rad_ffs, (int64_t)s->nrecv);
     (void)tb_timer_stop(tt);
@@ -1226,6 +1261,23 @@ static bool tb__near_element(const tb_rad_solver *s, size_t j, tb_vec3 cen, doub
     return !((double)tb_vec3_length2(tb_vec3_sub(ej->centroid, cen)) >= lim * lim); /* !(>=): a NaN counts as near */
 }
 
+/* The exact unoccluded form factor of near element j with shooter sk:
+ * F_jp from a patch (two levels), else F_ij, the mean over the shot's
+ * sample points (s->pts) of the point-to-polygon form factor to j. */
+static double tb__near_element_ff(const tb_rad_solver *s, size_t sk, size_t j)
+{
+    const tb_ff_polygon *pj = &s->polys[j];
+    if (s->pstart[sk + 1] - s->pstart[sk] > 1)
+        return tb__element_mean_ff(pj, s->m.elems[j].normal, &s->spoly[sk]); /* F_jp itself */
+    double f = 0.0;
+    for (int k = 0; k < s->opt.samples; k++) {
+        double x = tb_ff_point_polygon(s->pts[k], s->snrm[sk], pj);
+        if (x > 0.0 && isfinite(x))
+            f += x;
+    }
+    return f / s->opt.samples;
+}
+
 /* Two levels, hemicube: one hemicube at the patch's centroid stands for
  * the whole patch, which is poor for the elements next to it (the furnace's
  * edges were 7.5% off). Within TB__RAD_NEAR patch radii, F_jp becomes the
@@ -1267,7 +1319,7 @@ static void tb__hemicube_near_patch(tb_rad_solver *s, size_t k)
 static void tb__near_field(tb_rad_solver *s, size_t sk)
 {
     const tb_ff_polygon *poly = &s->spoly[sk];
-    const tb_vec3 cen = s->scen[sk], nrm = s->snrm[sk];
+    const tb_vec3 cen = s->scen[sk];
     const double area = s->sarea[sk];
     double rad = sqrt(tb__radius2(poly, cen));
     if (!s->vnear_done) { /* (tb__batch does the vertices with their clusters) */
@@ -1285,17 +1337,7 @@ static void tb__near_field(tb_rad_solver *s, size_t sk)
         const tb_rad_element *ej = &s->m.elems[j];
         const tb_ff_polygon *pj = &s->polys[j];
         bool patch = s->pstart[sk + 1] - s->pstart[sk] > 1;
-        double f = 0.0;
-        if (patch)
-            f = tb__element_mean_ff(pj, ej->normal, poly); /* F_jp itself */
-        else {
-            for (int k = 0; k < s->opt.samples; k++) {
-                double x = tb_ff_point_polygon(s->pts[k], nrm, pj);
-                if (x > 0.0 && isfinite(x))
-                    f += x;
-            }
-            f /= s->opt.samples;
-        }
+        double f = s->enf_done ? s->enf[j] : tb__near_element_ff(s, sk, j);
         double vis = 0.0;
         for (int k = 0; k < pj->n; k++) {
             double x = s->vvis[ej->v[k]];

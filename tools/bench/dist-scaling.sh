@@ -148,9 +148,9 @@ case_ start-up "$work/tiny.mid" --spp 1 -o "$work/t.pfm"
 case_ raytrace-box "$box" --spp $spp --passes 2 -o "$work/a.pfm"
 case_ path-spheres "$spheres" --method path --spp $spp -o "$work/b.pfm"
 case_ radiosity-box "$box" --method radiosity --patches "$work/c.csv"
-# the same with each exchange polled for 1 ms before the rank sleeps (for
-# ranks on cores of their own: docs/distributed.md, TB_DIST_SPIN_US)
-TB_DIST_SPIN_US=1000 case_ radiosity-box-spin "$box" --method radiosity --patches "$work/c.csv"
+# the same with no yielding poll: each exchange sleeps at once (what the
+# default 1 ms of yielding polls saves; docs/distributed.md, TB_DIST_SPIN_US)
+TB_DIST_SPIN_US=0 case_ radiosity-box-sleep "$box" --method radiosity --patches "$work/c.csv"
 case_ raytrace-grid "$work/grid.mid" --spp $spp -o "$work/d.pfm"
 case_ path-grid "$work/grid.mid" --method path --spp $spp -o "$work/e.pfm"
 # the generated grid's palette has a reflectance of 1 (no radiosity): the
