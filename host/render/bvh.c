@@ -710,6 +710,13 @@ tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt)
         acc->stats.bvh_wide_nodes = acc->nwide;
         acc->stats.memory_bytes += acc->nwide * sizeof(tb__bvhw_node);
         tb_stat_add(&tb__bvh_memory, (int64_t)(acc->nwide * sizeof(tb__bvhw_node)));
+        if (!opt->bvh_keep_binary) { /* the CPU traverses the wide tree alone */
+            acc->stats.memory_bytes -= (size_t)nnodes * sizeof(tb_bvh_node);
+            tb_stat_add(&tb__bvh_memory, -(int64_t)((size_t)nnodes * sizeof(tb_bvh_node)));
+            free(acc->nodes);
+            acc->nodes = NULL;
+            acc->nnodes = 0;
+        }
     }
 
 done:

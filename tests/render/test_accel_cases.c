@@ -868,7 +868,7 @@ static void test_bvhw_collapse_optimal(void **state)
         tp_scene s = {0};
         size_t n = 6 + tb_rng_below(&r, 9); /* up to 13 inner nodes with leaves of 1 */
         tp_random_scene(&s, &r, n, 1.0f, 0.0f);
-        tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = 1});
+        tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = 1, .bvh_keep_binary = 1});
         if (acc->nnodes > 1) {
             double got = wide_total_area(acc), best = best_total_area(acc->nodes, acc->nnodes);
             assert_true(fabs(got - best) <= 1e-9 * best);
@@ -880,7 +880,7 @@ static void test_bvhw_collapse_optimal(void **state)
     for (int i = 0; i < 2; i++) {
         tp_scene s = {0};
         tp_random_scene(&s, &r, sizes[i], 1.0f, 0.0f);
-        tb_accel *acc = build(TB_ACCEL_BVH, &s, NULL);
+        tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_keep_binary = 1});
         double got = wide_total_area(acc), greedy = greedy_total_area(acc->nodes, 0);
         print_message("[ bvhw collapse ] %zu references: wide-node area sum %.4g (greedy %.4g)\n", sizes[i], got,
                       greedy);
@@ -901,7 +901,7 @@ static void test_bvhw_structure(void **state)
         for (int max_leaf = 1; max_leaf <= 8; max_leaf += 7) {
             tp_scene s = {0};
             tp_random_scene(&s, &r, sizes[i], 1.0f, 0.0f);
-            tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = max_leaf});
+            tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = max_leaf, .bvh_keep_binary = 1});
             check_bvhw(acc, max_leaf);
             tb_accel_stats st;
             tb_accel_get_stats(acc, &st);
