@@ -122,7 +122,8 @@ typedef struct tb_accel_stats {
     double build_seconds;  /* wall-clock time of tb_accel_build */
     size_t memory_bytes;   /* heap bytes held by the structure */
     size_t tri_bytes;      /* the part of memory_bytes held for triangle references alone: their records
-                              (tb_accel_tri) and packed corners */
+                              (tb_accel_tri; none when every reference is a packed triangle), packed corners
+                              and their positions */
     tb_aabb bounds;        /* box of all stored references */
     /* BVH */
     size_t bvh_nodes;      /* nodes, inner and leaf */

@@ -738,7 +738,9 @@ void tb__bvh_free(tb_accel *acc)
     free(acc->nodes);
     free(acc->wide);
     free(acc->lanes);
+    free(acc->lane_pos);
     acc->lanes = NULL;
+    acc->lane_pos = NULL;
     acc->lanes_f32 = false;
     acc->nodes = NULL;
     acc->nnodes = 0;
