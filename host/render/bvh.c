@@ -697,6 +697,12 @@ tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt)
     acc->nodes = nodes;
     acc->nnodes = nnodes;
     nodes = NULL;
+    /* The builder's arrays are done with: freed before the wide tree is
+     * made, so they do not add to the build's peak with it. */
+    free(b.refs);
+    free(b.nodes);
+    b.refs = NULL;
+    b.nodes = NULL;
 
     acc->stats.bvh_nodes = nnodes;
     acc->stats.bvh_leaves = f.leaves;
