@@ -92,7 +92,8 @@ static tb_status tb__upload_occluders(tb_gpu_ff_scene *g, const tb_ff_polygon *p
     tb_status st = TB_OK;
     if (nt) {
         tb_accel_callbacks cb = {tb__ff_no_intersect, NULL, NULL, NULL};
-        st = tb_accel_build(TB_ACCEL_BVH, prims, nt, &cb, NULL, &acc);
+        tb_accel_options ao = {.bvh_keep_binary = 1}; /* converted below */
+        st = tb_accel_build(TB_ACCEL_BVH, prims, nt, &cb, &ao, &acc);
     }
     if (!st && acc) {
         tb_accel_stats ast;

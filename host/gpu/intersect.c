@@ -440,7 +440,8 @@ static tb_status tb__build_gpu(tb_gpu_scene *g, const tb_accel_prim *refs, const
     const tb_scene *s = g->scene;
     tb_accel *acc = NULL;
     tb_accel_callbacks cb = {tb__never, NULL, NULL, NULL};
-    tb_status st = tb_accel_build(TB_ACCEL_BVH, refs, n, &cb, NULL, &acc);
+    tb_accel_options ao = {.bvh_keep_binary = 1}; /* converted below */
+    tb_status st = tb_accel_build(TB_ACCEL_BVH, refs, n, &cb, &ao, &acc);
     if (st)
         return st;
     size_t nn = 0, nr = 0;

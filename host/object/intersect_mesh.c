@@ -328,7 +328,7 @@ tb_status tb__mesh_build(tb_object *o)
 
     /* Triangulate: triangles as they are, larger polygons (and FED faces
      * with holes) by ear clipping. */
-    const tb_fed *fed = o->fed;
+    const tb_fed *fed = o->fed ? o->fed->fed : NULL;
     tb_array tris, faces, tmp;
     tb_array_init(&tris, sizeof(uint32_t) * 3);
     tb_array_init(&faces, sizeof(uint32_t));

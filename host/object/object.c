@@ -214,12 +214,15 @@ static tb_status tb__load_fed(tb_object *o, const tb_geom_polygons *src, tb_obje
 {
     tb_geom_polygons *g = &o->geom.polygons;
     const char *path = src->mesh.path ? src->mesh.path : src->mesh.text;
-    o->mesh_file.text = tb_strdup(src->mesh.text);
-    o->mesh_file.path = tb_strdup(src->mesh.path);
-    if (!o->mesh_file.text || (src->mesh.path && !o->mesh_file.path))
+    tb_object_fed_ref *x = o->fed = calloc(1, sizeof *o->fed);
+    if (!x)
+        return tb_error(TB_ERR_NOMEM, "out of memory");
+    x->file.text = tb_strdup(src->mesh.text);
+    x->file.path = tb_strdup(src->mesh.path);
+    if (!x->file.text || (src->mesh.path && !x->file.path))
         return tb_error(TB_ERR_NOMEM, "out of memory");
     if (!cache) {
-        tb_status st = tb__read_fed(path, src->mesh.text, &o->fed, g);
+        tb_status st = tb__read_fed(path, src->mesh.text, &x->fed, g);
         return st ? st : tb__mesh_build(o);
     }
     struct tb__fed_shared *e = cache->head;
@@ -244,8 +247,8 @@ static tb_status tb__load_fed(tb_object *o, const tb_geom_polygons *src, tb_obje
         cache->bytes += tb__fed_bytes(e->fed, &e->inl);
     }
     e->refs++;
-    o->fed_shared = e;
-    o->fed = e->fed;
+    x->shared = e;
+    x->fed = e->fed;
     *g = e->inl;
     return tb__mesh_build(o);
 }
@@ -556,18 +559,22 @@ static void tb__object_clear(tb_object *o)
         free(o->profile);
     if (o->kind == TB_PRIM_POLYGONS) {
         tb_geom_polygons *g = &o->geom.polygons;
-        if (o->fed_shared) {
-            tb__fed_shared_release(o->fed_shared); /* the FED and inline arrays are its */
+        if (o->fed && o->fed->shared) {
+            tb__fed_shared_release(o->fed->shared); /* the FED and inline arrays are its */
         } else {
             free((void *)g->vertices);
             free((void *)g->normals);
             free((void *)g->uvs);
             free((void *)g->face_start);
             free((void *)g->indices);
-            tb_fed_free(o->fed);
+            if (o->fed)
+                tb_fed_free(o->fed->fed);
         }
-        free((void *)o->mesh_file.text);
-        free((void *)o->mesh_file.path);
+        if (o->fed) {
+            free((void *)o->fed->file.text);
+            free((void *)o->fed->file.path);
+            free(o->fed);
+        }
     } else if (o->kind == TB_PRIM_PRISM) {
         free((void *)o->geom.prism.profile);
     }

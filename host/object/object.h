@@ -65,6 +65,15 @@ typedef struct tb_object_mesh {
 
 typedef struct tb_object tb_object;
 
+/* What only a polygons object read from a FED file carries, kept out of
+ * tb_object (one pointer instead of 32 bytes in every object). */
+typedef struct tb_object_fed_ref {
+    struct tb_fed *fed;                /* the loaded mesh (util/mesh/fed.h) */
+    struct tb__fed_shared *shared;     /* when fed and the geom arrays are borrowed from a tb_object_fed_cache
+                                          entry (private); NULL when the object owns them */
+    tb_mid_ref file;                   /* the reference as written and resolved (owned copies) */
+} tb_object_fed_ref;
+
 /* FED files shared by the objects built through one cache (a scene): each
  * resolved path is read once, and every polygons object referring to it
  * borrows the loaded mesh and its inline form (docs/fed.md, "Shared files").
@@ -75,7 +84,7 @@ typedef struct tb_object_fed_cache tb_object_fed_cache;
 
 /* A primitive or a CSG node with its children. Fields are ordered so that
  * no padding is left, and the fields of one kind (revolved quadrics, prisms)
- * share storage: 472 bytes on 64-bit targets (docs/performance.md, "Memory per
+ * share storage, and a FED file's fields are a record of their own: 448 bytes on 64-bit targets (docs/performance.md, "Memory per
  * object"). */
 struct tb_object {
     tb_prim_kind kind;
@@ -100,10 +109,8 @@ struct tb_object {
     tb_object *children;     /* CSG nodes: the children, in MID order */
     const tb_object *parent; /* the CSG node holding this one, NULL at the top */
     tb_object_mesh *mesh;    /* polygons: the triangulated mesh; NULL for other kinds */
-    struct tb_fed *fed;      /* polygons from a FED file: the loaded mesh (util/mesh/fed.h); NULL otherwise */
-    struct tb__fed_shared *fed_shared; /* when fed and the geom arrays are borrowed from a
-                                tb_object_fed_cache entry (private); NULL when the object owns them */
-    tb_mid_ref mesh_file;    /* polygons from a FED file: the reference as written and resolved (owned copies) */
+    tb_object_fed_ref *fed;  /* polygons from a FED file: the loaded mesh, its sharing and the reference
+                                (owned record); NULL otherwise */
     /* Derived at build time for intersection (docs/primitives.md); only the
      * object's own kind's fields are meaningful (the others share storage). */
     union {
@@ -121,7 +128,7 @@ struct tb_object {
 };
 
 
-_Static_assert(sizeof(void *) != 8 || sizeof(tb_object) == 472, "tb_object stays 472 bytes (no padding)");
+_Static_assert(sizeof(void *) != 8 || sizeof(tb_object) == 448, "tb_object stays 448 bytes (no padding)");
 
 /* Maps a resolved MID material to the renderer's material index; returns
  * TB_OK or an error (with tb_error) that aborts the build. */

@@ -489,7 +489,7 @@ tb_status tb_rad_mesh_from_scene(const tb_scene *scene, const tb_rad_mesh_option
         const tb_object *obj = scene->objects[i];
         tb_fed *fed = NULL;
         if (obj->kind == TB_PRIM_POLYGONS && obj->fed) {
-            st = tb__fed_to_world(obj->fed, &obj->to_world, &fed);
+            st = tb__fed_to_world(obj->fed->fed, &obj->to_world, &fed);
         } else if (obj->kind == TB_PRIM_POLYGONS) {
             /* inline polygons keep their faces whole (quads stay quads; the
              * polygonizer would triangulate them): the element mesher

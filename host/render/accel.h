@@ -108,6 +108,9 @@ typedef struct tb_accel_options {
                               comparisons; the answers are the same) */
     int bvh_no_pack;       /* non-zero: test leaf triangles one by one instead of packed four (AVX) or two
                               (SSE2) at once (tests, comparisons; the answers are the same) */
+    int bvh_keep_binary;   /* non-zero: keep the binary nodes once collapsed into the wide tree the CPU
+                              traverses, for tb_accel_bvh_nodes (GPU conversion, tree comparisons); by
+                              default they are freed (32 bytes per node) */
     double grid_density;   /* voxels along the longest axis = density * cbrt(N) (0: 3.0) */
     int grid_max_res;      /* most voxels along one axis, 1..1024 (0: 256) */
 } tb_accel_options;
@@ -119,7 +122,8 @@ typedef struct tb_accel_stats {
     double build_seconds;  /* wall-clock time of tb_accel_build */
     size_t memory_bytes;   /* heap bytes held by the structure */
     size_t tri_bytes;      /* the part of memory_bytes held for triangle references alone: their records
-                              (tb_accel_tri) and packed corners */
+                              (tb_accel_tri; none when every reference is a packed triangle), packed corners
+                              and their positions */
     tb_aabb bounds;        /* box of all stored references */
     /* BVH */
     size_t bvh_nodes;      /* nodes, inner and leaf */
@@ -194,7 +198,9 @@ typedef struct tb_bvh_node {
 
 _Static_assert(sizeof(tb_bvh_node) == 32, "tb_bvh_node is 32 bytes");
 
-/* The BVH's nodes and their number (NULL and 0 for an empty BVH or another kind). */
+/* The BVH's binary nodes and their number: NULL and 0 for an empty BVH, another
+ * kind, or a BVH built without tb_accel_options.bvh_keep_binary (the CPU
+ * traverses the wide tree only; tb_accel_stats.bvh_nodes still counts them). */
 const tb_bvh_node *tb_accel_bvh_nodes(const tb_accel *acc, size_t *count);
 
 /* The input index of each reference in leaf order (leaf references

@@ -131,6 +131,11 @@ struct tb_accel {
      * array). NULL when no leaf is packed. */
     void *lanes;
     bool lanes_f32;        /* every packed corner is a float (exactly), stored as one: 52 bytes per reference */
+    /* When every reference is a triangle in a packed leaf, the records are
+     * freed (tris NULL: the lanes hold the same values) and this gives, per
+     * stored reference, its place in its leaf (high byte) and the leaf's
+     * size (low byte), from which tb__accel_tri_at reads it back; else NULL. */
+    uint16_t *lane_pos;
     tb__grid grid;         /* grid */
 };
 
@@ -221,9 +226,30 @@ typedef struct tb__accel_best {
 
 /* The triangle record of stored reference k, or NULL if it is not a triangle
  * (only triangles have one: an 80-byte record per whole object would double
- * the structure's size in a scene of objects and a few meshes). */
-static inline const tb_accel_tri *tb__accel_tri_at(const tb_accel *acc, size_t k)
+ * the structure's size in a scene of objects and a few meshes). Where the
+ * records were dropped for the packed corners (acc->lane_pos), the record is
+ * read back from its leaf's lanes into *tmp: the same doubles (a float lane
+ * holds a value that is exactly a float). */
+static inline const tb_accel_tri *tb__accel_tri_at(const tb_accel *acc, size_t k, tb_accel_tri *tmp)
 {
+    if (acc->lane_pos) {
+        size_t j = acc->lane_pos[k] >> 8, n = acc->lane_pos[k] & 0xffu, s = k - j;
+        const tb__lane_ids *id;
+        if (acc->lanes_f32) {
+            const float *base = (const float *)acc->lanes + TB__LANE_ROWS_F * s;
+            for (size_t r = 0; r < 9; r++)
+                tmp->v[r] = (double)base[r * n + j];
+            id = (const tb__lane_ids *)(base + 9 * n) + j;
+        } else {
+            const double *base = (const double *)acc->lanes + TB__LANE_ROWS * s;
+            for (size_t r = 0; r < 9; r++)
+                tmp->v[r] = base[r * n + j];
+            id = (const tb__lane_ids *)(base + 9 * n) + j;
+        }
+        tmp->object = id->object;
+        tmp->face = id->face;
+        return tmp;
+    }
     if (!acc->tris)
         return NULL;
     if (!acc->tri_of)
@@ -276,7 +302,8 @@ static inline bool tb__accel_tri_offer(tb__accel_best *b, uint32_t object, uint3
 /* Tests stored reference k against the running best; true if it improved it. */
 static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best *b)
 {
-    const tb_accel_tri *tr = tb__accel_tri_at(acc, k);
+    tb_accel_tri tmp;
+    const tb_accel_tri *tr = tb__accel_tri_at(acc, k, &tmp);
     if (tr) {
         double t, uvw[3];
         int dir;
@@ -318,7 +345,8 @@ static inline tb__accel_any tb__accel_any_start(const tb_ray *ray)
 static inline bool tb__accel_test_any(const tb_accel *acc, size_t k, tb__accel_any *q)
 {
     const tb_ray *ray = q->ray;
-    const tb_accel_tri *tr = tb__accel_tri_at(acc, k);
+    tb_accel_tri tmp;
+    const tb_accel_tri *tr = tb__accel_tri_at(acc, k, &tmp);
     if (tr) {
         double t;
         int dir;

@@ -697,6 +697,12 @@ tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt)
     acc->nodes = nodes;
     acc->nnodes = nnodes;
     nodes = NULL;
+    /* The builder's arrays are done with: freed before the wide tree is
+     * made, so they do not add to the build's peak with it. */
+    free(b.refs);
+    free(b.nodes);
+    b.refs = NULL;
+    b.nodes = NULL;
 
     acc->stats.bvh_nodes = nnodes;
     acc->stats.bvh_leaves = f.leaves;
@@ -710,6 +716,13 @@ tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt)
         acc->stats.bvh_wide_nodes = acc->nwide;
         acc->stats.memory_bytes += acc->nwide * sizeof(tb__bvhw_node);
         tb_stat_add(&tb__bvh_memory, (int64_t)(acc->nwide * sizeof(tb__bvhw_node)));
+        if (!opt->bvh_keep_binary) { /* the CPU traverses the wide tree alone */
+            acc->stats.memory_bytes -= (size_t)nnodes * sizeof(tb_bvh_node);
+            tb_stat_add(&tb__bvh_memory, -(int64_t)((size_t)nnodes * sizeof(tb_bvh_node)));
+            free(acc->nodes);
+            acc->nodes = NULL;
+            acc->nnodes = 0;
+        }
     }
 
 done:
@@ -731,7 +744,9 @@ void tb__bvh_free(tb_accel *acc)
     free(acc->nodes);
     free(acc->wide);
     free(acc->lanes);
+    free(acc->lane_pos);
     acc->lanes = NULL;
+    acc->lane_pos = NULL;
     acc->lanes_f32 = false;
     acc->nodes = NULL;
     acc->nnodes = 0;

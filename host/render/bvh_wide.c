@@ -253,7 +253,7 @@ static bool tb__bvhw_all_tris(const tb_accel *acc, const tb__bvhw_node *nd, unsi
     uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
     bool all = n > 0;
     for (uint32_t j = 0; all && j < n; j++)
-        all = tb__accel_tri_at(acc, s + j) != NULL;
+        all = tb__accel_tri_at(acc, s + j, NULL) != NULL;
     return all;
 }
 
@@ -275,7 +275,7 @@ tb_status tb__bvhw_pack(tb_accel *acc)
             uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
             for (uint32_t j = 0; f32 && j < n; j++)
                 for (unsigned r = 0; r < 9; r++) {
-                    double v = tb__accel_tri_at(acc, s + j)->v[r];
+                    double v = tb__accel_tri_at(acc, s + j, NULL)->v[r];
                     f32 = f32 && (double)(float)v == v; /* (a zero keeps its sign through float) */
                 }
         }
@@ -299,7 +299,7 @@ tb_status tb__bvhw_pack(tb_accel *acc)
             char *base = (char *)lanes + per * s;
             tb__lane_ids *ids = (tb__lane_ids *)(base + 9 * (size_t)n * (f32 ? sizeof(float) : sizeof(double)));
             for (uint32_t j = 0; j < n; j++) {
-                const tb_accel_tri *tr = tb__accel_tri_at(acc, s + j);
+                const tb_accel_tri *tr = tb__accel_tri_at(acc, s + j, NULL);
                 for (unsigned r = 0; r < 9; r++) { /* row 3 c + a is v[3 c + a] */
                     if (f32)
                         ((float *)base)[r * n + j] = (float)tr->v[r];
@@ -315,6 +315,30 @@ tb_status tb__bvhw_pack(tb_accel *acc)
     acc->lanes_f32 = f32;
     acc->stats.memory_bytes += bytes;
     acc->stats.tri_bytes += bytes;
+    /* Every reference a triangle (so every leaf packed): the lanes hold what
+     * the records do, so the records (80 bytes each) give way to a 2-byte
+     * position per reference for the few reads outside the packed test (an
+     * edge exactly 0, the occlusion hint). */
+    if (!acc->tri_of) {
+        uint16_t *pos = malloc(acc->n * sizeof *pos);
+        if (!pos)
+            return TB_OK; /* the records stay: the same answers */
+        for (size_t w = 0; w < acc->nwide; w++) {
+            const tb__bvhw_node *nd = &acc->wide[w];
+            for (unsigned i = 0; i < nd->n; i++) {
+                uint32_t s = nd->child[i], n = TB__BVHW_COUNT(nd->count[i]);
+                if (nd->count[i] & TB__BVHW_PACKED)
+                    for (uint32_t j = 0; j < n; j++)
+                        pos[s + j] = (uint16_t)(j << 8 | n);
+            }
+        }
+        acc->lane_pos = pos;
+        free(acc->tris);
+        acc->tris = NULL;
+        size_t freed = acc->n * sizeof(tb_accel_tri), added = acc->n * sizeof *pos;
+        acc->stats.memory_bytes = acc->stats.memory_bytes - freed + added;
+        acc->stats.tri_bytes = acc->stats.tri_bytes - freed + added;
+    }
 #else
     (void)acc;
 #endif

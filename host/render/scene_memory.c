@@ -43,16 +43,19 @@ static size_t tb__node_bytes(const tb_object *o, size_t *mesh)
     if (o->kind == TB_PRIM_POLYGONS) {
         const tb_geom_polygons *g = &o->geom.polygons;
         size_t m = 0;
-        if (!o->fed_shared) { /* a shared file's arrays are counted once, in fed_bytes */
+        if (!o->fed || !o->fed->shared) { /* a shared file's arrays are counted once, in fed_bytes */
             size_t nv = (size_t)g->nvertices, nidx = g->face_start ? (size_t)g->face_start[g->nfaces] : 0;
             m += tb__alloc(nv * sizeof(tb_vec3)) + (g->normals ? tb__alloc(nv * sizeof(tb_vec3)) : 0) +
                  (g->uvs ? tb__alloc(nv * sizeof(tb_vec2)) : 0) +
                  tb__alloc(((size_t)g->nfaces + 1) * sizeof(int)) + tb__alloc(nidx * sizeof(int));
         }
-        if (o->mesh_file.text)
-            n += tb__alloc(strlen(o->mesh_file.text) + 1);
-        if (o->mesh_file.path)
-            n += tb__alloc(strlen(o->mesh_file.path) + 1);
+        if (o->fed) {
+            n += tb__alloc(sizeof *o->fed);
+            if (o->fed->file.text)
+                n += tb__alloc(strlen(o->fed->file.text) + 1);
+            if (o->fed->file.path)
+                n += tb__alloc(strlen(o->fed->file.path) + 1);
+        }
         *mesh += m + tb__mesh_bytes(o->mesh);
     }
     if (o->nchildren) {

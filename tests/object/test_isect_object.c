@@ -418,7 +418,8 @@ static void test_fed_mesh(void **state)
     assert_true(o->closed);
     assert_non_null(o->fed);
     assert_null(o->geom.polygons.mesh.text); /* inline form for param and bounds */
-    assert_string_equal(o->mesh_file.text, "isect_cube.fed");
+    assert_non_null(o->fed->fed);
+    assert_string_equal(o->fed->file.text, "isect_cube.fed");
     assert_int_equal(o->geom.polygons.nfaces, 6);
     ti_expect(o, ti_ray(-5, 0.5, 0.25, 1, 0, 0), 4.0, 5, -1, 0, 0);
     ti_expect(o, ti_ray(0.5, 0.25, 5, 0, 0, -1), 4.0, 1, 0, 0, 1);

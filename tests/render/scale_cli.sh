@@ -3,7 +3,8 @@
 # predicted over the budget before loading it (exit 1, a message naming what
 # takes the memory, no image), accepts it under a generous budget, rejects a
 # malformed budget (exit 2); `testbed bench scale` measures two small counts
-# and writes one CSV row per count with positive times and memory.
+# and writes one CSV row per count with positive times and memory (prepare may be 0:
+# it is the load minus a separate parse pass, clamped, and a preempted parse can exceed it).
 set -eu
 : "${TESTBED:?}"
 tmp=$(mktemp -d)

@@ -380,7 +380,8 @@ static void test_triangle_references(void **state)
     for (int k = 0; k < NKINDS; k++) {
         size_t with = 0;
         for (size_t j = 0; j < acc[k]->n; j++) {
-            const tb_accel_tri *tr = tb__accel_tri_at(acc[k], j);
+            tb_accel_tri tmp;
+            const tb_accel_tri *tr = tb__accel_tri_at(acc[k], j, &tmp);
             with += tr != NULL;
             assert_true(!tr || tr->object == s.prims[acc[k]->index[j]].object);
         }
@@ -868,7 +869,7 @@ static void test_bvhw_collapse_optimal(void **state)
         tp_scene s = {0};
         size_t n = 6 + tb_rng_below(&r, 9); /* up to 13 inner nodes with leaves of 1 */
         tp_random_scene(&s, &r, n, 1.0f, 0.0f);
-        tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = 1});
+        tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = 1, .bvh_keep_binary = 1});
         if (acc->nnodes > 1) {
             double got = wide_total_area(acc), best = best_total_area(acc->nodes, acc->nnodes);
             assert_true(fabs(got - best) <= 1e-9 * best);
@@ -880,7 +881,7 @@ static void test_bvhw_collapse_optimal(void **state)
     for (int i = 0; i < 2; i++) {
         tp_scene s = {0};
         tp_random_scene(&s, &r, sizes[i], 1.0f, 0.0f);
-        tb_accel *acc = build(TB_ACCEL_BVH, &s, NULL);
+        tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_keep_binary = 1});
         double got = wide_total_area(acc), greedy = greedy_total_area(acc->nodes, 0);
         print_message("[ bvhw collapse ] %zu references: wide-node area sum %.4g (greedy %.4g)\n", sizes[i], got,
                       greedy);
@@ -901,7 +902,7 @@ static void test_bvhw_structure(void **state)
         for (int max_leaf = 1; max_leaf <= 8; max_leaf += 7) {
             tp_scene s = {0};
             tp_random_scene(&s, &r, sizes[i], 1.0f, 0.0f);
-            tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = max_leaf});
+            tb_accel *acc = build(TB_ACCEL_BVH, &s, &(tb_accel_options){.bvh_max_leaf = max_leaf, .bvh_keep_binary = 1});
             check_bvhw(acc, max_leaf);
             tb_accel_stats st;
             tb_accel_get_stats(acc, &st);
@@ -1097,6 +1098,11 @@ static void test_packed_leaves(void **state)
             assert_null(one->lanes);
             assert_non_null(pk->lanes);
             assert_int_equal(pk->lanes_f32, f32); /* the 1e-6 offsets of the double variant are no floats */
+            /* Every reference a triangle: the records gave way to the lanes, not so without packing. */
+            assert_null(pk->tris);
+            assert_non_null(pk->lane_pos);
+            assert_non_null(one->tris);
+            assert_null(one->lane_pos);
             assert_int_equal(pk_sse->lanes_f32, f32);
             /* Every leaf is packed, its rows and identities as the records say. */
             for (size_t w = 0; w < pk->nwide; w++) {
@@ -1111,12 +1117,19 @@ static void test_packed_leaves(void **state)
                     const tb__lane_ids *ids = f32 ? (const tb__lane_ids *)(bf + 9 * (size_t)cnt)
                                                   : (const tb__lane_ids *)(bd + 9 * (size_t)cnt);
                     for (uint32_t j = 0; j < cnt; j++) {
+                        const tb_accel_tri *in = &tris[pk->index[s0 + j]]; /* the caller's record */
+                        tb_accel_tri tmp;
+                        const tb_accel_tri *back = tb__accel_tri_at(pk, s0 + j, &tmp); /* read back from the lanes */
+                        assert_non_null(back);
                         for (unsigned row = 0; row < 9; row++) {
                             double v = f32 ? (double)bf[row * cnt + j] : bd[row * cnt + j];
-                            assert_memory_equal(&v, &tb__accel_tri_at(pk, s0 + j)->v[row], sizeof(double));
+                            assert_memory_equal(&v, &in->v[row], sizeof(double));
+                            assert_memory_equal(&back->v[row], &in->v[row], sizeof(double));
                         }
-                        assert_int_equal(ids[j].object, tb__accel_tri_at(pk, s0 + j)->object);
-                        assert_int_equal(ids[j].face, tb__accel_tri_at(pk, s0 + j)->face);
+                        assert_int_equal(ids[j].object, in->object);
+                        assert_int_equal(ids[j].face, in->face);
+                        assert_int_equal(back->object, in->object);
+                        assert_int_equal(back->face, in->face);
                         assert_int_equal(ids[j].index, pk->index[s0 + j]);
                     }
                 }

@@ -362,7 +362,7 @@ static void test_bvh_structure(void **state)
     tp_random_scene(&s, &r, 5000, 1.0f, 0.0f);
     tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s, NULL};
     for (int leaf = 1; leaf <= 16; leaf *= 4) {
-        tb_accel_options opt = {.bvh_max_leaf = leaf};
+        tb_accel_options opt = {.bvh_max_leaf = leaf, .bvh_keep_binary = 1};
         tb_accel *acc;
         assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &cb, &opt, &acc), TB_OK);
         check_bvh(acc, &s, leaf);
@@ -392,7 +392,7 @@ static void test_bvh_deterministic(void **state)
     tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s, NULL};
     tb_accel *a[3];
     for (int t = 0; t < 3; t++) {
-        tb_accel_options opt = {.threads = t + 1};
+        tb_accel_options opt = {.threads = t + 1, .bvh_keep_binary = 1};
         assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &cb, &opt, &a[t]), TB_OK);
     }
     size_t n0, r0;
@@ -411,6 +411,51 @@ static void test_bvh_deterministic(void **state)
     check_bvh(a[1], &s, 8);
     for (int t = 0; t < 3; t++)
         tb_accel_free(a[t]);
+    tp_free(&s);
+}
+
+/* By default the binary nodes are freed once collapsed into the wide tree:
+ * tb_accel_bvh_nodes gives none, the stats still count them, the structure
+ * holds 32 bytes per node less, and every query gives the same answer as
+ * with the nodes kept (the CPU traverses the wide tree alone). */
+static void test_bvh_drop_binary(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("bvh_drop_binary", 23);
+    tb_rng r;
+    tb_rng_seed(&r, seed, 7);
+    tp_scene s = {0};
+    tp_random_scene(&s, &r, (size_t)(5000 / divisor()), 1.0f, 0.0f);
+    tb_accel_callbacks cb = {tp_cb_intersect, tp_cb_occluded, &s, NULL};
+    tb_accel *keep, *drop;
+    assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &cb, &(tb_accel_options){.bvh_keep_binary = 1}, &keep),
+                     TB_OK);
+    assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &cb, NULL, &drop), TB_OK);
+    size_t nk = 0, nd = 1;
+    assert_non_null(tb_accel_bvh_nodes(keep, &nk));
+    assert_null(tb_accel_bvh_nodes(drop, &nd));
+    assert_int_equal(nd, 0);
+    tb_accel_stats sk, sd;
+    tb_accel_get_stats(keep, &sk);
+    tb_accel_get_stats(drop, &sd);
+    assert_true(nk > 100);
+    assert_int_equal(sk.bvh_nodes, nk);
+    assert_int_equal(sd.bvh_nodes, nk);
+    assert_int_equal(sk.memory_bytes - sd.memory_bytes, nk * sizeof(tb_bvh_node));
+    for (int i = 0; i < 2000; i++) {
+        tb_ray ray = tp_random_ray(&r, &s, 1.0f, 0.0f);
+        tb_hit hk, hd;
+        bool ak = tb_accel_intersect(keep, &ray, &hk), ad = tb_accel_intersect(drop, &ray, &hd);
+        assert_int_equal(ak, ad);
+        if (ak) {
+            assert_int_equal(hk.object, hd.object);
+            assert_int_equal(hk.face, hd.face);
+            assert_true(hk.t == hd.t);
+        }
+        assert_int_equal(tb_accel_occluded(keep, &ray), tb_accel_occluded(drop, &ray));
+    }
+    tb_accel_free(keep);
+    tb_accel_free(drop);
     tp_free(&s);
 }
 
@@ -547,6 +592,7 @@ int main(void)
         cmocka_unit_test(test_grazing),
         cmocka_unit_test(test_bvh_structure),
         cmocka_unit_test(test_bvh_deterministic),
+        cmocka_unit_test(test_bvh_drop_binary),
         cmocka_unit_test(test_counters),
         cmocka_unit_test(test_bvh_near_first),
         cmocka_unit_test(test_concurrent_queries),

@@ -104,7 +104,7 @@ static void test_fed_shared(void **state)
     assert_int_equal(s->stats.fed_bytes, one_bytes); /* one copy, not 1000 */
     assert_int_equal(s->stats.triangles, 1000 * 12);
     for (uint32_t i = 1; i < s->nobjects; i++) {
-        assert_ptr_equal(s->objects[i]->fed, s->objects[0]->fed);
+        assert_ptr_equal(s->objects[i]->fed->fed, s->objects[0]->fed->fed);
         assert_ptr_equal(s->objects[i]->geom.polygons.vertices, s->objects[0]->geom.polygons.vertices);
     }
     /* Each object where its transform puts it, hit as an unshared copy is. */

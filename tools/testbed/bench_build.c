@@ -89,7 +89,7 @@ static uint64_t tb__tree_hash(const tb_accel *acc)
 static bool tb__time_ours(tb_scene *s, int threads, int repeat, double *seconds, double *sah, uint64_t *hash)
 {
     *seconds = INFINITY;
-    tb_accel_options o = {.threads = threads};
+    tb_accel_options o = {.threads = threads, .bvh_keep_binary = 1}; /* the SAH and hash read the binary tree */
     for (int r = 0; r < repeat; r++) {
         double t0 = tb__now();
         if (tb_scene_rebuild_accel(s, TB_ACCEL_BVH, &o)) {
