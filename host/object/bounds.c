@@ -457,13 +457,16 @@ tb_status tb_bounds_points(const tb_vec3 *pts, size_t n, const tb_transform *to_
             p = tb_transform_dpoint(to_world, p);
         lo = tb_dvec3_min(lo, p), hi = tb_dvec3_max(hi, p);
     }
-    if (n > 0 && to_world) {
-        /* Each transformed coordinate carries a few double roundings. */
-        double pad = 0x1p-48 * fmax(tb_dvec3_max_comp(tb_dvec3_abs(lo)), tb_dvec3_max_comp(tb_dvec3_abs(hi)));
-        lo = tb_dvec3_sub(lo, tb__v3(pad, pad, pad)), hi = tb_dvec3_add(hi, tb__v3(pad, pad, pad));
-    }
-    *out = tb_bounds_round_out(lo, hi);
+    *out = n > 0 && to_world ? tb_bounds_transformed(lo, hi) : tb_bounds_round_out(lo, hi);
     return TB_OK;
+}
+
+tb_aabb tb_bounds_transformed(tb_dvec3 lo, tb_dvec3 hi)
+{
+    /* Each transformed coordinate carries a few double roundings. */
+    double pad = 0x1p-48 * fmax(tb_dvec3_max_comp(tb_dvec3_abs(lo)), tb_dvec3_max_comp(tb_dvec3_abs(hi)));
+    lo = tb_dvec3_sub(lo, tb__v3(pad, pad, pad)), hi = tb_dvec3_add(hi, tb__v3(pad, pad, pad));
+    return tb_bounds_round_out(lo, hi);
 }
 
 tb_status tb_bounds_points_sphere(const tb_vec3 *pts, size_t n, const tb_transform *to_world,

@@ -47,6 +47,12 @@ tb_status tb_bounds_sphere(tb_prim_kind kind, const tb_mid_geometry *geom, const
  * n == 0. TB_ERR_ARG for NULL pts with n > 0. */
 tb_status tb_bounds_points(const tb_vec3 *pts, size_t n, const tb_transform *to_world, tb_aabb *out);
 
+/* The float box of points already transformed to world in double whose
+ * double box is [lo, hi] (non-empty): tb_bounds_points' padding for the
+ * transform's roundings, then outward rounding, so that it equals
+ * tb_bounds_points of the untransformed points bit for bit. */
+tb_aabb tb_bounds_transformed(tb_dvec3 lo, tb_dvec3 hi);
+
 /* A sphere about the world box centre of the points, with radius the largest
  * distance to a transformed point (rounded up). */
 tb_status tb_bounds_points_sphere(const tb_vec3 *pts, size_t n, const tb_transform *to_world,

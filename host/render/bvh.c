@@ -3,6 +3,7 @@
  * volume hierarchies"), subtrees built as OpenMP tasks, flattened depth-first
  * into 32-byte nodes (the layout tb_accel_bvh_nodes exposes), then collapsed
  * into the 8-wide tree that the CPU queries traverse (bvh_wide.c). */
+#include <float.h>
 #include <omp.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -21,6 +22,8 @@ TB_STAT_MEMORY(tb__bvh_memory, "BVH/memory");
 #define TB__BVH_MAX_BINS 256
 #define TB__BVH_DEFAULT_BINS 32
 #define TB__BVH_DEFAULT_MAX_LEAF 8
+/* Nodes with at least this many references bin with twice the bins. */
+#define TB__BVH_WIDE_BINS_MIN 4096
 /* Subtrees with fewer references are built by the task that made them:
  * below this a task costs more than it saves. */
 #define TB__BVH_TASK_MIN 4096
@@ -178,15 +181,29 @@ static int tb__measure_mode(const tb_aabb *b)
     return TB__MEASURE_ONE;
 }
 
-/* The bin of centroid coordinate c (same arithmetic for binning and partitioning). */
-static inline int tb__bin(float c, double lo, double scale, int bins)
+/* The bins of a node: per axis, the box and the number of the references
+ * whose centroid falls in each. */
+typedef struct tb__bins {
+    tb__box4 box[TB__BVH_MAX_BINS][3]; /* [bin][axis]: the sweep takes the three axes at once */
+    uint32_t cnt[TB__BVH_MAX_BINS][4]; /* [bin][axis]; the fourth is unused */
+} tb__bins;
+
+/* How a node's centroids map to bins: bin = trunc(clamp((c - lo) scale, 0,
+ * nb - 1)) in float, for binning and partitioning alike. */
+typedef struct tb__binning {
+    float lo[3], scale[3];
+    bool live[3]; /* the axis has extent: worth binning */
+    int nb;       /* bins per axis */
+} tb__binning;
+
+static void tb__bins_clear(tb__bins *bn, int nb)
 {
-    double t = ((double)c - lo) * scale;
-    if (!(t > 0.0))
-        return 0;
-    if (t >= (double)bins)
-        return bins - 1;
-    return (int)t;
+    for (int k = 0; k < nb; k++)
+        for (int a = 0; a < 4; a++) {
+            if (a < 3)
+                bn->box[k][a] = tb__box4_empty();
+            bn->cnt[k][a] = 0;
+        }
 }
 
 /* The chosen SAH split of a node. */
@@ -195,101 +212,98 @@ typedef struct tb__split {
     int axis;
     int plane;     /* bins [0, plane) go to the first child */
     double cost;   /* SAH cost of splitting there */
-    double lo, scale; /* binning of that axis */
-    int bins;         /* bins used at this node */
+    tb__binning g; /* the node's binning */
 } tb__split;
 
-/* The bins of a node: per axis, the box and the number of the references
- * whose centroid falls in each. */
-typedef struct tb__bins {
-    tb__box4 box[3][TB__BVH_MAX_BINS];
-    uint32_t cnt[3][TB__BVH_MAX_BINS];
-} tb__bins;
-
-/* How a node's centroids map to bins. */
-typedef struct tb__binning {
-    double lo[3], scale[3];
-    bool live[3]; /* the axis has extent: worth binning */
-    int nb;       /* bins per axis */
-} tb__binning;
-
-static void tb__bins_clear(tb__bins *bn, int nb)
+/* The binning of a node's centroid box `cbox` in nb bins. */
+static tb__binning tb__binning_make(const tb_aabb *cbox, int nb)
 {
-    for (int a = 0; a < 3; a++)
-        for (int k = 0; k < nb; k++) {
-            bn->box[a][k] = tb__box4_empty();
-            bn->cnt[a][k] = 0;
-        }
+    tb__binning g = {.nb = nb};
+    for (int a = 0; a < 3; a++) {
+        float lo = tb_vec3_get(cbox->lo, a), ext = tb_vec3_get(cbox->hi, a) - lo;
+        float scale = (float)nb / ext;
+        g.live[a] = ext > 0.0f && isfinite(scale) && scale > 0.0f;
+        g.lo[a] = g.live[a] ? lo : 0.0f;
+        g.scale[a] = g.live[a] ? scale : 0.0f;
+    }
+    return g;
 }
 
-/* The bins of one reference's centroid on the three axes: tb__bin's
- * arithmetic, the clamping done on t (max(t, 0), min(t, nb - 1), then
- * truncation gives the same bin for every t). A dead axis has lo = scale =
- * 0: bin 0, never looked at. */
+/* The bins of one reference's centroid on the three axes (a dead axis has
+ * lo = scale = 0: bin 0, never looked at). tb__binner_t gives the clamped
+ * t, whose truncation is the bin: bin < plane exactly when t < plane. */
 #if defined(__SSE2__)
 typedef struct tb__binner {
-    __m128d lo01, sc01, lo2, sc2, top;
+    __m128 lo, sc, top;
 } tb__binner;
 static inline tb__binner tb__binner_make(const tb__binning *g)
 {
-    double lo[3], sc[3];
-    for (int a = 0; a < 3; a++) {
-        lo[a] = g->live[a] ? g->lo[a] : 0.0;
-        sc[a] = g->live[a] ? g->scale[a] : 0.0;
-    }
-    return (tb__binner){_mm_set_pd(lo[1], lo[0]), _mm_set_pd(sc[1], sc[0]), _mm_set_sd(lo[2]), _mm_set_sd(sc[2]),
-                        _mm_set1_pd((double)(g->nb - 1))};
+    return (tb__binner){_mm_setr_ps(g->lo[0], g->lo[1], g->lo[2], 0.0f),
+                        _mm_setr_ps(g->scale[0], g->scale[1], g->scale[2], 0.0f), _mm_set1_ps((float)(g->nb - 1))};
 }
-static inline void tb__binner_bins(const tb__binner *q, __m128 c, int k[3])
+/* MAXPS returns its second operand when the first is NaN: bin 0. */
+static inline __m128 tb__binner_t(const tb__binner *q, __m128 c)
 {
-    const __m128d zero = _mm_setzero_pd();
-    __m128d t01 = _mm_mul_pd(_mm_sub_pd(_mm_cvtps_pd(c), q->lo01), q->sc01);
-    __m128d t2 = _mm_mul_sd(_mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(c, c)), q->lo2), q->sc2);
-    __m128i k01 = _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(t01, zero), q->top));
-    k[0] = _mm_cvtsi128_si32(k01);
-    k[1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(k01, 1));
-    k[2] = _mm_cvttsd_si32(_mm_min_sd(_mm_max_sd(t2, zero), q->top));
+    return _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, q->lo), q->sc), _mm_setzero_ps()), q->top);
 }
+static inline void tb__binner_bins(const tb__binner *q, __m128 c, int k[4])
+{
+    _mm_storeu_si128((__m128i *)k, _mm_cvttps_epi32(tb__binner_t(q, c)));
+}
+/* True if centroid c falls below `plane` on `axis`. */
+static inline bool tb__binner_below(const tb__binner *q, __m128 c, __m128 plane, int axis)
+{
+    return (_mm_movemask_ps(_mm_cmplt_ps(tb__binner_t(q, c), plane)) >> axis) & 1;
+}
+static inline __m128 tb__binner_plane(int plane) { return _mm_set1_ps((float)plane); }
 #else
 typedef struct tb__binner {
-    double lo[3], sc[3];
-    int nb;
+    float lo[3], sc[3], top;
 } tb__binner;
 static inline tb__binner tb__binner_make(const tb__binning *g)
 {
-    tb__binner q = {.nb = g->nb};
-    for (int a = 0; a < 3; a++) {
-        q.lo[a] = g->live[a] ? g->lo[a] : 0.0;
-        q.sc[a] = g->live[a] ? g->scale[a] : 0.0;
-    }
+    tb__binner q = {.top = (float)(g->nb - 1)};
+    for (int a = 0; a < 3; a++)
+        q.lo[a] = g->lo[a], q.sc[a] = g->scale[a];
     return q;
 }
-static inline void tb__binner_bins(const tb__binner *q, tb__f4 c, int k[3])
+static inline float tb__binner_t1(const tb__binner *q, float c, int a)
+{
+    float t = (c - q->lo[a]) * q->sc[a];
+    t = t > 0.0f ? t : 0.0f;
+    return t < q->top ? t : q->top;
+}
+static inline void tb__binner_bins(const tb__binner *q, tb__f4 c, int k[4])
 {
     for (int a = 0; a < 3; a++)
-        k[a] = tb__bin(c.v[a], q->lo[a], q->sc[a], q->nb);
+        k[a] = (int)tb__binner_t1(q, c.v[a], a);
 }
+static inline bool tb__binner_below(const tb__binner *q, tb__f4 c, tb__f4 plane, int axis)
+{
+    return tb__binner_t1(q, c.v[axis], axis) < plane.v[0];
+}
+static inline tb__f4 tb__binner_plane(int plane) { return (tb__f4){{(float)plane, 0.0f, 0.0f, 0.0f}}; }
 #endif
 
 /* Adds reference r to the bins. */
 static inline void tb__bins_add(tb__bins *bn, const tb__binner *q, const tb__bref *r)
 {
     tb__f4 lo = tb__ref_lo(r), hi = tb__ref_hi(r);
-    int k[3];
+    int k[4];
     tb__binner_bins(q, tb__ref_centroid(lo, hi), k);
     for (int a = 0; a < 3; a++) {
-        bn->cnt[a][k[a]]++;
-        tb__box4_grow(&bn->box[a][k[a]], lo, hi);
+        bn->cnt[k[a]][a]++;
+        tb__box4_grow(&bn->box[k[a]][a], lo, hi);
     }
 }
 
 /* Adds the bins of `from` to `to`. */
 static void tb__bins_merge(tb__bins *to, const tb__bins *from, int nb)
 {
-    for (int a = 0; a < 3; a++)
-        for (int k = 0; k < nb; k++) {
-            to->cnt[a][k] += from->cnt[a][k];
-            tb__box4_add(&to->box[a][k], &from->box[a][k]);
+    for (int k = 0; k < nb; k++)
+        for (int a = 0; a < 3; a++) {
+            to->cnt[k][a] += from->cnt[k][a];
+            tb__box4_add(&to->box[k][a], &from->box[k][a]);
         }
 }
 
@@ -351,31 +365,17 @@ static void tb__bins_fill_node(tb__builder *b, tb__bins *bn, const tb__binning *
     free(part);
 }
 
-/* Best binned SAH plane over the three axes. Kept out of line so that the
- * bin arrays live only while it runs, not in every frame of the recursion. */
-static __attribute__((noinline)) tb__split tb__find_split(tb__builder *b, uint32_t begin, uint32_t end,
-                                                          const tb_aabb *cbox, int mode, double node_measure)
+/* The sweep in double (any node): per axis, every plane between bins,
+ * right to left then left to right; the least cost wins with strict <
+ * (first axis, then first plane). */
+static void tb__sweep_f64(const tb__builder *b, const tb__bins *bn, tb__split *best, int mode, double node_measure)
 {
-    tb__bins bn;
+    const int nb = best->g.nb;
     double rmeasure[TB__BVH_MAX_BINS];
     uint32_t rcount[TB__BVH_MAX_BINS];
-    tb__binning g;
-    /* No more bins than references: the sweeps cost O(bins) per node, and
-     * most nodes are small. */
-    g.nb = end - begin < (uint32_t)b->bins ? (int)(end - begin) : b->bins;
-    const int nb = g.nb;
-    tb__split best = {.ok = false, .cost = INFINITY};
     double best_x = INFINITY; /* the numerator of the best cost */
-
     for (int a = 0; a < 3; a++) {
-        g.lo[a] = tb_vec3_get(cbox->lo, a);
-        double ext = (double)tb_vec3_get(cbox->hi, a) - g.lo[a];
-        g.scale[a] = (double)nb / ext;
-        g.live[a] = ext > 0.0 && isfinite(g.scale[a]) && g.scale[a] > 0.0;
-    }
-    tb__bins_fill_node(b, &bn, &g, begin, end);
-    for (int a = 0; a < 3; a++) {
-        if (!g.live[a])
+        if (!best->g.live[a])
             continue;
         /* rmeasure[p], rcount[p]: the bins p .. nb-1 (the second child of plane p). */
         tb__box4 acc = tb__box4_empty();
@@ -384,21 +384,21 @@ static __attribute__((noinline)) tb__split tb__find_split(tb__builder *b, uint32
          * (the union with an empty box is exact), and the plane after it
          * has the candidate of the plane before, which cannot win. */
         for (int p = nb - 1; p >= 1; p--) {
-            rcount[p] = n += bn.cnt[a][p];
-            if (bn.cnt[a][p] == 0 && p < nb - 1) {
+            rcount[p] = n += bn->cnt[p][a];
+            if (bn->cnt[p][a] == 0 && p < nb - 1) {
                 rmeasure[p] = rmeasure[p + 1];
                 continue;
             }
-            tb__box4_add(&acc, &bn.box[a][p]);
+            tb__box4_add(&acc, &bn->box[p][a]);
             rmeasure[p] = tb__measure4(&acc, mode);
         }
         acc = tb__box4_empty();
         n = 0;
         for (int p = 1; p < nb; p++) {
-            if (bn.cnt[a][p - 1] == 0)
+            if (bn->cnt[p - 1][a] == 0)
                 continue;
-            tb__box4_add(&acc, &bn.box[a][p - 1]);
-            n += bn.cnt[a][p - 1];
+            tb__box4_add(&acc, &bn->box[p - 1][a]);
+            n += bn->cnt[p - 1][a];
             if (rcount[p] == 0)
                 continue;
             /* The cost is a rounded, non-decreasing function of x, so it can
@@ -408,38 +408,152 @@ static __attribute__((noinline)) tb__split tb__find_split(tb__builder *b, uint32
             if (!(x < best_x))
                 continue;
             double cost = b->cost_node + b->cost_prim * x / node_measure;
-            /* Strict <: on equal cost the first axis and plane win. */
-            if (cost < best.cost) {
-                best = (tb__split){true, a, p, cost, g.lo[a], g.scale[a], nb};
+            if (cost < best->cost) {
+                best->ok = true, best->axis = a, best->plane = p, best->cost = cost;
                 best_x = x;
             }
         }
     }
+}
+
+#if defined(__SSE2__)
+/* The measures of three boxes (one per axis of the sweep) from their
+ * extents scaled by s: lane a is box a's. */
+static inline __m128 tb__measure3(const tb__box4 acc[3], __m128 s, bool area)
+{
+    __m128 d0 = _mm_mul_ps(_mm_sub_ps(acc[0].hi, acc[0].lo), s);
+    __m128 d1 = _mm_mul_ps(_mm_sub_ps(acc[1].hi, acc[1].lo), s);
+    __m128 d2 = _mm_mul_ps(_mm_sub_ps(acc[2].hi, acc[2].lo), s);
+    __m128 d3 = _mm_setzero_ps();
+    _MM_TRANSPOSE4_PS(d0, d1, d2, d3); /* d0: the x extents of the three boxes, d1: y, d2: z */
+    if (area)
+        return _mm_add_ps(_mm_add_ps(_mm_mul_ps(d0, d1), _mm_mul_ps(d1, d2)), _mm_mul_ps(d2, d0));
+    return _mm_add_ps(_mm_add_ps(d0, d1), d2);
+}
+
+/* The sweep in float, the three axes at once (SIMD lanes): the extents are
+ * scaled by the power of two that brings the node's largest into [1/2, 1)
+ * (so no measure overflows, and the sizes of the children relative to the
+ * node keep float's precision); false (the double sweep then runs) for a
+ * node whose box has no finite float extent, or a zero scaled measure. The
+ * same rule as the double sweep: least n_L A(L) + n_R A(R), strict < (first
+ * axis, then first plane). */
+static bool tb__sweep_f32(const tb__builder *b, const tb__bins *bn, tb__split *best, const tb_aabb *bounds,
+                          int mode)
+{
+    if (mode == TB__MEASURE_ONE)
+        return false;
+    const bool area = mode == TB__MEASURE_AREA;
+    float ex = bounds->hi.x - bounds->lo.x, ey = bounds->hi.y - bounds->lo.y, ez = bounds->hi.z - bounds->lo.z;
+    float m = fmaxf(ex, fmaxf(ey, ez));
+    if (!(m > 0.0f && m <= FLT_MAX))
+        return false;
+    int e;
+    frexpf(m, &e);
+    float sc = ldexpf(1.0f, -e);
+    if (!(sc > 0.0f && sc <= FLT_MAX))
+        return false;
+    ex *= sc, ey *= sc, ez *= sc;
+    float node_measure = area ? ex * ey + ey * ez + ez * ex : ex + ey + ez;
+    if (!(node_measure > 0.0f))
+        return false;
+    const int nb = best->g.nb;
+    const __m128 vs = _mm_set1_ps(sc);
+    _Alignas(16) float rmeasure[TB__BVH_MAX_BINS][4];
+    _Alignas(16) int32_t rcount[TB__BVH_MAX_BINS][4];
+    tb__box4 acc[3] = {tb__box4_empty(), tb__box4_empty(), tb__box4_empty()};
+    __m128i n = _mm_setzero_si128();
+    for (int p = nb - 1; p >= 1; p--) {
+        for (int a = 0; a < 3; a++)
+            tb__box4_add(&acc[a], &bn->box[p][a]);
+        n = _mm_add_epi32(n, _mm_loadu_si128((const __m128i *)bn->cnt[p]));
+        _mm_store_si128((__m128i *)rcount[p], n);
+        _mm_store_ps(rmeasure[p], tb__measure3(acc, vs, area));
+    }
+    acc[0] = acc[1] = acc[2] = tb__box4_empty();
+    n = _mm_setzero_si128();
+    const __m128i zero = _mm_setzero_si128();
+    __m128 best_x = _mm_set1_ps(INFINITY);
+    __m128i best_p = zero;
+    for (int p = 1; p < nb; p++) {
+        for (int a = 0; a < 3; a++)
+            tb__box4_add(&acc[a], &bn->box[p - 1][a]);
+        n = _mm_add_epi32(n, _mm_loadu_si128((const __m128i *)bn->cnt[p - 1]));
+        __m128i nr = _mm_load_si128((const __m128i *)rcount[p]);
+        __m128 x = _mm_add_ps(_mm_mul_ps(tb__measure3(acc, vs, area), _mm_cvtepi32_ps(n)),
+                              _mm_mul_ps(_mm_load_ps(rmeasure[p]), _mm_cvtepi32_ps(nr)));
+        /* a plane with references on both sides that beats this axis' best so far */
+        __m128i empty = _mm_or_si128(_mm_cmpeq_epi32(n, zero), _mm_cmpeq_epi32(nr, zero));
+        __m128i win = _mm_andnot_si128(empty, _mm_castps_si128(_mm_cmplt_ps(x, best_x)));
+        best_x = _mm_or_ps(_mm_and_ps(_mm_castsi128_ps(win), x), _mm_andnot_ps(_mm_castsi128_ps(win), best_x));
+        best_p = _mm_or_si128(_mm_and_si128(win, _mm_set1_epi32(p)), _mm_andnot_si128(win, best_p));
+    }
+    _Alignas(16) float bx[4];
+    _Alignas(16) int32_t bp[4];
+    _mm_store_ps(bx, best_x);
+    _mm_store_si128((__m128i *)bp, best_p);
+    float least = INFINITY;
+    for (int a = 0; a < 3; a++)
+        if (best->g.live[a] && bx[a] < least) {
+            least = bx[a];
+            best->ok = true, best->axis = a, best->plane = bp[a];
+        }
+    if (best->ok)
+        best->cost = b->cost_node + b->cost_prim * (double)least / (double)node_measure;
+    return true;
+}
+#endif
+
+/* Best binned SAH plane over the three axes. Kept out of line so that the
+ * bin arrays live only while it runs, not in every frame of the recursion. */
+static __attribute__((noinline)) tb__split tb__find_split(tb__builder *b, uint32_t begin, uint32_t end,
+                                                          const tb_aabb *bounds, const tb_aabb *cbox, int mode,
+                                                          double node_measure)
+{
+    tb__bins bn;
+    /* No more bins than references: the sweeps cost O(bins) per node, and
+     * most nodes are small. */
+    int nb = end - begin < (uint32_t)b->bins ? (int)(end - begin) : b->bins;
+    /* Large nodes: twice the bins. 32 cannot tell a small group at the
+     * edge of a node's centroid range (a ground quad under a model) from its
+     * neighbours: 8 % of SAH cost on a lat/long sphere on its ground, against
+     * an exact sweep (test_bvh_sah_quality); the sweep's cost is nothing
+     * next to binning 4096 references. */
+    if (end - begin >= TB__BVH_WIDE_BINS_MIN)
+        nb = 2 * b->bins < TB__BVH_MAX_BINS ? 2 * b->bins : TB__BVH_MAX_BINS;
+    tb__split best = {.ok = false, .cost = INFINITY, .g = tb__binning_make(cbox, nb)};
+    tb__bins_fill_node(b, &bn, &best.g, begin, end);
+#if defined(__SSE2__)
+    if (tb__sweep_f32(b, &bn, &best, bounds, mode))
+        return best;
+#else
+    (void)bounds;
+#endif
+    tb__sweep_f64(b, &bn, &best, mode, node_measure);
     return best;
 }
 
 /* tb__find_split for a node of two references (about half of all nodes),
  * without the bins: on an axis where their centroids differ, the lower one
- * falls in bin 0 (t = 0) and the other in bin 1 (t = 2 rounded), so every
- * live axis offers the same plane, the sum of the two boxes' measures, and
- * the first live axis wins, as in the general sweep. */
+ * falls in bin 0 (t = 0) and the other in bin 1 (t about 2, clamped), so
+ * every live axis offers the same plane, the sum of the two boxes'
+ * measures, and the first live axis wins, as in the general sweep. */
 static tb__split tb__find_split2(const tb__builder *b, uint32_t begin, const tb_aabb *cbox, int mode,
                                  double node_measure)
 {
+    tb__split s = {.ok = false, .cost = INFINITY, .g = tb__binning_make(cbox, 2)};
     for (int a = 0; a < 3; a++) {
-        double lo = tb_vec3_get(cbox->lo, a);
-        double ext = (double)tb_vec3_get(cbox->hi, a) - lo;
-        double scale = 2.0 / ext;
-        if (!(ext > 0.0 && isfinite(scale) && scale > 0.0))
+        if (!s.g.live[a])
             continue;
         const tb__bref *r = &b->refs[begin];
         tb__box4 b0 = tb__box4_empty(), b1 = tb__box4_empty();
         tb__box4_grow(&b0, tb__ref_lo(&r[0]), tb__ref_hi(&r[0]));
         tb__box4_grow(&b1, tb__ref_lo(&r[1]), tb__ref_hi(&r[1]));
         double x = tb__measure4(&b0, mode) + tb__measure4(&b1, mode);
-        return (tb__split){true, a, 1, b->cost_node + b->cost_prim * x / node_measure, lo, scale, 2};
+        s.ok = true, s.axis = a, s.plane = 1, s.cost = b->cost_node + b->cost_prim * x / node_measure;
+        return s;
     }
-    return (tb__split){.ok = false, .cost = INFINITY};
+    return s;
 }
 
 /* A reference's position along an axis, for the median split. */
@@ -518,7 +632,7 @@ static void tb__build_node(tb__builder *b, uint32_t id, uint32_t begin, uint32_t
     tb__split s = {.ok = false};
     if (depth < TB__BVH_SAH_MAX_DEPTH)
         s = n == 2 && b->bins >= 2 ? tb__find_split2(b, begin, &cbox, mode, tb__measure(&bounds, mode))
-                                   : tb__find_split(b, begin, end, &cbox, mode, tb__measure(&bounds, mode));
+                                   : tb__find_split(b, begin, end, &bounds, &cbox, mode, tb__measure(&bounds, mode));
     bool split = (s.ok && s.cost < leaf_cost) || n > (uint32_t)b->max_leaf;
     if (!split)
         return;
@@ -534,12 +648,12 @@ static void tb__build_node(tb__builder *b, uint32_t id, uint32_t begin, uint32_t
         tb__box4 lb = tb__box4_empty(), lc = tb__box4_empty(), rb = tb__box4_empty(), rc = tb__box4_empty();
         uint32_t i = begin, j = end;
         tb__bref *refs = b->refs;
+        const tb__binner q = tb__binner_make(&s.g);
+        const tb__f4 plane = tb__binner_plane(s.plane);
         while (i < j) {
             tb__f4 lo = tb__ref_lo(&refs[i]), hi = tb__ref_hi(&refs[i]);
             tb__f4 c4 = tb__ref_centroid(lo, hi);
-            float c[4];
-            tb__v4_store(c, c4);
-            if (tb__bin(c[axis], s.lo, s.scale, s.bins) < s.plane) {
+            if (tb__binner_below(&q, c4, plane, axis)) {
                 tb__box4_grow(&lb, lo, hi);
                 tb__box4_grow(&lc, c4, c4);
                 i++;

@@ -125,8 +125,21 @@ tb_status tb__scene_tri_bounds(const tb_object *o, uint32_t tri, tb_aabb *out)
     if (!m || tri >= m->ntris)
         return tb_error(TB_ERR_ARG, "scene: triangle %u out of range", tri);
     const uint32_t *tv = &m->tris[3 * (size_t)tri];
-    tb_vec3 v[3] = {m->vertices[tv[0]], m->vertices[tv[1]], m->vertices[tv[2]]};
-    return tb_bounds_points(v, 3, &o->to_world, out);
+    if (!m->wvertices) {
+        tb_vec3 v[3] = {m->vertices[tv[0]], m->vertices[tv[1]], m->vertices[tv[2]]};
+        return tb_bounds_points(v, 3, &o->to_world, out);
+    }
+    /* The world corners are stored (tb_transform_dpoint of each vertex, as
+     * tb_bounds_points computes them): the same box without the transform
+     * (a third of a large mesh's reference making). */
+    tb_dvec3 lo = {INFINITY, INFINITY, INFINITY}, hi = {-INFINITY, -INFINITY, -INFINITY};
+    for (int k = 0; k < 3; k++) {
+        const double *w = &m->wvertices[3 * (size_t)tv[k]];
+        tb_dvec3 p = {w[0], w[1], w[2]};
+        lo = tb_dvec3_min(lo, p), hi = tb_dvec3_max(hi, p);
+    }
+    *out = tb_bounds_transformed(lo, hi);
+    return TB_OK;
 }
 
 tb_status tb__scene_object_bounds(const tb_object *o, tb_aabb *out)

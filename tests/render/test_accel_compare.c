@@ -5,6 +5,7 @@
  * across thread counts; statistics counters. */
 #include "tb_test.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -457,6 +458,185 @@ static void test_bvh_drop_binary(void **state)
     tb_accel_free(keep);
     tb_accel_free(drop);
     tp_free(&s);
+/* ---- SAH quality against an exact sweep ----
+ * A slow reference builder, independent of bvh.c: top-down, every node
+ * sorts its references by centroid on each axis (ties by index) and
+ * evaluates every split between two of them (not bins) with the same cost
+ * and leaf rule (C_split = 1 + (A(L) n_L + A(R) n_R) / A(node), leaf when
+ * n <= 8 and n <= C_split, or n == 1); its tree's SAH cost is the
+ * reference value the binned build must stay within 5 % of. */
+typedef struct xs_ref {
+    tb_aabb b;
+    float c[3];
+    uint32_t id;
+} xs_ref;
+
+static int xs_axis;
+static int xs_cmp(const void *pa, const void *pb)
+{
+    const xs_ref *a = pa, *b = pb;
+    if (a->c[xs_axis] != b->c[xs_axis])
+        return a->c[xs_axis] < b->c[xs_axis] ? -1 : 1;
+    return a->id < b->id ? -1 : (a->id > b->id);
+}
+
+static double xs_area(const tb_aabb *b)
+{
+    double ex = (double)b->hi.x - b->lo.x, ey = (double)b->hi.y - b->lo.y, ez = (double)b->hi.z - b->lo.z;
+    return ex * ey + ey * ez + ez * ex;
+}
+
+/* SAH sum (unnormalised) of the exact-sweep subtree over r[0, n). */
+static double xs_build(xs_ref *r, size_t n, double *right)
+{
+    tb_aabb box = tb_aabb_empty();
+    for (size_t i = 0; i < n; i++)
+        box = tb_aabb_union(box, r[i].b);
+    double area = xs_area(&box);
+    if (n == 1)
+        return area;
+    double best = INFINITY;
+    int best_axis = -1;
+    size_t best_k = 0;
+    for (int a = 0; a < 3; a++) {
+        xs_axis = a;
+        qsort(r, n, sizeof *r, xs_cmp);
+        tb_aabb acc = tb_aabb_empty();
+        for (size_t k = n; k-- > 1;) { /* right[k]: area of r[k, n) */
+            acc = tb_aabb_union(acc, r[k].b);
+            right[k] = xs_area(&acc);
+        }
+        acc = tb_aabb_empty();
+        for (size_t k = 1; k < n; k++) {
+            acc = tb_aabb_union(acc, r[k - 1].b);
+            double x = xs_area(&acc) * (double)k + right[k] * (double)(n - k);
+            if (x < best)
+                best = x, best_axis = a, best_k = k;
+        }
+    }
+    double split = 1.0 + best / area;
+    if (n <= 8 && (double)n <= split)
+        return (double)n * area;
+    xs_axis = best_axis;
+    qsort(r, n, sizeof *r, xs_cmp);
+    return area + xs_build(r, best_k, right) + xs_build(r + best_k, n - best_k, right);
+}
+
+static double xs_sah(const tp_scene *s)
+{
+    xs_ref *r = malloc(s->n * sizeof *r);
+    double *right = malloc(s->n * sizeof *right);
+    assert_non_null(r);
+    assert_non_null(right);
+    tb_aabb root = tb_aabb_empty();
+    for (size_t i = 0; i < s->n; i++) {
+        const tb_aabb *b = &s->refs[i].bounds;
+        r[i] = (xs_ref){*b, {0.5f * b->lo.x + 0.5f * b->hi.x, 0.5f * b->lo.y + 0.5f * b->hi.y,
+                             0.5f * b->lo.z + 0.5f * b->hi.z}, (uint32_t)i};
+        root = tb_aabb_union(root, *b);
+    }
+    double sum = xs_build(r, s->n, right);
+    free(r);
+    free(right);
+    return sum / xs_area(&root);
+}
+
+/* A displaced sphere (lat/long grid) on a ground quad, and long thin
+ * triangles in random directions (boxes that bound badly). */
+static void sah_mesh(tp_scene *s, tb_rng *r, int kind)
+{
+    if (kind == 0) {
+        const int nu = 96, nv = 48;
+        float amp[4], fr[4][3];
+        for (int k = 0; k < 4; k++) {
+            amp[k] = tp_uniform(r, 0.01f, 0.05f);
+            for (int a = 0; a < 3; a++)
+                fr[k][a] = tp_uniform(r, -12.0f, 12.0f);
+        }
+        float (*p)[3] = malloc(sizeof *p * (size_t)(nu + 1) * (nv + 1));
+        assert_non_null(p);
+        for (int j = 0; j <= nv; j++)
+            for (int i = 0; i <= nu; i++) {
+                double th = 3.14159265358979 * j / nv, ph = 2 * 3.14159265358979 * i / nu;
+                double d[3] = {sin(th) * cos(ph), sin(th) * sin(ph), cos(th)}, rad = 0.9;
+                for (int k = 0; k < 4; k++)
+                    rad += amp[k] * sin(fr[k][0] * d[0] + fr[k][1] * d[1] + fr[k][2] * d[2]);
+                for (int a = 0; a < 3; a++)
+                    p[j * (nu + 1) + i][a] = (float)(rad * d[a]) + (a == 2 ? 1.0f : 0.0f);
+            }
+        for (int j = 0; j < nv; j++)
+            for (int i = 0; i < nu; i++) {
+                const float *q00 = p[j * (nu + 1) + i], *q10 = p[j * (nu + 1) + i + 1];
+                const float *q01 = p[(j + 1) * (nu + 1) + i], *q11 = p[(j + 1) * (nu + 1) + i + 1];
+                float t0[3][3], t1[3][3];
+                memcpy(t0[0], q00, 12), memcpy(t0[1], q10, 12), memcpy(t0[2], q11, 12);
+                memcpy(t1[0], q00, 12), memcpy(t1[1], q11, 12), memcpy(t1[2], q01, 12);
+                tp_add_triangle(s, t0, 0, 0);
+                tp_add_triangle(s, t1, 0, 0);
+            }
+        free(p);
+        const float g0[3][3] = {{-3, -3, 0}, {3, -3, 0}, {3, 3, 0}}, g1[3][3] = {{-3, -3, 0}, {3, 3, 0}, {-3, 3, 0}};
+        tp_add_triangle(s, g0, 1, 0);
+        tp_add_triangle(s, g1, 1, 0);
+        return;
+    }
+    for (int k = 0; k < 6000; k++) {
+        tb_vec3 d = tp_random_dir(r), e = tp_random_dir(r);
+        float len = tp_uniform(r, 0.3f, 1.5f), w = tp_uniform(r, 0.001f, 0.01f);
+        float c[3] = {tp_uniform(r, -2, 2), tp_uniform(r, -2, 2), tp_uniform(r, -2, 2)};
+        float v[3][3];
+        for (int a = 0; a < 3; a++) {
+            float da = tb_vec3_get(d, a), ea = tb_vec3_get(e, a);
+            v[0][a] = c[a] - 0.5f * len * da;
+            v[1][a] = c[a] + 0.5f * len * da;
+            v[2][a] = c[a] + w * ea;
+        }
+        tp_add_triangle(s, v, 0, (uint32_t)k);
+    }
+}
+
+static void test_bvh_sah_quality(void **state)
+{
+    (void)state;
+    uint64_t seed = tb_test_seed("bvh_sah_quality", 23);
+    for (int kind = 0; kind < 2; kind++) {
+        tb_rng r;
+        tb_rng_seed(&r, seed, 7 + (uint64_t)kind);
+        tp_scene s = {0};
+        sah_mesh(&s, &r, kind);
+        double exact = xs_sah(&s);
+        tb_accel_callbacks cb = {tp_cb_intersect, NULL, &s, NULL};
+        tb_accel *first = NULL;
+        for (int threads = 1; threads <= 2; threads++) {
+            tb_accel_options opt = {.threads = threads, .bvh_keep_binary = 1};
+            tb_accel *acc;
+            assert_int_equal(tb_accel_build(TB_ACCEL_BVH, s.refs, s.n, &cb, &opt, &acc), TB_OK);
+            if (!first) {
+                first = acc;
+            } else { /* the same tree at 2 threads, byte for byte */
+                size_t n0, n1, r0, r1;
+                const tb_bvh_node *a0 = tb_accel_bvh_nodes(first, &n0), *a1 = tb_accel_bvh_nodes(acc, &n1);
+                const uint32_t *i0 = tb_accel_bvh_refs(first, &r0), *i1 = tb_accel_bvh_refs(acc, &r1);
+                assert_int_equal(n0, n1);
+                assert_int_equal(r0, r1);
+                assert_memory_equal(a0, a1, n0 * sizeof *a0);
+                assert_memory_equal(i0, i1, r0 * sizeof *i0);
+            }
+            tb_accel_stats st;
+            tb_accel_get_stats(acc, &st);
+            print_message("  %s, %zu references, %d threads: SAH binned %.4f, exact sweep %.4f, ratio %.4f\n",
+                          kind ? "slivers" : "bumpy sphere", s.n, threads, st.bvh_sah_cost, exact,
+                          st.bvh_sah_cost / exact);
+            assert_true(st.bvh_sah_cost <= 1.05 * exact);
+            /* A plane between bins is one of the exact sweep's candidates, so
+             * a much lower cost would mean a wrong cost, not a better tree. */
+            assert_true(st.bvh_sah_cost >= 0.9 * exact);
+            if (acc != first)
+                tb_accel_free(acc);
+        }
+        tb_accel_free(first);
+        tp_free(&s);
+    }
 }
 
 static int64_t counter(const char *name)
@@ -593,6 +773,7 @@ int main(void)
         cmocka_unit_test(test_bvh_structure),
         cmocka_unit_test(test_bvh_deterministic),
         cmocka_unit_test(test_bvh_drop_binary),
+        cmocka_unit_test(test_bvh_sah_quality),
         cmocka_unit_test(test_counters),
         cmocka_unit_test(test_bvh_near_first),
         cmocka_unit_test(test_concurrent_queries),
