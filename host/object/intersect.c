@@ -264,10 +264,14 @@ static double tb__revolved_dist(const double *c, tb_dvec3 p)
     return g > 0.0 ? fabs(q) / g : sqrt(fabs(q));
 }
 
+/* fmax(a, b) without the libm call: the same value (NaN loses) for these
+ * arguments, which are never of opposite-signed zeros (absolute values). */
+static inline double tb__max_abs(double a, double b) { return a > b || b != b ? a : b; }
+
 double tb__face_residual(const tb_object *o, uint32_t face, uint32_t tri, tb_dvec3 p)
 {
     static const tb_dvec3 axis[6] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
-    double size = fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z)));
+    double size = tb__max_abs(fabs(p.x), tb__max_abs(fabs(p.y), fabs(p.z)));
     double d = 0.0;
     switch (o->kind) {
     case TB_PRIM_SPHERE: d = fabs(tb_dvec3_length(p) - 1.0); break;
@@ -330,7 +334,7 @@ double tb__face_residual(const tb_object *o, uint32_t face, uint32_t tri, tb_dve
         double l = tb_dvec3_length(n);
         tb_dvec3 q = {p.x - v0.x, p.y - v0.y, p.z - v0.z};
         d = l > 0.0 ? fabs(tb_dvec3_dot(n, q)) / l : tb_dvec3_length(q);
-        size += fmax(fabs(v0.x), fmax(fabs(v0.y), fabs(v0.z)));
+        size += tb__max_abs(fabs(v0.x), tb__max_abs(fabs(v0.y), fabs(v0.z)));
         break;
     }
     case TB_PRIM_SQUARE_ARCH:

@@ -29,6 +29,9 @@ tb_status tb_rt_init(tb_raytracer *rt, const tb_scene *scene, const tb_rt_option
     tb_rt_options o = opt ? *opt : (tb_rt_options){0};
     if (o.light_samples < 0 || o.light_samples > TB__RT_MAX_LIGHT_SAMPLES)
         return tb_error(TB_ERR_ARG, "raytrace: light samples must be in 0..%d", TB__RT_MAX_LIGHT_SAMPLES);
+    if (!(o.min_weight >= 0.0 && o.min_weight < 1.0))
+        return tb_error(TB_ERR_ARG, "raytrace: the adaptive depth control's weight must be in [0, 1), not %g",
+                        o.min_weight);
     if (o.glossy_samples < 0 || o.glossy_samples > TB__RT_MAX_LIGHT_SAMPLES)
         return tb_error(TB_ERR_ARG, "raytrace: glossy samples must be in 0..%d", TB__RT_MAX_LIGHT_SAMPLES);
     rt->scene = scene;
@@ -38,6 +41,7 @@ tb_status tb_rt_init(tb_raytracer *rt, const tb_scene *scene, const tb_rt_option
     rt->glossy_samples = o.glossy_samples == 0 ? TB_RT_DEFAULT_GLOSSY_SAMPLES : o.glossy_samples;
     tb_stratified_dims(rt->glossy_samples, &rt->gsx, &rt->gsy);
     rt->indirect = o.indirect;
+    rt->min_weight = o.min_weight;
     rt->indirect_ctx = o.indirect_ctx;
     tb_status st = tb_light_set_init(&rt->lights, scene);
     if (!st)
@@ -99,11 +103,18 @@ static inline bool tb__black_p(const tb_channels *c)
  * samples of the same point (multiple importance sampling, power heuristic). */
 typedef tb_rt_mis tb__mis;
 
+/* True if a ray of weight w is left out by the adaptive depth control. */
+static inline bool tb__below_weight(const tb_raytracer *rt, double w)
+{
+    return rt->min_weight > 0.0 && w < rt->min_weight;
+}
+
 /* rd: the camera ray's offset rays {rx_o, rx_d, ry_o, ry_d} (NULL past the
  * first hit: reflected and refracted rays are point sampled). mis: set for a
- * glossy ray, whose emission found is weighted against light sampling. */
+ * glossy ray, whose emission found is weighted against light sampling. w: the
+ * ray's weight (1 for a camera ray), which the adaptive depth control reads. */
 static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb_vec3 *rd, tb_rng *rng,
-                             int depth, const tb__mis *mis)
+                             int depth, const tb__mis *mis, double w)
 {
     const tb_scene *s = rt->scene;
     const int nch = s->nchannels;
@@ -266,15 +277,16 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
         tb_frame fr = tb_frame_from_normal(ng);
         tb_specular_split sp;
         tb_specular_dielectric(tb_frame_to_local(&fr, wo), sf.ior, &sp);
-        if (sp.R > 0.0) {
+        const double wr = w * sp.R, wt = w * sp.T * tb_channels_max(*transmission);
+        if (sp.R > 0.0 && !tb__below_weight(rt, wr)) {
             tb_ray r = tb_surface_spawn(&sf, tb_frame_to_world(&fr, sp.wr));
             TB_STAT_INC(tb__rt_secondary_rays);
-            L = tb_channels_add_scaled(L, tb__trace(rt, &r, NULL, rng, depth + 1, NULL), (float)sp.R);
+            L = tb_channels_add_scaled(L, tb__trace(rt, &r, NULL, rng, depth + 1, NULL, wr), (float)sp.R);
         }
-        if (sp.refracts && sp.T > 0.0) {
+        if (sp.refracts && sp.T > 0.0 && !tb__below_weight(rt, wt)) {
             tb_ray r = tb_surface_spawn(&sf, tb_vec3_normalize(tb_frame_to_world(&fr, sp.wt)));
             TB_STAT_INC(tb__rt_secondary_rays);
-            tb_channels Lt = tb__trace(rt, &r, NULL, rng, depth + 1, NULL);
+            tb_channels Lt = tb__trace(rt, &r, NULL, rng, depth + 1, NULL, wt);
             L = tb_channels_add(L, tb_channels_scale(tb_channels_mul(*transmission, Lt), (float)sp.T));
         }
     } else if (glossy_rays) {
@@ -292,19 +304,24 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
             tb_vec3 wi = tb_vec3_normalize(tb_frame_to_world(&frame, bs.wi));
             if ((tb_vec3_dot(wi, ng) > 0.0f) != front)
                 continue; /* a bumped normal can send the ray into the surface: no light there */
+            const double wg = w * tb_channels_max(bs.weight);
+            if (tb__below_weight(rt, wg))
+                continue;
             tb_ray r = tb_surface_spawn(&sf, wi);
             TB_STAT_INC(tb__rt_secondary_rays);
             const tb__mis mis_g = {p, wi, bs.pdf, (double)ns, (double)rt->light_samples};
-            Lg = tb_channels_add(Lg, tb_channels_mul(bs.weight, tb__trace(rt, &r, NULL, rng, depth + 1, &mis_g)));
+            Lg = tb_channels_add(Lg, tb_channels_mul(bs.weight, tb__trace(rt, &r, NULL, rng, depth + 1, &mis_g, wg)));
         }
         L = tb_channels_add_scaled(L, Lg, 1.0f / (float)ns);
     } else if (has_specular) {
         /* Perfect mirror weighted by the specular colour (Whitted's k_s S). */
         tb_vec3 wr = tb_vec3_normalize(tb_reflect(wo, n));
-        if ((tb_vec3_dot(wr, ng) > 0.0f) == front) { /* a bumped normal can mirror into the surface */
+        const double wm = w * tb_channels_max(*specular);
+        /* a bumped normal can mirror into the surface */
+        if ((tb_vec3_dot(wr, ng) > 0.0f) == front && !tb__below_weight(rt, wm)) {
             tb_ray r = tb_surface_spawn(&sf, wr);
             TB_STAT_INC(tb__rt_secondary_rays);
-            L = tb_channels_add(L, tb_channels_mul(*specular, tb__trace(rt, &r, NULL, rng, depth + 1, NULL)));
+            L = tb_channels_add(L, tb_channels_mul(*specular, tb__trace(rt, &r, NULL, rng, depth + 1, NULL, wm)));
         }
     }
     return L;
@@ -312,13 +329,13 @@ static tb_channels tb__trace(const tb_raytracer *rt, const tb_ray *ray, const tb
 
 tb_channels tb_rt_radiance(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng)
 {
-    return tb__trace(rt, ray, NULL, rng, 0, NULL);
+    return tb__trace(rt, ray, NULL, rng, 0, NULL, 1.0);
 }
 
 tb_channels tb_rt_radiance_at(const tb_raytracer *rt, const tb_ray *ray, tb_rng *rng, int depth,
                               const tb_rt_mis *mis)
 {
-    return tb__trace(rt, ray, NULL, rng, depth, mis);
+    return tb__trace(rt, ray, NULL, rng, depth, mis, 1.0);
 }
 
 double tb_rt_mis_weight(const tb_raytracer *rt, const tb_rt_mis *mis)
@@ -340,7 +357,7 @@ void tb_rt_sample(void *ctx, double x, double y, tb_rng *rng, float *out)
         tb_camera_ray_diff cd;
         tb_camera_ray_differential(cam, x, y, lu, lv, &cd);
         const tb_vec3 rd[4] = {cd.rx_o, cd.rx_d, cd.ry_o, cd.ry_d};
-        L = tb__trace(rt, &cd.ray, rd, rng, 0, NULL);
+        L = tb__trace(rt, &cd.ray, rd, rng, 0, NULL, 1.0);
     } else {
         tb_ray r = tb_camera_ray(cam, x, y, lu, lv);
         L = tb_rt_radiance(rt, &r, rng);

@@ -72,6 +72,9 @@ typedef struct tb_rt_options {
     int glossy_samples; /* rays sampled from a GGX lobe at a camera ray's hit, stratified (0: the default) */
     tb_rt_indirect_fn indirect; /* NULL: no indirect diffuse light (Whitted); else asked at every diffuse hit */
     void *indirect_ctx;         /* passed to indirect */
+    double min_weight; /* adaptive depth control (POV-Ray's adc_bailout): a reflected or refracted ray whose
+                        * weight (product of the mirror, Fresnel and transmission weights on its way from the
+                        * camera, largest channel) is below it is not traced; 0: every ray to max_depth */
 } tb_rt_options;
 
 /* A ray tracer over a loaded scene (read-only after init, shareable by threads). */
@@ -95,6 +98,7 @@ typedef struct tb_raytracer {
     int gsx, gsy;           /* strata of the glossy samples */
     tb_rt_indirect_fn indirect; /* from the options (NULL: none) */
     void *indirect_ctx;
+    double min_weight;      /* in effect (0: off) */
 } tb_raytracer;
 
 /* Prepares a tracer for `scene` (which must stay alive). TB_ERR_ARG for bad

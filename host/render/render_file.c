@@ -174,6 +174,10 @@ static tb_status tb__rf_provenance(tb__rf_run *r, const char *scene_path, const 
              ro->rt.glossy_samples ? ro->rt.glossy_samples : TB_RT_DEFAULT_GLOSSY_SAMPLES, nthreads,
              r->scene->spectral ? "spectral" : "rgb",
              on_backend ? (o->backend_name ? o->backend_name : "backend") : "cpu");
+    if (!r->method && ro->rt.min_weight > 0.0) {
+        size_t n = strlen(popts);
+        snprintf(popts + n, sizeof popts - n, " adc_bailout=%.17g", ro->rt.min_weight);
+    }
     if (ro->exchange && ro->exchange->ranks > 1) {
         size_t n = strlen(popts);
         snprintf(popts + n, sizeof popts - n, " ranks=%d", ro->exchange->ranks);

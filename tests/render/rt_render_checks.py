@@ -11,7 +11,9 @@
    emitter behind it, a 0.2-degree field of view: with max depth 2 only the
    straight path reaches the emitter, L = (1 - R)^2 M / pi; with max depth 64
    every internal round trip is traced, L = (1 - R)^2 / (1 - R^2) M / pi;
-   a uniform transmission texture tt on both faces, depth 2: (1 - R)^2 tt^2.
+   a uniform transmission texture tt on both faces, depth 2: (1 - R)^2 tt^2;
+   depth 64 with --adc-bailout 0.01 (adaptive depth control) stops the
+   round trips, whose weights are (1 - R)^2 R^(2k): (1 - R)^2 again.
 4. Direct lighting: a point light of intensity I at height h above a grey
    Lambertian floor, the camera looking straight down through a 0.2-degree
    field of view: L = rho / pi * I / h^2 at the centre.
@@ -203,6 +205,26 @@ for depth, expect_t in ((2, (1 - R) ** 2), (64, (1 - R) ** 2 / (1 - R * R))):
     got = centre[0] / (Me[0] / math.pi)
     check(abs(got - expect_t) < 2e-5,
           "slab, max depth %d: transmittance %.7f, expected %.7f" % (depth, got, expect_t))
+
+# Adaptive depth control: the exit ray of the k-th internal round trip has
+# weight (1 - R)^2 R^(2k) (the rays inside more), so --adc-bailout 0.01 keeps
+# only k = 0 at depth 64: T = (1 - R)^2 again; --adc-bailout 0 is the default
+# bit for bit.
+out0 = os.path.join(TMP, "rt_slab64_adc0.pfm")
+run([slab, "-o", out0, "--max-depth", "64", "--adc-bailout", "0"])
+with open(out0, "rb") as f0, open(os.path.join(TMP, "rt_slab64.pfm"), "rb") as f1:
+    check(f0.read() == f1.read(), "slab, --adc-bailout 0: the image of the default, bit for bit")
+out = os.path.join(TMP, "rt_slab64_adc.pfm")
+run([slab, "-o", out, "--max-depth", "64", "--adc-bailout", "0.01"])
+w, h, rows = read_pfm(out)
+got = rows[1][3] / (Me[0] / math.pi)
+check(abs(got - (1 - R) ** 2) < 2e-5,
+      "slab, max depth 64, --adc-bailout 0.01: transmittance %.7f, expected (1 - R)^2 = %.7f" % (got, (1 - R) ** 2))
+bad_out = os.path.join(TMP, "rt_slab_adc_bad.pfm")
+for bad in ("-0.1", "1", "nan"):
+    p = run([slab, "-o", bad_out, "--adc-bailout", bad], expect=2)
+    check("--adc-bailout" in p.stderr and not os.path.exists(bad_out),
+          "--adc-bailout %s is refused (exit 2, no image)" % bad)
 
 # A uniform transmission texture tt on both faces: the straight path (max
 # depth 2) passes both, T = (1 - R)^2 tt^2 per channel.

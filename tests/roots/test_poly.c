@@ -19,6 +19,7 @@
 
 #include "roots_ref.h"
 #include "util/roots/roots.h"
+#include "util/roots/roots_internal.h"
 
 #define SIMPLE_ULPS 1.0
 
@@ -563,6 +564,34 @@ static void test_polish(void **state)
     print_message("[ measured ] polish from 1e-6 away: worst %.2f ulps\n", worst);
 }
 
+/* The exponent helpers of the root bounds give libm's values on every class
+ * of input (normal, subnormal, zero, Inf, NaN; 2^k at and past the normal
+ * range), so the roots do not depend on which one computed them. */
+static void test_exponent_helpers(void **state)
+{
+    (void)state;
+    const double xs[] = {1.0, -1.0, 0.75, 3.0, 0x1p-1022, -0x1p-1022, 0x1.fffffffffffffp+1023, -0x1p+1023,
+                         0x1p-1074, 0x1.8p-1060, -0x1p-1030, 0.0, -0.0, INFINITY, -INFINITY, NAN, 1e-300,
+                         1e300, 0x1.fffffffffffffp-1, 0x1p-100, 0x1p100};
+    for (size_t i = 0; i < sizeof xs / sizeof xs[0]; ++i)
+        if (tb__ilogb(xs[i]) != ilogb(xs[i]))
+            fail_msg("tb__ilogb(%a) = %d, ilogb %d", xs[i], tb__ilogb(xs[i]), ilogb(xs[i]));
+    tb_rng rng;
+    tb_rng_seed(&rng, tb_test_seed("exponent_helpers", 0xe4au), 1);
+    for (int t = 0; t < 100000; ++t) {
+        uint64_t u = (uint64_t)tb_rng_u32(&rng) << 32 | tb_rng_u32(&rng);
+        double x;
+        memcpy(&x, &u, sizeof x);
+        if (!(x != x) && tb__ilogb(x) != ilogb(x))
+            fail_msg("tb__ilogb(%a) = %d, ilogb %d", x, tb__ilogb(x), ilogb(x));
+    }
+    for (int k = -1100; k <= 1100; ++k) {
+        double a = tb__pow2(k), b = ldexp(1.0, k);
+        if (memcmp(&a, &b, sizeof a) != 0)
+            fail_msg("tb__pow2(%d) = %a, ldexp %a", k, a, b);
+    }
+}
+
 static void test_report_worst(void **state)
 {
     (void)state;
@@ -582,6 +611,7 @@ int main(void)
         cmocka_unit_test(test_torus_random_rays),
         cmocka_unit_test(test_random_root_sets),
         cmocka_unit_test(test_polish),
+        cmocka_unit_test(test_exponent_helpers),
         cmocka_unit_test(test_report_worst),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

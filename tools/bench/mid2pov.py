@@ -6,7 +6,7 @@ POV-Ray"). Writing the POV file from the MID file, rather than by hand,
 guarantees that both renderers see the same objects at the same places.
 
     tools/bench/mid2pov.py SCENE.mid [--light-samples N] [--max-depth D] \
-        [--scale S] > SCENE.pov
+        [--adc-bailout W] [--scale S] > SCENE.pov
 
 Every MID primitive becomes the exact POV-Ray shape (no tessellation):
 sphere, box, cylinder/cone (`open` without caps), conic as a `quadric`
@@ -39,6 +39,9 @@ plus, for a sphere, an `area_light` (with the sphere as its `looks_like`) of N =
 sphere's radius at its centre, which our renderer samples as the sphere
 itself; other emitter shapes are refused. `--max-depth D` (our camera ray is
 depth 0) is POV-Ray's `max_trace_level D+1` (its camera ray is level 1).
+`--adc-bailout W` (default 1/255, POV-Ray's own default, written out so the
+setting is visible) is POV-Ray's adaptive depth control; ours is
+`testbed render --adc-bailout W`.
 """
 import argparse
 import math
@@ -427,6 +430,8 @@ def main():
     ap.add_argument("scene")
     ap.add_argument("--light-samples", type=int, default=4)
     ap.add_argument("--max-depth", type=int, default=5)
+    ap.add_argument("--adc-bailout", default="1/255",
+                    help="POV-Ray's adc_bailout, an SDL expression (default 1/255)")
     ap.add_argument("--scale", type=float, default=1.0,
                     help="POV colour per unit of our radiance (default 1)")
     args = ap.parse_args()
@@ -438,7 +443,7 @@ def main():
     out = ["// Written by tools/bench/mid2pov.py from " + args.scene + "; do not edit.",
            "#version 3.7;",
            f"global_settings {{ assumed_gamma 1.0 max_trace_level {args.max_depth + 1} "
-           "ambient_light 0 }",
+           f"adc_bailout {args.adc_bailout} ambient_light 0 }}",
            "background { rgb 0 }"]
     for it in items:
         kind = it["_kind"]

@@ -29,10 +29,15 @@
 #   LIGHT_SAMPLES  area-light samples per shading point, a square (default 4:
 #            POV-Ray's 2 x 2 area_light grid)
 #   THREADS  thread count for both (default 1)
+#   ADC      ours' --adc-bailout (default 0.00392156862745098 = 1/255, the
+#            adc_bailout the .pov files state: POV-Ray's default adaptive
+#            depth control); ADC=0 traces every ray of ours to the depth
+#            limit (POV-Ray still bails out)
 #   SUITE    the folder of scene pairs (default tools/bench/pov)
 #   BASELINE another testbed binary (e.g. a Release build of main), timed
 #            in the same run: the last column is its user CPU / POV-Ray's,
-#            so a change is judged within one run on a shared machine
+#            so a change is judged within one run on a shared machine (a
+#            build without --adc-bailout runs without it)
 #   RUNS     timed runs per command (default 3; medians are reported)
 #
 # Timing: /usr/bin/time (GNU time) per run, wall and user CPU seconds of the
@@ -73,6 +78,7 @@ light_samples=${LIGHT_SAMPLES:-4}
 threads=${THREADS:-1}
 runs=${RUNS:-3}
 max_depth=5
+adc=${ADC:-0.00392156862745098}
 spp=$((R * R + 1))
 
 have_povray=1
@@ -112,7 +118,7 @@ if [[ $check == 1 ]]; then
     fi
     sed 's/^\( *resolution = \)\[[0-9]* [0-9]*\]/\1[200 150]/' "$suite/$s.mid" > "$out/$s.small.mid"
     "$TESTBED" render "$out/$s.small.mid" -o "$out/$s.ours.png" --spp "$spp" --light-samples "$light_samples" \
-      --max-depth "$max_depth" --exposure 0 --threads 0 >/dev/null 2>"$out/$s.ours.log"
+      --max-depth "$max_depth" --adc-bailout "$adc" --exposure 0 --threads 0 >/dev/null 2>"$out/$s.ours.log"
     # shellcheck disable=SC2046
     povray $(pov_args "$suite/$s.pov" 200 150 "$out/$s.pov.png") +WT2 >/dev/null 2>&1
     "$TESTBED" compare "$out/$s.ours.png" "$out/$s.pov.png" --json > "$out/$s.compare.json"
@@ -182,7 +188,7 @@ timeit() {
   printf '%s\n' "${t[@]}" | python3 -c 'import sys,statistics as s; r=[l.split() for l in sys.stdin]; print(s.median(float(a[0]) for a in r), s.median(float(a[1]) for a in r))'
 }
 
-echo "pov-suite: $spp samples/pixel (POV +A0.0 +AM1 +R$R +J), $light_samples area-light samples, depth $max_depth, $threads thread(s), $runs runs (medians)"
+echo "pov-suite: $spp samples/pixel (POV +A0.0 +AM1 +R$R +J), $light_samples area-light samples, depth $max_depth, ours --adc-bailout $adc, $threads thread(s), $runs runs (medians)"
 echo "pov-suite: $(povray --version 2>&1 | grep -m1 "^POV-Ray"); $($TESTBED --version 2>&1 | head -1)"
 echo "pov-suite: load before: $(uptime)"
 hdr=$(printf '%-12s %9s %9s %9s %9s %8s %8s' scene "ours wall" "POV wall" "ours CPU" "POV CPU" "CPU x" "wall x")
@@ -194,7 +200,7 @@ rows=$out/rows.txt
 for s in $scenes; do
   read -r width height < <(sed -n 's,^// resolution \([0-9]*\) x \([0-9]*\)$,\1 \2,p' "$suite/$s.pov")
   ours=("$TESTBED" render "$suite/$s.mid" -o "$out/$s.ours.png" --spp "$spp" --light-samples "$light_samples"
-    --max-depth "$max_depth" --exposure 0 --threads "$threads")
+    --max-depth "$max_depth" --adc-bailout "$adc" --exposure 0 --threads "$threads")
   # shellcheck disable=SC2207
   pov=(povray $(pov_args "$suite/$s.pov" "$width" "$height" "$out/$s.pov.png"))
   read -r ow ou < <(timeit "${ours[@]}")
@@ -208,6 +214,9 @@ for s in $scenes; do
   if [[ -n ${BASELINE:-} ]]; then
     base=("$BASELINE" "${ours[@]:1}")
     base[4]=$out/$s.base.png
+    if ! "$BASELINE" render --help 2>&1 | grep -q -- --adc-bailout; then
+      base=("${base[@]:0:11}" "${base[@]:13}") # a build before --adc-bailout: every ray traced
+    fi
     read -r _ bu < <(timeit "${base[@]}")
     line="$line $(python3 -c 'import sys; print(f"{float(sys.argv[1]) / float(sys.argv[2]):8.2f}")' "$bu" "$pu")"
   fi

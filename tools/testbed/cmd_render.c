@@ -206,7 +206,8 @@ static int tb__cmd_render(int argc, char **argv)
     int glossy_samples = TB_RT_DEFAULT_GLOSSY_SAMPLES;
     int rr_depth = TB_PT_DEFAULT_RR_DEPTH;
     bool depth_seen = false, light_seen = false, glossy_seen = false, tf_seen = false, adaptive = false;
-    bool rr_seen = false;
+    bool rr_seen = false, adc_seen = false;
+    double adc_bailout = 0.0;
     enum { TB__RAYTRACE, TB__RADIOSITY, TB__PATH, TB__HYBRID };
     static const tb_opt_choice methods[] = {
         {"raytrace", TB__RAYTRACE}, {"path", TB__PATH}, {"hybrid", TB__HYBRID},
@@ -266,6 +267,12 @@ static int tb__cmd_render(int argc, char **argv)
          .seen = &light_seen, .help = "area-light samples per shading point (default %D)"},
         {"glossy-samples", .type = TB_OPT_INT, .dest = &glossy_samples, .min = 1, .max = 1024, .metavar = "N",
          .seen = &glossy_seen, .help = "rays sampled from a GGX lobe at a camera ray's hit (default %D; one deeper)"},
+        {"adc-bailout", .type = TB_OPT_DOUBLE, .dest = &adc_bailout, .min = 0, .max = 1, .metavar = "W",
+         .flags = TB_OPTF_OPEN_MAX, .seen = &adc_seen,
+         .help = "raytrace: adaptive depth control, POV-Ray's adc_bailout: a reflected or\n"
+                 "refracted ray whose weight (product of the mirror, Fresnel and\n"
+                 "transmission weights since the camera) is below W is not traced\n"
+                 "(default 0: every ray to --max-depth; CPU backend)"},
         {"texture-filter", .type = TB_OPT_CHOICE, .dest = &texture_filter, .choices = tex_filters, .seen = &tf_seen,
          .help = "image texture filter over the pixel footprint (default %D)"},
         {"passes", .type = TB_OPT_INT, .dest = &ro->passes, .min = 1, .max = 1 << 20, .metavar = "N",
@@ -320,6 +327,8 @@ static int tb__cmd_render(int argc, char **argv)
         if ((backend == TB_GPU_MODE_VULKAN || gdevice >= 0) && adaptive)
             return tb_cli_usage_error(&cli, "--backend vulkan: the Vulkan path tracer has no adaptive antialiasing; "
                                             "use --backend cpu or a fixed --spp");
+        if (adc_seen)
+            return tb_cli_usage_error(&cli, "--adc-bailout goes with --method raytrace");
         if (light_seen || glossy_seen)
             return tb_cli_usage_error(&cli, "--%s goes with --method raytrace (the path tracer takes one light "
                                             "sample per vertex and samples its BSDFs)",
@@ -342,6 +351,9 @@ static int tb__cmd_render(int argc, char **argv)
         ro->rt.glossy_samples = glossy_samples;
     if (tf_seen)
         ro->rt.texture_filter = texture_filter;
+    ro->rt.min_weight = adc_bailout;
+    if (adc_bailout > 0.0 && (backend == TB_GPU_MODE_VULKAN || gdevice >= 0))
+        return tb_cli_usage_error(&cli, "--adc-bailout: the Vulkan renderer traces every ray; use --backend cpu");
     ro->cancel = &tb__render_interrupt;
     ro->progress = true;
     o.scene.accel = (tb_accel_kind)accel;
@@ -369,7 +381,7 @@ static int tb__cmd_render(int argc, char **argv)
     if (method == TB__PATH)
         cmd.pt = &po;
     if (method != TB__PATH || !ro->aa.adaptive) { /* the Vulkan backends render in one process */
-        if (tb_dist_size() == 1)
+        if (tb_dist_size() == 1 && !(adc_bailout > 0.0)) /* the Vulkan renderer has no depth control */
             o.backend = tb__render_gpu;
         o.backend_stats = tb__render_gpu_stats;
         o.backend_user = &cmd;

@@ -14,7 +14,10 @@
 
 #include "util/roots/roots_internal.h"
 
-tb__peval tb__poly_eval(const double *a, int n, double x)
+/* The bodies of tb__poly_eval and tb__poly_eval_quick, inlined where the
+ * degree is a constant (tb__poly_bracketed's cubic and quartic cases) so
+ * that the loops unroll; the same operations in the same order. */
+static inline __attribute__((always_inline)) tb__peval tb__eval_impl(const double *a, int n, double x)
 {
     double s = a[0], comp = 0.0, ds = 0.0, dds = 0.0, abs = fabs(a[0]), ax = fabs(x);
     for (int i = 1; i <= n; ++i) {
@@ -32,7 +35,9 @@ tb__peval tb__poly_eval(const double *a, int n, double x)
     return (tb__peval){s + comp, ds, 2.0 * dds, abs};
 }
 
-tb__peval tb__poly_eval_quick(const double *a, int n, double x)
+tb__peval tb__poly_eval(const double *a, int n, double x) { return tb__eval_impl(a, n, x); }
+
+static inline __attribute__((always_inline)) tb__peval tb__eval_quick_impl(const double *a, int n, double x)
 {
     double p = a[0], dp = 0.0, ddp = 0.0, abs = fabs(a[0]), ax = fabs(x);
     for (int i = 1; i <= n; ++i) {
@@ -46,8 +51,10 @@ tb__peval tb__poly_eval_quick(const double *a, int n, double x)
     double g = 2.0 * n * TB__ROOTS_U;
     if (fabs(p) > 2.5 * g * abs)
         return (tb__peval){p, dp, 2.0 * ddp, abs};
-    return tb__poly_eval(a, n, x);
+    return tb__eval_impl(a, n, x);
 }
+
+tb__peval tb__poly_eval_quick(const double *a, int n, double x) { return tb__eval_quick_impl(a, n, x); }
 
 double tb_poly_eval(const double *coef, int degree, double x, double *deriv)
 {
@@ -89,7 +96,7 @@ static double tb__split(double lo, double hi)
  * real roots convergent from anywhere, where Newton crawls by (n-1)/n per
  * step far from the roots); Newton's step when the square root would be of
  * a negative number (complex roots nearby). */
-static double tb__laguerre_step(int n, tb__peval e)
+static inline double tb__laguerre_step(int n, tb__peval e)
 {
     double inv = 1.0 / e.p, g = e.dp * inv, h = g * g - e.ddp * inv;
     double rad = (double)(n - 1) * ((double)n * h - g * g);
@@ -99,7 +106,8 @@ static double tb__laguerre_step(int n, tb__peval e)
     return den != 0.0 ? (double)n / den : e.p / e.dp;
 }
 
-double tb__poly_bracketed(const double *a, int n, double lo, double hi, int slo, double x)
+static inline __attribute__((always_inline)) double tb__bracketed_impl(const double *a, int n, double lo, double hi,
+                                                                      int slo, double x)
 {
     if (!(x > lo && x < hi))
         x = tb__split(lo, hi);
@@ -110,7 +118,7 @@ double tb__poly_bracketed(const double *a, int n, double lo, double hi, int slo,
     double dx_old = hi - lo, dx = dx_old;
     double best = x, best_abs = INFINITY;
     for (int it = 0; it < 400; ++it) {
-        tb__peval e = tb__poly_eval_quick(a, n, x);
+        tb__peval e = tb__eval_quick_impl(a, n, x);
         double ap = fabs(e.p);
         if (ap < best_abs) {
             best_abs = ap;
@@ -136,6 +144,16 @@ double tb__poly_bracketed(const double *a, int n, double lo, double hi, int slo,
         x = xn;
     }
     return best;
+}
+
+double tb__poly_bracketed(const double *a, int n, double lo, double hi, int slo, double x)
+{
+    /* The torus's quartic and its derivative cubic: constant degrees. */
+    if (n == 4)
+        return tb__bracketed_impl(a, 4, lo, hi, slo, x);
+    if (n == 3)
+        return tb__bracketed_impl(a, 3, lo, hi, slo, x);
+    return tb__bracketed_impl(a, n, lo, hi, slo, x);
 }
 
 double tb_poly_polish(const double *coef, int degree, double x, double lo, double hi)

@@ -27,17 +27,17 @@ static int tb__roots_core(const double *a, int n, double *r);
  * alone (no roots taken, no rounding); 0 if a_1..a_n are all 0. */
 static double tb__fujiwara(const double *a, int n)
 {
-    int e0 = ilogb(a[0]), best = INT_MIN;
+    int e0 = tb__ilogb(a[0]), best = INT_MIN;
     for (int i = 1; i <= n; ++i) {
         if (a[i] == 0.0)
             continue;
         /* |a_i/a_0| < 2^e, e = ilogb(a_i) + 1 - ilogb(a_0), so its i-th root < 2^ceil(e/i) */
-        int e = ilogb(a[i]) + 1 - e0 - (i == n);
+        int e = tb__ilogb(a[i]) + 1 - e0 - (i == n);
         int c = e >= 0 ? (e + i - 1) / i : -((-e) / i);
         if (c > best)
             best = c;
     }
-    return best == INT_MIN ? 0.0 : ldexp(1.0, best + 1);
+    return best == INT_MIN ? 0.0 : tb__pow2(best + 1);
 }
 
 static int tb__sign(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
@@ -57,7 +57,7 @@ static int tb__isolate(const double *a, int n, double *r)
      * (Fujiwara <= 2^201); balanced ones only with a tiny leading coefficient
      * that still fails the negligibility test, and roots beyond the cap are
      * then not reported. */
-    double cap = ldexp(1.0, 890 / n);
+    double cap = tb__pow2(890 / n);
     double bound = tb__fujiwara(a, n);
     int capped = !(bound < cap);
     if (capped)

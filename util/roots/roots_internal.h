@@ -2,6 +2,31 @@
 #ifndef TB_UTIL_ROOTS_ROOTS_INTERNAL_H
 #define TB_UTIL_ROOTS_ROOTS_INTERNAL_H
 
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+/* ilogb(x) without the libm call for normal x (the exponent field), the
+ * call itself for 0, subnormals, Inf and NaN: the same value in every case. */
+static inline int tb__ilogb(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    int e = (int)((u >> 52) & 0x7ff);
+    return e != 0 && e != 0x7ff ? e - 1023 : ilogb(x);
+}
+
+/* 2^k, exactly ldexp(1.0, k), built from the bits when it is a normal double. */
+static inline double tb__pow2(int k)
+{
+    if (k < -1022 || k > 1023)
+        return ldexp(1.0, k);
+    uint64_t u = (uint64_t)(k + 1023) << 52;
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
 /* Unit roundoff of double, 2^-53. */
 #define TB__ROOTS_U 0x1p-53
 

@@ -1,6 +1,6 @@
 // Written by tools/bench/mid2pov.py from tools/bench/pov/area.mid; do not edit.
 #version 3.7;
-global_settings { assumed_gamma 1.0 max_trace_level 6 ambient_light 0 }
+global_settings { assumed_gamma 1.0 max_trace_level 6 adc_bailout 1/255 ambient_light 0 }
 background { rgb 0 }
 // resolution 800 x 600
 camera { perspective location <1, -9, 4.5> direction <-0.121231205, 1.21231205, -0.460678578> right <1.32671625, 0.132671625, 0> up <-0.035192065, 0.35192065, 0.935368042> }

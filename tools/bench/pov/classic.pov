@@ -1,6 +1,6 @@
 // Written by tools/bench/mid2pov.py from tools/bench/pov/classic.mid; do not edit.
 #version 3.7;
-global_settings { assumed_gamma 1.0 max_trace_level 6 ambient_light 0 }
+global_settings { assumed_gamma 1.0 max_trace_level 6 adc_bailout 1/255 ambient_light 0 }
 background { rgb 0 }
 // resolution 800 x 600
 camera { perspective location <0, -10, 4> direction <0, 1.31905745, -0.383725803> right <1.33333333, -0, 0> up <0, 0.279329541, 0.960195297> }

@@ -1,6 +1,6 @@
 // Written by tools/bench/mid2pov.py from tools/bench/pov/glass.mid; do not edit.
 #version 3.7;
-global_settings { assumed_gamma 1.0 max_trace_level 6 ambient_light 0 }
+global_settings { assumed_gamma 1.0 max_trace_level 6 adc_bailout 1/255 ambient_light 0 }
 background { rgb 0 }
 // resolution 800 x 600
 camera { perspective location <0, -9, 3.2> direction <0, 1.33878418, -0.307920362> right <1.33333333, -0, 0> up <0, 0.224147693, 0.974555187> }

@@ -1,6 +1,6 @@
 // Written by tools/bench/mid2pov.py from tools/bench/pov/mirror-room.mid; do not edit.
 #version 3.7;
-global_settings { assumed_gamma 1.0 max_trace_level 6 ambient_light 0 }
+global_settings { assumed_gamma 1.0 max_trace_level 6 adc_bailout 1/255 ambient_light 0 }
 background { rgb 0 }
 // resolution 800 x 600
 camera { perspective location <-3.2, -3.4, 1.7> direction <0.565209457, 0.641589113, -0.137483381> right <1.00047866, -0.881374057, -1.85037171e-17> up <0.10494001, 0.119121092, 0.987318469> }
