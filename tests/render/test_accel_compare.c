@@ -458,6 +458,8 @@ static void test_bvh_drop_binary(void **state)
     tb_accel_free(keep);
     tb_accel_free(drop);
     tp_free(&s);
+}
+
 /* ---- SAH quality against an exact sweep ----
  * A slow reference builder, independent of bvh.c: top-down, every node
  * sorts its references by centroid on each axis (ties by index) and
