@@ -224,15 +224,7 @@ static bool tb__sample(void *ctx, float u1, float u2, tb_vec3 *q, tb_vec3 *n, do
     if (!tb_csg_emitter_build(ce))
         return false;
     double u = u1 >= 0.0f ? (u1 < 1.0f ? u1 : 0x1.fffffep-1) : 0.0;
-    int lo = 1, hi = ce->ntris; /* first i with cdf[i] <= u < cdf[i + 1] */
-    while (lo < hi) {
-        int mid = lo + (hi - lo) / 2;
-        if (ce->cdf[mid] > u)
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
-    int i = lo - 1;
+    int i = tb_cdf_search(ce->cdf, ce->ntris, u);
     double w = ce->cdf[i + 1] - ce->cdf[i];
     double r = w > 0.0 ? (u - ce->cdf[i]) / w : 0.0;
     float ur = r < 1.0 ? (r > 0.0 ? (float)r : 0.0f) : 0x1.fffffep-1f;

@@ -130,6 +130,22 @@ tb_status tb_distrib1d_init(tb_distrib1d *d, const double *f, int n);
 /* Frees the table and zeroes *d (harmless on a zeroed struct). */
 void tb_distrib1d_release(tb_distrib1d *d);
 
+/* The item of u in [0, 1) under a cumulative table of n + 1 entries (cdf[0] =
+ * 0, cdf[n] = 1, non-decreasing): the i with cdf[i] <= u < cdf[i + 1], so an
+ * item of width 0 is never returned. */
+static inline int tb_cdf_search(const double *cdf, int n, double u)
+{
+    int lo = 1, hi = n; /* first j with cdf[j] > u; cdf[n] = 1 > u always */
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (cdf[mid] > u)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo - 1;
+}
+
 /* Picks item i with probability f[i] / total (never an item of weight 0).
  * *pmf (if not NULL) gets that probability and *u_remap (if not NULL) the
  * position of u within the item's slice of [0,1), rescaled to [0,1), so the
@@ -141,17 +157,7 @@ static inline int tb_distrib1d_sample_discrete(const tb_distrib1d *d, double u, 
         u = 0.0;
     if (u >= 1.0)
         u = 0x1.fffffffffffffp-1;
-    /* First j with cdf[j] > u; item j - 1 has cdf[j-1] <= u < cdf[j], so a
-     * positive width: items of weight 0 are never picked. */
-    int lo = 1, hi = d->n;
-    while (lo < hi) {
-        int mid = lo + (hi - lo) / 2;
-        if (d->cdf[mid] > u)
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
-    int i = lo - 1;
+    int i = tb_cdf_search(d->cdf, d->n, u);
     /* cdf[n] = 1 > u always, so i is in 0..n-1 with cdf[i] <= u < cdf[i+1]. */
     double w = d->cdf[i + 1] - d->cdf[i];
     if (pmf)
