@@ -552,10 +552,6 @@ bool tb__bvh_intersect(const tb_accel *acc, const tb_ray *ray, tb__accel_best *b
 typedef struct tb__occ_cache {
     const tb_accel *acc;          /* the structure the hints are for */
     uint32_t k[TB__OCC_SLOTS];    /* stored reference numbers; UINT32_MAX: none */
-    /* A copy of each hint's box: most hints miss the next ray, and testing
-     * the copy costs no read of the references (a cache miss per shadow ray
-     * on large scenes). */
-    tb_aabb box[TB__OCC_SLOTS];
 } tb__occ_cache;
 
 static _Thread_local tb__occ_cache tb__occ;
@@ -589,7 +585,7 @@ bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
     uint32_t k = c->k[slot];
     tb__accel_any q = tb__accel_any_start(ray);
     /* The hint's box first: a miss there costs a slab test, not a callback. */
-    if (k < acc->n && tb__bvh_box_hit(&c->box[slot], ray)) {
+    if (k < acc->n && tb__bvh_box_hit(&acc->prims[k].bounds, ray)) {
         tb_stat_add(&tb__bvh_prims_tested, 1);
         if (tb__accel_test_any(acc, k, &q)) {
             TB_STAT_INC(tb__bvh_shadow_rays);
@@ -612,9 +608,7 @@ bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
     TB_STAT_INC(tb__bvh_shadow_rays);
     tb_stat_add(&tb__bvh_nodes_visited, visited);
     tb_stat_add(&tb__bvh_prims_tested, tested);
-    if (hit && c->k[slot] != who) {
+    if (hit)
         c->k[slot] = who;
-        c->box[slot] = acc->prims[who].bounds;
-    }
     return hit;
 }
