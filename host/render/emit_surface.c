@@ -8,6 +8,7 @@
 
 #include "host/object/intersect.h"
 #include "host/object/param.h"
+#include "host/render/sampling.h"
 #include "util/math/float.h"
 
 /* 8-point Gauss-Legendre on [0, 1]: nodes and weights (a direction in
@@ -54,15 +55,7 @@ static int tb__pick(const double *cdf, int n, double u, double *p, double *ur)
         u = 0.0;
     if (u >= 1.0)
         u = 0x1.fffffffffffffp-1;
-    int lo = 1, hi = n;
-    while (lo < hi) {
-        int mid = lo + (hi - lo) / 2;
-        if (cdf[mid] > u)
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
-    int i = lo - 1;
+    int i = tb_cdf_search(cdf, n, u);
     double w = cdf[i + 1] - cdf[i];
     *p = w;
     double r = w > 0.0 ? (u - cdf[i]) / w : 0.0;
