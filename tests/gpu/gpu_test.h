@@ -77,6 +77,22 @@ static inline void gpu_test_close(gpu_test_env *e)
     tb_gpu_instance_destroy(e->inst);
 }
 
+/* cmocka group fixtures: one gpu_test_env (default device) for a file's
+ * tests, passed to each as *state; the teardown checks the validation layer. */
+static inline int gpu_test_setup(void **state)
+{
+    static gpu_test_env e;
+    gpu_test_open(&e, NULL);
+    *state = &e;
+    return 0;
+}
+
+static inline int gpu_test_teardown(void **state)
+{
+    gpu_test_close(*state);
+    return 0;
+}
+
 /* The scene in MID `text` (`name` for messages, files relative to `dir`,
  * NULL: the working folder); fails the test if it does not load. */
 static inline tb_scene *gpu_test_load(const char *text, const char *name, const char *dir)

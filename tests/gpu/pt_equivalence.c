@@ -34,20 +34,6 @@
 #define TB__K 16
 #define TB__ALPHA 0.01
 
-static int tb__setup(void **state)
-{
-    static gpu_test_env e;
-    gpu_test_open(&e, NULL);
-    *state = &e;
-    return 0;
-}
-
-static int tb__teardown(void **state)
-{
-    gpu_test_close(*state);
-    return 0;
-}
-
 /* ln Gamma(x), x > 0 (Lanczos, g = 7, 9 terms: |error| < 1e-13). */
 static double tb__lgamma(double x)
 {
@@ -433,5 +419,5 @@ int main(void)
         cmocka_unit_test(test_delta_lights),
         cmocka_unit_test(test_controls),       cmocka_unit_test(test_refused),
     };
-    return cmocka_run_group_tests(tests, tb__setup, tb__teardown);
+    return cmocka_run_group_tests(tests, gpu_test_setup, gpu_test_teardown);
 }

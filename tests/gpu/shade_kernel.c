@@ -47,20 +47,6 @@ static tb_scene *tb__load(const char *mat, const char *extra, bool lamp, const c
     return gpu_test_load(text, "shade.mid", dir);
 }
 
-static int tb__setup(void **state)
-{
-    static gpu_test_env e;
-    gpu_test_open(&e, NULL);
-    *state = &e;
-    return 0;
-}
-
-static int tb__teardown(void **state)
-{
-    gpu_test_close(*state);
-    return 0;
-}
-
 /* Rays from (0, -6, 3) to a 32 x 32 grid of floor points. */
 static void tb__rays(tb_ray *rays)
 {
@@ -400,5 +386,5 @@ int main(void)
         cmocka_unit_test(test_lambert_model),  cmocka_unit_test(test_routed_models), cmocka_unit_test(test_ggx),
         cmocka_unit_test(test_patterns),       cmocka_unit_test(test_ies),
     };
-    return cmocka_run_group_tests(tests, tb__setup, tb__teardown);
+    return cmocka_run_group_tests(tests, gpu_test_setup, gpu_test_teardown);
 }

@@ -33,6 +33,7 @@
 #include "host/render/emit_surface.h"
 #include "host/render/pathtrace.h"
 #include "host/render/scene.h"
+#include "test_pt_agree.h"
 #include "test_shading_support.h"
 #include "util/math/rng.h"
 
@@ -329,27 +330,6 @@ static void test_scene(void **state)
 
 /* ------------------------------------------------------------- path tracer */
 
-typedef struct est {
-    double mean, se;
-} est;
-
-static est estimate(const tb_pathtracer *pt, tb_vec3 o, tb_vec3 target, long n, uint64_t seed)
-{
-    double s1 = 0.0, s2 = 0.0;
-    tb_rng rng;
-    tb_rng_seed(&rng, seed, 11);
-    tb_vec3 d = tb_vec3_normalize(tb_vec3_sub(target, o));
-    for (long i = 0; i < n; i++) {
-        tb_ray ray = tb_ray_make(o, d, 0.0f, INFINITY);
-        tb_channels L = tb_pt_radiance(pt, &ray, &rng);
-        s1 += L.v[1];
-        s2 += (double)L.v[1] * L.v[1];
-    }
-    est e = {s1 / n, 0.0};
-    e.se = sqrt(fmax(0.0, s2 / n - e.mean * e.mean) / n);
-    return e;
-}
-
 static void test_pathtracer(void **state)
 {
     (void)state;
@@ -367,26 +347,10 @@ static void test_pathtracer(void **state)
     tb_scene *sa = load(text);
     tb_scene_options o = {.tessellated_emitters = true};
     tb_scene *st = load_opt(text, &o);
-    tb_pt_options po = {0};
-    po.max_depth = 2;
-    tb_pathtracer *pa = NULL, *pb = NULL;
-    assert_int_equal(tb_pt_create(sa, &po, &pa), TB_OK);
-    assert_int_equal(tb_pt_create(st, &po, &pb), TB_OK);
     const tb_vec3 eye = tb_vec3_make(0.5f, -6.0f, 4.0f);
     const tb_vec3 pts[5] = {{0, 0, 0}, {-1, 0.3f, 0}, {2, 1, 0}, {-3, -2, 0}, {3, -1.5f, 0}};
     uint64_t seed = tb_test_seed("surface emitter path tracer", 5);
-    for (int k = 0; k < 5; k++) {
-        est a = estimate(pa, eye, pts[k], n, seed + 2 * k), b = estimate(pb, eye, pts[k], n, seed + 2 * k + 1);
-        double bound = 4.0 * sqrt(a.se * a.se + b.se * b.se);
-        printf("[ pt       ] point %d: analytic %.5f +- %.5f, tessellated %.5f +- %.5f\n", k, a.mean, a.se, b.mean,
-               b.se);
-        if (!(fabs(a.mean - b.mean) <= bound))
-            fail_msg("point %d: analytic %.6g, tessellated %.6g, differ by more than %.3g (4 sigma)", k, a.mean,
-                     b.mean, bound);
-        assert_true(a.mean > 0.0);
-    }
-    tb_pt_free(pa);
-    tb_pt_free(pb);
+    tp_pt_agree(sa, "analytic", st, "tessellated", eye, pts, 5, n, seed);
     tb_scene_free(sa);
     tb_scene_free(st);
 }
