@@ -19,6 +19,7 @@
  *    threads, each from a freshly loaded scene (the tessellations built
  *    during the render). */
 #include "tb_test.h"
+#include "test_scene_text.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -32,28 +33,6 @@
 #include "host/render/sampling.h"
 #include "util/math/rng.h"
 #include "util/stats/stats.h"
-
-/* Sample counts are divided by $TB_PT_TEST_DIVISOR (the sanitizer build sets 8). */
-static long divisor(void)
-{
-    const char *e = getenv("TB_PT_TEST_DIVISOR");
-    long d = e ? atol(e) : 1;
-    return d > 0 ? d : 1;
-}
-
-static tb_scene *load_opt(const char *text, const tb_scene_options *opt)
-{
-    FILE *fp = fmemopen((void *)text, strlen(text), "r");
-    assert_non_null(fp);
-    tb_scene *s = NULL;
-    tb_status st = tb_scene_load_stream(fp, "t.mid", tb_test_tmpdir(), opt, &s);
-    fclose(fp);
-    if (st)
-        fail_msg("%s", tb_last_error());
-    return s;
-}
-
-static tb_scene *load(const char *text) { return load_opt(text, NULL); }
 
 /* Two unit spheres, centres (0 0 0) and (0 0 1): area 2 (4 pi - 2 pi / 2) = 6 pi. */
 #define TWO_SPHERES "union { rendering = { emission = 1 } sphere {} sphere { transform = [translate([0 0 1])] } }\n"
@@ -75,7 +54,7 @@ static void test_lazy(void **state)
     (void)state;
     tb_stats_set_enabled(1);
     tb_stats_reset();
-    tb_scene *s = load("mid 1\n" TWO_SPHERES CUBE_HOLE
+    tb_scene *s = tp_scene_text("mid 1\n" TWO_SPHERES CUBE_HOLE
                        "intersection { transform = [translate([0 6 0])] sphere {} cube { transform = [scale(0.8)] } }\n");
     assert_int_equal(s->nemissive, 2);
     assert_int_equal(s->nemitters, 2);
@@ -110,7 +89,7 @@ static void test_lazy(void **state)
 static void test_area(void **state)
 {
     (void)state;
-    tb_scene *s = load("mid 1\n" TWO_SPHERES CUBE_HOLE);
+    tb_scene *s = tp_scene_text("mid 1\n" TWO_SPHERES CUBE_HOLE);
     const double want[2] = {6.0 * TB_PI, 24.0 + TB_PI};
     for (int i = 0; i < 2; i++) {
         tb_csg_emitter *ce = csg_of(s, i);
@@ -132,11 +111,11 @@ static void test_area(void **state)
 static void test_uniform(void **state)
 {
     (void)state;
-    tb_scene *s = load("mid 1\n" TWO_SPHERES);
+    tb_scene *s = tp_scene_text("mid 1\n" TWO_SPHERES);
     tb_area_light al;
     assert_int_equal(tb_area_light_init(&al, s->emitters, 1), TB_OK);
     enum { BINS = 24 };
-    long n = 48000 / divisor(), count[BINS] = {0}, got = 0;
+    long n = 48000 / tp_pt_divisor(), count[BINS] = {0}, got = 0;
     tb_rng rng;
     tb_rng_seed(&rng, tb_test_seed("csg emitter uniform", 3), 1);
     const tb_emitter *e = &s->emitters[0];
@@ -190,14 +169,14 @@ static void test_line_pdf(void **state)
     const tb_vec3 p[2] = {{0.1f, -0.2f, 0.4f}, {5.7f, 0.1f, 0.2f}};
     uint64_t seed = tb_test_seed("csg emitter line pdf", 17);
     for (int i = 0; i < 2; i++) {
-        tb_scene *s = load(cases[i]);
+        tb_scene *s = tp_scene_text(cases[i]);
         tb_emitter e = s->emitters[0];
         e.two_sided = true;
         tb_area_light a;
         assert_int_equal(tb_area_light_init(&a, &e, 1), TB_OK);
         tb_rng rng;
         tb_rng_seed(&rng, seed + (uint64_t)i, 3);
-        long n = 4000 / divisor();
+        long n = 4000 / tp_pt_divisor();
         double s1 = 0.0, s2 = 0.0;
         for (long k = 0; k < n; k++) {
             tb_vec3 w = tb_sample_uniform_sphere(tb_rng_float(&rng), tb_rng_float(&rng));
@@ -209,7 +188,7 @@ static void test_line_pdf(void **state)
         printf("[ line pdf ] %s: integral %.4f +- %.4f\n", i ? "cube - sphere" : "two spheres", mean, se);
         if (!(fabs(mean - 1.0) <= 4.0 * se + 1e-3))
             fail_msg("integral of the line density %.5f +- %.5f, not 1", mean, se);
-        for (int k = 0; k < 500 / divisor(); k++) {
+        for (int k = 0; k < 500 / tp_pt_divisor(); k++) {
             tb_light_sample ls;
             if (!tb_area_light_sample(&a, p[i], tb_rng_float(&rng), tb_rng_float(&rng), &ls))
                 continue;
@@ -240,10 +219,10 @@ static void test_line_pdf(void **state)
 static void test_pathtracer(void **state)
 {
     (void)state;
-    long n = 4000 / divisor();
-    tb_scene *sa = load(PT_SCENE);
+    long n = 4000 / tp_pt_divisor();
+    tb_scene *sa = tp_scene_text(PT_SCENE);
     tb_scene_options o = {.tessellated_emitters = true};
-    tb_scene *st = load_opt(PT_SCENE, &o);
+    tb_scene *st = tp_scene_text_opt(PT_SCENE, &o);
     assert_int_equal(sa->nemitters, 2);
     assert_true(st->nemitters > 100); /* the eager triangles */
     const tb_vec3 eye = tb_vec3_make(0.5f, -6.0f, 4.0f);
@@ -260,7 +239,7 @@ static void test_threads(void **state)
     (void)state;
     tb_image *img[2] = {NULL, NULL};
     for (int k = 0; k < 2; k++) {
-        tb_scene *s = load(PT_SCENE);
+        tb_scene *s = tp_scene_text(PT_SCENE);
         tb_render_options o = tb_render_defaults();
         o.aa.spp = 4;
         o.threads = k + 1;

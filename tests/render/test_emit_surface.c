@@ -24,6 +24,7 @@
  *  - the scene: one emitter per curved primitive, its area for
  *    tb_scene_emissive_area, its table in tb_scene_memory. */
 #include "tb_test.h"
+#include "test_scene_text.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -37,33 +38,11 @@
 #include "test_shading_support.h"
 #include "util/math/rng.h"
 
-/* Sample counts are divided by $TB_PT_TEST_DIVISOR (the sanitizer build sets 8). */
-static long divisor(void)
-{
-    const char *e = getenv("TB_PT_TEST_DIVISOR");
-    long d = e ? atol(e) : 1;
-    return d > 0 ? d : 1;
-}
-
-static tb_scene *load_opt(const char *text, const tb_scene_options *opt)
-{
-    FILE *fp = fmemopen((void *)text, strlen(text), "r");
-    assert_non_null(fp);
-    tb_scene *s = NULL;
-    tb_status st = tb_scene_load_stream(fp, "t.mid", tb_test_tmpdir(), opt, &s);
-    fclose(fp);
-    if (st)
-        fail_msg("%s", tb_last_error());
-    return s;
-}
-
-static tb_scene *load(const char *text) { return load_opt(text, NULL); }
-
 /* Area of the surface of object i of a one-object scene `text`, by its
  * surface emitter; prints its table's size. */
 static double surf_area(const char *text)
 {
-    tb_scene *s = load(text);
+    tb_scene *s = tp_scene_text(text);
     tb_surface_emitter *se;
     if (tb_surface_emitter_make(s->objects[0], &se))
         fail_msg("%s", tb_last_error());
@@ -214,7 +193,7 @@ static double light_pdf(void *c_, tb_vec3 w)
  * silhouettes, which the expected counts' quadrature could miss. */
 static void chi2_case(const char *name, const char *text, tb_vec3 p, uint64_t seed, bool partial, long n)
 {
-    tb_scene *s = load(text);
+    tb_scene *s = tp_scene_text(text);
     assert_int_equal(s->nemitters, 1);
     tb_emitter e = s->emitters[0];
     assert_true(tb_emitter_is_surface(&e));
@@ -222,7 +201,7 @@ static void chi2_case(const char *name, const char *text, tb_vec3 p, uint64_t se
     tb_area_light a;
     assert_int_equal(tb_area_light_init(&a, &e, 1), TB_OK);
     light_ctx c = {&a, p};
-    n /= divisor();
+    n /= tp_pt_divisor();
     tst_chi2 r = tst_chi2_run(name, light_sample, light_pdf, &c, n, 24, 12, seed);
     assert_false(r.zero_bin_hit);
     assert_true(r.p_value >= TST_CHI2_ALPHA);
@@ -233,7 +212,7 @@ static void chi2_case(const char *name, const char *text, tb_vec3 p, uint64_t se
     /* The density a sample reports is tb_area_light_pdf at its point. */
     tb_rng rng;
     tb_rng_seed(&rng, seed, 3);
-    for (int k = 0; k < 2000 / divisor(); k++) {
+    for (int k = 0; k < 2000 / tp_pt_divisor(); k++) {
         tb_light_sample ls;
         if (!tb_area_light_sample(&a, p, tb_rng_float(&rng), tb_rng_float(&rng), &ls))
             continue;
@@ -282,7 +261,7 @@ static void test_scene(void **state)
                        "prism { geometry = { sides = 6 } transform = [translate([20 0 0])] rendering = { emission = 1 } }\n"
                        "square_arch { transform = [translate([30 0 0])] rendering = { emission = 1 } }\n"
                        "sphere { transform = [scale(2)] rendering = { emission = 1 } }\n";
-    tb_scene *s = load(text);
+    tb_scene *s = tp_scene_text(text);
     assert_int_equal(s->nemissive, 5);
     assert_int_equal(s->nemitters, 5);
     double want[4] = {ellipsoid_area(1, 2, 3), 4.0 * M_PI * M_PI * 2.0 * 0.5, 12.0 + 2.0 * 1.5 * sqrt(3.0), 0.0};
@@ -321,7 +300,7 @@ static void test_scene(void **state)
     tb_scene_free(s);
     /* tessellated on request: many triangles */
     tb_scene_options o = {.tessellated_emitters = true};
-    s = load_opt(text, &o);
+    s = tp_scene_text_opt(text, &o);
     assert_true(s->nemitters > 1000);
     for (int i = 0; i < s->nemitters; i++)
         assert_false(tb_emitter_is_surface(&s->emitters[i]));
@@ -343,10 +322,10 @@ static void test_pathtracer(void **state)
         "translate([-1 0 2.2])] rendering = { emission = 3 } }\n"
         "cylinder { transform = [scale([0.3 0.6 0.5]) rotate([0 1 0], 70) translate([2 1 1.5])] "
         "rendering = { emission = 5 } }\n";
-    long n = 16000 / divisor();
-    tb_scene *sa = load(text);
+    long n = 16000 / tp_pt_divisor();
+    tb_scene *sa = tp_scene_text(text);
     tb_scene_options o = {.tessellated_emitters = true};
-    tb_scene *st = load_opt(text, &o);
+    tb_scene *st = tp_scene_text_opt(text, &o);
     const tb_vec3 eye = tb_vec3_make(0.5f, -6.0f, 4.0f);
     const tb_vec3 pts[5] = {{0, 0, 0}, {-1, 0.3f, 0}, {2, 1, 0}, {-3, -2, 0}, {3, -1.5f, 0}};
     uint64_t seed = tb_test_seed("surface emitter path tracer", 5);

@@ -26,6 +26,7 @@
  *  - determinism: a rendered image is byte-identical for 1 and 2 threads and
  *    the same seed, and differs for another seed. */
 #include "tb_test.h"
+#include "test_scene_text.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -42,29 +43,10 @@
 
 /* Path counts are divided by $TB_PT_TEST_DIVISOR (the sanitizer build sets 4);
  * the bounds follow from the sample variance, so they widen accordingly. */
-static long divisor(void)
-{
-    const char *e = getenv("TB_PT_TEST_DIVISOR");
-    long d = e ? atol(e) : 1;
-    return d > 0 ? d : 1;
-}
-
-static long scaled(long n) { return n / divisor(); }
+static long scaled(long n) { return n / tp_pt_divisor(); }
 
 /* A standard error allowed to grow as the counts shrink: sqrt(divisor) times base. */
-static double se_bound(double base) { return base * sqrt((double)divisor()); }
-
-static tb_scene *load(const char *text)
-{
-    FILE *fp = fmemopen((void *)text, strlen(text), "r");
-    assert_non_null(fp);
-    tb_scene *s = NULL;
-    tb_status st = tb_scene_load_stream(fp, "t.mid", tb_test_tmpdir(), NULL, &s);
-    fclose(fp);
-    if (st)
-        fail_msg("%s", tb_last_error());
-    return s;
-}
+static double se_bound(double base) { return base * sqrt((double)tp_pt_divisor()); }
 
 static tb_pathtracer *pt_make(const tb_scene *s, int max_depth, int rr_depth)
 {
@@ -150,7 +132,7 @@ static void furnace_check(const char *what, const char *mat, long n, int rr_dept
     char text[8192];
     int k = snprintf(text, sizeof text, "mid 1.1\n");
     furnace_box(text + k, sizeof text - (size_t)k, mat);
-    tb_scene *s = load(text);
+    tb_scene *s = tp_scene_text(text);
     tb_pathtracer *pt = pt_make(s, 0, rr_depth);
     const tb_material *m = &s->materials[0];
     est e = estimate(pt, s->nchannels, tb_vec3_make(1.0f, -2.0f, 3.0f), tb_vec3_make(0, 0, 0), true, n, seed);
@@ -228,7 +210,7 @@ static void test_direct_sphere(void **state)
 {
     (void)state;
     uint64_t seed = tb_test_seed("pt direct sphere", 162);
-    tb_scene *s = load("mid 1.1\n" FLOOR
+    tb_scene *s = tp_scene_text("mid 1.1\n" FLOOR
                        "sphere { transform = [translate([0 0 6])] "
                        "rendering = { diffuse = 0 emission = 3.14159265358979 } }\n");
     tb_pathtracer *pt = pt_make(s, 0, 0);
@@ -259,7 +241,7 @@ static void test_direct_rectangle(void **state)
 {
     (void)state;
     uint64_t seed = tb_test_seed("pt direct rectangle", 163);
-    tb_scene *s = load("mid 1.1\n" FLOOR
+    tb_scene *s = tp_scene_text("mid 1.1\n" FLOOR
                        "polygons { geometry = { vertices = [[0 0 4] [0 3 4] [2 3 4] [2 0 4]] faces = [[0 1 2 3]] } "
                        "rendering = { diffuse = 0 emission = 6.28318530717959 } }\n");
     tb_pathtracer *pt = pt_make(s, 0, 0);
@@ -279,7 +261,7 @@ static void test_direct_rectangle(void **state)
 static void test_delta_lights(void **state)
 {
     (void)state;
-    tb_scene *s = load("mid 1.1\n" FLOOR
+    tb_scene *s = tp_scene_text("mid 1.1\n" FLOOR
                        "point_light { position = [1 2 5] intensity = 40 }\n"
                        "spot_light { position = [-20 0 8] direction = [0 0 -1] intensity = 90 cone_angle = 30 "
                        "cone_delta = 10 }\n"
@@ -353,7 +335,7 @@ static double one_strategy(const mis_ctx *c, const tb_ray *ray, bool light, tb_r
  * the two single-strategy estimates, n paths each. */
 static void mis_case(const char *what, const char *text, tb_vec3 eye, tb_vec3 q, long n, bool exact, uint64_t seed)
 {
-    tb_scene *s = load(text);
+    tb_scene *s = tp_scene_text(text);
     mis_ctx c = {.s = s};
     assert_int_equal(tb_surfaces_create(s, NULL, &c.ss), TB_OK);
     assert_int_equal(tb_light_set_init(&c.ls, s), TB_OK);
@@ -468,7 +450,7 @@ static void test_threads_identical(void **state)
 static void test_bad_options(void **state)
 {
     (void)state;
-    tb_scene *s = load("mid 1.1\n" FLOOR);
+    tb_scene *s = tp_scene_text("mid 1.1\n" FLOOR);
     tb_pathtracer *pt = NULL;
     tb_pt_options o = {.max_depth = -1};
     assert_int_equal(tb_pt_create(s, &o, &pt), TB_ERR_ARG);

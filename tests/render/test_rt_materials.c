@@ -20,6 +20,7 @@
  *  - a bump map with a constant slope (an image ramp) tilts the normal by
  *    the analytic angle: cos = n' . l with n' = normalise(-H, 0, 2). */
 #include "tb_test.h"
+#include "test_scene_text.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -31,18 +32,6 @@
 #include "util/math/rng.h"
 
 #define M_PI 3.14159265358979323846
-
-static tb_scene *load(const char *text)
-{
-    FILE *fp = fmemopen((void *)text, strlen(text), "r");
-    assert_non_null(fp);
-    tb_scene *s = NULL;
-    tb_status st = tb_scene_load_stream(fp, "t.mid", tb_test_tmpdir(), NULL, &s);
-    fclose(fp);
-    if (st)
-        fail_msg("%s", tb_last_error());
-    return s;
-}
 
 static void rt_init(tb_raytracer *rt, const tb_scene *s, int glossy)
 {
@@ -121,7 +110,7 @@ static void test_ggx_white_furnace(void **state)
                          "mid 1.1\nsphere { rendering = { diffuse = 0 specular = 1 model = ggx roughness = %g } }\n",
                          alphas[ia]);
         furnace_box(text + k, sizeof text - (size_t)k);
-        tb_scene *s = load(text);
+        tb_scene *s = tp_scene_text(text);
         tb_raytracer rt;
         rt_init(&rt, s, 64);
         tb_bsdf b = tb_bsdf_ggx(tb_channels_splat(1, 1.0f), alphas[ia], TB_FRESNEL_SCHLICK, 1.0);
@@ -159,7 +148,7 @@ static void test_ggx_area_light_mis(void **state)
 {
     (void)state;
     const double alpha = 0.3;
-    tb_scene *s = load("mid 1.1\n"
+    tb_scene *s = tp_scene_text("mid 1.1\n"
                        "polygons { geometry = { vertices = [[0 -0.5 2] [0 0.5 2] [1 0.5 2] [1 -0.5 2]] faces = [[0 1 2 3]] }\n"
                        "  rendering = { diffuse = 0 emission = 3.14159265358979 } }\n"
                        "polygons { geometry = { vertices = [[-50 -50 0] [50 -50 0] [50 50 0] [-50 50 0]] faces = [[0 1 2 3]] }\n"
@@ -211,7 +200,7 @@ static void test_models_under_point_light(void **state)
                  "polygons { geometry = { vertices = [[-50 -50 0] [50 -50 0] [50 50 0] [-50 50 0]] faces = [[0 1 2 3]] }\n"
                  "  rendering = { diffuse = %g specular = %g exponent = %g roughness = %g model = %s } }\n",
                  h, I, rho, ks, n, alpha, models[im]);
-        tb_scene *s = load(text);
+        tb_scene *s = tp_scene_text(text);
         tb_raytracer rt;
         rt_init(&rt, s, 1);
         for (int e = 0; e < 2; e++) {
@@ -262,7 +251,7 @@ static void grazing_rows(const char *mat, int y0, int y1, double out[4])
              "polygons { geometry = { vertices = [[-100 0 0] [-100 0 100] [100 0 100] [100 0 0]] faces = [[0 1 2 3]] }\n"
              "  rendering = { %s } }\n",
              mat);
-    tb_scene *s = load(text);
+    tb_scene *s = tp_scene_text(text);
     tb_raytracer rt;
     rt_init(&rt, s, 1);
     double sum = 0.0, sum2 = 0.0, lo = INFINITY, hi = -INFINITY;
@@ -332,7 +321,7 @@ static void test_object_space_checker(void **state)
     /* a unit sphere scaled by 2 and moved to x = 5: object point (x, 0, 0.8)
      * of the 3D checker of scale 1 is odd for x = -0.6 (floor -1) and even
      * for x = 0.6; straight down light, cos = 0.8 */
-    tb_scene *s = load("mid 1.1\ndirectional_light { direction = [0 0 -1] irradiance = 3.14159265358979 }\n"
+    tb_scene *s = tp_scene_text("mid 1.1\ndirectional_light { direction = [0 0 -1] irradiance = 3.14159265358979 }\n"
                        "sphere { transform = [scale(2) translate([5 0 0])]\n"
                        "  rendering = { diffuse_pattern = checker(1, 0.2, 0.8, object) } }\n");
     tb_raytracer rt;
@@ -374,7 +363,7 @@ static void test_bump_constant_slope(void **state)
                  "                        uvs = [[0 0] [1 0] [1 1] [0 1]] }\n"
                  "  rendering = { diffuse = 1 bump = image(file(\"rt_bump_ramp.pfm\"), %.17g) } }\n",
                  H);
-        tb_scene *s = load(text);
+        tb_scene *s = tp_scene_text(text);
         tb_raytracer rt;
         rt_init(&rt, s, 1);
         /* dp'/du = (2, 0, H), dp'/dv = (0, 2, 0): n' = normalise(-H, 0, 2) */
