@@ -251,12 +251,14 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
         if (!(st = tb_camera_from_mid(&scene->mid_camera, pw, ph, &scene->camera)))
             st = tb_rad_render_image(solver, scene, o->spp, &img);
         scene->camera = full;
+        double px_ratio = ((double)W * H) / ((double)pw * ph);
+        if (!st) /* the pilot image's PNG bytes stand for the image's (docs/predict.md) */
+            st = tb_predict_image_bytes(img, 1, true, px_ratio, &f->f[TB_PF_IMAGE_BYTES]);
         tb_image_free(img);
         if (st)
             goto done;
         double nodes = (double)tb_stats_counter("BVH/nodes visited");
         double depth = log2(full_elems + 2.0) / log2((double)mesh.nelems + 2.0);
-        double px_ratio = ((double)W * H) / ((double)pw * ph);
         f->f[TB_PF_RAD_PIXEL_NODES] = nodes * px_ratio * depth;
         /* a leaf holds a few elements however fine the mesh: the tests per ray follow what the rays hit */
         f->f[TB_PF_RAD_PIXEL_LEAF_TESTS] = (double)tb_stats_counter("BVH/primitives tested") * px_ratio;

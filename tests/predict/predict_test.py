@@ -71,7 +71,7 @@ def main():
     run("calibrate", "--set", "quick", "--runs", runs_csv)
     check(os.path.exists(default), "calibrate without -o writes " + default)
     costs = json.load(open(default))
-    check(costs["schema"] == "testbed-costs-4" and costs["threads"] >= 1, "COSTS.json schema and threads")
+    check(costs["schema"] == "testbed-costs-5" and costs["threads"] >= 1, "COSTS.json schema and threads")
     check(len(costs["costs"]) >= 40, "COSTS.json has every term")
     for k, v in costs["costs"].items():
         check(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0, "cost %s = %r is finite and >= 0" % (k, v))
@@ -141,7 +141,7 @@ def main():
     # 4b. a broken COSTS.json: located error, exit 1
     bad = os.path.join(TMP, "bad.json")
     with open(bad, "w") as f:
-        f.write('{\n  "schema": "testbed-costs-4",\n  "threads": 2,\n  "costs": {"load.fixed": oops}\n}\n')
+        f.write('{\n  "schema": "testbed-costs-5",\n  "threads": 2,\n  "costs": {"load.fixed": oops}\n}\n')
     p = run("predict", scene, "--costs", bad, expect=1)
     check(bad + ":4:27: error: expected a number" in p.stderr, "bad COSTS.json located: %r" % p.stderr)
 

@@ -460,6 +460,12 @@ static void tb__cal_child(const tb__cal_run *r, const char *scene, const char *d
     if (r->method != TB_PREDICT_RADIOSITY)
         tb_predict_stats_sub_work(&out->f, &load);
     out->f.f[TB_PF_VULKAN_PROBE] = tb__cal_value(TB_VULKAN_PROBE_KEY) > 0.0; /* as the render did */
+    /* the PNG's bytes as predict estimates them: from every TB_PREDICT_IMAGE_STEP-th pixel, as the pilot's image */
+    tb_image *png = NULL;
+    if (tb_image_read(img, NULL, &png) == TB_OK)
+        tb_predict_image_bytes(png, TB_PREDICT_IMAGE_STEP, false, (double)TB_PREDICT_IMAGE_STEP * TB_PREDICT_IMAGE_STEP,
+                               &out->f.f[TB_PF_IMAGE_BYTES]);
+    tb_image_free(png);
     tb_predict_measured *y = &out->y;
     y->wall = wall;
     y->module[TB_PM_LOAD] = tb__cal_timer("Scene/load");
