@@ -88,8 +88,9 @@ tb_status tb_rad_render_image(const tb_rad_solver *s, const tb_scene *scene, int
         free(prims), free(corner);
         return tb_error(TB_ERR_NOMEM, "radiosity image: out of memory");
     }
-    /* every corner's radiance, ambient included */
-    double b[TB_CHANNELS_MAX];
+    /* every corner's radiance, ambient included (summed over the elements once, not at every corner) */
+    double b[TB_CHANNELS_MAX], amb[TB_CHANNELS_MAX];
+    tb_rad_ambient(s, amb);
     for (size_t i = 0; i < m->nelems; i++) {
         const tb_rad_element *e = &m->elems[i];
         int n = e->v[3] == TB_RAD_NONE ? 3 : 4;
@@ -97,7 +98,7 @@ tb_status tb_rad_render_image(const tb_rad_solver *s, const tb_scene *scene, int
         for (int k = 0; k < n; k++) {
             box.lo = tb_vec3_min(box.lo, m->verts[e->v[k]].p);
             box.hi = tb_vec3_max(box.hi, m->verts[e->v[k]].p);
-            tb_rad_corner_radiosity(s, i, k, true, b);
+            tb_rad_corner_radiosity_amb(s, i, k, amb, b);
             for (int c = 0; c < nc; c++)
                 corner[(i * 4 + (size_t)k) * (size_t)nc + (size_t)c] = (float)(b[c] / TB_PI);
         }

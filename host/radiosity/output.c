@@ -177,11 +177,11 @@ static void tb__to_rgb(const tb_rad_mesh *m, const double *b, double rgb[3])
     }
 }
 
-void tb__rad_corner_colour(const tb_rad_solver *s, size_t i, int k, double scale, float radiance[3], float display[3],
-                           unsigned char u8[3])
+void tb__rad_corner_colour(const tb_rad_solver *s, const double *amb, size_t i, int k, double scale, float radiance[3],
+                           float display[3], unsigned char u8[3])
 {
     double b[TB_CHANNELS_MAX], rgb[3];
-    tb_rad_corner_radiosity(s, i, k, true, b);
+    tb_rad_corner_radiosity_amb(s, i, k, amb, b);
     tb__to_rgb(tb_rad_solver_mesh(s), b, rgb);
     for (int c = 0; c < 3; c++) {
         double x = rgb[c] * scale;
@@ -286,6 +286,8 @@ tb_status tb_rad_write_ply(const tb_rad_solver *s, const char *path, double scal
             "property uchar red\nproperty uchar green\nproperty uchar blue\n"
             "element face %zu\nproperty list uchar uint vertex_indices\nproperty uint object\nend_header\n",
             ncorners, m->nelems);
+    double amb[TB_CHANNELS_MAX]; /* summed once, not at every corner */
+    tb_rad_ambient(s, amb);
     for (size_t i = 0; i < m->nelems; i++) {
         const tb_rad_element *e = &m->elems[i];
         int n = e->v[3] == TB_RAD_NONE ? 3 : 4;
@@ -293,7 +295,7 @@ tb_status tb_rad_write_ply(const tb_rad_solver *s, const char *path, double scal
             const tb_rad_vertex *v = &m->verts[e->v[k]];
             float rad[3], disp[3];
             unsigned char u8[3];
-            tb__rad_corner_colour(s, i, k, scale, rad, disp, u8);
+            tb__rad_corner_colour(s, amb, i, k, scale, rad, disp, u8);
             float f[9] = {v->p.x, v->p.y, v->p.z, e->normal.x, e->normal.y, e->normal.z, rad[0], rad[1], rad[2]};
             fwrite(f, sizeof f, 1, fp);
             fwrite(u8, 1, 3, fp);

@@ -146,6 +146,8 @@ tb_status tb_rad_write_gltf(const tb_rad_solver *s, const char *path, double sca
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     size_t v = 0, t = 0;
     unsigned char *idx = buf + TB__ATTR_COUNT * attr_bytes;
+    double amb[TB_CHANNELS_MAX]; /* summed once, not at every corner */
+    tb_rad_ambient(s, amb);
     for (size_t i = 0; i < m->nelems; i++) {
         const tb_rad_element *e = &m->elems[i];
         int n = e->v[3] == TB_RAD_NONE ? 3 : 4;
@@ -153,7 +155,7 @@ tb_status tb_rad_write_gltf(const tb_rad_solver *s, const char *path, double sca
             const tb_rad_vertex *rv = &m->verts[e->v[k]];
             float val[TB__ATTR_COUNT][3] = {{rv->p.x, rv->p.y, rv->p.z}, {e->normal.x, e->normal.y, e->normal.z}};
             unsigned char u8[3];
-            tb__rad_corner_colour(s, i, k, scale, val[TB__ATTR_RADIANCE], val[TB__ATTR_COLOR], u8);
+            tb__rad_corner_colour(s, amb, i, k, scale, val[TB__ATTR_RADIANCE], val[TB__ATTR_COLOR], u8);
             for (int a = 0; a < TB__ATTR_COUNT; a++)
                 for (int c = 0; c < 3; c++)
                     tb__put_f32(buf + (size_t)a * attr_bytes + v * 12 + (size_t)c * 4, val[a][c]);

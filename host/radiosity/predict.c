@@ -94,6 +94,52 @@ static double tb__rad_extrapolate(const tb_array *d, double threshold)
     return shots;
 }
 
+/* How many of the full mesh's shooters tb__rad_full_sample casts form factors from, and for how long at most. */
+#define TB__RAD_SAMPLE_SHOOTERS 32
+#define TB__RAD_SAMPLE_SECONDS 2.0
+
+/* The visibility work per form-factor ray on the full mesh: from up to
+ * TB__RAD_SAMPLE_SHOOTERS shooters spread evenly over the mesh's, the
+ * form-factor rays traced through the BVH, the BVH nodes they visit and the
+ * occluders listed per shaft, each per form-factor ray. The coarse pilot
+ * gets these wrong (its larger elements make larger shafts, more of them
+ * too full for a list: radiosity-room's BVH rays came out 3.2 times the
+ * render's), so they come from the render's own mesh. False when nothing
+ * was sampled (hemicube form factors: no rays). */
+static bool tb__rad_full_sample(const tb_rad_mesh *mesh, const tb_rad_options *ro, double ratio[3])
+{
+    if (ro->ff != TB_RAD_FF_RAYCAST)
+        return false;
+    tb_rad_solver *s = NULL;
+    if (tb_rad_solver_create(mesh, NULL, ro, &s)) {
+        tb_clear_error();
+        return false;
+    }
+    size_t n = tb_rad_solver_npatches(s), k = n < TB__RAD_SAMPLE_SHOOTERS ? n : TB__RAD_SAMPLE_SHOOTERS;
+    tb_stats_reset();
+    int64_t t0 = tb_stats_now_ns();
+    size_t done = 0;
+    for (size_t j = 0; j < k && 1e-9 * (double)(tb_stats_now_ns() - t0) < TB__RAD_SAMPLE_SECONDS; j++) {
+        double f;
+        if (tb_rad_formfactor(s, (j * n + n / 2) / k, 0, &f)) {
+            tb_clear_error();
+            break;
+        }
+        done++;
+    }
+    double rays = (double)tb_stats_counter("Radiosity/rays (receivers x samples)");
+    double shafts = (double)tb_stats_counter("Form factors/shafts");
+    bool ok = done > 0 && rays > 0;
+    if (ok) {
+        ratio[0] = (double)tb_stats_counter("BVH/occlusion rays") / rays;
+        ratio[1] = (double)tb_stats_counter("BVH/nodes visited") / rays;
+        ratio[2] = shafts > 0 ? (double)tb_stats_counter("Form factors/occluders listed in shafts") / shafts : 0.0;
+    }
+    tb_rad_solver_free(s);
+    tb_stats_reset();
+    return ok;
+}
+
 tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o, double pilot_seconds,
                                tb_predict_stats *f)
 {
@@ -165,7 +211,15 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
         goto done;
     }
     tb__rad_shooter_objects(&mesh, full_obj, full_count);
-    if (full_shooters > 256 && (mo.max_edge > 0 || mo.max_area > 0)) {
+    double full_ratio[3] = {0};
+    bool coarsen = full_shooters > 256 && (mo.max_edge > 0 || mo.max_area > 0);
+    bool sampled = false;
+    if (coarsen) {
+        tb_rad_options fo = ro; /* the render's sample points: the rays as it traces them */
+        fo.samples = o->solver.samples;
+        sampled = tb__rad_full_sample(&mesh, &fo, full_ratio);
+    }
+    if (coarsen) {
         tb_rad_mesh_options co = mo;
         co.max_edge *= TB__RAD_PILOT_COARSEN;
         co.max_area *= TB__RAD_PILOT_COARSEN * TB__RAD_PILOT_COARSEN;
@@ -237,6 +291,11 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
     f->f[TB_PF_RAD_OCC_RAYS] *= ray_scale;
     f->f[TB_PF_RAD_NODES] *= ray_scale;
     f->f[TB_PF_RAD_SHAFT_TESTS] *= ray_scale;
+    if (sampled) { /* the full mesh's visibility work per ray, not the coarse pilot's */
+        f->f[TB_PF_RAD_OCC_RAYS] = f->f[TB_PF_RAD_RAYS] * full_ratio[0];
+        f->f[TB_PF_RAD_NODES] = f->f[TB_PF_RAD_RAYS] * full_ratio[1];
+        f->f[TB_PF_RAD_SHAFT_TESTS] = f->f[TB_PF_RAD_RAYS] * full_ratio[2];
+    }
     if (image) {
         /* A pilot image, 1/TB__RAD_PILOT_COARSEN of the resolution each way, of
          * the pilot's solution: the BVH nodes its rays visit (a view of mostly
@@ -251,12 +310,14 @@ tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o,
         if (!(st = tb_camera_from_mid(&scene->mid_camera, pw, ph, &scene->camera)))
             st = tb_rad_render_image(solver, scene, o->spp, &img);
         scene->camera = full;
+        double px_ratio = ((double)W * H) / ((double)pw * ph);
+        if (!st) /* the pilot image's PNG bytes stand for the image's (docs/predict.md) */
+            st = tb_predict_image_bytes(img, 1, true, px_ratio, &f->f[TB_PF_IMAGE_BYTES]);
         tb_image_free(img);
         if (st)
             goto done;
         double nodes = (double)tb_stats_counter("BVH/nodes visited");
         double depth = log2(full_elems + 2.0) / log2((double)mesh.nelems + 2.0);
-        double px_ratio = ((double)W * H) / ((double)pw * ph);
         f->f[TB_PF_RAD_PIXEL_NODES] = nodes * px_ratio * depth;
         /* a leaf holds a few elements however fine the mesh: the tests per ray follow what the rays hit */
         f->f[TB_PF_RAD_PIXEL_LEAF_TESTS] = (double)tb_stats_counter("BVH/primitives tested") * px_ratio;

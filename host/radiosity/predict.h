@@ -19,7 +19,11 @@
  * pilot runs out of time first, its count is extrapolated along an
  * exponential fitted to the unshot fraction over its second half
  * (f->rad_extrapolated). Rays and form factors per shot scale with the
- * vertices and the sample points. TB_ERR_UNSUPPORTED for adaptive
+ * vertices and the sample points; when the pilot's mesh is coarser, the
+ * visibility work per ray (BVH rays, their nodes, shaft occluders) comes
+ * from the form factors of up to 32 of the render's own shooters (ray
+ * cast; at most 2 s). The image's PNG bytes come from a pilot image.
+ * TB_ERR_UNSUPPORTED for adaptive
  * subdivision (o->adapt), which the model leaves out; the loader's and
  * solver's errors. */
 tb_status tb_rad_predict_scene(const char *path, const tb_rad_render_options *o, double pilot_seconds,

@@ -333,6 +333,12 @@ void tb_rad_element_unshot(const tb_rad_solver *s, size_t i, double *out);
 /* Radiosity at corner k of element i (Gouraud display), out[0..nchannels). */
 void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambient, double *out);
 
+/* tb_rad_corner_radiosity with the ambient term given (amb from
+ * tb_rad_ambient, NULL for none): the same values, for loops over every
+ * corner, which would otherwise sum the ambient over all elements at each
+ * corner (quadratic in the elements). */
+void tb_rad_corner_radiosity_amb(const tb_rad_solver *s, size_t i, int k, const double *amb, double *out);
+
 /* Gathered irradiance H_v at vertex v (the display's value, without the
  * ambient term), out[0..nchannels): corner k of element i shows
  * E_i + rho_i (H_v + ambient) with v = its k-th vertex. */

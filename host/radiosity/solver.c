@@ -1808,17 +1808,22 @@ void tb_rad_element_unshot(const tb_rad_solver *s, size_t i, double *out)
         out[c] = s->dB[i * (size_t)s->nc + (size_t)c];
 }
 
-void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambient, double *out)
+void tb_rad_corner_radiosity_amb(const tb_rad_solver *s, size_t i, int k, const double *amb, double *out)
 {
     int nc = s->nc;
     const tb_rad_element *e = &s->m.elems[i];
+    for (int c = 0; c < nc; c++) {
+        double rho = s->m.rho[i * (size_t)nc + (size_t)c];
+        out[c] = s->m.emission[i * (size_t)nc + (size_t)c] + rho * (tb__Hv(s, e->v[k], c) + (amb ? amb[c] : 0.0));
+    }
+}
+
+void tb_rad_corner_radiosity(const tb_rad_solver *s, size_t i, int k, bool ambient, double *out)
+{
     double amb[TB_CHANNELS_MAX] = {0};
     if (ambient)
         tb_rad_ambient(s, amb);
-    for (int c = 0; c < nc; c++) {
-        double rho = s->m.rho[i * (size_t)nc + (size_t)c];
-        out[c] = s->m.emission[i * (size_t)nc + (size_t)c] + rho * (tb__Hv(s, e->v[k], c) + amb[c]);
-    }
+    tb_rad_corner_radiosity_amb(s, i, k, amb, out);
 }
 
 void tb_rad_vertex_irradiance(const tb_rad_solver *s, size_t v, double *out)

@@ -1,6 +1,7 @@
 /* The cost model of testbed predict / calibrate (host/render/predict.h,
  * docs/predict.md): the terms, the statistics read from util/stats, the
  * pilot render, the evaluation, the fit and COSTS.json. */
+#define _GNU_SOURCE /* mkstemps */
 #include "host/render/predict.h"
 
 #include <ctype.h>
@@ -85,6 +86,7 @@ static const tb_cost_term tb__terms[] = {
     {"process.radiosity", TB_PM_PROCESS, TB_PF_IS_RADIOSITY, "s"},
     {"process.pixel", TB_PM_PROCESS, TB_PF_PIXELS, "s/pixel"},
     {"process.pixel_channel", TB_PM_PROCESS, TB_PF_PIXEL_CHANNELS, "s/(pixel x channel)"},
+    {"process.image_byte", TB_PM_PROCESS, TB_PF_IMAGE_BYTES, "s/PNG byte (estimated at 1/4 resolution)"},
     {"process.radiosity_pixel_ray", TB_PM_PROCESS, TB_PF_RAD_PIXEL_RAYS, "s/image ray"},
     {"process.vulkan_probe", TB_PM_PROCESS, TB_PF_VULKAN_PROBE, "s (loading and asking the Vulkan driver)"},
     {"process.radiosity_pixel_node", TB_PM_PROCESS, TB_PF_RAD_PIXEL_NODES, "s/image ray's BVH node visited"},
@@ -122,7 +124,7 @@ const char *tb_pfeat_name(tb_pfeat k)
         "references",
         "references_log2", "camera_samples", "rays", "occlusion_rays", "bvh_nodes", "tests_primitive", "tests_torus",
         "tests_csg", "tests_mesh", "hits", "leaf_tests", "noise_octaves", "sample_channels", "hit_channels", "pixel_channels",
-        "pixels", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays", "rad_nodes",
+        "pixels", "image_bytes", "rad_rays", "rad_form_factors", "rad_shot_elements", "rad_elements", "rad_occlusion_rays", "rad_nodes",
         "rad_shaft_tests", "rad_vertices", "rad_pixel_rays", "rad_pixel_nodes", "rad_pixel_leaf_tests", "rad_mesh_probes", "rad_cache_bytes", "mem_objects", "mem_meshes", "mem_emitters",
         "mem_accel", "film_bytes", "vulkan_probe", "is_raytrace", "is_path", "is_radiosity", "one"};
     _Static_assert(sizeof fname / sizeof fname[0] == TB_PF_COUNT, "a name per statistic");
@@ -326,14 +328,49 @@ tb_status tb_predict_scene(const char *path, const tb_predict_options *o, tb_pre
         else
             st = tb_render_raytrace(s, &ro, &img, NULL);
     }
-    tb_image_free(img);
     f->pilot_seconds = 1e-9 * (double)(tb_stats_now_ns() - t0);
+    double px_ratio = (double)W * (double)H / ((double)pw * (double)ph);
     if (!st)
-        tb_predict_stats_add_work(f, (double)W * (double)H / ((double)pw * (double)ph));
+        tb_predict_stats_add_work(f, px_ratio);
+    if (!st) /* the pilot's image is the render's at 1/D each way: its PNG's bytes stand for the image's */
+        st = tb_predict_image_bytes(img, 1, true, px_ratio, &f->f[TB_PF_IMAGE_BYTES]);
+    tb_image_free(img);
     s->camera = full;
     tb_scene_free(s);
     tb_stats_reset();
     tb_stats_set_enabled(saved);
+    return st;
+}
+
+tb_status tb_predict_image_bytes(const tb_image *img, int step, bool expose, double scale, double *bytes)
+{
+    *bytes = 0.0;
+    if (!img || step < 1)
+        return tb_error(TB_ERR_ARG, "predict: no image, or a step < 1");
+    int w = (img->width + step - 1) / step, h = (img->height + step - 1) / step, nc = img->channels;
+    tb_image *sub = tb_image_create(w, h, nc, NULL);
+    if (!sub)
+        return TB_ERR_NOMEM;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++)
+            memcpy(sub->pixels + ((size_t)y * (size_t)w + (size_t)x) * (size_t)nc,
+                   img->pixels + ((size_t)y * (size_t)step * (size_t)img->width + (size_t)x * (size_t)step) * (size_t)nc,
+                   sizeof(float) * (size_t)nc);
+    const char *tmp = getenv("TMPDIR");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/testbed-predict-XXXXXX.png", tmp && *tmp ? tmp : "/tmp");
+    int fd = mkstemps(path, 4);
+    if (fd < 0) {
+        tb_image_free(sub);
+        return tb_error(TB_ERR_IO, "predict: a temporary file in %s: %s", tmp && *tmp ? tmp : "/tmp", strerror(errno));
+    }
+    close(fd);
+    tb_status st = tb_image_write_exposed(path, sub, expose ? NAN : 0.0);
+    struct stat sb;
+    if (!st && stat(path, &sb) == 0)
+        *bytes = (double)sb.st_size * scale;
+    unlink(path);
+    tb_image_free(sub);
     return st;
 }
 

@@ -24,6 +24,7 @@
 #include "host/render/render.h"
 #include "host/render/scene.h"
 #include "util/base/error.h"
+#include "util/image/image.h"
 
 /* The renderer a prediction is for. */
 typedef enum tb_predict_method {
@@ -65,6 +66,9 @@ typedef enum tb_pfeat {
     TB_PF_HIT_CHANNELS,    /* hits x colour channels (shading evaluates every band) */
     TB_PF_PIXEL_CHANNELS,  /* pixels x colour channels (resolving and writing the image) */
     TB_PF_PIXELS,          /* image pixels */
+    TB_PF_IMAGE_BYTES,     /* bytes of the PNG written, estimated from an image of 1/4 of the resolution each way
+                              (the pilot's; calibration: every 4th pixel of the render's), times 16: deflate's
+                              work follows the content (a noisy room costs several times a sky per pixel) */
     TB_PF_RAD_RAYS,        /* radiosity: form-factor rays (receivers x sample points) */
     TB_PF_RAD_FFS,         /* radiosity: form factors */
     TB_PF_RAD_SHOT_ELEMS,  /* radiosity: shots x elements (each shot updates every element) */
@@ -224,7 +228,7 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
 
 /* The schema COSTS.json is written with and the only one read: bumped
  * whenever the terms change, so an older file is refused. */
-#define TB_COSTS_SCHEMA "testbed-costs-4"
+#define TB_COSTS_SCHEMA "testbed-costs-5"
 
 /* The --stats value in which the radiosity renderer puts the BVH nodes its
  * image rays visited (the form factors' nodes are the rest of the counter). */
@@ -237,6 +241,17 @@ tb_status tb_costs_fit(const tb_predict_stats *f, const tb_predict_measured *y, 
 /* The --stats value `testbed render` sets to 1 when it probes the Vulkan
  * device (--backend auto or vulkan), which calibration reads. */
 #define TB_VULKAN_PROBE_KEY "vulkan_probed"
+
+/* How many pixels of the image the TB_PF_IMAGE_BYTES estimate keeps in
+ * each direction (1 of this many). */
+#define TB_PREDICT_IMAGE_STEP 4
+
+/* The TB_PF_IMAGE_BYTES estimate of an image: the size of the PNG of every
+ * `step`-th pixel of img in each direction (step >= 1), times `scale`;
+ * `expose`: scaled to the automatic exposure as the render's PNG is (a
+ * linear pilot image), else written as it is (an image read from a PNG).
+ * Writes and removes a temporary file (in $TMPDIR, else /tmp). */
+tb_status tb_predict_image_bytes(const tb_image *img, int step, bool expose, double scale, double *bytes);
 
 /* Writes COSTS.json (whole or not at all). */
 tb_status tb_costs_write(const char *path, const tb_costs *c);

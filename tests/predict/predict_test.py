@@ -71,7 +71,7 @@ def main():
     run("calibrate", "--set", "quick", "--runs", runs_csv)
     check(os.path.exists(default), "calibrate without -o writes " + default)
     costs = json.load(open(default))
-    check(costs["schema"] == "testbed-costs-4" and costs["threads"] >= 1, "COSTS.json schema and threads")
+    check(costs["schema"] == "testbed-costs-5" and costs["threads"] >= 1, "COSTS.json schema and threads")
     check(len(costs["costs"]) >= 40, "COSTS.json has every term")
     for k, v in costs["costs"].items():
         check(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0, "cost %s = %r is finite and >= 0" % (k, v))
@@ -86,6 +86,7 @@ def main():
         want = {"raytrace": "1", "radiosity": "0"}.get(r["method"])
         check(want is None or r["vulkan_probe"] == want,
               "run %s (%s): vulkan_probe %s, expected %s" % (r["run"], r["method"], r["vulkan_probe"], want))
+        check(float(r["image_bytes"]) > 0, "run %s: the PNG's bytes estimated" % r["run"])
 
     # 3. predict --json for every method, and the text output
     for method, extra in (("raytrace", []), ("path", ["--spp", "2"]), ("radiosity", ["--max-edge", "3"])):
@@ -141,7 +142,7 @@ def main():
     # 4b. a broken COSTS.json: located error, exit 1
     bad = os.path.join(TMP, "bad.json")
     with open(bad, "w") as f:
-        f.write('{\n  "schema": "testbed-costs-4",\n  "threads": 2,\n  "costs": {"load.fixed": oops}\n}\n')
+        f.write('{\n  "schema": "testbed-costs-5",\n  "threads": 2,\n  "costs": {"load.fixed": oops}\n}\n')
     p = run("predict", scene, "--costs", bad, expect=1)
     check(bad + ":4:27: error: expected a number" in p.stderr, "bad COSTS.json located: %r" % p.stderr)
 
@@ -154,6 +155,15 @@ def main():
     _, status, ru = os.wait4(proc.pid, 0)
     check(os.waitstatus_to_exitcode(status) == 0, "the held-out render runs")
     measured = ru.ru_maxrss * 1024.0
+    # the PNG-byte estimate (the pilot's image, 1/4 each way, x 16) against the PNG the render wrote; a view
+    # of mostly sky (this open grid) has fewer bytes per pixel than the closed Cornell box
+    png = os.path.getsize(os.path.join(TMP, "m.png"))
+    est = d["statistics"]["image_bytes"]
+    check(0.5 * png <= est <= 4.0 * png, "PNG bytes estimated %.0f, written %d" % (est, png))
+    sb = stats(box, "--method", "raytrace")
+    check(sb["image_bytes"] / sb["pixels"] > 2.0 * est / d["statistics"]["pixels"],
+          "the Cornell box's PNG bytes per pixel %.3f > twice the open grid's %.3f"
+          % (sb["image_bytes"] / sb["pixels"], est / d["statistics"]["pixels"]))
     ratio = d["peak_rss_bytes"] / measured
     print("memory: predicted %.1f MiB, measured %.1f MiB, ratio %.3f"
           % (d["peak_rss_bytes"] / 2**20, measured / 2**20, ratio))

@@ -289,6 +289,89 @@ static void test_radiosity_image_rays(void **state)
     }
 }
 
+/* A w x h RGB image: a grey of 0.5, or noise in [0, 1) where keep(x, y) is false. */
+static tb_image *grey_or_noise(int w, int h, bool (*keep)(int x, int y), uint64_t seed)
+{
+    tb_image *img = tb_image_create(w, h, 3, NULL);
+    assert_non_null(img);
+    tb_rng rng;
+    tb_rng_seed(&rng, seed, 0);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++)
+            for (int c = 0; c < 3; c++)
+                img->pixels[((size_t)y * (size_t)w + (size_t)x) * 3 + (size_t)c] =
+                    keep && keep(x, y) ? 0.5f : (float)tb_rng_double(&rng);
+    return img;
+}
+
+static bool every_4th(int x, int y) { return x % 4 == 0 && y % 4 == 0; }
+static bool everywhere(int x, int y) { (void)x, (void)y; return true; }
+
+/* The PNG-bytes estimate: noise costs many more bytes than a flat grey, the
+ * scale multiplies, and with a step only every step-th pixel each way is
+ * read (noise between them changes nothing). */
+static void test_image_bytes(void **state)
+{
+    (void)state;
+    tb_image *grey = grey_or_noise(64, 48, everywhere, 1), *noise = grey_or_noise(64, 48, NULL, 2);
+    tb_image *holes = grey_or_noise(64, 48, every_4th, 3);
+    double g1, n1, g16, g4, h4;
+    assert_int_equal(tb_predict_image_bytes(grey, 1, false, 1.0, &g1), TB_OK);
+    assert_int_equal(tb_predict_image_bytes(noise, 1, false, 1.0, &n1), TB_OK);
+    assert_true(g1 > 0.0 && n1 > 10.0 * g1);          /* 64 x 48 x 3 bytes of noise hardly compress */
+    assert_true(n1 > 0.8 * 64 * 48 * 3);
+    assert_int_equal(tb_predict_image_bytes(grey, 1, false, 16.0, &g16), TB_OK);
+    tb_assert_near(g16, 16.0 * g1, 0.0);
+    assert_int_equal(tb_predict_image_bytes(grey, 4, false, 1.0, &g4), TB_OK);
+    assert_int_equal(tb_predict_image_bytes(holes, 4, false, 1.0, &h4), TB_OK);
+    tb_assert_near(h4, g4, 0.0);                        /* the same 16 x 12 grey image */
+    assert_true(g4 < g1);
+    double b = 1.0;
+    assert_int_equal(tb_predict_image_bytes(grey, 0, false, 1.0, &b), TB_ERR_ARG);
+    assert_true(b == 0.0);
+    tb_clear_error();
+    tb_image_free(grey), tb_image_free(noise), tb_image_free(holes);
+}
+
+/* Process runs shaped like the calibration's: equal pixels, PNG bytes per
+ * pixel from a sky's 0.02 to a noisy room's 1.3: the per-byte and per-pixel
+ * costs come back apart, and a noisy image is predicted that much dearer. */
+static void test_fit_image_bytes(void **state)
+{
+    (void)state;
+    enum { N = 40 };
+    tb_costs truth, got;
+    memset(&truth, 0, sizeof truth);
+    truth.threads = 2;
+    truth.c[term("process.raytrace")] = 0.05;
+    truth.c[term("process.pixel_channel")] = 2e-8;
+    truth.c[term("process.image_byte")] = 1.5e-7;
+    tb_predict_stats f[N];
+    tb_predict_measured y[N];
+    tb_rng rng;
+    tb_rng_seed(&rng, 77, 0);
+    for (int r = 0; r < N; r++) {
+        int w = 160 * (1 + r % 5), h = 120 * (1 + r % 5);
+        tb_predict_stats_init(&f[r], TB_PREDICT_RAYTRACE, 1e4, w, h, r % 3 ? 3 : 31, 0, 2);
+        f[r].f[TB_PF_IMAGE_BYTES] = (double)w * h * (0.02 + 1.3 * tb_rng_double(&rng));
+        tb_prediction p;
+        tb_predict_eval(&truth, &f[r], &p);
+        memset(&y[r], 0, sizeof y[r]);
+        y[r].module[TB_PM_PROCESS] = p.module[TB_PM_PROCESS];
+    }
+    assert_int_equal(tb_costs_fit(f, y, N, 2, &got), TB_OK);
+    tb_assert_near(got.c[term("process.image_byte")], 1.5e-7, 1e-4 * 1.5e-7);
+    tb_assert_near(got.c[term("process.pixel_channel")], 2e-8, 1e-4 * 2e-8);
+    tb_assert_near(got.c[term("process.raytrace")], 0.05, 1e-4 * 0.05);
+    tb_predict_stats sky = f[0], room = f[0];
+    sky.f[TB_PF_IMAGE_BYTES] = 0.02 * sky.f[TB_PF_PIXELS];
+    room.f[TB_PF_IMAGE_BYTES] = 1.3 * room.f[TB_PF_PIXELS];
+    tb_prediction ps, pr;
+    tb_predict_eval(&got, &sky, &ps);
+    tb_predict_eval(&got, &room, &pr);
+    tb_assert_near(pr.seconds - ps.seconds, 1.5e-7 * 1.28 * sky.f[TB_PF_PIXELS], 1e-3 * pr.seconds);
+}
+
 static void test_eval_modules(void **state)
 {
     (void)state;
@@ -381,15 +464,15 @@ static void test_costs_bad_files(void **state)
 
     expect_bad("empty.json", "", TB_ERR_FORMAT, "predict-model-empty.json:1:1: error: expected a JSON object");
     expect_bad("array.json", "[1, 2]", TB_ERR_FORMAT, ":1:1: error: expected a JSON object");
-    expect_bad("trunc.json", "{\"schema\": \"testbed-costs-4\",\n  \"threads\": 2,\n  \"costs\": {\"load.fixed\": 1",
+    expect_bad("trunc.json", "{\"schema\": \"testbed-costs-5\",\n  \"threads\": 2,\n  \"costs\": {\"load.fixed\": 1",
                TB_ERR_FORMAT, ":3:28: error: expected ',' or '}'");
     expect_bad("schema.json", "{\"schema\": \"other\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
-               ":1:12: error: schema is not \"testbed-costs-4\"");
+               ":1:12: error: schema is not \"testbed-costs-5\"");
     /* a file of the previous model (other terms) is refused by its schema, with what to do */
-    expect_bad("old.json", "{\"schema\": \"testbed-costs-3\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
-               "schema is not \"testbed-costs-4\" (a COSTS.json of another version: re-run testbed calibrate)");
+    expect_bad("old.json", "{\"schema\": \"testbed-costs-4\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
+               "schema is not \"testbed-costs-5\" (a COSTS.json of another version: re-run testbed calibrate)");
     expect_bad("noschema.json", "{\"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT, "no \"schema\"");
-    expect_bad("missing.json", "{\"schema\": \"testbed-costs-4\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
+    expect_bad("missing.json", "{\"schema\": \"testbed-costs-5\", \"threads\": 2, \"costs\": {}}", TB_ERR_FORMAT,
                "cost term \"load.parse_byte\" is missing");
     /* an unknown term, a negative and a non-number cost, a duplicate, text after */
     char *p = strstr(strcpy(bad, good), "\"load.primitive\"");
@@ -424,6 +507,8 @@ int main(void)
         cmocka_unit_test(test_fit_outliers),
         cmocka_unit_test(test_fit_vulkan_probe),
         cmocka_unit_test(test_radiosity_image_rays),
+        cmocka_unit_test(test_image_bytes),
+        cmocka_unit_test(test_fit_image_bytes),
         cmocka_unit_test(test_eval_modules),
         cmocka_unit_test(test_costs_round_trip),
         cmocka_unit_test(test_costs_bad_files),

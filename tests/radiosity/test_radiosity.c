@@ -372,6 +372,39 @@ static void test_continue(void **state)
     tb_scene_free(sc);
 }
 
+/* The display's corner values with the ambient term summed once
+ * (tb_rad_corner_radiosity_amb, as the image does) are bit for bit those
+ * of tb_rad_corner_radiosity, which sums it at every corner; NULL is no
+ * ambient. Mid-solve, so the ambient term is not 0. */
+static void test_corner_ambient(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb_rad_test_load("tests/radiosity/furnace.mid");
+    tb_rad_mesh m;
+    tb_rad_mesh_options mo = {.max_edge = 0.25};
+    assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+    tb_rad_options o = {.samples = 4};
+    tb_rad_solver *s = NULL;
+    assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &s), TB_OK);
+    tb_rad_stop st = {.threshold = 1e-9, .max_shots = 20};
+    assert_int_equal(tb_rad_solver_run(s, &st, NULL, NULL, 0), TB_OK);
+    double amb[TB_CHANNELS_MAX], x[TB_CHANNELS_MAX], y[TB_CHANNELS_MAX];
+    tb_rad_ambient(s, amb);
+    assert_true(amb[0] > 0.0);
+    for (size_t i = 0; i < m.nelems; i++)
+        for (int k = 0; k < (m.elems[i].v[3] == TB_RAD_NONE ? 3 : 4); k++) {
+            tb_rad_corner_radiosity(s, i, k, true, x);
+            tb_rad_corner_radiosity_amb(s, i, k, amb, y);
+            assert_memory_equal(x, y, sizeof(double) * (size_t)m.nchannels);
+            tb_rad_corner_radiosity(s, i, k, false, x);
+            tb_rad_corner_radiosity_amb(s, i, k, NULL, y);
+            assert_memory_equal(x, y, sizeof(double) * (size_t)m.nchannels);
+        }
+    tb_rad_solver_free(s);
+    tb_rad_mesh_free(&m);
+    tb_scene_free(sc);
+}
+
 /* Checkpoints (tb_rad_solver_pack/unpack): a solver stopped after 60
  * shots, packed, and unpacked into a new solver of the same mesh, shoots on
  * exactly as the original: same shots, every element's radiosity and the
@@ -753,7 +786,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_furnace_raycast), cmocka_unit_test(test_furnace_hemicube),
         cmocka_unit_test(test_sphere_cap),      cmocka_unit_test(test_energy),
         cmocka_unit_test(test_reciprocity),     cmocka_unit_test(test_threads),
-        cmocka_unit_test(test_patches_csv),     cmocka_unit_test(test_continue), cmocka_unit_test(test_pack),
+        cmocka_unit_test(test_patches_csv),     cmocka_unit_test(test_continue), cmocka_unit_test(test_corner_ambient),
+        cmocka_unit_test(test_pack),
         cmocka_unit_test(test_errors),          cmocka_unit_test(test_cornell_image),
         cmocka_unit_test(test_occluders), cmocka_unit_test(test_shaft), cmocka_unit_test(test_update_kernels),
     };
