@@ -297,7 +297,7 @@ static int tb__tiles_worker_poll(tb__tiles *t)
                     : 64 * t->threads;
     pthread_mutex_lock(&t->lock);
     bool ask = !t->asked && !t->done && t->qlen < ahead;
-    int want = ahead - t->qlen; /* what the queue lacks */
+    int want = 2 * ahead - t->qlen; /* refill to twice the low mark: a request per `ahead` tiles, not per tile */
     pthread_mutex_unlock(&t->lock);
     /* sends that completed */
     for (int i = 0; i < t->nsend;) {
