@@ -33,6 +33,19 @@
 #define TB__TILES_POLL_MIN_US 20
 #define TB__TILES_POLL_MAX_US 400
 
+/* Once rank 0 knows its tiles' time, its communication thread polls every
+ * half tile (within these bounds) instead: its render threads answer
+ * between their tiles anyway, it only stands in for one that is inside a
+ * long tile or parked, and each wake-up costs CPU the renders need (on 2
+ * cores, 20-400 µs polls were several wake-ups per tile). */
+#define TB__TILES_COMM_MIN_US 50
+#define TB__TILES_COMM_MAX_US 2000
+
+/* Seconds of rendering a worker keeps queued (at least four tiles per
+ * thread): more than the communication thread's longest poll, so a worker
+ * with short tiles does not run dry waiting for an answer. */
+#define TB__TILES_AHEAD_SECONDS 0.004
+
 /* A finished tile on its way out of a worker (buf NULL: a skip). */
 typedef struct tb__outgoing {
     int index;
@@ -90,6 +103,17 @@ static void tb__tiles_pause(int *us, int moved)
     struct timespec ts = {0, *us * 1000L};
     nanosleep(&ts, NULL);
     *us = *us * 2 < TB__TILES_POLL_MAX_US ? *us * 2 : TB__TILES_POLL_MAX_US;
+}
+
+/* Wall seconds a render thread of this rank spends per tile so far this
+ * pass (its waits left out), or 0 until each thread has had a tile. */
+static double tb__tiles_tile_seconds(tb__tiles *t)
+{
+    pthread_mutex_lock(&t->lock);
+    uint64_t units = t->units;
+    double busy = tb__dist_now() - t->t_pass - t->wait;
+    pthread_mutex_unlock(&t->lock);
+    return units >= (uint64_t)t->threads && busy > 0.0 ? busy * t->threads / (double)units : 0.0;
 }
 
 #ifdef TB_HAVE_MPI
@@ -264,8 +288,16 @@ static int tb__tiles_worker_poll(tb__tiles *t)
     if (nout > 0) /* (the outbox is NULL until the first tile: no pointer arithmetic on it) */
         memmove(t->outbox, t->outbox + nout, sizeof *t->outbox * (size_t)(t->nout - nout));
     t->nout -= nout;
-    bool ask = !t->asked && !t->done && t->qlen < t->ahead;
-    int want = t->ahead - t->qlen; /* what the queue lacks */
+    pthread_mutex_unlock(&t->lock);
+    int ahead = t->ahead;
+    double tile = tb__tiles_tile_seconds(t);
+    if (tile > 0.0 && TB__TILES_AHEAD_SECONDS * t->threads / tile > ahead) /* short tiles: more of them */
+        ahead = TB__TILES_AHEAD_SECONDS * t->threads / tile < 64.0 * t->threads
+                    ? (int)(TB__TILES_AHEAD_SECONDS * t->threads / tile) + 1
+                    : 64 * t->threads;
+    pthread_mutex_lock(&t->lock);
+    bool ask = !t->asked && !t->done && t->qlen < ahead;
+    int want = 2 * ahead - t->qlen; /* refill to twice the low mark: a request per `ahead` tiles, not per tile */
     pthread_mutex_unlock(&t->lock);
     /* sends that completed */
     for (int i = 0; i < t->nsend;) {
@@ -328,8 +360,18 @@ static int tb__tiles_service(tb__tiles *t, bool block)
 static void *tb__tiles_root_comm(void *arg)
 {
     tb__tiles *t = arg;
-    for (int pause = TB__TILES_POLL_MIN_US; !atomic_load(&t->comm_stop);)
-        tb__tiles_pause(&pause, tb__tiles_service(t, true));
+    for (int pause = TB__TILES_POLL_MIN_US; !atomic_load(&t->comm_stop);) {
+        int moved = tb__tiles_service(t, true);
+        double tile = tb__tiles_tile_seconds(t);
+        if (tile > 0.0) { /* every half tile, whatever moved */
+            double us = 0.5e6 * tile;
+            int fixed = us < TB__TILES_COMM_MIN_US ? TB__TILES_COMM_MIN_US
+                        : us > TB__TILES_COMM_MAX_US ? TB__TILES_COMM_MAX_US : (int)us;
+            tb__tiles_pause(&fixed, 0);
+        } else {
+            tb__tiles_pause(&pause, moved);
+        }
+    }
     return NULL;
 }
 

@@ -401,12 +401,8 @@ static int tb__cmd_render(int argc, char **argv)
     }
     o.argc = argc + 1, o.argv = full;
     tb_render_file_result res;
-    /* Counters nobody reads cost a few percent of the ray tracer's time
-     * (a thread-local add per ray, per object test, per BVH node): off
-     * unless --stats writes them (or the ranks merge them). */
-    const int stats_were = tb_stats_enabled();
-    if (!o.stats_path && tb_dist_size() == 1)
-        tb_stats_set_enabled(0);
+    /* counters nobody reads cost a few percent: off unless --stats writes them */
+    const int stats_were = tb_cli_stats_where_written(o.stats_path);
     tb_status st = tb_render_file(scene_path, &o, &res);
     tb_stats_set_enabled(stats_were);
     free(full);

@@ -18,6 +18,7 @@
 #include "host/render/render_file.h"
 #include "options.h"
 #include "util/image/image.h"
+#include "util/stats/stats.h"
 
 #define TB__HYB_STR2(x) #x
 #define TB__HYB_STR(x) TB__HYB_STR2(x)
@@ -210,7 +211,9 @@ int tb_cmd_render_hybrid(int argc, char **argv)
     }
     o.argc = argc + 1, o.argv = full;
     tb_render_file_result res;
+    const int stats_were = tb_cli_stats_where_written(o.stats_path);
     tb_status st = tb_render_file(scene_path, &o, &res);
+    tb_stats_set_enabled(stats_were);
     free(full);
     tb_dist_tiles_free(ex);
     tb_cli_dist_summary("testbed render", "tiles", st == TB_OK);

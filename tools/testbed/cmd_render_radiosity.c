@@ -16,6 +16,7 @@
 #include "host/radiosity/render.h"
 #include "options.h"
 #include "util/image/image.h"
+#include "util/stats/stats.h"
 
 #define TB__RAD_STR2(x) #x
 #define TB__RAD_STR(x) TB__RAD_STR2(x)
@@ -270,7 +271,9 @@ int tb_cmd_render_radiosity(int argc, char **argv)
     }
     o.argc = argc + 1, o.argv = full;
     tb_rad_render_result res;
+    const int stats_were = tb_cli_stats_where_written(o.stats_path);
     tb_status st = tb_rad_render(scene_path, &o, &res);
+    tb_stats_set_enabled(stats_were);
     free(full);
     tb__rad_gpu_close(&gpu);
     tb_dist_rad_exchange_free(ex);

@@ -1,5 +1,6 @@
 /* dist_cli.h: job keys, per-rank summaries, the render set-up. */
 #include "dist_cli.h"
+#include "util/stats/stats.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -99,6 +100,13 @@ bool tb_cli_dist_render_setup(const char *prog, const char *scene_path, int argc
     if (tb_dist_rank() == 0 && tb_dist_size() > 1)
         tb_ckpt_on_term(prog);
     return true;
+}
+
+int tb_cli_stats_where_written(const char *stats_path)
+{
+    int were = tb_stats_enabled();
+    tb_stats_set_enabled(stats_path && tb_dist_rank() == 0);
+    return were;
 }
 
 void tb_cli_dist_summary(const char *prog, const char *unit, bool print)

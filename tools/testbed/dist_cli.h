@@ -37,6 +37,13 @@ bool tb_cli_dist_render_setup(const char *prog, const char *scene_path, int argc
                               tb_render_options *ro, const char *ckpt, double every, const char *resume,
                               tb_tile_exchange **ex, tb_ckpt_render *ck, tb_render_persist *persist);
 
+/* Turns the statistics counters on only where they are written: on rank 0
+ * when `stats_path` (--stats) is given. They cost a few per cent of a
+ * renderer's time (a thread-local add per ray, node and test) and the other
+ * ranks' are never reported. Returns the previous state, for
+ * tb_stats_set_enabled after the render. */
+int tb_cli_stats_where_written(const char *stats_path);
+
 /* Rank 0 prints a line per rank (work, wait, bytes sent, units) after a
  * distributed job if `print` (rank 0's say); collective, so every rank calls
  * it, failed or not. Nothing in a job of one rank. */
