@@ -91,6 +91,8 @@ struct tb__scene_priv {
     int nmats, capmats;
     char **mat_strs;       /* the strings the material table points to (names, paths), owned */
     size_t nmat_strs;
+    tb_material_pattern *mat_pats; /* the patterns the table points to: [0] the one of kind NONE, then
+                                      every pattern some material has */
     tb_htab mat_hash;      /* key hash -> first entry with that hash */
     tb__light_src *lights;
     int caplights;
@@ -666,6 +668,17 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
     s->materials = n ? calloc((size_t)n, sizeof *s->materials) : NULL;
     if (!st && n && !s->materials)
         st = tb_error(TB_ERR_NOMEM, "scene: out of memory for the material table");
+    /* The patterns out of line: one of kind NONE shared by every material
+     * without one, then one per pattern a used material has. */
+    size_t npats = 1;
+    for (int i = 0; i < p->nmats; i++)
+        for (int k = 0; k < 3 && used[i]; k++)
+            npats += p->mats[i].pat[k].kind != TB_MID_PATTERN_NONE;
+    if (!st && n && !(p->mat_pats = calloc(npats, sizeof *p->mat_pats)))
+        st = tb_error(TB_ERR_NOMEM, "scene: out of memory for the material table");
+    if (!st && n)
+        p->mat_pats[0].a = p->mat_pats[0].b = tb_channels_splat(s->nchannels, 0.0f);
+    size_t pat_next = 1;
     for (int i = 0; i < p->nmats && !st; i++) {
         if (!used[i])
             continue;
@@ -693,10 +706,14 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
         m->emission_texture = e->texture[3];
         m->model = e->model;
         m->roughness = e->roughness;
-        tb_material_pattern *mp[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+        const tb_material_pattern **mp[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
         for (int k = 0; k < 3 && !st; k++) {
             const tb_mid_pattern *src = &e->pat[k];
-            tb_material_pattern *d = mp[k];
+            *mp[k] = &p->mat_pats[0];
+            if (src->kind == TB_MID_PATTERN_NONE)
+                continue;
+            tb_material_pattern *d = &p->mat_pats[pat_next++];
+            *mp[k] = d;
             d->kind = src->kind;
             d->object_space = src->object_space;
             d->scale = (float)src->scale;
@@ -705,7 +722,7 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
             d->height = (float)src->height;
             d->image = src->image.path;
             d->a = d->b = tb_channels_splat(s->nchannels, 0.0f);
-            if (k < 2 && src->kind != TB_MID_PATTERN_NONE &&
+            if (k < 2 &&
                 ((st = tb_channels_from_mid_color(&src->a, bands, TB_COLOR_REFLECTANCE, &d->a)) ||
                  (st = tb_channels_from_mid_color(&src->b, bands, TB_COLOR_REFLECTANCE, &d->b)))) {
                 char what[160];
@@ -1156,6 +1173,7 @@ void tb_scene_free(tb_scene *s)
         for (size_t i = 0; i < p->nmat_strs; i++)
             free(p->mat_strs[i]);
         free(p->mat_strs);
+        free(p->mat_pats);
         for (int i = 0; i < s->nlights; i++) {
             tb__free_color(&p->lights[i].l.intensity);
             free((void *)p->lights[i].l.name);
