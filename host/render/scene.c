@@ -71,7 +71,8 @@ typedef struct tb__mat_src {
     char *name;            /* base material name (owned) or NULL */
     tb_mid_model model;
     float roughness;
-    tb_mid_pattern pat[3]; /* diffuse pattern, specular pattern, bump: colours and image path owned */
+    tb_mid_pattern *pat;   /* diffuse pattern, specular pattern, bump: colours and image path owned
+                              (owned array of 3; NULL when all three are of kind NONE, as most are) */
     tb_mid_loc loc;        /* where the block or definition is */
     tb_mid_attrs extra;    /* effective unknown attributes (copies in the attribute store; part of the key) */
     bool emits;
@@ -317,7 +318,8 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     int i = p->nmats;
     tb__mat_src *e = &p->mats[i];
     memset(e, 0, sizeof *e);
-    e->key = key.p;
+    unsigned char *fit = realloc(key.p, key.n ? key.n : 1); /* the buffer grew in steps of 2 from 256 bytes */
+    e->key = fit ? fit : key.p;
     e->keylen = key.n;
     const tb_mid_color *cols[4] = {&m->diffuse, &m->specular, &m->transmission, &m->emission};
     const tb_mid_ref *tex[4] = {&m->diffuse_texture, &m->specular_texture, &m->transmission_texture,
@@ -331,7 +333,12 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     if (m->base)
         ok = (e->name = tb_strdup(m->base)) != NULL && ok;
     const tb_mid_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
-    for (int k = 0; k < 3; k++) {
+    bool any_pat = false;
+    for (int k = 0; k < 3; k++)
+        any_pat = any_pat || pats[k]->kind != TB_MID_PATTERN_NONE;
+    if (any_pat)
+        ok = (e->pat = calloc(3, sizeof *e->pat)) != NULL && ok;
+    for (int k = 0; k < 3 && e->pat; k++) {
         tb_mid_pattern *d = &e->pat[k];
         *d = *pats[k];
         d->image.text = d->image.path = NULL;
@@ -387,6 +394,13 @@ tb_status tb__scene_predict_materials(const tb_mid_object *m, tb_htab *set)
     return TB_OK;
 }
 
+/* Pattern k of a material source (one of kind NONE when it has none). */
+static const tb_mid_pattern *tb__src_pat(const tb__mat_src *e, int k)
+{
+    static const tb_mid_pattern none = {.kind = TB_MID_PATTERN_NONE};
+    return e->pat ? &e->pat[k] : &none;
+}
+
 static void tb__free_mat_src(tb__mat_src *e)
 {
     for (int k = 0; k < 4; k++) {
@@ -394,10 +408,13 @@ static void tb__free_mat_src(tb__mat_src *e)
         free(e->texture[k]);
     }
     for (int k = 0; k < 3; k++) {
-        tb__free_color(&e->pat[k].a);
-        tb__free_color(&e->pat[k].b);
-        free((void *)e->pat[k].image.path);
+        if (e->pat) {
+            tb__free_color(&e->pat[k].a);
+            tb__free_color(&e->pat[k].b);
+            free((void *)e->pat[k].image.path);
+        }
     }
+    free(e->pat);
     free(e->name);
     free(e->key);
 }
@@ -588,8 +605,10 @@ static tb_status tb__drop_mat_srcs(tb__scene_priv *p, const bool *used)
     for (int i = 0; i < p->nmats; i++) {
         const tb__mat_src *e = &p->mats[i];
         n += used[i] ? (e->name != NULL) + (e->texture[0] != NULL) + (e->texture[1] != NULL) +
-                           (e->texture[2] != NULL) + (e->texture[3] != NULL) + (e->pat[0].image.path != NULL) +
-                           (e->pat[1].image.path != NULL) + (e->pat[2].image.path != NULL)
+                           (e->texture[2] != NULL) + (e->texture[3] != NULL) +
+                           (e->pat ? (e->pat[0].image.path != NULL) + (e->pat[1].image.path != NULL) +
+                                         (e->pat[2].image.path != NULL)
+                                   : 0)
                      : 0;
     }
     if (n && !(p->mat_strs = malloc(n * sizeof *p->mat_strs)))
@@ -597,10 +616,10 @@ static tb_status tb__drop_mat_srcs(tb__scene_priv *p, const bool *used)
     for (int i = 0; i < p->nmats; i++) {
         tb__mat_src *e = &p->mats[i];
         if (used[i]) { /* the table owns these now: tb__free_mat_src must not free them */
-            char **keep[8] = {&e->name,         &e->texture[0], &e->texture[1], &e->texture[2], &e->texture[3],
-                              (char **)&e->pat[0].image.path, (char **)&e->pat[1].image.path,
-                              (char **)&e->pat[2].image.path};
-            for (int k = 0; k < 8; k++)
+            char **keep[8] = {&e->name, &e->texture[0], &e->texture[1], &e->texture[2], &e->texture[3]};
+            for (int k = 0; k < 3 && e->pat; k++)
+                keep[5 + k] = (char **)&e->pat[k].image.path;
+            for (int k = 0; k < (e->pat ? 8 : 5); k++)
                 if (*keep[k]) {
                     p->mat_strs[p->nmat_strs++] = *keep[k];
                     *keep[k] = NULL;
@@ -641,7 +660,7 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
     for (int i = 0; i < p->nmats; i++)
         for (int k = 0; k < 4 && used[i]; k++)
             spectral = spectral || tb__is_spectral(&p->mats[i].color[k]) ||
-                       (k < 2 && p->mats[i].pat[k].kind != TB_MID_PATTERN_NONE &&
+                       (k < 2 && tb__src_pat(&p->mats[i], k)->kind != TB_MID_PATTERN_NONE &&
                         (tb__is_spectral(&p->mats[i].pat[k].a) || tb__is_spectral(&p->mats[i].pat[k].b)));
     for (int i = 0; i < s->nlights; i++)
         spectral = spectral || tb__is_spectral(&p->lights[i].l.intensity);
@@ -673,7 +692,7 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
     size_t npats = 1;
     for (int i = 0; i < p->nmats; i++)
         for (int k = 0; k < 3 && used[i]; k++)
-            npats += p->mats[i].pat[k].kind != TB_MID_PATTERN_NONE;
+            npats += tb__src_pat(&p->mats[i], k)->kind != TB_MID_PATTERN_NONE;
     if (!st && n && !(p->mat_pats = calloc(npats, sizeof *p->mat_pats)))
         st = tb_error(TB_ERR_NOMEM, "scene: out of memory for the material table");
     if (!st && n)
@@ -708,7 +727,7 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
         m->roughness = e->roughness;
         const tb_material_pattern **mp[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
         for (int k = 0; k < 3 && !st; k++) {
-            const tb_mid_pattern *src = &e->pat[k];
+            const tb_mid_pattern *src = tb__src_pat(e, k);
             *mp[k] = &p->mat_pats[0];
             if (src->kind == TB_MID_PATTERN_NONE)
                 continue;
