@@ -69,9 +69,9 @@ const char *tb_gpu_pt_unsupported(const tb_scene *s)
         const tb_material *m = &s->materials[i];
         if (m->diffuse_texture || m->specular_texture || m->transmission_texture || m->emission_texture)
             return "image textures are not in the kernel";
-        if (m->diffuse_pattern.kind != TB_MID_PATTERN_NONE || m->specular_pattern.kind != TB_MID_PATTERN_NONE)
+        if (m->diffuse_pattern->kind != TB_MID_PATTERN_NONE || m->specular_pattern->kind != TB_MID_PATTERN_NONE)
             return "procedural patterns are not in the kernel";
-        if (m->bump.kind != TB_MID_PATTERN_NONE)
+        if (m->bump->kind != TB_MID_PATTERN_NONE)
             return "bump maps are not in the kernel";
     }
     for (int i = 0; i < s->nemitters; i++) {

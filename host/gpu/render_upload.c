@@ -137,7 +137,7 @@ static void tb__layout_colours(tb_gpu_renderer *r, tb__tables *t)
     for (int i = 0; i < nm; i++)
         for (int k = 0; k < 2; k++)
             if (!r->route[i] && r->mpat[i] &&
-                (k == 0 ? s->materials[i].diffuse_pattern.kind : s->materials[i].specular_pattern.kind))
+                (k == 0 ? s->materials[i].diffuse_pattern->kind : s->materials[i].specular_pattern->kind))
                 ncol += 2 * nch;
     r->perm_col = (uint32_t)ncol;
     if (r->uses.pattern_kinds & (1u << TB_GPU_PATTERN_NOISE))
@@ -162,7 +162,7 @@ static void tb__fill_patterns(tb_gpu_renderer *r, tb__tables *t, int i)
 {
     const tb_material *m = &r->scene->materials[i];
     const int nch = r->nch;
-    const tb_material_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+    const tb_material_pattern *pats[3] = {m->diffuse_pattern, m->specular_pattern, m->bump};
     for (int k = 0; k < 3; k++) {
         const tb_material_pattern *pt = pats[k];
         if (!pt->kind || (k == 1 && m->model == TB_MID_MODEL_LAMBERT))

@@ -63,8 +63,50 @@ static tb_status tb__check_options(const tb_accel_options *o)
     return TB_OK;
 }
 
+/* Where the build's triangle records come from: the caller's array
+ * (cb->tris), else the callback (NULL: none). */
+typedef struct tb__tri_src {
+    const tb_accel_tri *tris;
+    tb_accel_tri_fn fn;
+    void *ctx;
+} tb__tri_src;
+
+/* The triangle record of input reference i (its reference p): the array's,
+ * or one made by the callback into *tmp. */
+static const tb_accel_tri *tb__accel_input_tri(const tb__tri_src *ts, const tb_accel_prim *p, uint32_t i,
+                                               tb_accel_tri *tmp)
+{
+    if (ts->tris)
+        return &ts->tris[i];
+    ts->fn(ts->ctx, p, i, tmp);
+    return tmp;
+}
+
+static tb_status tb__accel_build(tb_accel_kind kind, const tb_accel_prim *prims, tb_accel_prim **owned, size_t n,
+                                 const tb_accel_callbacks *cb, tb__tri_src ts, const tb_accel_options *opt,
+                                 tb_accel **out);
+
 tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t n,
                          const tb_accel_callbacks *cb, const tb_accel_options *opt, tb_accel **out)
+{
+    return tb__accel_build(kind, prims, NULL, n, cb, (tb__tri_src){cb ? cb->tris : NULL, NULL, NULL}, opt, out);
+}
+
+tb_status tb_accel_build_owned(tb_accel_kind kind, tb_accel_prim *prims, size_t n, const tb_accel_callbacks *cb,
+                               tb_accel_tri_fn tri, void *tri_ctx, const tb_accel_options *opt, tb_accel **out)
+{
+    tb_accel_prim *own = prims;
+    tb__tri_src ts = {cb ? cb->tris : NULL, cb && cb->tris ? NULL : tri, tri_ctx};
+    tb_status st = tb__accel_build(kind, prims, &own, n, cb, ts, opt, out);
+    free(own); /* NULL once the structure took it */
+    return st;
+}
+
+/* tb_accel_build; with `owned` (*owned == prims), that array becomes the
+ * structure's own and *owned NULL (else the caller still owns it). */
+static tb_status tb__accel_build(tb_accel_kind kind, const tb_accel_prim *prims, tb_accel_prim **owned, size_t n,
+                                 const tb_accel_callbacks *cb, tb__tri_src ts, const tb_accel_options *opt,
+                                 tb_accel **out)
 {
     if (!out)
         return tb_error(TB_ERR_ARG, "accel: NULL output");
@@ -107,20 +149,26 @@ tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t 
     acc->n = nkept;
     acc->bounds = tb_aabb_empty();
     if (nkept > 0) {
-        acc->prims = malloc(nkept * sizeof *acc->prims);
+        acc->prims = owned ? NULL : malloc(nkept * sizeof *acc->prims);
         acc->index = malloc(nkept * sizeof *acc->index);
-        if (!acc->prims || !acc->index) {
+        if ((!owned && !acc->prims) || !acc->index) {
             tb_accel_free(acc);
             return tb_error(TB_ERR_NOMEM, "accel: out of memory for %zu references", nkept);
         }
+        tb_accel_prim *dst = owned ? *owned : acc->prims; /* owned: compacted in place (k <= i) */
         size_t k = 0;
         for (size_t i = 0; i < n; i++) {
             if (tb_aabb_is_empty(&prims[i].bounds))
                 continue;
-            acc->prims[k] = prims[i];
+            dst[k] = prims[i];
             acc->index[k] = (uint32_t)i;
-            acc->bounds = tb_aabb_union(acc->bounds, prims[i].bounds);
+            acc->bounds = tb_aabb_union(acc->bounds, dst[k].bounds);
             k++;
+        }
+        if (owned) {
+            tb_accel_prim *shrunk = nkept < n ? realloc(*owned, nkept * sizeof *dst) : *owned;
+            acc->prims = shrunk ? shrunk : *owned;
+            *owned = NULL;
         }
     }
     acc->stats.kind = kind;
@@ -136,10 +184,13 @@ tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t 
             st = tb__grid_build(acc, &o);
     }
     /* Triangle references in stored order, so a leaf's lie side by side. */
-    if (!st && nkept > 0 && cb->tris) {
+    if (!st && nkept > 0 && (ts.tris || ts.fn)) {
         size_t ntri = 0;
-        for (size_t k = 0; k < nkept; k++)
-            ntri += cb->tris[acc->index[k]].object != TB_ACCEL_TRI_NONE;
+        tb_accel_tri made;
+        for (size_t k = 0; k < nkept; k++) {
+            const tb_accel_tri *tr = tb__accel_input_tri(&ts, &acc->prims[k], acc->index[k], &made);
+            ntri += tr->object != TB_ACCEL_TRI_NONE;
+        }
         /* Records for the triangles only; a map from reference to record
          * unless every reference is one. */
         if (ntri > 0) {
@@ -148,7 +199,7 @@ tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t 
             if (!acc->tris || (ntri < nkept && !acc->tri_of))
                 st = tb_error(TB_ERR_NOMEM, "accel: out of memory for %zu triangle references", ntri);
             for (size_t k = 0, t = 0; !st && k < nkept; k++) {
-                const tb_accel_tri *tr = &cb->tris[acc->index[k]];
+                const tb_accel_tri *tr = tb__accel_input_tri(&ts, &acc->prims[k], acc->index[k], &made);
                 if (acc->tri_of)
                     acc->tri_of[k] = tr->object != TB_ACCEL_TRI_NONE ? (uint32_t)t : TB_ACCEL_TRI_NONE;
                 if (tr->object != TB_ACCEL_TRI_NONE)

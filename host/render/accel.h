@@ -78,6 +78,11 @@ _Static_assert(sizeof(tb_accel_tri) == 80, "tb_accel_tri is 80 bytes");
 /* tb_accel_tri.object of a reference that is not a triangle. */
 #define TB_ACCEL_TRI_NONE UINT32_MAX
 
+/* The triangle record of reference `prim` (number `index` in the array
+ * given to the build), made on demand at build: writes *out (object
+ * TB_ACCEL_TRI_NONE for a reference that is not a triangle). */
+typedef void (*tb_accel_tri_fn)(void *tri_ctx, const tb_accel_prim *prim, uint32_t index, tb_accel_tri *out);
+
 /* How leaf references are intersected. */
 typedef struct tb_accel_callbacks {
     tb_accel_intersect_fn intersect; /* required */
@@ -151,6 +156,16 @@ typedef struct tb_accel tb_accel;
  * *out is NULL on failure. */
 tb_status tb_accel_build(tb_accel_kind kind, const tb_accel_prim *prims, size_t n,
                          const tb_accel_callbacks *cb, const tb_accel_options *opt, tb_accel **out);
+
+/* tb_accel_build that takes `prims` (from malloc, n elements) instead of
+ * copying it: the structure keeps the array as its own, or frees it on
+ * failure, so the caller's copy is not held beside the structure's through
+ * the build (32 bytes per reference at its peak). With cb->tris NULL, `tri`
+ * (may be NULL) makes the triangle records instead, one at a time once the
+ * tree is built, so no array of them exists during the build (80 bytes per
+ * reference). The same structure as tb_accel_build with the same records. */
+tb_status tb_accel_build_owned(tb_accel_kind kind, tb_accel_prim *prims, size_t n, const tb_accel_callbacks *cb,
+                               tb_accel_tri_fn tri, void *tri_ctx, const tb_accel_options *opt, tb_accel **out);
 
 /* Closest hit with ray->tmin <= t <= ray->tmax (ties as in the file comment):
  * fills *hit and returns true, or returns false and leaves *hit unchanged.

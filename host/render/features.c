@@ -51,7 +51,7 @@ static unsigned tb__texture_positive(const tb_mipmap *t)
 static int tb__colour_class(const tb_material *m, int k, const tb_mipmap *tex)
 {
     const tb_channels *base = k == 0 ? &m->diffuse : k == 1 ? &m->specular : &m->transmission;
-    const tb_material_pattern *p = k == 0 ? &m->diffuse_pattern : k == 1 ? &m->specular_pattern : NULL;
+    const tb_material_pattern *p = k == 0 ? m->diffuse_pattern : k == 1 ? m->specular_pattern : NULL;
     bool black = true, positive = false;
     unsigned pos = 0; /* channels < 3 positive everywhere */
     for (int c = 0; c < base->n; c++) {
@@ -136,9 +136,9 @@ void tb_material_features(const tb_raytracer *rt, uint32_t *out)
         case TB_MID_MODEL_GGX: f |= TB_FEAT_GGX; break;
         default: f |= TB_FEAT_MODEL_OTHER; break;
         }
-        f |= tb__pattern_feature(m->diffuse_pattern.kind);
-        f |= lambert ? 0u : tb__pattern_feature(m->specular_pattern.kind);
-        f |= tb__bump_feature(m->bump.kind);
+        f |= tb__pattern_feature(m->diffuse_pattern->kind);
+        f |= lambert ? 0u : tb__pattern_feature(m->specular_pattern->kind);
+        f |= tb__bump_feature(m->bump->kind);
         /* the area-light samples: the diffuse term's, and the GGX lobe's */
         if ((f & TB_FEAT_DIFFUSE) || ((f & TB_FEAT_GGX) && (f & TB_FEAT_SPECULAR)))
             f |= lit;

@@ -57,7 +57,7 @@ tb_status tb__rt_patterns_init(const tb_scene *s, int filter, tb__rt_patterns **
     bool any = false;
     for (int i = 0; i < s->nmaterials; i++) {
         const tb_material *m = &s->materials[i];
-        any = any || m->diffuse_pattern.kind || m->specular_pattern.kind || m->bump.kind;
+        any = any || m->diffuse_pattern->kind || m->specular_pattern->kind || m->bump->kind;
     }
     if (!any)
         return TB_OK;
@@ -74,7 +74,7 @@ tb_status tb__rt_patterns_init(const tb_scene *s, int filter, tb__rt_patterns **
     }
     for (int i = 0; i < P->n; i++) {
         const tb_material *m = &s->materials[i];
-        const tb_material_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+        const tb_material_pattern *pats[3] = {m->diffuse_pattern, m->specular_pattern, m->bump};
         for (int k = 0; k < 3; k++) {
             if (pats[k]->kind == TB_MID_PATTERN_NONE)
                 continue;
@@ -157,7 +157,7 @@ bool tb__rt_bump(const tb__rt_patterns *P, const tb_material *m, int material, c
         bg.p = g->p;
     }
     tb_vec3 nb;
-    if (!tb_bump_map(t, m->bump.height, &bg, &nb, NULL, NULL))
+    if (!tb_bump_map(t, m->bump->height, &bg, &nb, NULL, NULL))
         return false;
     /* back to the viewer's side of the original normal */
     *n = tb_vec3_dot(nb, g->n) < 0.0f ? tb_vec3_neg(nb) : nb;

@@ -71,7 +71,8 @@ typedef struct tb__mat_src {
     char *name;            /* base material name (owned) or NULL */
     tb_mid_model model;
     float roughness;
-    tb_mid_pattern pat[3]; /* diffuse pattern, specular pattern, bump: colours and image path owned */
+    tb_mid_pattern *pat;   /* diffuse pattern, specular pattern, bump: colours and image path owned
+                              (owned array of 3; NULL when all three are of kind NONE, as most are) */
     tb_mid_loc loc;        /* where the block or definition is */
     tb_mid_attrs extra;    /* effective unknown attributes (copies in the attribute store; part of the key) */
     bool emits;
@@ -87,8 +88,12 @@ typedef struct tb__light_src {
 } tb__light_src;
 
 struct tb__scene_priv {
-    tb__mat_src *mats;     /* every material a node used, before compaction */
+    tb__mat_src *mats;     /* every material a node used, before compaction; freed once converted */
     int nmats, capmats;
+    char **mat_strs;       /* the strings the material table points to (names, paths), owned */
+    size_t nmat_strs;
+    tb_material_pattern *mat_pats; /* the patterns the table points to: [0] the one of kind NONE, then
+                                      every pattern some material has */
     tb_htab mat_hash;      /* key hash -> first entry with that hash */
     tb__light_src *lights;
     int caplights;
@@ -313,7 +318,8 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     int i = p->nmats;
     tb__mat_src *e = &p->mats[i];
     memset(e, 0, sizeof *e);
-    e->key = key.p;
+    unsigned char *fit = realloc(key.p, key.n ? key.n : 1); /* the buffer grew in steps of 2 from 256 bytes */
+    e->key = fit ? fit : key.p;
     e->keylen = key.n;
     const tb_mid_color *cols[4] = {&m->diffuse, &m->specular, &m->transmission, &m->emission};
     const tb_mid_ref *tex[4] = {&m->diffuse_texture, &m->specular_texture, &m->transmission_texture,
@@ -327,7 +333,12 @@ static tb_status tb__material_cb(void *user, const tb_mid_material *m, int *inde
     if (m->base)
         ok = (e->name = tb_strdup(m->base)) != NULL && ok;
     const tb_mid_pattern *pats[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
-    for (int k = 0; k < 3; k++) {
+    bool any_pat = false;
+    for (int k = 0; k < 3; k++)
+        any_pat = any_pat || pats[k]->kind != TB_MID_PATTERN_NONE;
+    if (any_pat)
+        ok = (e->pat = calloc(3, sizeof *e->pat)) != NULL && ok;
+    for (int k = 0; k < 3 && e->pat; k++) {
         tb_mid_pattern *d = &e->pat[k];
         *d = *pats[k];
         d->image.text = d->image.path = NULL;
@@ -383,6 +394,13 @@ tb_status tb__scene_predict_materials(const tb_mid_object *m, tb_htab *set)
     return TB_OK;
 }
 
+/* Pattern k of a material source (one of kind NONE when it has none). */
+static const tb_mid_pattern *tb__src_pat(const tb__mat_src *e, int k)
+{
+    static const tb_mid_pattern none = {.kind = TB_MID_PATTERN_NONE};
+    return e->pat ? &e->pat[k] : &none;
+}
+
 static void tb__free_mat_src(tb__mat_src *e)
 {
     for (int k = 0; k < 4; k++) {
@@ -390,10 +408,13 @@ static void tb__free_mat_src(tb__mat_src *e)
         free(e->texture[k]);
     }
     for (int k = 0; k < 3; k++) {
-        tb__free_color(&e->pat[k].a);
-        tb__free_color(&e->pat[k].b);
-        free((void *)e->pat[k].image.path);
+        if (e->pat) {
+            tb__free_color(&e->pat[k].a);
+            tb__free_color(&e->pat[k].b);
+            free((void *)e->pat[k].image.path);
+        }
     }
+    free(e->pat);
     free(e->name);
     free(e->key);
 }
@@ -574,6 +595,45 @@ static void tb__mark_used(const tb_object *o, bool *used)
 
 static bool tb__is_spectral(const tb_mid_color *c) { return c->type != TB_MID_COLOR_RGB; }
 
+/* Frees the source copies of the materials once the table holds them (about
+ * 1 KB each, one per object in a scene of per-object colours: they would be
+ * live through the acceleration build otherwise), keeping the strings the
+ * table points to. */
+static tb_status tb__drop_mat_srcs(tb__scene_priv *p, const bool *used)
+{
+    size_t n = 0;
+    for (int i = 0; i < p->nmats; i++) {
+        const tb__mat_src *e = &p->mats[i];
+        n += used[i] ? (e->name != NULL) + (e->texture[0] != NULL) + (e->texture[1] != NULL) +
+                           (e->texture[2] != NULL) + (e->texture[3] != NULL) +
+                           (e->pat ? (e->pat[0].image.path != NULL) + (e->pat[1].image.path != NULL) +
+                                         (e->pat[2].image.path != NULL)
+                                   : 0)
+                     : 0;
+    }
+    if (n && !(p->mat_strs = malloc(n * sizeof *p->mat_strs)))
+        return tb_error(TB_ERR_NOMEM, "scene: out of memory for the material table");
+    for (int i = 0; i < p->nmats; i++) {
+        tb__mat_src *e = &p->mats[i];
+        if (used[i]) { /* the table owns these now: tb__free_mat_src must not free them */
+            char **keep[8] = {&e->name, &e->texture[0], &e->texture[1], &e->texture[2], &e->texture[3]};
+            for (int k = 0; k < 3 && e->pat; k++)
+                keep[5 + k] = (char **)&e->pat[k].image.path;
+            for (int k = 0; k < (e->pat ? 8 : 5); k++)
+                if (*keep[k]) {
+                    p->mat_strs[p->nmat_strs++] = *keep[k];
+                    *keep[k] = NULL;
+                }
+        }
+        tb__free_mat_src(e);
+    }
+    free(p->mats);
+    p->mats = NULL;
+    p->nmats = p->capmats = 0;
+    tb_htab_free(&p->mat_hash);
+    return TB_OK;
+}
+
 /* Drops the materials no primitive uses (a CSG node's own material is only
  * inherited), decides the colour representation, converts every colour. */
 static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
@@ -600,7 +660,7 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
     for (int i = 0; i < p->nmats; i++)
         for (int k = 0; k < 4 && used[i]; k++)
             spectral = spectral || tb__is_spectral(&p->mats[i].color[k]) ||
-                       (k < 2 && p->mats[i].pat[k].kind != TB_MID_PATTERN_NONE &&
+                       (k < 2 && tb__src_pat(&p->mats[i], k)->kind != TB_MID_PATTERN_NONE &&
                         (tb__is_spectral(&p->mats[i].pat[k].a) || tb__is_spectral(&p->mats[i].pat[k].b)));
     for (int i = 0; i < s->nlights; i++)
         spectral = spectral || tb__is_spectral(&p->lights[i].l.intensity);
@@ -627,6 +687,17 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
     s->materials = n ? calloc((size_t)n, sizeof *s->materials) : NULL;
     if (!st && n && !s->materials)
         st = tb_error(TB_ERR_NOMEM, "scene: out of memory for the material table");
+    /* The patterns out of line: one of kind NONE shared by every material
+     * without one, then one per pattern a used material has. */
+    size_t npats = 1;
+    for (int i = 0; i < p->nmats; i++)
+        for (int k = 0; k < 3 && used[i]; k++)
+            npats += tb__src_pat(&p->mats[i], k)->kind != TB_MID_PATTERN_NONE;
+    if (!st && n && !(p->mat_pats = calloc(npats, sizeof *p->mat_pats)))
+        st = tb_error(TB_ERR_NOMEM, "scene: out of memory for the material table");
+    if (!st && n)
+        p->mat_pats[0].a = p->mat_pats[0].b = tb_channels_splat(s->nchannels, 0.0f);
+    size_t pat_next = 1;
     for (int i = 0; i < p->nmats && !st; i++) {
         if (!used[i])
             continue;
@@ -654,10 +725,14 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
         m->emission_texture = e->texture[3];
         m->model = e->model;
         m->roughness = e->roughness;
-        tb_material_pattern *mp[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
+        const tb_material_pattern **mp[3] = {&m->diffuse_pattern, &m->specular_pattern, &m->bump};
         for (int k = 0; k < 3 && !st; k++) {
-            const tb_mid_pattern *src = &e->pat[k];
-            tb_material_pattern *d = mp[k];
+            const tb_mid_pattern *src = tb__src_pat(e, k);
+            *mp[k] = &p->mat_pats[0];
+            if (src->kind == TB_MID_PATTERN_NONE)
+                continue;
+            tb_material_pattern *d = &p->mat_pats[pat_next++];
+            *mp[k] = d;
             d->kind = src->kind;
             d->object_space = src->object_space;
             d->scale = (float)src->scale;
@@ -666,7 +741,7 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
             d->height = (float)src->height;
             d->image = src->image.path;
             d->a = d->b = tb_channels_splat(s->nchannels, 0.0f);
-            if (k < 2 && src->kind != TB_MID_PATTERN_NONE &&
+            if (k < 2 &&
                 ((st = tb_channels_from_mid_color(&src->a, bands, TB_COLOR_REFLECTANCE, &d->a)) ||
                  (st = tb_channels_from_mid_color(&src->b, bands, TB_COLOR_REFLECTANCE, &d->b)))) {
                 char what[160];
@@ -688,6 +763,8 @@ static tb_status tb__finish_materials(tb_scene *s, const tb_scene_options *opt)
             a->materials[remap[i]] = p->mats[i].extra;
     s->nmaterials = n;
     tb_stat_add(&tb__n_materials, n);
+    if (!st)
+        st = tb__drop_mat_srcs(p, used);
     free(used);
     free(remap);
     return st;
@@ -892,16 +969,23 @@ static bool tb__cb_occluded(void *ctx, const tb_accel_prim *prim, uint32_t index
     return tb_object_occluded(s->objects[prim->object], ray);
 }
 
+/* tb_accel_tri_fn: a reference's triangle record (object TB_ACCEL_TRI_NONE for a whole object). */
+static void tb__scene_tri_cb(void *ctx, const tb_accel_prim *r, uint32_t index, tb_accel_tri *out)
+{
+    (void)index;
+    const tb_scene *s = ctx;
+    if (r->sub == TB_SCENE_WHOLE_OBJECT)
+        *out = (tb_accel_tri){.object = TB_ACCEL_TRI_NONE};
+    else
+        tb__scene_tri_make(s->objects[r->object], r->sub, out);
+}
+
 tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel_options *opt)
 {
     if (!s)
         return tb_error(TB_ERR_ARG, "scene: NULL argument");
     int64_t t0 = tb_stats_now_ns();
     tb_timer_token tt = tb_timer_start(&tb__t_accel);
-    /* The triangle references' corners, for the build to copy in its order;
-     * none when there is no triangle reference (the structure then keeps no
-     * 80-byte record per reference: every one goes to the callbacks, as a
-     * whole-object reference does anyway). */
     tb_accel_prim *prims = s->prims;
     if (!prims) { /* dropped after the last build: made again */
         tb_status st = tb_scene_refs(s, &prims);
@@ -913,29 +997,18 @@ tb_status tb_scene_rebuild_accel(tb_scene *s, tb_accel_kind kind, const tb_accel
     bool any_tri = false;
     for (size_t k = 0; k < s->nprims && !any_tri; k++)
         any_tri = prims[k].sub != TB_SCENE_WHOLE_OBJECT;
-    tb_accel_tri *tris = any_tri ? malloc(sizeof *tris * s->nprims) : NULL;
-    if (any_tri && !tris) {
-        tb_timer_stop(tt);
-        if (prims != s->prims)
-            free(prims);
-        return tb_error(TB_ERR_NOMEM, "scene: out of memory for %zu acceleration references", s->nprims);
-    }
-    for (size_t k = 0; tris && k < s->nprims; k++) {
-        const tb_accel_prim *r = &prims[k];
-        if (r->sub == TB_SCENE_WHOLE_OBJECT)
-            tris[k] = (tb_accel_tri){.object = TB_ACCEL_TRI_NONE};
-        else
-            tb__scene_tri_make(s->objects[r->object], r->sub, &tris[k]);
-    }
-    tb_accel_callbacks cb = {tb__cb_intersect, tb__cb_occluded, s, tris};
-    tb_accel *acc;
-    tb_status st = tb_accel_build(kind, prims, s->nprims, &cb, opt, &acc);
-    tb_timer_stop(tt);
-    free(tris);
-    /* The structure keeps its own copy: the scene's array goes (32 bytes per
-     * reference; tb_scene_refs makes it again for the few that need it). */
-    free(prims);
+    /* The triangle references' corners: records the structure makes through
+     * the callback once its tree is built, in its order (no array of them
+     * through the build: 80 bytes per reference). None when there is no
+     * triangle reference (the structure then keeps no record per reference:
+     * every one goes to the callbacks, as a whole-object reference does). */
+    tb_accel_callbacks cb = {tb__cb_intersect, tb__cb_occluded, s, NULL};
+    /* The structure takes the scene's array as its own (tb_scene_refs makes
+     * it again for the few that need it in the scene's order). */
     s->prims = NULL;
+    tb_accel *acc;
+    tb_status st = tb_accel_build_owned(kind, prims, s->nprims, &cb, any_tri ? tb__scene_tri_cb : NULL, s, opt, &acc);
+    tb_timer_stop(tt);
     if (st)
         return tb_error_context(st, "scene");
     tb_accel_free(s->accel);
@@ -1116,6 +1189,10 @@ void tb_scene_free(tb_scene *s)
             tb__free_mat_src(&p->mats[i]);
         free(p->mats);
         tb_htab_free(&p->mat_hash);
+        for (size_t i = 0; i < p->nmat_strs; i++)
+            free(p->mat_strs[i]);
+        free(p->mat_strs);
+        free(p->mat_pats);
         for (int i = 0; i < s->nlights; i++) {
             tb__free_color(&p->lights[i].l.intensity);
             free((void *)p->lights[i].l.name);

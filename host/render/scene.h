@@ -109,9 +109,11 @@ typedef struct tb_material {
     const char *emission_texture;     /* likewise */
     tb_mid_model model;       /* reflection model of the specular term (MID 1.1) */
     float roughness;          /* GGX alpha */
-    tb_material_pattern diffuse_pattern;  /* replaces `diffuse` when kind != NONE */
-    tb_material_pattern specular_pattern; /* replaces `specular` when kind != NONE */
-    tb_material_pattern bump;             /* perturbs the shading normal when kind != NONE */
+    /* The patterns, never NULL: a material without one points to the scene's
+     * pattern of kind NONE (zero colours), so each is 8 bytes, not 296. */
+    const tb_material_pattern *diffuse_pattern;  /* replaces `diffuse` when kind != NONE */
+    const tb_material_pattern *specular_pattern; /* replaces `specular` when kind != NONE */
+    const tb_material_pattern *bump;             /* perturbs the shading normal when kind != NONE */
 } tb_material;
 
 /* An emissive object: a top-level object one of whose surfaces emits. */

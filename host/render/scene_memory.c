@@ -84,7 +84,12 @@ void tb_scene_memory(const tb_scene *s, tb_scene_memory_use *m)
         }
     }
     m->fed = s->stats.fed_bytes;
-    m->materials = tb__alloc((size_t)s->nmaterials * sizeof(tb_material));
+    size_t npats = s->nmaterials > 0; /* the shared pattern of kind NONE, then each material's own */
+    for (int i = 0; i < s->nmaterials; i++)
+        npats += (s->materials[i].diffuse_pattern->kind != TB_MID_PATTERN_NONE) +
+                 (s->materials[i].specular_pattern->kind != TB_MID_PATTERN_NONE) +
+                 (s->materials[i].bump->kind != TB_MID_PATTERN_NONE);
+    m->materials = tb__alloc((size_t)s->nmaterials * sizeof(tb_material)) + tb__alloc(npats * sizeof(tb_material_pattern));
     m->emitters = tb__alloc((size_t)s->nemitters * sizeof(tb_emitter)) +
                   tb__alloc((size_t)s->nemissive * sizeof(tb_scene_emissive));
     for (int i = 0; i < s->nemitters; i++)

@@ -149,7 +149,7 @@ static void tb__patterned(const tb_surfaces *ss, const tb_material *m, int slot,
     double f;
     if (!g || !tb__rt_pattern_factor(ss->patterns, (int)(m - ss->scene->materials), slot, g, &f))
         return;
-    const tb_material_pattern *p = slot == 0 ? &m->diffuse_pattern : &m->specular_pattern;
+    const tb_material_pattern *p = slot == 0 ? m->diffuse_pattern : m->specular_pattern;
     tb_channels r = p->a;
     for (int k = 0; k < r.n; k++)
         r.v[k] = (float)((double)p->a.v[k] + f * ((double)p->b.v[k] - (double)p->a.v[k]));
@@ -221,7 +221,7 @@ bool tb_surface_at(const tb_surfaces *ss, const tb_ray *ray, const tb_hit *hit, 
     float fpv[4];
     const float *fp = NULL;
     const tb_object *leaf = NULL;
-    const bool patterned = ss->patterns && (m->diffuse_pattern.kind || m->specular_pattern.kind || m->bump.kind);
+    const bool patterned = ss->patterns && (m->diffuse_pattern->kind || m->specular_pattern->kind || m->bump->kind);
     sf->has_tangents = (ss->textures || patterned) && tb__surface_tangents(s, hit, &sf->dpdu, &sf->dpdv, &leaf);
     if (!sf->has_tangents)
         sf->dpdu = sf->dpdv = (tb_vec3){0, 0, 0};
@@ -238,7 +238,7 @@ bool tb_surface_at(const tb_surfaces *ss, const tb_ray *ray, const tb_hit *hit, 
         tb__surface_fill(leaf, hit, p, sf->nv, sf->dpdu, sf->dpdv, fp, dpdxy, &surf);
         g = &surf;
         tb_vec3 nb;
-        if (m->bump.kind && tb__rt_bump(ss->patterns, m, sf->material, g, &nb))
+        if (m->bump->kind && tb__rt_bump(ss->patterns, m, sf->material, g, &nb))
             sf->n = nb; /* the shading normal; rays still leave by the geometric one */
     }
 

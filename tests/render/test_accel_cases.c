@@ -458,6 +458,129 @@ static void test_triangle_references(void **state)
     tp_free(&s);
 }
 
+/* Records made by tb_accel_build_owned's callback: counts the calls, and
+ * checks that it is handed the reference the index names. */
+typedef struct tt_tri_maker {
+    const tp_scene *s;
+    const tb_accel_prim *refs; /* the input, for the check */
+    size_t calls;
+} tt_tri_maker;
+
+/* The record of test primitive p (object TB_ACCEL_TRI_NONE unless a triangle). */
+static void tt_tri_record(const tp_prim *p, tb_accel_tri *out)
+{
+    *out = (tb_accel_tri){.object = TB_ACCEL_TRI_NONE};
+    if (p->kind != TP_TRIANGLE)
+        return;
+    for (int j = 0; j < 9; j++)
+        out->v[j] = p->v[j / 3][j % 3];
+    out->object = p->object;
+    out->face = p->face;
+}
+
+static void tt_make_tri(void *ctx, const tb_accel_prim *prim, uint32_t index, tb_accel_tri *out)
+{
+    tt_tri_maker *m = ctx;
+    m->calls++;
+    assert_memory_equal(prim, &m->refs[index], sizeof *prim);
+    assert_false(tb_aabb_is_empty(&prim->bounds)); /* dropped references are never asked for */
+    tt_tri_record(&m->s->prims[prim->sub], out);
+}
+
+/* tb_accel_build_owned (the structure takes the reference array, and makes
+ * the triangle records through a callback after its tree is built) gives
+ * the structure tb_accel_build gives with a copied array and records, bit
+ * for bit, empty references dropped alike; a refused build frees the array. */
+static void test_owned_build(void **state)
+{
+    (void)state;
+    tb_rng r;
+    tb_rng_seed(&r, tb_test_seed("owned_build", 91), 0);
+    tp_scene s = {0};
+    tp_random_scene(&s, &r, 5000, 1.0f, 0.0f);
+    tb_accel_prim *in = malloc(s.n * sizeof *in);
+    tb_accel_tri *tris = malloc(s.n * sizeof *tris);
+    assert_non_null(in);
+    assert_non_null(tris);
+    memcpy(in, s.refs, s.n * sizeof *in);
+    size_t ntri = 0, nempty = 0;
+    for (size_t i = 0; i < s.n; i++) {
+        if (i % 97 == 5) { /* some empty references, which both builds drop */
+            in[i].bounds = tb_aabb_empty();
+            nempty++;
+        }
+        tt_tri_record(&s.prims[i], &tris[i]);
+        ntri += tris[i].object != TB_ACCEL_TRI_NONE;
+    }
+    assert_true(ntri > s.n / 4 && nempty > 10);
+    tt_ctx ctx = {&s};
+    for (int k = 0; k < NKINDS; k++) {
+        tb_accel_callbacks cb_copy = {tt_sphere_only, NULL, &ctx, tris};
+        tb_accel_callbacks cb_own = {tt_sphere_only, NULL, &ctx, NULL};
+        tb_accel *a, *b;
+        assert_int_equal(tb_accel_build(kinds[k], in, s.n, &cb_copy, NULL, &a), TB_OK);
+        tb_accel_prim *owned = malloc(s.n * sizeof *owned);
+        assert_non_null(owned);
+        memcpy(owned, in, s.n * sizeof *owned);
+        tt_tri_maker mk = {&s, in, 0};
+        assert_int_equal(tb_accel_build_owned(kinds[k], owned, s.n, &cb_own, tt_make_tri, &mk, NULL, &b), TB_OK);
+        assert_int_equal(a->n, s.n - nempty);
+        assert_int_equal(b->n, a->n);
+        assert_true(mk.calls >= b->n); /* every kept reference asked for, no dropped one */
+        assert_memory_equal(a->prims, b->prims, a->n * sizeof *a->prims);
+        assert_memory_equal(a->index, b->index, a->n * sizeof *a->index);
+        for (size_t j = 0; j < a->n; j++) {
+            tb_accel_tri ta, tb2;
+            const tb_accel_tri *ra = tb__accel_tri_at(a, j, &ta), *rb = tb__accel_tri_at(b, j, &tb2);
+            assert_int_equal(ra != NULL, rb != NULL);
+            if (ra)
+                assert_memory_equal(ra, rb, sizeof *ra);
+        }
+        assert_int_equal(a->nwide, b->nwide);
+        if (a->nwide)
+            assert_memory_equal(a->wide, b->wide, a->nwide * sizeof *a->wide);
+        for (int i = 0; i < 2000; i++) {
+            tb_ray ray = tp_random_ray(&r, &s, 1.0f, 0.0f);
+            tb_hit ha, hb;
+            tb_accel_tri_hit da, db;
+            memset(&ha, 0, sizeof ha);
+            memset(&hb, 0, sizeof hb);
+            memset(&da, 0, sizeof da);
+            memset(&db, 0, sizeof db);
+            bool fa = tb_accel_intersect_tri(a, &ray, &ha, &da), fb = tb_accel_intersect_tri(b, &ray, &hb, &db);
+            assert_int_equal(fa, fb);
+            assert_memory_equal(&ha, &hb, sizeof ha);
+            assert_memory_equal(&da, &db, sizeof da);
+            assert_int_equal(tb_accel_occluded(a, &ray), tb_accel_occluded(b, &ray));
+        }
+        tb_accel_free(a);
+        tb_accel_free(b);
+    }
+    /* Refused (a NaN corner): the array is freed by the build (the leak checker of the ASan build sees it). */
+    tb_accel_prim *bad = malloc(s.n * sizeof *bad);
+    assert_non_null(bad);
+    memcpy(bad, in, s.n * sizeof *bad);
+    bad[s.n / 2].bounds.hi.y = NAN;
+    tb_accel_callbacks cb = {tt_sphere_only, NULL, &ctx, NULL};
+    tb_accel *c = (tb_accel *)&cb;
+    assert_int_equal(tb_accel_build_owned(TB_ACCEL_BVH, bad, s.n, &cb, tt_make_tri, NULL, NULL, &c), TB_ERR_ARG);
+    assert_null(c);
+    /* Nothing but empty references: an empty structure, the array freed. */
+    tb_accel_prim *empty = malloc(3 * sizeof *empty);
+    assert_non_null(empty);
+    for (int i = 0; i < 3; i++)
+        empty[i] = (tb_accel_prim){tb_aabb_empty(), 0, (uint32_t)i};
+    assert_int_equal(tb_accel_build_owned(TB_ACCEL_BVH, empty, 3, &cb, tt_make_tri, NULL, NULL, &c), TB_OK);
+    assert_int_equal(c->n, 0);
+    tb_hit h;
+    tb_ray ray = tb_ray_make(tb_vec3_make(0, 0, -5), tb_vec3_make(0, 0, 1), 0.0f, INFINITY);
+    assert_false(tb_accel_intersect(c, &ray, &h));
+    tb_accel_free(c);
+    free(in);
+    free(tris);
+    tp_free(&s);
+}
+
 static void test_callback_range_not_trusted(void **state)
 {
     (void)state;
@@ -1335,6 +1458,7 @@ int main(void)
         cmocka_unit_test(test_tmin_tmax_exact),
         cmocka_unit_test(test_callback_range_not_trusted),
         cmocka_unit_test(test_triangle_references),
+        cmocka_unit_test(test_owned_build),
         cmocka_unit_test(test_t_tolerance),
         cmocka_unit_test(test_slab_matches_util),
         cmocka_unit_test(test_bvhw_slab_matches_scalar),

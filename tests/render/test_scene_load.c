@@ -288,6 +288,55 @@ static void test_material_dedup(void **state)
     tb_scene_free(s);
 }
 
+/* Patterns are kept out of line: a material without one points to the
+ * scene's one pattern of kind NONE (zero colours of the scene's channels),
+ * a material with one to its own, converted like the colours. */
+static void test_material_patterns(void **state)
+{
+    (void)state;
+    const char *text = "mid 1.1\n"
+                       "sphere { rendering = { diffuse = 0.5 } }\n"
+                       "sphere { rendering = { diffuse = 1 diffuse_pattern = checker([3 2], 0.2, [0.9 0.7 0.5]) } }\n"
+                       "sphere { rendering = { diffuse = 0.3 specular = 1 exponent = 40 "
+                       "specular_pattern = noise(3, 4, [0.9 0.6 0.3], 0.2) } }\n"
+                       "sphere { rendering = { diffuse = 0.7 } }\n";
+    tb_scene_options opt = {0};
+    opt.no_accel = true;
+    tb_scene *s = load_ok(text, &opt);
+    assert_int_equal(s->nmaterials, 4);
+    const tb_material *plain = &s->materials[s->objects[0]->material];
+    const tb_material *check = &s->materials[s->objects[1]->material];
+    const tb_material *noise = &s->materials[s->objects[2]->material];
+    const tb_material *other = &s->materials[s->objects[3]->material];
+    const tb_material_pattern *none = plain->diffuse_pattern;
+    assert_non_null(none);
+    assert_int_equal(none->kind, TB_MID_PATTERN_NONE);
+    assert_int_equal(none->a.n, s->nchannels);
+    for (int c = 0; c < TB_CHANNELS_MAX; c++)
+        assert_true(none->a.v[c] == 0.0f && none->b.v[c] == 0.0f);
+    /* Shared by every material without a pattern, in every slot. */
+    assert_ptr_equal(plain->specular_pattern, none);
+    assert_ptr_equal(plain->bump, none);
+    assert_ptr_equal(other->diffuse_pattern, none);
+    assert_ptr_equal(check->specular_pattern, none);
+    assert_ptr_equal(noise->diffuse_pattern, none);
+    assert_ptr_equal(noise->bump, none);
+    assert_int_equal(check->diffuse_pattern->kind, TB_MID_PATTERN_CHECKER);
+    assert_true(check->diffuse_pattern->scale == 3.0f && check->diffuse_pattern->scale_v == 2.0f);
+    assert_true(check->diffuse_pattern->a.v[0] == 0.2f && check->diffuse_pattern->a.v[2] == 0.2f);
+    assert_true(check->diffuse_pattern->b.v[0] == 0.9f && check->diffuse_pattern->b.v[2] == 0.5f);
+    assert_int_equal(noise->specular_pattern->kind, TB_MID_PATTERN_NOISE);
+    assert_int_equal(noise->specular_pattern->octaves, 4);
+    assert_true(noise->specular_pattern->a.v[1] == 0.6f && noise->specular_pattern->b.v[1] == 0.2f);
+    assert_true(noise->specular_pattern != check->diffuse_pattern);
+    /* The accounting counts the table and the three patterns (NONE, checker, noise). */
+    tb_scene_memory_use mu;
+    tb_scene_memory(s, &mu);
+    assert_int_equal(mu.materials, 4 * sizeof(tb_material) + 3 * sizeof(tb_material_pattern) +
+                                       2 * TB_SCENE_MALLOC_OVERHEAD);
+    tb_scene_free(s);
+}
+
 /* ------------------------------------------------------------------ lights */
 
 static void test_lights(void **state)
@@ -580,7 +629,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell_spectral), cmocka_unit_test(test_cornell_rgb),
-        cmocka_unit_test(test_material_dedup),   cmocka_unit_test(test_lights),
+        cmocka_unit_test(test_material_dedup),   cmocka_unit_test(test_material_patterns),
+        cmocka_unit_test(test_lights),
         cmocka_unit_test(test_emissive),         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_stats),
         cmocka_unit_test(test_occluded_except),
