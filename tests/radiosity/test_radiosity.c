@@ -739,6 +739,27 @@ static void test_update_kernels(void **state)
             assert_memory_equal(w[0], ref[0], sizeof ref[0]);
             assert_memory_equal(w[1], ref[1], NE * NC * sizeof(double));
             assert_memory_equal(w[2], ref[2], NE * NC * sizeof(double));
+            /* He alone (the solver's deferred replay), then dB alone (its
+             * shot): the same bits in each, the other array untouched */
+            memcpy(w, got, sizeof w);
+            tb__rad_update uh = {NC, dBi, vff, eff, pel, pof, 2, rho, w[0], w[1], NULL};
+            tb__rad_update ud = {NC, dBi, vff, eff, pel, pof, 2, rho, w[0], NULL, w[2]};
+            if (avx) {
+                tb__rad_update_elements_avx(&uh, cut, NE);
+                tb__rad_update_elements_avx(&uh, 0, cut);
+                assert_memory_equal(w[2], got[2], NE * NC * sizeof(double));
+                tb__rad_update_elements_avx(&ud, 0, cut);
+                tb__rad_update_elements_avx(&ud, cut, NE);
+            } else {
+                tb__rad_update_elements(&uh, cut, NE);
+                tb__rad_update_elements(&uh, 0, cut);
+                assert_memory_equal(w[2], got[2], NE * NC * sizeof(double));
+                tb__rad_update_elements(&ud, 0, cut);
+                tb__rad_update_elements(&ud, cut, NE);
+            }
+            assert_memory_equal(w[0], got[0], sizeof got[0]);
+            assert_memory_equal(w[1], ref[1], NE * NC * sizeof(double));
+            assert_memory_equal(w[2], ref[2], NE * NC * sizeof(double));
         }
     }
     assert_true(isinf(ref[0][3 * NC]) || isnan(ref[0][3 * NC])); /* the infinity reached its vertex */
