@@ -844,11 +844,29 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
     /* the logged shots' replay shares the threads' wake-up (it writes Hv
      * and He, which the rays do not read) */
     ptrdiff_t nfb = s->ndlog ? (ptrdiff_t)tb__defer_blocks(s) : 0;
+    /* one process: the near elements' exact form factors (tb__near_field)
+     * too, each its own value (several processes share them out below) */
+    ptrdiff_t nne = 0;
+    if (!s->opt.exchange && !s->enf) {
+        s->enf = malloc((s->m.nelems + 1) * sizeof *s->enf);
+        s->enl = malloc((s->m.nelems + 1) * sizeof *s->enl);
+        if (!s->enf || !s->enl) /* then tb__near_field computes them */
+            free(s->enf), free(s->enl), s->enf = NULL, s->enl = NULL;
+    }
+    if (!s->opt.exchange && s->enf) {
+        double rad = sqrt(tb__radius2(&s->spoly[k], s->scen[k]));
+        for (size_t j = 0; j < s->m.nelems; j++)
+            if (s->pof[j] != k && tb__near_element(s, j, s->scen[k], rad))
+                s->enl[nne++] = (uint32_t)j;
+    }
 #pragma omp parallel
     {
 #pragma omp for schedule(dynamic, 1) nowait
     for (ptrdiff_t b = 0; b < nfb; b++)
         tb__defer_block(s, (size_t)b);
+#pragma omp for schedule(dynamic, 4) nowait
+    for (ptrdiff_t q = 0; q < nne; q++)
+        s->enf[s->enl[q]] = tb__near_element_ff(s, k, s->enl[q]);
 #pragma omp for schedule(dynamic, 4)
     for (ptrdiff_t ci = 0; ci < nmine; ci++) {
         ptrdiff_t c = c0 + ci * dc;
@@ -879,6 +897,8 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
     }
     s->ndlog = 0;
     s->vnear_done = true;
+    if (!s->opt.exchange && s->enf)
+        s->enf_done = true;
     if (!ex)
         return TB_OK;
     /* the near elements (the same list on every process), and this one's share of their form factors */
