@@ -66,7 +66,11 @@ struct tb_rad_solver {
     tb_vec3 *crp;           /* the receiver positions in corder's order */
     size_t ncl;
     tb_hemicube *hc;
-    tb_pqueue q;            /* shooters (patches) by unshot power */
+    tb_pqueue q;            /* shooters (patches) by unshot power; empty when `scan` */
+    bool scan;              /* one level, one process: the next shooter is the element of most unshot
+                               power found by a scan of `up` (tb__top), no queue kept: a shot changes
+                               almost every element's power, and a scan costs less than that many
+                               queue updates */
     /* Shooters (docs/radiosity.md, "Patches and elements"): the mesh's
      * patches, or its elements on one level (shooter k = element k). */
     size_t nsh;
@@ -95,6 +99,17 @@ struct tb_rad_solver {
     double *row_dot;        /* per distinct row: sum_c rho[c] dBi[c] of the current shot */
     size_t nrows;
     bool avx;               /* the update's AVX kernels (tb__rad_have_avx) */
+    /* Deferred channel sums (tb__defer_flush): inside tb_rad_solver_run a
+     * shot of a cached shooter only logs (shooter, dBi) for Hv, He and, on
+     * one level, dB (the next shooter's dBi is read through the log,
+     * tb__pending_dB; with patches dB is updated at once); all threads then
+     * replay the logged shots in order, from the shooters' cached form
+     * factors. The serial part of a shot is left with the scalars per
+     * element (received, absorbed, unshot power). */
+    bool defer;             /* this run logs its shots */
+    uint32_t *dlog;         /* TB__RAD_DEFER_MAX: the shooters of the logged shots, in order */
+    double *dlog_dbi;       /* TB__RAD_DEFER_MAX * nc: their unshot radiosities */
+    size_t ndlog;           /* shots logged and not yet replayed */
     /* point, spot and directional lights (the block at the end of this file) */
     tb_rad_lights *lights;  /* NULL: none */
     unsigned char *lshot;   /* nlights: shot yet */
@@ -225,6 +240,8 @@ static void tb__owned(const tb_rad_solver *s, uint32_t *qa, uint32_t *qb)
  * levels at tb__queue_flush, once per shot). */
 static inline void tb__queue_elem(tb_rad_solver *s, size_t j)
 {
+    if (s->scan)
+        return;
     if (s->m.npatches == 0)
         tb_pqueue_set(&s->q, (uint32_t)j, s->up[j]);
     else
@@ -236,6 +253,8 @@ static inline void tb__queue_elem(tb_rad_solver *s, size_t j)
  * the original's order. */
 static void tb__queue_rebuild(tb_rad_solver *s)
 {
+    if (s->scan)
+        return;
     for (size_t k = 0; k < s->nsh; k++) {
         double pw = tb__shooter_power(s, k);
         if (pw > 0.0)
@@ -243,6 +262,26 @@ static void tb__queue_rebuild(tb_rad_solver *s)
         else
             tb_pqueue_remove(&s->q, (uint32_t)k);
     }
+}
+
+/* The first shooter: the queue's, or with `scan` the element of most
+ * unshot power, ties to the lower index (the queue's order), none if no
+ * element has any (the queue would offer one of power 0, which no caller
+ * shoots). */
+static bool tb__top(const tb_rad_solver *s, uint32_t *key, double *pri)
+{
+    if (!s->scan)
+        return tb_pqueue_peek(&s->q, key, pri);
+    const double *restrict up = s->up;
+    size_t ne = s->m.nelems, best = 0;
+    double p = 0.0;
+    for (size_t j = 0; j < ne; j++)
+        if (up[j] > p)
+            p = up[j], best = j;
+    if (!(p > 0.0))
+        return false;
+    *key = (uint32_t)best, *pri = p;
+    return true;
 }
 
 /* Two levels: the patches whose elements changed get their new sums. */
@@ -313,6 +352,8 @@ void tb_rad_solver_free(tb_rad_solver *s)
         for (size_t i = 0; i < s->nsh; i++)
             free(s->cache[i]);
     free(s->cache);
+    free(s->dlog);
+    free(s->dlog_dbi);
     tb_rad_mesh_free(&s->m);
     free(s->He);
     free(s->Hv);
@@ -681,6 +722,97 @@ static tb_status tb__gather_clusters(tb_rad_solver *s, const tb_rad_exchange *ex
     return TB_OK;
 }
 
+/* Most shots the log holds (then it is replayed), and the receivers per
+ * block of the replay: a block's Hv or He rows (64 x 31 channels x 8 bytes
+ * = 16 KB) stay in the first-level cache while the logged shots stream by. */
+#define TB__RAD_DEFER_MAX 256
+#define TB__RAD_DEFER_BLOCK 64
+
+/* Replay blocks: the vertices' (Hv), then the elements' in pel order (He). */
+static size_t tb__defer_blocks(const tb_rad_solver *s)
+{
+    return (s->m.nverts + TB__RAD_DEFER_BLOCK - 1) / TB__RAD_DEFER_BLOCK +
+           (s->m.nelems + TB__RAD_DEFER_BLOCK - 1) / TB__RAD_DEFER_BLOCK;
+}
+
+/* Replays every logged shot, in order, on block b: each value gets the sums
+ * tb__shoot would have added, in the same order (the same bits). */
+static void tb__defer_block(const tb_rad_solver *s, size_t b)
+{
+    size_t nv = s->m.nverts, ne = s->m.nelems, nvb = (nv + TB__RAD_DEFER_BLOCK - 1) / TB__RAD_DEFER_BLOCK;
+    bool vert = b < nvb;
+    size_t r0 = (vert ? b : b - nvb) * TB__RAD_DEFER_BLOCK, n = vert ? nv : ne;
+    size_t r1 = r0 + TB__RAD_DEFER_BLOCK < n ? r0 + TB__RAD_DEFER_BLOCK : n;
+    bool db = s->m.npatches == 0; /* one level: dB is deferred too */
+    size_t nc = (size_t)s->nc;
+    for (size_t e = 0; e < s->ndlog; e++) {
+        uint32_t k = s->dlog[e];
+        const float *c = s->cache[k]; /* vff (nverts) then eff (nelems) */
+        tb__rad_update u = {nc, s->dlog_dbi + e * nc, c, c + nv, s->pel, s->pof, k, s->m.rho, s->Hv, s->He,
+                            db ? s->dB : NULL};
+        if (vert) {
+            (s->avx ? tb__rad_update_vertices_avx : tb__rad_update_vertices)(&u, r0, r1);
+            continue;
+        }
+        (s->avx ? tb__rad_update_elements_avx : tb__rad_update_elements)(&u, r0, r1);
+        /* the shooter's own elements: unshot 0 from its shot on */
+        for (size_t q = s->pstart[k]; db && q < s->pstart[k + 1]; q++)
+            if (q >= r0 && q < r1)
+                memset(s->dB + s->pel[q] * nc, 0, nc * sizeof *s->dB);
+    }
+}
+
+/* Element j's unshot radiosity dB as the replay of the logged shots will
+ * leave it (one level), into out[nc]: the same products in the same order,
+ * without touching the state. */
+static void tb__pending_dB(const tb_rad_solver *s, size_t j, double *out)
+{
+    size_t nc = (size_t)s->nc, nv = s->m.nverts;
+    memcpy(out, s->dB + j * nc, nc * sizeof *out);
+    const float *rho = s->m.rho + j * nc;
+    for (size_t e = 0; e < s->ndlog; e++) {
+        uint32_t k = s->dlog[e];
+        if (s->pof[j] == k) {
+            memset(out, 0, nc * sizeof *out);
+            continue;
+        }
+        double g = s->cache[k][nv + j];
+        if (!(g > 0.0))
+            continue;
+        const double *dBi = s->dlog_dbi + e * nc;
+        for (size_t c = 0; c < nc; c++) {
+            double dh = dBi[c] * g, r = rho[c];
+            out[c] += r * dh;
+        }
+    }
+}
+
+/* Brings Hv, He and (one level) dB up to date: replays the logged shots over all threads
+ * (one parallel loop; tb__batch does it inside its own when it runs). */
+static void tb__defer_flush(tb_rad_solver *s)
+{
+    if (s->ndlog == 0)
+        return;
+    ptrdiff_t nb = (ptrdiff_t)tb__defer_blocks(s);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (ptrdiff_t b = 0; b < nb; b++)
+        tb__defer_block(s, (size_t)b);
+    s->ndlog = 0;
+}
+
+/* tb__defer_flush outside a shot: its time counts as update time and as
+ * the solver's. */
+static void tb__defer_flush_timed(tb_rad_solver *s)
+{
+    if (s->ndlog == 0)
+        return;
+    double t0 = tb__now();
+    tb_timer_token tt = tb_timer_start(&tb__rad_update_time);
+    tb__defer_flush(s);
+    (void)tb_timer_stop(tt);
+    s->seconds += tb__now() - t0;
+}
+
 /* The CPU form factors of shooter i to every vertex: tb_ff_raycast over the
  * solver's occluders. Each cluster of receivers first lists the occluders
  * in the shaft between it and the sample points (most lists are empty: no
@@ -709,7 +841,33 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
     /* the vertices' near field goes with their cluster: split over threads
      * and processes like the rays, not repeated whole on every process */
     const tb__near_shooter near = tb__near_of(s, k);
-#pragma omp parallel for schedule(dynamic, 4)
+    /* the logged shots' replay shares the threads' wake-up (it writes Hv
+     * and He, which the rays do not read) */
+    ptrdiff_t nfb = s->ndlog ? (ptrdiff_t)tb__defer_blocks(s) : 0;
+    /* one process: the near elements' exact form factors (tb__near_field)
+     * too, each its own value (several processes share them out below) */
+    ptrdiff_t nne = 0;
+    if (!s->opt.exchange && !s->enf) {
+        s->enf = malloc((s->m.nelems + 1) * sizeof *s->enf);
+        s->enl = malloc((s->m.nelems + 1) * sizeof *s->enl);
+        if (!s->enf || !s->enl) /* then tb__near_field computes them */
+            free(s->enf), free(s->enl), s->enf = NULL, s->enl = NULL;
+    }
+    if (!s->opt.exchange && s->enf) {
+        double rad = sqrt(tb__radius2(&s->spoly[k], s->scen[k]));
+        for (size_t j = 0; j < s->m.nelems; j++)
+            if (s->pof[j] != k && tb__near_element(s, j, s->scen[k], rad))
+                s->enl[nne++] = (uint32_t)j;
+    }
+#pragma omp parallel
+    {
+#pragma omp for schedule(dynamic, 1) nowait
+    for (ptrdiff_t b = 0; b < nfb; b++)
+        tb__defer_block(s, (size_t)b);
+#pragma omp for schedule(dynamic, 4) nowait
+    for (ptrdiff_t q = 0; q < nne; q++)
+        s->enf[s->enl[q]] = tb__near_element_ff(s, k, s->enl[q]);
+#pragma omp for schedule(dynamic, 4)
     for (ptrdiff_t ci = 0; ci < nmine; ci++) {
         ptrdiff_t c = c0 + ci * dc;
         tb_ff_shaft sh;
@@ -736,7 +894,11 @@ static tb_status tb__batch(tb_rad_solver *s, size_t k, bool share)
             tb__near_vertex(s, v, &near);
         }
     }
+    }
+    s->ndlog = 0;
     s->vnear_done = true;
+    if (!s->opt.exchange && s->enf)
+        s->enf_done = true;
     if (!ex)
         return TB_OK;
     /* the near elements (the same list on every process), and this one's share of their form factors */
@@ -989,7 +1151,8 @@ tb_status tb_rad_solver_create(const tb_rad_mesh *mesh, const tb_rad_state *stat
         s->up[i] = p;
         unshot += p;
     }
-    for (size_t k = 0; k < s->nsh; k++) {
+    s->scan = mesh->npatches == 0 && !(o.exchange && o.exchange->ranks > 1);
+    for (size_t k = 0; k < s->nsh && !s->scan; k++) {
         double p = tb__shooter_power(s, k);
         if (p > 0.0)
             tb_pqueue_set(&s->q, (uint32_t)k, p);
@@ -1369,7 +1532,7 @@ tb_status tb_rad_solver_step(tb_rad_solver *s, bool *shot)
     double pri;
     if (s->split) /* the processes agreed on it after the last shot */
         i = (uint32_t)s->sel[2], pri = s->sel[1];
-    else if (!tb_pqueue_peek(&s->q, &i, &pri))
+    else if (!tb__top(s, &i, &pri))
         return TB_OK;
     if (!(pri > 0.0))
         return TB_OK;
@@ -1491,11 +1654,20 @@ static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0)
     /* (a split solve: as its owner computed it for the selection) */
     double dBi[TB_CHANNELS_MAX];
     uint32_t pa = s->pstart[i], pb = s->pstart[i + 1];
+    /* deferred (a cached shooter inside tb_rad_solver_run): this shot is
+     * logged for Hv and He (and on one level dB; its own dBi comes from the
+     * log); else whatever is logged is replayed first, then all of it now */
+    bool defer = s->defer && !s->split && s->cache && s->cache[i];
+    bool defer_db = defer && s->m.npatches == 0;
+    if (!defer)
+        tb__defer_flush(s);
     if (s->split)
         memcpy(dBi, s->sel + 3, (size_t)nc * sizeof *dBi);
+    else if (defer_db)
+        tb__pending_dB(s, i, dBi); /* one level: shooter i is element i, dBi its dB */
     else
         tb__shooter_dbi(s, i, dBi);
-    for (uint32_t q = pa; q < pb; q++)
+    for (uint32_t q = pa; q < pb && !defer_db; q++) /* (a replay zeroes them in order) */
         for (int c = 0; c < nc; c++)
             s->dB[s->pel[q] * (size_t)nc + (size_t)c] = 0.0;
     double shot_power = 0.0;
@@ -1542,13 +1714,17 @@ static void tb__shoot(tb_rad_solver *s, uint32_t i, double t0)
         tb__owned(s, &qa, &qb);
         /* the channel loops (update_internal.h: AVX where the CPU has it),
          * then the scalars per element */
-        tb__rad_update u = {ncs, dBi, s->vff, s->eff, s->pel, s->pof, i, rhos, Hv, He, dB};
-        if (s->avx) {
-            tb__rad_update_vertices_avx(&u, va, vb);
-            tb__rad_update_elements_avx(&u, qa, qb);
-        } else {
-            tb__rad_update_vertices(&u, va, vb);
-            tb__rad_update_elements(&u, qa, qb);
+        tb__rad_update u = {ncs, dBi, s->vff, s->eff, s->pel, s->pof, i, rhos, Hv, defer ? NULL : He,
+                            defer_db ? NULL : dB};
+        if (!defer)
+            (s->avx ? tb__rad_update_vertices_avx : tb__rad_update_vertices)(&u, va, vb);
+        if (!defer_db)
+            (s->avx ? tb__rad_update_elements_avx : tb__rad_update_elements)(&u, qa, qb);
+        if (defer) {
+            s->dlog[s->ndlog] = i;
+            memcpy(s->dlog_dbi + s->ndlog * ncs, dBi, ncs * sizeof *dBi);
+            if (++s->ndlog == TB__RAD_DEFER_MAX)
+                tb__defer_flush(s);
         }
         for (uint32_t q = qa; q < qb; q++) {
             size_t j = s->pel[q];
@@ -1707,6 +1883,18 @@ tb_status tb_rad_solver_run(tb_rad_solver *s, const tb_rad_stop *stop, tb_rad_re
             s->opt.exchange->fail(s->opt.exchange->ctx, st);
         return st;
     }
+    /* the display sums deferred (tb__defer_flush) where every cached
+     * shooter's form factors can be replayed: ray cast, one process */
+    s->defer = !split && s->cache && s->opt.ff != TB_RAD_FF_HEMICUBE &&
+               !(s->opt.exchange && s->opt.exchange->ranks > 1);
+    if (s->defer && !s->dlog) {
+        s->dlog = malloc(TB__RAD_DEFER_MAX * sizeof *s->dlog);
+        s->dlog_dbi = malloc(TB__RAD_DEFER_MAX * (size_t)s->nc * sizeof *s->dlog_dbi);
+        if (!s->dlog || !s->dlog_dbi) { /* then eager updates: the same values */
+            free(s->dlog), free(s->dlog_dbi);
+            s->dlog = NULL, s->dlog_dbi = NULL, s->defer = false;
+        }
+    }
     double frac = tb_rad_unshot_fraction(s);
     while (frac >= thr) {
         if (sp.max_shots > 0 && n >= sp.max_shots)
@@ -1732,9 +1920,14 @@ tb_status tb_rad_solver_run(tb_rad_solver *s, const tb_rad_stop *stop, tb_rad_re
             if (k > drawn)
                 tb_progress_add(&pr, k - drawn), drawn = k;
         }
-        if (report && every > 0 && n % every == 0 && (st = report(user, s)))
-            break;
+        if (report && every > 0 && n % every == 0) {
+            tb__defer_flush_timed(s); /* the report reads the whole state */
+            if ((st = report(user, s)))
+                break;
+        }
     }
+    tb__defer_flush_timed(s);
+    s->defer = false;
     if (draw)
         tb_progress_finish(&pr);
     if (!st && split)
@@ -1799,6 +1992,8 @@ void tb_rad_patch_radiosity(const tb_rad_solver *s, size_t p, bool ambient, doub
 double tb_rad_patch_unshot_power(const tb_rad_solver *s, size_t p)
 {
     double pri;
+    if (s->scan) /* (what the queue would hold: shot elements hold 0) */
+        return s->up[p] > 0.0 ? s->up[p] : 0.0;
     return tb_pqueue_get(&s->q, (uint32_t)p, &pri) ? pri : 0.0;
 }
 
@@ -1898,8 +2093,9 @@ static tb_status tb__lights_step(tb_rad_solver *s, bool *shot)
             k = q;
     uint32_t top;
     double pri;
-    if (k < 0 || (tb_pqueue_peek(&s->q, &top, &pri) && pri > s->lpower[k]))
+    if (k < 0 || (tb__top(s, &top, &pri) && pri > s->lpower[k]))
         return TB_OK;
+    tb__defer_flush_timed(s); /* the logged shots come first */
     double t0 = tb__now();
     int nc = s->nc;
     size_t nv = s->m.nverts, ne = s->m.nelems;

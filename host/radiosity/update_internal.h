@@ -22,14 +22,15 @@ typedef struct tb__rad_update {
     const uint32_t *pof;   /* per element: its shooter */
     uint32_t shooter;      /* whose elements receive nothing */
     const float *rho;      /* per element: nc reflectances */
-    double *Hv, *He, *dB;  /* per vertex / element: nc values each */
+    double *Hv, *He, *dB;  /* per vertex / element: nc values each; He or dB NULL: that one is left alone */
 } tb__rad_update;
 
 /* Hv[v] += dBi F(v) for the vertices v in [v0, v1) with F(v) != 0. */
 void tb__rad_update_vertices(const tb__rad_update *u, size_t v0, size_t v1);
 
 /* For the elements pel[q], q in [q0, q1), that receive (F_ji > 0, not the
- * shooter's): He[j] += dBi F_ji and dB[j] += rho_j dBi F_ji. */
+ * shooter's): He[j] += dBi F_ji and dB[j] += rho_j dBi F_ji (only the one
+ * of the two that is not NULL: the solver defers He, see tb__defer_flush). */
 void tb__rad_update_elements(const tb__rad_update *u, size_t q0, size_t q1);
 
 /* The same two, built with -mavx (update_avx.c; call only where the CPU has AVX). */

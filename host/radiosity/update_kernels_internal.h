@@ -25,15 +25,39 @@ static inline void tb__rad_update_elements_body(const tb__rad_update *u, size_t 
     const double *restrict dBi = u->dBi;
     const float *restrict eff = u->eff, *restrict rho = u->rho;
     double *restrict He = u->He, *restrict dB = u->dB;
-    for (size_t q = q0; q < q1; q++) {
-        size_t j = u->pel[q];
-        double g = eff[j];
-        if (u->pof[j] == u->shooter || !(g > 0.0))
-            continue;
-        for (size_t c = 0; c < nc; c++) {
-            double dh = dBi[c] * g, r = rho[j * nc + c];
-            He[j * nc + c] += dh;
-            dB[j * nc + c] += r * dh;
+    /* one loop per kind of update (He and dB, one of them), the branch
+     * outside: each value gets the same products in the same order */
+    if (He && dB) {
+        for (size_t q = q0; q < q1; q++) {
+            size_t j = u->pel[q];
+            double g = eff[j];
+            if (u->pof[j] == u->shooter || !(g > 0.0))
+                continue;
+            for (size_t c = 0; c < nc; c++) {
+                double dh = dBi[c] * g, r = rho[j * nc + c];
+                He[j * nc + c] += dh;
+                dB[j * nc + c] += r * dh;
+            }
+        }
+    } else if (He) {
+        for (size_t q = q0; q < q1; q++) {
+            size_t j = u->pel[q];
+            double g = eff[j];
+            if (u->pof[j] == u->shooter || !(g > 0.0))
+                continue;
+            for (size_t c = 0; c < nc; c++)
+                He[j * nc + c] += dBi[c] * g;
+        }
+    } else if (dB) {
+        for (size_t q = q0; q < q1; q++) {
+            size_t j = u->pel[q];
+            double g = eff[j];
+            if (u->pof[j] == u->shooter || !(g > 0.0))
+                continue;
+            for (size_t c = 0; c < nc; c++) {
+                double dh = dBi[c] * g, r = rho[j * nc + c];
+                dB[j * nc + c] += r * dh;
+            }
         }
     }
 }

@@ -772,10 +772,132 @@ static void test_update_kernels(void **state)
             assert_memory_equal(w[0], ref[0], sizeof ref[0]);
             assert_memory_equal(w[1], ref[1], NE * NC * sizeof(double));
             assert_memory_equal(w[2], ref[2], NE * NC * sizeof(double));
+            /* He alone (the solver's deferred replay), then dB alone (its
+             * shot): the same bits in each, the other array untouched */
+            memcpy(w, got, sizeof w);
+            tb__rad_update uh = {NC, dBi, vff, eff, pel, pof, 2, rho, w[0], w[1], NULL};
+            tb__rad_update ud = {NC, dBi, vff, eff, pel, pof, 2, rho, w[0], NULL, w[2]};
+            if (avx) {
+                tb__rad_update_elements_avx(&uh, cut, NE);
+                tb__rad_update_elements_avx(&uh, 0, cut);
+                assert_memory_equal(w[2], got[2], NE * NC * sizeof(double));
+                tb__rad_update_elements_avx(&ud, 0, cut);
+                tb__rad_update_elements_avx(&ud, cut, NE);
+            } else {
+                tb__rad_update_elements(&uh, cut, NE);
+                tb__rad_update_elements(&uh, 0, cut);
+                assert_memory_equal(w[2], got[2], NE * NC * sizeof(double));
+                tb__rad_update_elements(&ud, 0, cut);
+                tb__rad_update_elements(&ud, cut, NE);
+            }
+            assert_memory_equal(w[0], got[0], sizeof got[0]);
+            assert_memory_equal(w[1], ref[1], NE * NC * sizeof(double));
+            assert_memory_equal(w[2], ref[2], NE * NC * sizeof(double));
         }
     }
     assert_true(isinf(ref[0][3 * NC]) || isnan(ref[0][3 * NC])); /* the infinity reached its vertex */
     assert_true(ref[1][0] == got[1][0]); /* element 0: F = 0, untouched */
+}
+
+/* The state's bits after a run: element radiosities (He), unshot (dB),
+ * vertex irradiances (Hv) and the energy sums, appended to out[]. */
+static size_t tb__state_bits(const tb_rad_solver *s, const tb_rad_mesh *m, double *out)
+{
+    size_t n = 0, nc = (size_t)m->nchannels;
+    for (size_t i = 0; i < m->nelems; i++, n += 2 * nc) {
+        tb_rad_element_radiosity(s, i, false, out + n);
+        tb_rad_element_unshot(s, i, out + n + nc);
+    }
+    for (size_t v = 0; v < m->nverts; v++, n += nc)
+        tb_rad_vertex_irradiance(s, v, out + n);
+    tb_rad_energy e = tb_rad_solver_energy(s);
+    out[n++] = e.absorbed, out[n++] = e.unshot, out[n++] = e.escaped;
+    return n;
+}
+
+/* A report every 7 shots: the sum of the element radiosities then. */
+typedef struct tb__report_log {
+    const tb_rad_mesh *m;
+    double sum[512];
+    int n;
+} tb__report_log;
+
+static double tb__radiosity_sum(const tb_rad_solver *s, const tb_rad_mesh *m)
+{
+    double b[TB_CHANNELS_MAX], sum = 0.0;
+    for (size_t i = 0; i < m->nelems; i++) {
+        tb_rad_element_radiosity(s, i, false, b);
+        for (int c = 0; c < m->nchannels; c++)
+            sum += b[c];
+    }
+    return sum;
+}
+
+static tb_status tb__report_sum(void *user, const tb_rad_solver *s)
+{
+    tb__report_log *r = user;
+    if (r->n < 512)
+        r->sum[r->n++] = tb__radiosity_sum(s, r->m);
+    return TB_OK;
+}
+
+/* tb_rad_solver_run logs the channel sums of cached shooters and replays
+ * them later over the threads (docs/radiosity.md, "Solver"); shot by shot
+ * (tb_rad_solver_step) they are made at once. Both must leave the same
+ * bits in He, dB, Hv and the energy sums: on one level (dB deferred too)
+ * and with patches (dB at once), with more shots than the log holds, with
+ * the cache off, and with a report every 7 shots, which must see the state
+ * as it is after that shot. */
+static void test_deferred(void **state)
+{
+    (void)state;
+    tb_scene *sc = tb_rad_test_load("scenes/cornell-box-rgb.mid");
+    for (int level = 0; level < 2; level++) {
+        tb_rad_mesh m;
+        tb_rad_mesh_options mo = {.max_edge = 110, .patch_edge = level ? 220 : 0};
+        assert_int_equal(tb_rad_mesh_from_scene(sc, &mo, &m), TB_OK);
+        tb_rad_options o = {.samples = 4, .seed = 5};
+        tb_rad_stop stop = {.threshold = 2e-3};
+        size_t len = ((m.nelems * 2 + m.nverts) * (size_t)m.nchannels + 3) * sizeof(double);
+        double *ref = malloc(len), *got = malloc(len);
+        assert_non_null(ref), assert_non_null(got);
+        /* eager: shot by shot, the sums of every 7th shot kept */
+        tb_rad_solver *e = NULL;
+        assert_int_equal(tb_rad_solver_create(&m, NULL, &o, &e), TB_OK);
+        tb__report_log want = {.m = &m};
+        uint64_t shots = 0;
+        while (tb_rad_unshot_fraction(e) >= stop.threshold) {
+            bool did = false;
+            assert_int_equal(tb_rad_solver_step(e, &did), TB_OK);
+            if (!did)
+                break;
+            if (++shots % 7 == 0)
+                assert_int_equal(tb__report_sum(&want, e), TB_OK);
+        }
+        if (!level)
+            assert_true(shots > 300); /* more than the log's 256: replays inside the run too */
+        tb__state_bits(e, &m, ref);
+        for (int run = 0; run < 3; run++) {
+            tb_rad_options oc = o;
+            oc.no_cache = run == 1;
+            tb_rad_solver *d = NULL;
+            assert_int_equal(tb_rad_solver_create(&m, NULL, &oc, &d), TB_OK);
+            tb__report_log seen = {.m = &m};
+            assert_int_equal(tb_rad_solver_run(d, &stop, run == 2 ? tb__report_sum : NULL, &seen, 7), TB_OK);
+            assert_int_equal(tb_rad_solver_shots(d), shots);
+            tb__state_bits(d, &m, got);
+            assert_memory_equal(got, ref, len);
+            if (run == 2) {
+                assert_true(seen.n >= want.n && want.n > 10);
+                assert_memory_equal(seen.sum, want.sum, (size_t)want.n * sizeof want.sum[0]);
+            }
+            tb_rad_solver_free(d);
+        }
+        tb_rad_solver_free(e);
+        free(ref), free(got);
+        tb_rad_mesh_free(&m);
+    }
+    tb_scene_free(sc);
 }
 
 int main(int argc, char **argv)
@@ -790,6 +912,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_pack),
         cmocka_unit_test(test_errors),          cmocka_unit_test(test_cornell_image),
         cmocka_unit_test(test_occluders), cmocka_unit_test(test_shaft), cmocka_unit_test(test_update_kernels),
+        cmocka_unit_test(test_deferred),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
