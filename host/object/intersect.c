@@ -85,6 +85,12 @@ bool tb__prim_any(const tb_object *o, const tb__oray *r, double tmin, double tma
     case TB_PRIM_CYLINDER:
     case TB_PRIM_CONE:
     case TB_PRIM_CONIC: tb__count_kind(o->kind); return tb__any_revolved(o, r, tmin, tmax);
+    case TB_PRIM_TORUS:
+        if (tb__torus_clear(o, r, tmin, tmax)) {
+            tb__count_kind(o->kind);
+            return false;
+        }
+        break;
     default: break;
     }
     tb__xbuf b;
