@@ -85,6 +85,12 @@ bool tb__prim_any(const tb_object *o, const tb__oray *r, double tmin, double tma
     case TB_PRIM_CYLINDER:
     case TB_PRIM_CONE:
     case TB_PRIM_CONIC: tb__count_kind(o->kind); return tb__any_revolved(o, r, tmin, tmax);
+    case TB_PRIM_TORUS:
+        if (tb__torus_clear(o, r, tmin, tmax)) {
+            tb__count_kind(o->kind);
+            return false;
+        }
+        break;
     default: break;
     }
     tb__xbuf b;
@@ -403,9 +409,7 @@ bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *
     for (int i = 0; i < 3; i++) {
         pf[i] = (float)pw[i];
         double e = err[i] + fabs((double)pf[i] - pw[i]) + FLT_TRUE_MIN;
-        ef[i] = (float)e;
-        if ((double)ef[i] < e)
-            ef[i] = tb_next_float_up(ef[i]);
+        ef[i] = tb_float_round_up(e);
     }
     *p = (tb_vec3){pf[0], pf[1], pf[2]};
     *perr = (tb_vec3){ef[0], ef[1], ef[2]};

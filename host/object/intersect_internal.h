@@ -93,6 +93,10 @@ bool tb__prim_any(const tb_object *o, const tb__oray *r, double tmin, double tma
 /* Per family: the same for a sphere, and for cylinder, cone and conic (intersect_quadric.c, uncounted). */
 bool tb__any_sphere(const tb_object *o, const tb__oray *r, double tmin, double tmax);
 bool tb__any_revolved(const tb_object *o, const tb__oray *r, double tmin, double tmax);
+/* True when the torus certainly has no crossing the any-hit test would take
+ * (float t in [tmin, tmax]), decided without solving its quartic; false when
+ * that is not certain (tb__xings_torus then decides). */
+bool tb__torus_clear(const tb_object *o, const tb__oray *r, double tmin, double tmax);
 
 /* Sets o->zclosed of a cylinder, cone or conic (after conic and zrange;
  * object.c), once instead of at every ray. */

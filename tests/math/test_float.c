@@ -78,6 +78,23 @@ static void test_float_round_down_up(void **state)
     assert_float_bits(tb_float_round_up(-1e39), -FLT_MAX);
     assert_float_bits(tb_float_round_up(INFINITY), INFINITY);
     assert_true(isnan(tb_float_round_down(NAN)) && isnan(tb_float_round_up(NAN)));
+    assert_float_bits(tb_float_round_up(0x1.fffffep127 + 0x1p100), INFINITY); /* FLT_MAX steps to +inf */
+    assert_float_bits(tb_float_round_down(-0x1.fffffep127 - 0x1p100), -INFINITY);
+    assert_float_bits(tb_float_round_up(-0x1p-160), -0.0f);
+    /* The defining property on 10^5 doubles of every sign and exponent that
+     * floats reach (and beyond): r = round_up(v) >= v > the float below r
+     * (likewise down), which the bit-step fast paths must keep. */
+    uint64_t x = 0x9e3779b97f4a7c15ull;
+    for (int i = 0; i < 100000; i++) {
+        x = x * 6364136223846793005ull + 1442695040888963407ull;
+        int e = (int)((x >> 11) % 320) - 170; /* 2^-170 .. 2^149 */
+        double v = ldexp(1.0 + (double)(x >> 12) * 0x1p-52, e) * ((x >> 63) ? -1.0 : 1.0);
+        float up = tb_float_round_up(v), dn = tb_float_round_down(v);
+        if (!((double)up >= v && (double)tb_next_float_down(up) < v))
+            fail_msg("round_up(%a) = %a", v, (double)up);
+        if (!((double)dn <= v && (double)tb_next_float_up(dn) > v))
+            fail_msg("round_down(%a) = %a", v, (double)dn);
+    }
 }
 
 static void test_next_double_up_down(void **state)

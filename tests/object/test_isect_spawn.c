@@ -193,6 +193,65 @@ static void test_spawn_origins_pair(void **state)
     assert_true(ties > 1000 && backs > 50000);
 }
 
+/* tb_spawn_ray_origin's branch-free steps against the rule they replace,
+ * bit for bit: each coordinate of p + s ng moves one float up where its
+ * offset is > 0 and down where it is < 0 (tb_next_float_up/down), on points
+ * of every sign and size, zeros, denormals, FLT_MAX, infinities and NaN, and
+ * normals with zero, negative and NaN components. */
+static tb_vec3 ti_spawn_reference(tb_vec3 p, tb_vec3 perr, tb_vec3 ng, tb_vec3 w)
+{
+    double dd = fabs((double)ng.x) * perr.x + fabs((double)ng.y) * perr.y + fabs((double)ng.z) * perr.z;
+    float d = (float)dd;
+    if ((double)d < dd)
+        d = tb_next_float_up(d);
+    double side = (double)w.x * ng.x + (double)w.y * ng.y + (double)w.z * ng.z;
+    float s = side < 0.0 ? -d : d;
+    float off[3] = {s * ng.x, s * ng.y, s * ng.z};
+    float po[3] = {p.x + off[0], p.y + off[1], p.z + off[2]};
+    for (int i = 0; i < 3; i++) {
+        if (off[i] > 0.0f)
+            po[i] = tb_next_float_up(po[i]);
+        else if (off[i] < 0.0f)
+            po[i] = tb_next_float_down(po[i]);
+    }
+    return (tb_vec3){po[0], po[1], po[2]};
+}
+
+static void test_spawn_origin_steps(void **state)
+{
+    (void)state;
+    static const float special[] = {0.0f,     -0.0f,    0x1p-149f, -0x1p-149f, 1.0f,      -1.0f,    FLT_MAX,
+                                    -FLT_MAX, INFINITY, -INFINITY, NAN,        0x1p-126f, 3.5e-20f, -7e30f};
+    const int ns = (int)(sizeof special / sizeof special[0]);
+    tb_rng r;
+    tb_rng_seed(&r, tb_test_seed("spawn_origin_steps", 7004), 1);
+    for (int i = 0; i < 200000; i++) {
+        float c[9];
+        for (int k = 0; k < 9; k++) {
+            uint32_t u = tb_rng_u32(&r);
+            if (u % 5 == 0)
+                c[k] = special[(u >> 8) % (uint32_t)ns];
+            else
+                c[k] = (float)(ldexp(tb_rng_double(&r), (int)(u >> 8) % 80 - 60) * (u & 0x80 ? -1.0 : 1.0));
+        }
+        tb_vec3 p = {c[0], c[1], c[2]}, perr = {fabsf(c[3]), fabsf(c[4]), fabsf(c[5])};
+        tb_vec3 ng = {c[6], c[7], c[8]}, w = {c[8], c[6], -c[7]};
+        if (i % 3 == 0) { /* unit normals, the common case */
+            tb_dvec3 nd = ti_sphere_dir(&r);
+            ng = (tb_vec3){(float)nd.x, (float)nd.y, (float)nd.z};
+        }
+        tb_vec3 want = ti_spawn_reference(p, perr, ng, w), got = tb_spawn_ray_origin(p, perr, ng, w);
+        const float wv[3] = {want.x, want.y, want.z}, gv[3] = {got.x, got.y, got.z};
+        bool same = true; /* bit for bit, but any NaN for a NaN (its payload is the compiler's choice) */
+        for (int k = 0; k < 3; k++)
+            same = same && (isnan(wv[k]) ? isnan(gv[k]) : memcmp(&wv[k], &gv[k], sizeof wv[k]) == 0);
+        if (!same)
+            fail_msg("case %d: want (%a %a %a) got (%a %a %a) p (%a %a %a) perr (%a %a %a) ng (%a %a %a): origin differs from the rule", i,
+                     (double)wv[0], (double)wv[1], (double)wv[2], (double)gv[0], (double)gv[1], (double)gv[2], (double)p.x, (double)p.y, (double)p.z, (double)perr.x, (double)perr.y, (double)perr.z,
+                     (double)ng.x, (double)ng.y, (double)ng.z);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -200,6 +259,7 @@ int main(void)
         cmocka_unit_test(test_spawn_polyhedra),
         cmocka_unit_test(test_spawn_meshes),
         cmocka_unit_test(test_spawn_origins_pair),
+        cmocka_unit_test(test_spawn_origin_steps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -19,6 +19,7 @@
 
 #include "host/object/hit.h"
 #include "host/object/intersect.h"
+#include "host/object/intersect_internal.h"
 
 typedef long double ld;
 
@@ -313,10 +314,83 @@ static void test_torus_hard_cases(void **state)
         ti_torus_case_run(&cases[i], seed, n);
 }
 
+/* The any-hit shortcut (tb__torus_clear: no quartic when Q is certainly
+ * positive over the segment) against the full crossing list, ray by ray:
+ * whenever it says "clear", tb__xings_torus must have no crossing with float
+ * t in [tmin, tmax], and tb_object_occluded must agree with
+ * tb_object_intersect. Shadow-like segments from hit points on the torus
+ * (spawned as the ray tracer does: the origin ~1e-7 off the surface) toward
+ * random targets, some past the far side of the tube, some grazing, on the
+ * hard-case shapes and transforms above; the shortcut must decide a good
+ * share of them (else the test would not test it). */
+static void test_torus_any_hit_shortcut(void **state)
+{
+    (void)state;
+    tb_rng rng;
+    tb_rng_seed(&rng, tb_test_seed("torus_any", 4243), 3);
+    static const double shapes[][3] = {{1.0, 0.25, 1.0}, {1.0, 0.9, 1.0}, {3.0, 0.01, 1.0}, {2.0, 0.5, 1e-3},
+                                       {0.8, 0.25, 1e4}};
+    long n = ti_count(20000, 2000), cleared = 0, total = 0;
+    for (size_t c = 0; c < sizeof shapes / sizeof shapes[0]; c++) {
+        tb_transform S, Rt;
+        assert_int_equal(tb_transform_scale((tb_dvec3){shapes[c][2], shapes[c][2], shapes[c][2]}, &S), TB_OK);
+        assert_int_equal(tb_transform_rotate(ti_uniform(&rng, 0, 2 * TI_PI), ti_sphere_dir(&rng), &Rt), TB_OK);
+        tb_transform xf = tb_transform_compose(&Rt, &S);
+        tb_mid_geometry g = tb_mid_geometry_default(TB_PRIM_TORUS);
+        g.torus.major = shapes[c][0];
+        g.torus.minor = shapes[c][1];
+        tb_mid_object m = ti_prim(TB_PRIM_TORUS, g, xf);
+        tb_object *o = ti_build(&m, 0);
+        const double B = g.torus.major + g.torus.minor;
+        for (long i = 0; i < n; i++) {
+            tb_dvec3 a = ti_sphere_dir(&rng), b = ti_sphere_dir(&rng);
+            tb_ray ray = ti_world_ray(o, tb_dvec3_scale(a, 3.0 * B), tb_dvec3_scale(b, 0.5 * B));
+            tb_hit h;
+            tb_vec3 p, perr;
+            if (!tb_object_intersect(o, &ray, &h) || !tb_object_hit_point(o, &ray, &h, &p, &perr))
+                continue;
+            /* target: a random point out to 4 B, or (1 in 4) just past the tube's far side */
+            tb_dvec3 q = i % 4 == 0 ? tb_dvec3_scale(ti_sphere_dir(&rng), B * ti_uniform(&rng, 0.0, 1.2))
+                                    : tb_dvec3_scale(ti_sphere_dir(&rng), B * ti_uniform(&rng, 0.5, 4.0));
+            tb_dvec3 qw = tb_transform_dpoint(&o->to_world, q);
+            tb_vec3 tq = {(float)qw.x, (float)qw.y, (float)qw.z};
+            tb_vec3 w = tb_vec3_sub(tq, p);
+            tb_ray sh;
+            sh.o = tb_spawn_ray_origin(p, perr, h.ng, w);
+            sh.d = tb_vec3_sub(tq, sh.o);
+            sh.tmin = 0.0f;
+            sh.tmax = i % 3 == 0 ? INFINITY : 1.0f - 1e-4f;
+            if (!tb_ray_is_valid(&sh))
+                continue;
+            total++;
+            tb__oray orr = tb__object_ray(o, &sh);
+            tb__xbuf xb;
+            tb__xbuf_init(&xb);
+            tb__xings_torus(o, &orr, &xb);
+            bool any = false;
+            for (int k = 0; k < xb.n; k++)
+                any = any || ((float)xb.x[k].t >= sh.tmin && (float)xb.x[k].t <= sh.tmax);
+            tb__xbuf_free(&xb);
+            bool clear = tb__torus_clear(o, &orr, sh.tmin, sh.tmax);
+            cleared += clear;
+            if (clear && any)
+                fail_msg("shape %zu ray %ld: the shortcut says clear, but a crossing lies in [0, %a]", c, i,
+                         (double)sh.tmax);
+            tb_hit h2;
+            if (tb_object_occluded(o, &sh) != tb_object_intersect(o, &sh, &h2))
+                fail_msg("shape %zu ray %ld: occluded and intersect disagree", c, i);
+        }
+        tb_object_free(o);
+    }
+    print_message("[ torus any ] %ld shadow segments, %ld cleared without the quartic\n", total, cleared);
+    assert_true(total > n && cleared > total / 4);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_torus_hard_cases),
+        cmocka_unit_test(test_torus_any_hit_shortcut),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
