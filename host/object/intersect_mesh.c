@@ -52,6 +52,7 @@ void tb__mesh_free(tb_object_mesh *m)
     free(m->wvertices); /* (vertices are the geometry's) */
     free(m->tris);
     free(m->tri_face);
+    free(m->tri_uv);
     free(m->nodes);
     free(m);
 }
@@ -264,6 +265,43 @@ static bool tb__polygons_closed(const tb_geom_polygons *g)
     return closed;
 }
 
+/* The (u, v) at the corners of the nt triangles tv[] (all of face f) as
+ * floats (u0 v0 u1 v1 u2 v2 per triangle): where f's (u, v) is affine over
+ * each triangle, the exact (u, v) of its corners, so a hit's barycentric mix
+ * is tb_param_from_point's (u, v) of the hit point up to rounding. A face
+ * without uvs: the frame projection (affine; param's nearest-point step does
+ * nothing for points of the triangles, which lie in the loop); no area: 0,
+ * param's error answer. A triangle with uvs: its uvs. More corners with uvs:
+ * param's fan or ear clipping need not be the mesh's triangles, so false
+ * (the hit point path). */
+static bool tb__corner_uv(const tb_geom_polygons *g, int f, const uint32_t *tv, size_t nt, float *out)
+{
+    int b = g->face_start[f], nv = g->face_start[f + 1] - b;
+    if (g->uvs) {
+        if (nv != 3)
+            return false;
+        for (size_t i = 0; i < nt; i++)
+            for (int k = 0; k < 3; k++) {
+                tb_vec2 uv = g->uvs[tv[3 * i + k]];
+                out[6 * i + 2 * k] = uv.x;
+                out[6 * i + 2 * k + 1] = uv.y;
+            }
+        return true;
+    }
+    tb_poly_frame fr;
+    bool ok = tb_poly_frame_make(g->vertices, &g->indices[b], nv, &fr);
+    for (size_t i = 0; i < nt; i++)
+        for (int k = 0; k < 3; k++) {
+            double u = 0.0, v = 0.0;
+            if (ok)
+                tb_poly_frame_uv(&fr, g->vertices, &g->indices[b], nv, tb_vec3_to_d(g->vertices[tv[3 * i + k]]), &u,
+                                 &v);
+            out[6 * i + 2 * k] = (float)u;
+            out[6 * i + 2 * k + 1] = (float)v;
+        }
+    return true;
+}
+
 tb_status tb__mesh_build(tb_object *o)
 {
     const tb_geom_polygons *g = &o->geom.polygons;
@@ -363,10 +401,14 @@ tb_status tb__mesh_build(tb_object *o)
     c.nodes = malloc(sizeof *c.nodes * (nt ? 2 * nt : 1));
     m->tris = malloc(sizeof(uint32_t) * 3 * (nt ? nt : 1));
     m->tri_face = malloc(sizeof(uint32_t) * (nt ? nt : 1));
-    if (!c.prims || !c.order || !c.nodes || !m->tris || !m->tri_face) {
+    /* Corner (u, v) kept only for the frame projection (no uvs), a frame per face. */
+    float *uv0 = g->uvs ? NULL : malloc(sizeof(float) * 6 * (nt ? nt : 1));
+    m->tri_uv = g->uvs ? NULL : malloc(sizeof(float) * 6 * (nt ? nt : 1));
+    if (!c.prims || !c.order || !c.nodes || !m->tris || !m->tri_face || (!g->uvs && (!uv0 || !m->tri_uv))) {
         free(c.prims);
         free(c.order);
         free(c.nodes);
+        free(uv0);
         tb_array_free(&tris);
         tb_array_free(&faces);
         return tb_error(TB_ERR_NOMEM, "polygons: out of memory for %zu triangles", nt);
@@ -388,13 +430,25 @@ tb_status tb__mesh_build(tb_object *o)
             p->c[a] = 0.5f * p->lo[a] + 0.5f * p->hi[a];
         c.order[i] = (uint32_t)i;
     }
+    /* A face's triangles are consecutive here. */
+    for (size_t i = 0; uv0 && i < nt;) {
+        uint32_t f = TB_ARRAY_AT(&faces, uint32_t, i);
+        size_t j = i;
+        while (j < nt && TB_ARRAY_AT(&faces, uint32_t, j) == f)
+            j++;
+        tb__corner_uv(g, (int)f, &tv[3 * i], j - i, &uv0[6 * i]);
+        i = j;
+    }
     if (nt > 0)
         tb__build_node(&c, 0, (uint32_t)nt, 0);
     for (size_t i = 0; i < nt; i++) {
         uint32_t t = c.order[i];
         memcpy(&m->tris[3 * i], &tv[3 * t], sizeof(uint32_t) * 3);
         m->tri_face[i] = TB_ARRAY_AT(&faces, uint32_t, t);
+        if (uv0)
+            memcpy(&m->tri_uv[6 * i], &uv0[6 * (size_t)t], sizeof(float) * 6);
     }
+    free(uv0);
     m->nnodes = c.nnodes;
     m->nodes = c.nodes;
     free(c.prims);
@@ -700,44 +754,14 @@ bool tb__mesh_tri_weights(const tb_object *o, uint32_t tri, const tb_ray *ray, d
                           &m->wvertices[3 * (size_t)tv[2]], &t, &dir, uvw);
 }
 
-/* The (u, v) at the corners of triangle tv (of face f) as floats (u0 v0 u1
- * v1 u2 v2): where f's (u, v) is affine over the triangle, the exact (u, v)
- * of its corners, so a hit's barycentric mix is tb_param_from_point's (u, v)
- * of the hit point up to rounding. A face without uvs: the frame projection
- * (affine; param's nearest-point step does nothing for points of the
- * triangles, which lie in the loop); no area: 0, param's error answer. A
- * triangle with uvs: its uvs. More corners with uvs: param's fan or ear
- * clipping need not be the mesh's triangles, so false (the hit point path). */
-static bool tb__corner_uv(const tb_geom_polygons *g, int f, const uint32_t *tv, float out[6])
-{
-    int b = g->face_start[f], nv = g->face_start[f + 1] - b;
-    if (g->uvs) {
-        if (nv != 3)
-            return false;
-        for (int k = 0; k < 3; k++) {
-            tb_vec2 uv = g->uvs[tv[k]];
-            out[2 * k] = uv.x;
-            out[2 * k + 1] = uv.y;
-        }
-        return true;
-    }
-    tb_poly_frame fr;
-    bool ok = tb_poly_frame_make(g->vertices, &g->indices[b], nv, &fr);
-    for (int k = 0; k < 3; k++) {
-        double u = 0.0, v = 0.0;
-        if (ok)
-            tb_poly_frame_uv(&fr, g->vertices, &g->indices[b], nv, tb_vec3_to_d(g->vertices[tv[k]]), &u, &v);
-        out[2 * k] = (float)u;
-        out[2 * k + 1] = (float)v;
-    }
-    return true;
-}
-
 bool tb_object_triangle_uv(const tb_object *obj, uint32_t tri, const double uvw[3], double *u, double *v)
 {
     const tb_object_mesh *m = obj->mesh;
-    float c[6];
-    if (!tb__corner_uv(&obj->geom.polygons, (int)m->tri_face[tri], &m->tris[3 * (size_t)tri], c))
+    float cc[6];
+    const float *c = cc;
+    if (m->tri_uv)
+        c = &m->tri_uv[6 * (size_t)tri];
+    else if (!tb__corner_uv(&obj->geom.polygons, (int)m->tri_face[tri], &m->tris[3 * (size_t)tri], 1, cc))
         return false;
     /* U V W share one sign (or are 0) and det is their sum: a convex mix,
      * with one division. */
