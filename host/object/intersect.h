@@ -58,36 +58,20 @@ bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *
 bool tb_object_triangle_crossing(const tb_object *obj, uint32_t tri, const tb_ray *ray, double *t);
 
 /* Unit world-space geometric normal of triangle `tri`, as tb_object_intersect
- * reports it for a hit on that triangle (kept per triangle: a load; inline,
- * as it ends every closest-hit query on a mesh). */
-static inline tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t tri)
-{
-    return obj->mesh->wnormal[tri];
-}
+ * reports it for a hit on that triangle: its object-space normal (from the
+ * object's float vertices) by the inverse transpose, normalised in double,
+ * negated for a flipped CSG leaf. Computed on each call (not stored). */
+tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t tri);
 
 /* (u, v) of a crossing of triangle `tri` of a polygons object's mesh from
  * the edge functions U V W the watertight test gave for it (tb_wt_triangle's
  * uvw): the mix of the face's (u, v) at the triangle's corners, which is
  * tb_param_from_point's (u, v) of the crossing up to rounding (clamped to
- * [0, 1]). False, with u and v untouched, for a triangle of a face of more
- * than 3 corners with uvs (param splits those its own way): use the point.
- * Inline for the same reason as the normal. */
-static inline bool tb_object_triangle_uv(const tb_object *obj, uint32_t tri, const double uvw[3], double *u,
-                                         double *v)
-{
-    const float *c = &obj->mesh->tri_uv[6 * (size_t)tri];
-    if (c[0] != c[0]) /* NaN: the point's path */
-        return false;
-    /* U V W share one sign (or are 0) and det is their sum: a convex mix,
-     * with one division (its latency sits on the end of every query). */
-    double inv = 1.0 / (uvw[0] + uvw[1] + uvw[2]);
-    double su = (uvw[0] * c[0] + uvw[1] * c[2] + uvw[2] * c[4]) * inv;
-    double sv = (uvw[0] * c[1] + uvw[1] * c[3] + uvw[2] * c[5]) * inv;
-    /* Rounding may step past the corners' range by an ulp: [0, 1] as param. */
-    *u = su < 0.0 ? 0.0 : su > 1.0 ? 1.0 : su;
-    *v = sv < 0.0 ? 0.0 : sv > 1.0 ? 1.0 : sv;
-    return true;
-}
+ * [0, 1]). The corners' (u, v) are the vertices' uvs, or without uvs the
+ * face's frame projection, derived on each call (not stored). False, with u
+ * and v untouched, for a triangle of a face of more than 3 corners with uvs
+ * (param splits those its own way): use the point. */
+bool tb_object_triangle_uv(const tb_object *obj, uint32_t tri, const double uvw[3], double *u, double *v);
 
 /* Tells the object level that triangle `tri` of the top-level polygons
  * object obj, crossed at line parameter t with direction dir (both as

@@ -49,11 +49,9 @@ void tb__mesh_free(tb_object_mesh *m)
 {
     if (!m)
         return;
-    free(m->vertices);
-    free(m->wvertices);
+    free(m->wvertices); /* (vertices are the geometry's) */
     free(m->tris);
     free(m->tri_face);
-    free(m->wnormal);
     free(m->tri_uv);
     free(m->nodes);
     free(m);
@@ -267,28 +265,28 @@ static bool tb__polygons_closed(const tb_geom_polygons *g)
     return closed;
 }
 
-static tb_vec3 tb__tri_world_normal(const tb_object *o, uint32_t tri);
-
-/* The (u, v) of face f's corners-to-be for the nt triangles tv[] (all of
- * face f): where f's (u, v) is affine over each triangle, the exact (u, v)
- * of its corners, so a hit's barycentric mix is tb_param_from_point's
- * (u, v) of the hit point up to rounding. A face without uvs: the frame
- * projection (affine; param's nearest-point step does nothing for points of
- * the triangles, which lie in the loop); no area: 0, param's error answer. A
- * triangle with uvs: its uvs. More corners with uvs: param's fan or ear
- * clipping need not be the mesh's triangles, so NaN (the hit point path). */
-static void tb__face_corner_uv(const tb_object_mesh *m, const tb_geom_polygons *g, int f, const uint32_t *tv,
-                               size_t nt, float *out)
+/* The (u, v) at the corners of the nt triangles tv[] (all of face f) as
+ * floats (u0 v0 u1 v1 u2 v2 per triangle): where f's (u, v) is affine over
+ * each triangle, the exact (u, v) of its corners, so a hit's barycentric mix
+ * is tb_param_from_point's (u, v) of the hit point up to rounding. A face
+ * without uvs: the frame projection (affine; param's nearest-point step does
+ * nothing for points of the triangles, which lie in the loop); no area: 0,
+ * param's error answer. A triangle with uvs: its uvs. More corners with uvs:
+ * param's fan or ear clipping need not be the mesh's triangles, so false
+ * (the hit point path). */
+static bool tb__corner_uv(const tb_geom_polygons *g, int f, const uint32_t *tv, size_t nt, float *out)
 {
     int b = g->face_start[f], nv = g->face_start[f + 1] - b;
     if (g->uvs) {
+        if (nv != 3)
+            return false;
         for (size_t i = 0; i < nt; i++)
             for (int k = 0; k < 3; k++) {
-                tb_vec2 uv = nv == 3 ? g->uvs[tv[3 * i + k]] : (tb_vec2){NAN, NAN};
+                tb_vec2 uv = g->uvs[tv[3 * i + k]];
                 out[6 * i + 2 * k] = uv.x;
                 out[6 * i + 2 * k + 1] = uv.y;
             }
-        return;
+        return true;
     }
     tb_poly_frame fr;
     bool ok = tb_poly_frame_make(g->vertices, &g->indices[b], nv, &fr);
@@ -296,11 +294,12 @@ static void tb__face_corner_uv(const tb_object_mesh *m, const tb_geom_polygons *
         for (int k = 0; k < 3; k++) {
             double u = 0.0, v = 0.0;
             if (ok)
-                tb_poly_frame_uv(&fr, g->vertices, &g->indices[b], nv, tb_vec3_to_d(m->vertices[tv[3 * i + k]]), &u,
+                tb_poly_frame_uv(&fr, g->vertices, &g->indices[b], nv, tb_vec3_to_d(g->vertices[tv[3 * i + k]]), &u,
                                  &v);
             out[6 * i + 2 * k] = (float)u;
             out[6 * i + 2 * k + 1] = (float)v;
         }
+    return true;
 }
 
 tb_status tb__mesh_build(tb_object *o)
@@ -311,10 +310,7 @@ tb_status tb__mesh_build(tb_object *o)
         return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
     o->mesh = m;
     m->nvertices = (uint32_t)g->nvertices;
-    m->vertices = malloc(sizeof(tb_vec3) * (g->nvertices ? (size_t)g->nvertices : 1));
-    if (!m->vertices)
-        return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
-    memcpy(m->vertices, g->vertices, sizeof(tb_vec3) * (size_t)g->nvertices);
+    m->vertices = g->vertices;
     m->wvertices = malloc(sizeof(double) * 3 * (g->nvertices ? (size_t)g->nvertices : 1));
     if (!m->wvertices)
         return tb_error(TB_ERR_NOMEM, "polygons: out of memory");
@@ -405,9 +401,10 @@ tb_status tb__mesh_build(tb_object *o)
     c.nodes = malloc(sizeof *c.nodes * (nt ? 2 * nt : 1));
     m->tris = malloc(sizeof(uint32_t) * 3 * (nt ? nt : 1));
     m->tri_face = malloc(sizeof(uint32_t) * (nt ? nt : 1));
-    m->tri_uv = malloc(sizeof(float) * 6 * (nt ? nt : 1));
-    float *uv0 = malloc(sizeof(float) * 6 * (nt ? nt : 1));
-    if (!c.prims || !c.order || !c.nodes || !m->tris || !m->tri_face || !m->tri_uv || !uv0) {
+    /* Corner (u, v) kept only for the frame projection (no uvs), a frame per face. */
+    float *uv0 = g->uvs ? NULL : malloc(sizeof(float) * 6 * (nt ? nt : 1));
+    m->tri_uv = g->uvs ? NULL : malloc(sizeof(float) * 6 * (nt ? nt : 1));
+    if (!c.prims || !c.order || !c.nodes || !m->tris || !m->tri_face || (!g->uvs && (!uv0 || !m->tri_uv))) {
         free(c.prims);
         free(c.order);
         free(c.nodes);
@@ -433,13 +430,13 @@ tb_status tb__mesh_build(tb_object *o)
             p->c[a] = 0.5f * p->lo[a] + 0.5f * p->hi[a];
         c.order[i] = (uint32_t)i;
     }
-    /* Corner (u, v), a face at a time (its triangles are consecutive here). */
-    for (size_t i = 0; i < nt;) {
+    /* A face's triangles are consecutive here. */
+    for (size_t i = 0; uv0 && i < nt;) {
         uint32_t f = TB_ARRAY_AT(&faces, uint32_t, i);
         size_t j = i;
         while (j < nt && TB_ARRAY_AT(&faces, uint32_t, j) == f)
             j++;
-        tb__face_corner_uv(m, g, (int)f, &tv[3 * i], j - i, &uv0[6 * i]);
+        tb__corner_uv(g, (int)f, &tv[3 * i], j - i, &uv0[6 * i]);
         i = j;
     }
     if (nt > 0)
@@ -448,7 +445,8 @@ tb_status tb__mesh_build(tb_object *o)
         uint32_t t = c.order[i];
         memcpy(&m->tris[3 * i], &tv[3 * t], sizeof(uint32_t) * 3);
         m->tri_face[i] = TB_ARRAY_AT(&faces, uint32_t, t);
-        memcpy(&m->tri_uv[6 * i], &uv0[6 * (size_t)t], sizeof(float) * 6);
+        if (uv0)
+            memcpy(&m->tri_uv[6 * i], &uv0[6 * (size_t)t], sizeof(float) * 6);
     }
     free(uv0);
     m->nnodes = c.nnodes;
@@ -458,12 +456,6 @@ tb_status tb__mesh_build(tb_object *o)
     tb_array_free(&tris);
     tb_array_free(&faces);
     o->closed = m->closed;
-    /* Hits report the normal of the triangle they land on: computed once. */
-    m->wnormal = malloc(sizeof *m->wnormal * (nt ? nt : 1));
-    if (!m->wnormal)
-        return tb_error(TB_ERR_NOMEM, "polygons: out of memory for %zu triangles", nt);
-    for (size_t i = 0; i < nt; i++)
-        m->wnormal[i] = tb__tri_world_normal(o, (uint32_t)i);
     return TB_OK;
 }
 
@@ -741,9 +733,7 @@ bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray 
                    &m->wvertices[3 * (size_t)tv[2]], t, &dir, NULL);
 }
 
-/* The unit world normal of triangle tri: its object-space normal by the
- * inverse transpose, normalised in double, negated for a flipped leaf. */
-static tb_vec3 tb__tri_world_normal(const tb_object *o, uint32_t tri)
+tb_vec3 tb_object_triangle_normal(const tb_object *o, uint32_t tri)
 {
     tb_dvec3 nw = tb_transform_dnormal(&o->to_world, tb__tri_normal(o->mesh, tri));
     double len = tb_dvec3_length(nw);
@@ -762,4 +752,24 @@ bool tb__mesh_tri_weights(const tb_object *o, uint32_t tri, const tb_ray *ray, d
     int dir;
     return tb_wt_triangle(w, &m->wvertices[3 * (size_t)tv[0]], &m->wvertices[3 * (size_t)tv[1]],
                           &m->wvertices[3 * (size_t)tv[2]], &t, &dir, uvw);
+}
+
+bool tb_object_triangle_uv(const tb_object *obj, uint32_t tri, const double uvw[3], double *u, double *v)
+{
+    const tb_object_mesh *m = obj->mesh;
+    float cc[6];
+    const float *c = cc;
+    if (m->tri_uv)
+        c = &m->tri_uv[6 * (size_t)tri];
+    else if (!tb__corner_uv(&obj->geom.polygons, (int)m->tri_face[tri], &m->tris[3 * (size_t)tri], 1, cc))
+        return false;
+    /* U V W share one sign (or are 0) and det is their sum: a convex mix,
+     * with one division. */
+    double inv = 1.0 / (uvw[0] + uvw[1] + uvw[2]);
+    double su = (uvw[0] * c[0] + uvw[1] * c[2] + uvw[2] * c[4]) * inv;
+    double sv = (uvw[0] * c[1] + uvw[1] * c[3] + uvw[2] * c[5]) * inv;
+    /* Rounding may step past the corners' range by an ulp: [0, 1] as param. */
+    *u = su < 0.0 ? 0.0 : su > 1.0 ? 1.0 : su;
+    *v = sv < 0.0 ? 0.0 : sv > 1.0 ? 1.0 : sv;
+    return true;
 }

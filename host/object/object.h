@@ -47,17 +47,20 @@ _Static_assert(sizeof(tb_object_bvh_node) == 32, "BVH nodes are 32 bytes");
  * are transformed once here, so a ray needs no transform per mesh. */
 typedef struct tb_object_mesh {
     uint32_t nvertices;
-    tb_vec3 *vertices;          /* object-space positions */
+    const tb_vec3 *vertices;    /* object-space positions: the object's geom.polygons.vertices (borrowed, not a
+                                   copy: the geometry lives as long as the mesh) */
     double *wvertices;          /* the same mapped to world space by to_world in double, x y z per
                                    vertex (what the test uses) */
     int wsign;                  /* +1, or -1 if to_world mirrors (swaps which side is counter-clockwise) */
     uint32_t ntris;
     uint32_t *tris;             /* 3 vertex indices per triangle, counter-clockwise seen from the front; BVH leaf order */
     uint32_t *tri_face;         /* polygon index (face ID) of each triangle */
-    tb_vec3 *wnormal;           /* unit world normal of each triangle, as hits report it (flip included) */
-    float *tri_uv;              /* the face's (u, v) at each triangle's corners (u0 v0 u1 v1 u2 v2): a hit's
-                                   (u, v) is their mix by the test's weights; u0 NaN where (u, v) is not affine
-                                   over the triangle (a face of > 3 corners with uvs): from the hit point then */
+    float *tri_uv;              /* geometry without uvs: the face's frame-projected (u, v) at each triangle's
+                                   corners (u0 v0 u1 v1 u2 v2), too slow to derive per hit; NULL with uvs
+                                   (tb_object_triangle_uv reads the vertices' uvs then) */
+    /* A triangle's world normal is not stored (12 bytes per triangle):
+     * tb_object_triangle_normal derives it from the vertices when a hit needs
+     * it (docs/performance.md, "Memory per object, per triangle"). */
     uint32_t nnodes;
     tb_object_bvh_node *nodes;  /* BVH over the triangles' world boxes; node 0 is the root (nnodes == 0 when ntris == 0) */
     bool closed;                /* every polygon edge is matched by exactly one edge running the other way: a solid */

@@ -219,7 +219,9 @@ _Static_assert(sizeof(tb_bvh_node) == 32, "tb_bvh_node is 32 bytes");
 const tb_bvh_node *tb_accel_bvh_nodes(const tb_accel *acc, size_t *count);
 
 /* The input index of each reference in leaf order (leaf references
- * offset .. offset + count - 1 are refs[offset ..]); NULL for another kind. */
+ * offset .. offset + count - 1 are refs[offset ..]); NULL for another kind,
+ * and for a BVH of packed triangles only built without bvh_keep_binary (the
+ * packed leaves keep the indices; the array is freed). */
 const uint32_t *tb_accel_bvh_refs(const tb_accel *acc, size_t *count);
 
 #endif

@@ -108,8 +108,10 @@ struct tb_accel {
     tb_accel_kind kind;
     tb_accel_callbacks cb;
     size_t n;              /* references stored */
-    tb_accel_prim *prims;  /* stored references: BVH leaf order, else input order (empty boxes dropped) */
-    uint32_t *index;       /* input index of each stored reference (the tie rule's last key) */
+    tb_accel_prim *prims;  /* stored references: BVH leaf order, else input order (empty boxes dropped);
+                              NULL once built when every one is a packed triangle (lane_pos), unless the
+                              binary nodes are kept: the lanes hold what the queries read (tb__accel_ids) */
+    uint32_t *index;       /* input index of each stored reference (the tie rule's last key); NULL with prims */
     tb_accel_tri *tris;    /* cb.tris's triangles in stored order (a leaf's triangles side by side), or NULL
                               when there is none: see tb__accel_tri_at */
     uint32_t *tri_of;      /* per stored reference, its record in tris (TB_ACCEL_TRI_NONE: not a triangle);
@@ -258,6 +260,30 @@ static inline const tb_accel_tri *tb__accel_tri_at(const tb_accel *acc, size_t k
     return i == TB_ACCEL_TRI_NONE ? NULL : &acc->tris[i];
 }
 
+/* The packed identity of stored reference k, a triangle of a structure with
+ * lane_pos (every reference packed): its object, face, input index and sub. */
+static inline const tb__lane_ids *tb__accel_lane_ids(const tb_accel *acc, size_t k)
+{
+    size_t j = acc->lane_pos[k] >> 8, n = acc->lane_pos[k] & 0xffu, s = k - j;
+    const char *base = acc->lanes_f32 ? (const char *)((const float *)acc->lanes + TB__LANE_ROWS_F * s)
+                                      : (const char *)((const double *)acc->lanes + TB__LANE_ROWS * s);
+    return (const tb__lane_ids *)(base + 9 * n * (acc->lanes_f32 ? sizeof(float) : sizeof(double))) + j;
+}
+
+/* The input index and sub of stored reference k (from its lanes when the
+ * reference array was dropped). */
+static inline void tb__accel_ids(const tb_accel *acc, size_t k, uint32_t *index, uint32_t *sub)
+{
+    if (acc->index) {
+        *index = acc->index[k];
+        *sub = acc->prims[k].sub;
+    } else {
+        const tb__lane_ids *id = tb__accel_lane_ids(acc, k);
+        *index = id->index;
+        *sub = id->sub;
+    }
+}
+
 /* The triangle test on stored reference k (acc->tris[k] is a triangle): the
  * crossing's float t in [tmin, tmax]. */
 static inline __attribute__((always_inline)) bool tb__accel_tri_test(const tb_accel_tri *tr, const tb_ray *ray,
@@ -309,7 +335,9 @@ static inline bool tb__accel_test(const tb_accel *acc, size_t k, tb__accel_best 
         int dir;
         if (!tb__accel_tri_test(tr, &b->ray, &b->w, &b->wready, &t, &dir, uvw))
             return false;
-        return tb__accel_tri_offer(b, tr->object, tr->face, acc->index[k], acc->prims[k].sub, t, dir, uvw);
+        uint32_t index, sub;
+        tb__accel_ids(acc, k, &index, &sub);
+        return tb__accel_tri_offer(b, tr->object, tr->face, index, sub, t, dir, uvw);
     }
     tb_hit h;
     if (!acc->cb.intersect(acc->cb.ctx, &acc->prims[k], acc->index[k], &b->ray, &h))

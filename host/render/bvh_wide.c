@@ -338,6 +338,17 @@ tb_status tb__bvhw_pack(tb_accel *acc)
         size_t freed = acc->n * sizeof(tb_accel_tri), added = acc->n * sizeof *pos;
         acc->stats.memory_bytes = acc->stats.memory_bytes - freed + added;
         acc->stats.tri_bytes = acc->stats.tri_bytes - freed + added;
+        /* The lanes also hold each reference's input index and sub, and its
+         * box is only read by the occlusion hint (which can test the
+         * triangle instead): the reference array (36 bytes each) goes too,
+         * unless the binary nodes are kept (tb_accel_bvh_refs reads it). */
+        if (!acc->nodes) {
+            free(acc->prims);
+            free(acc->index);
+            acc->prims = NULL;
+            acc->index = NULL;
+            acc->stats.memory_bytes -= acc->n * (sizeof(tb_accel_prim) + sizeof(uint32_t));
+        }
     }
 #else
     (void)acc;
@@ -584,8 +595,9 @@ bool tb__bvh_occluded(const tb_accel *acc, const tb_ray *ray)
     unsigned slot = tb__occ_slot(ray->d);
     uint32_t k = c->k[slot];
     tb__accel_any q = tb__accel_any_start(ray);
-    /* The hint's box first: a miss there costs a slab test, not a callback. */
-    if (k < acc->n && tb__bvh_box_hit(&acc->prims[k].bounds, ray)) {
+    /* The hint's box first: a miss there costs a slab test, not a callback
+     * (without the reference array, a packed triangle: its test). */
+    if (k < acc->n && (!acc->prims || tb__bvh_box_hit(&acc->prims[k].bounds, ray))) {
         tb_stat_add(&tb__bvh_prims_tested, 1);
         if (tb__accel_test_any(acc, k, &q)) {
             TB_STAT_INC(tb__bvh_shadow_rays);

@@ -1224,6 +1224,9 @@ static void test_packed_leaves(void **state)
             /* Every reference a triangle: the records gave way to the lanes, not so without packing. */
             assert_null(pk->tris);
             assert_non_null(pk->lane_pos);
+            /* ... and so did the reference array (the lanes keep index and sub). */
+            assert_null(pk->prims);
+            assert_null(pk->index);
             assert_non_null(one->tris);
             assert_null(one->lane_pos);
             assert_int_equal(pk_sse->lanes_f32, f32);
@@ -1240,7 +1243,8 @@ static void test_packed_leaves(void **state)
                     const tb__lane_ids *ids = f32 ? (const tb__lane_ids *)(bf + 9 * (size_t)cnt)
                                                   : (const tb__lane_ids *)(bd + 9 * (size_t)cnt);
                     for (uint32_t j = 0; j < cnt; j++) {
-                        const tb_accel_tri *in = &tris[pk->index[s0 + j]]; /* the caller's record */
+                        /* The unpacked tree is the same tree: its reference array gives the stored order. */
+                        const tb_accel_tri *in = &tris[one->index[s0 + j]]; /* the caller's record */
                         tb_accel_tri tmp;
                         const tb_accel_tri *back = tb__accel_tri_at(pk, s0 + j, &tmp); /* read back from the lanes */
                         assert_non_null(back);
@@ -1253,7 +1257,12 @@ static void test_packed_leaves(void **state)
                         assert_int_equal(ids[j].face, in->face);
                         assert_int_equal(back->object, in->object);
                         assert_int_equal(back->face, in->face);
-                        assert_int_equal(ids[j].index, pk->index[s0 + j]);
+                        assert_int_equal(ids[j].index, one->index[s0 + j]);
+                        assert_int_equal(ids[j].sub, one->prims[s0 + j].sub);
+                        uint32_t idx, sub;
+                        tb__accel_ids(pk, s0 + j, &idx, &sub);
+                        assert_int_equal(idx, one->index[s0 + j]);
+                        assert_int_equal(sub, one->prims[s0 + j].sub);
                     }
                 }
             }
@@ -1323,6 +1332,18 @@ static void test_packed_leaves(void **state)
                 total++;
             }
             tb_stats_set_enabled(was);
+            /* Kept binary nodes keep the reference array too (tb_accel_bvh_refs, GPU conversions). */
+            tb_accel *keep;
+            assert_int_equal(tb_accel_build(TB_ACCEL_BVH, refs, n, &cb,
+                                            &(tb_accel_options){.bvh_max_leaf = leaves[li], .bvh_keep_binary = 1},
+                                            &keep),
+                             TB_OK);
+            size_t nrefs = 0;
+            assert_non_null(keep->lane_pos);
+            assert_non_null(tb_accel_bvh_refs(keep, &nrefs));
+            assert_int_equal(nrefs, keep->n);
+            assert_null(tb_accel_bvh_refs(pk, NULL));
+            tb_accel_free(keep);
             tb_accel_free(pk);
             tb_accel_free(pk_sse);
             tb_accel_free(one);
