@@ -437,7 +437,7 @@ static tb_status tb__gpt_tables(tb_gpu_pathtracer *pt, uint32_t *emitter_kinds)
         for (int c = 0; c < nch; c++) {
             w[c] = mt->diffuse.v[c];
             w[nch + c] = Le.v[c];
-            w[2 * nch + c] = mt->specular.v[c];
+            w[2 * nch + c] = mt->model == TB_MID_MODEL_LAMBERT ? 0.0f : mt->specular.v[c]; /* as tb_surface_at */
             w[3 * nch + c] = mt->transmission.v[c];
         }
         tb__gpt_material(s, mt, w + 4 * nch);
@@ -665,7 +665,7 @@ static tb_gpu_dispatch tb__gpt_dispatch(tb_gpu_pathtracer *pt, uint32_t stage, c
 /* Traces rays[0..n) (n <= cap) to the end of their paths; rx, ry: their
  * offset rays (NULL: none). */
 static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const tb_ray *rx, const tb_ray *ry,
-                               const uint32_t *seeds, size_t n, float *out)
+                               const uint32_t *seeds, size_t n, float *out, bool probe)
 {
     const int nch = pt->nch;
     _Static_assert(sizeof(tb_ray) == sizeof(tb_gpu_ray), "tb_ray is uploaded as tb_gpu_ray");
@@ -692,7 +692,8 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
                                .perm = pt->perm_base,
                                .diffs = diffs ? 1u : 0u,
                                /* tb_surfaces_create's scale of the offset rays */
-                               .diff_scale = (float)fmax(0.125, 1.0 / sqrt(pt->opt.spp > 1 ? (double)pt->opt.spp : 1.0))};
+                               .diff_scale = (float)fmax(0.125, 1.0 / sqrt(pt->opt.spp > 1 ? (double)pt->opt.spp : 1.0)),
+                               .probe = probe ? 1u : 0u};
     push[1] = push[0];
     push[1].count = 1;
     tb_gpu_dispatch d[2 + 3 * TB_GPU_PT_BOUNCES_PER_SUBMIT];
@@ -728,6 +729,8 @@ static tb_status tb__gpt_batch(tb_gpu_pathtracer *pt, const tb_ray *rays, const 
         if (alive == 0)
             break;
     }
+    if (probe)
+        return TB_OK; /* tb_gpu_pt_surfaces reads the buffers */
     /* radiance: the TB_GPU_PT_L arrays, word-major */
     const size_t lo = (size_t)TB_GPU_PT_L * (size_t)nch * n * sizeof(float);
     if ((st = tb_gpu_buffer_download(pt->b_values, lo, pt->L, (size_t)nch * n * sizeof(float))))
@@ -752,11 +755,48 @@ tb_status tb_gpu_pt_radiance_diff(tb_gpu_pathtracer *pt, const tb_ray *rays, con
     for (size_t at = 0; at < n && !st; at += pt->cap) {
         size_t m = n - at < pt->cap ? n - at : pt->cap;
         st = tb__gpt_batch(pt, rays + at, rx ? rx + at : NULL, ry ? ry + at : NULL, seeds + 2 * at, m,
-                           out + at * (size_t)pt->nch);
+                           out + at * (size_t)pt->nch, false);
     }
     pt->st.paths += n;
     tb_stat_add(&tb__gpt_paths, (int64_t)n);
     pt->st.wall_seconds += tb__gpt_now() - t0;
+    return st;
+}
+
+tb_status tb_gpu_pt_surfaces(tb_gpu_pathtracer *pt, const tb_ray *rays, const tb_ray *rx, const tb_ray *ry, size_t n,
+                             float *out)
+{
+    const size_t nch = (size_t)pt->nch, stride = 5 + 2 * nch;
+    if (nch < 3)
+        return tb_error(TB_ERR_ARG, "GPU path tracer: surfaces need at least 3 channels");
+    tb_status st = TB_OK;
+    uint32_t *seeds = calloc(2 * (pt->cap < n ? pt->cap : n) + 2, sizeof *seeds);
+    tb_gpu_hit *hits = malloc((pt->cap < n ? pt->cap : n) * sizeof *hits + sizeof *hits);
+    float *v = malloc(3 * nch * (pt->cap < n ? pt->cap : n) * sizeof *v + sizeof *v);
+    if (!seeds || !hits || !v)
+        st = tb_error(TB_ERR_NOMEM, "GPU path tracer: out of memory");
+    for (size_t at = 0; at < n && !st; at += pt->cap) {
+        const size_t m = n - at < pt->cap ? n - at : pt->cap;
+        memset(hits, 0xff, m * sizeof *hits); /* a miss leaves its record alone: object TB_GPU_NO_HIT */
+        if ((st = tb_gpu_buffer_upload(pt->b_hits, 0, hits, m * sizeof *hits)) ||
+            (st = tb__gpt_batch(pt, rays + at, rx ? rx + at : NULL, ry ? ry + at : NULL, seeds, m, NULL, true)) ||
+            (st = tb_gpu_buffer_download(pt->b_hits, 0, hits, m * sizeof *hits)) ||
+            (st = tb_gpu_buffer_download(pt->b_values, 0, v, 3 * nch * m * sizeof *v)))
+            break;
+        for (size_t i = 0; i < m; i++) {
+            float *o = out + (at + i) * stride;
+            const bool hit = hits[i].object != TB_GPU_NO_HIT;
+            o[0] = hit ? hits[i].u : NAN;
+            o[1] = hit ? hits[i].v : NAN;
+            for (size_t c = 0; c < 3; c++)
+                o[2 + c] = hit ? v[(TB_GPU_PT_PROBE_NORMAL * nch + c) * m + i] : NAN;
+            for (size_t c = 0; c < nch; c++) {
+                o[5 + c] = hit ? v[(TB_GPU_PT_PROBE_DIFFUSE * nch + c) * m + i] : NAN;
+                o[5 + nch + c] = hit ? v[(TB_GPU_PT_PROBE_SPECULAR * nch + c) * m + i] : NAN;
+            }
+        }
+    }
+    free(seeds), free(hits), free(v);
     return st;
 }
 

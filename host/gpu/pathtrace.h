@@ -72,6 +72,15 @@ tb_status tb_gpu_pt_radiance(tb_gpu_pathtracer *pt, const tb_ray *rays, const ui
 tb_status tb_gpu_pt_radiance_diff(tb_gpu_pathtracer *pt, const tb_ray *rays, const tb_ray *rx, const tb_ray *ry,
                                   const uint32_t *seeds, size_t n, float *out);
 
+/* The surface at the first hit of each ray as the shade stage sees it, for
+ * tests against tb_surface_at: per ray 5 + 2 nchannels floats at out[i *
+ * (5 + 2 nch)]: the hit's (u, v), the shading normal (bump-mapped, on the
+ * ray's side), the diffuse and the specular colours (patterns applied); NaN
+ * for a miss. rx, ry as tb_gpu_pt_radiance_diff (NULL: none). At least 3
+ * channels. */
+tb_status tb_gpu_pt_surfaces(tb_gpu_pathtracer *pt, const tb_ray *rays, const tb_ray *rx, const tb_ray *ry, size_t n,
+                             float *out);
+
 /* The stats so far. */
 void tb_gpu_pt_get_stats(const tb_gpu_pathtracer *pt, tb_gpu_pt_stats *out);
 

@@ -89,7 +89,7 @@ layout(push_constant) uniform Push {
     uint perm;
     uint diffs;
     float diff_scale;
-    uint pad0;
+    uint probe;
     uint pad1;
 } pc;
 
@@ -928,6 +928,22 @@ void stage_shade()
     for (int c = 0; c < NCH; c++)
         beta[c] = val(TB_GPU_PT_BETA, c);
 
+#ifndef TB_PT_TRACE
+    if (pc.probe != 0u) { // tb_gpu_pt_surfaces: the hit's colours and shading normal; the path ends
+        vec3 n = front ? ng : -ng;
+        b.nv = n;
+        if (HAS_PATTERNS)
+            surface_patterns(b, h, p, ng, st.depth == 0u, n);
+        for (int c = 0; c < NCH; c++) {
+            set_val(TB_GPU_PT_PROBE_DIFFUSE, c, g_kd[c]);
+            set_val(TB_GPU_PT_PROBE_SPECULAR, c, g_ks[c]);
+            set_val(TB_GPU_PT_PROBE_NORMAL, c, c < 3 ? n[c] : 0.0);
+        }
+        st.alive = 0u;
+        states[g_i] = st;
+        return;
+    }
+#endif
     // Emission of a front face, weighted against the light sample the
     // previous vertex took of the same point unless the ray left the camera
     // or a delta lobe.

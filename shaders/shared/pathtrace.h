@@ -98,6 +98,13 @@
 #define TB_GPU_PT_GLOSSY_BLINN 2u /* exactly normalised Blinn (TB_BSDF_BLINN_NORMALIZED_EXACT) */
 #define TB_GPU_PT_GLOSSY_GGX 3u   /* GGX with Schlick's Fresnel of the specular colour (TB_BSDF_GGX) */
 
+/* With the push constant `probe` (tb_gpu_pt_surfaces), the value arrays
+ * that receive the first hit's diffuse and specular colours (channels) and
+ * its shading normal (channels 0..2). */
+#define TB_GPU_PT_PROBE_DIFFUSE 0u
+#define TB_GPU_PT_PROBE_SPECULAR 1u
+#define TB_GPU_PT_PROBE_NORMAL 2u
+
 /* Kernel stages (specialization constant 1 of pathtrace.comp). */
 #define TB_GPU_PT_STAGE_INIT 0u       /* radiance 0 */
 #define TB_GPU_PT_STAGE_EXTEND 1u     /* closest hit of each live path's ray; a miss ends the path */
@@ -149,7 +156,8 @@ struct tb_gpu_pt_push {
     TB_GPU_UINT diffs;      /* 1: the rays buffer holds each camera ray's offset rays (x + 1 at n + i, y + 1 at
                                2n + i) for the footprint of the patterns at the first hit */
     float diff_scale;       /* their scale, max(1/8, 1/sqrt(spp)) (tb_surfaces') */
-    TB_GPU_UINT pad0, pad1;
+    TB_GPU_UINT probe;      /* 1: shade writes the first hit's surface (TB_GPU_PT_PROBE_*) and ends the path */
+    TB_GPU_UINT pad1;
 };
 
 #ifndef TB_GPU_GLSL
