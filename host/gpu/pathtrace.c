@@ -954,7 +954,11 @@ tb_status tb_gpu_render_path(tb_gpu_device *dev, const tb_scene *s, const tb_pt_
         return tb_error(TB_ERR_UNSUPPORTED, "GPU path tracer: adaptive antialiasing is not implemented "
                                             "(use fixed --spp, or --backend cpu)");
     tb__gpt_engine e = {.o = o};
-    if ((err = tb_gpu_pt_create(dev, s, po, &e.pt)))
+    /* the samples per pixel that scale the footprints: as the CPU path tracer's render takes them */
+    tb_pt_options p = po ? *po : (tb_pt_options){0};
+    if (p.spp == 0)
+        p.spp = o->rt.spp > 0 ? o->rt.spp : o->aa.spp;
+    if ((err = tb_gpu_pt_create(dev, s, &p, &e.pt)))
         return err;
     tb_render_stats rs;
     memset(&rs, 0, sizeof rs);

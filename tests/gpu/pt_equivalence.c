@@ -416,8 +416,9 @@ typedef struct tb__surf_err {
 
 /* The kernel's first-hit surfaces against tb_surface_at on a grid of nx x ny
  * camera rays of s (with their offset rays when `diffs`); a ray is an
- * outlier when (u, v) differ by more than 1e-4, the normal by more than
- * 1e-3 or a colour by more than 1e-3. */
+ * outlier when (u, v) differ by more than 5e-5, the normal or a colour by
+ * more than 5e-4 (float against double: measured at most 2.6e-6, 4.6e-5
+ * and 2.7e-5). */
 static tb__surf_err tb__surfaces(gpu_test_env *env, const tb_scene *s, int nx, int ny, bool diffs)
 {
     tb_pt_options po = {.spp = TB__SPP};
@@ -469,11 +470,7 @@ static tb__surf_err tb__surfaces(gpu_test_env *env, const tb_scene *s, int nx, i
             dn = fmax(dn, fabs(o[2 + c] - nc[c]));
         for (size_t c = 0; c < nch; c++)
             dc = fmax(dc, fmax(fabs(o[5 + c] - sf.diffuse.v[c]), fabs(o[5 + nch + c] - sf.specular.v[c])));
-        if (!(duv <= 1e-4 && dn <= 1e-3 && dc <= 1e-3)) {
-            if (getenv("TB_DEBUG_SURF") && e.outliers < 30)
-                printf("DBG mat %d obj %u face %u: uv %g %g / %g %g n %g %g %g / %g %g %g kd %g / %g ks %g / %g\n",
-                       sf.material, hit.object, hit.face, o[0], o[1], sf.u, sf.v, o[2], o[3], o[4], nc[0], nc[1], nc[2],
-                       o[5], sf.diffuse.v[0], o[5 + nch], sf.specular.v[0]);
+        if (!(duv <= 5e-5 && dn <= 5e-4 && dc <= 5e-4)) {
             e.outliers++;
             continue;
         }
@@ -489,10 +486,11 @@ static tb__surf_err tb__surfaces(gpu_test_env *env, const tb_scene *s, int nx, i
 }
 
 /* The kernel's patterns, bump maps, (u, v) and tangents against the CPU's
- * at 96 x 54 camera rays of the materials scene: every hit within 1e-4 in
- * (u, v) and 1e-3 in the normal and the colours but at most 1 % (edges of
- * objects and, point sampled, of checker cells: where float and double
- * round to different sides). */
+ * at 96 x 54 camera rays of the materials scene (at the test's 32 x 24
+ * pixels, so that the footprints span several checker cells): every hit
+ * within the tolerances of tb__surfaces but at most 1 % (edges of objects
+ * and, point sampled, of checker cells, where float and double may round
+ * to different sides; none measured). */
 static void test_surfaces(void **state)
 {
     gpu_test_env *env = *state;
