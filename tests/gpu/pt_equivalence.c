@@ -31,12 +31,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "host/gpu/pathtrace.h"
+#include "host/render/camera.h"
 #include "host/render/pathtrace.h"
 #include "host/render/render.h"
-#include "host/render/camera.h"
 #include "host/render/scene.h"
 #include "host/render/surface.h"
 
@@ -571,6 +570,29 @@ static void test_refused(void **state)
     remove(dir);
 }
 
+/* A patterned polygon whose (u, v) the kernel cannot reproduce (texture
+ * coordinates past 1, which the CPU clamps: not affine over the face) is
+ * refused when the tables are built, naming the object and face. */
+static void test_refused_uv(void **state)
+{
+    gpu_test_env *env = *state;
+    static const char text[] =
+        "mid 1.1\ncamera \"c\" { eye = [0 -6 3] look_at = [0 0 0] up = [0 0 1] fov = 45 resolution = [8 8] }\n"
+        "point_light \"l\" { position = [0 -3 4] intensity = 10 }\n"
+        "polygons \"p\" { geometry = { vertices = [[-2 -2 0] [2 -2 0] [2 2 0] [-2 2 0]] faces = [[0 1 2 3]]\n"
+        "  uvs = [[0 0] [2 0] [2 2] [0 2]] } rendering = { diffuse = 0.5 diffuse_pattern = checker(4, 0.2, 0.8) } }\n";
+    tb_scene *s = gpu_test_load(text, "uv past 1", NULL);
+    assert_null(tb_gpu_pt_unsupported(s));
+    tb_render_options ro = tb_render_defaults();
+    ro.aa.spp = 1;
+    ro.progress = false;
+    tb_image *img = NULL;
+    gpu_assert_error(tb_gpu_render_path(env->dev, s, NULL, &ro, &img, NULL, NULL), TB_ERR_UNSUPPORTED,
+                     "object 0, face 0: its (u, v) is not an affine map over the face");
+    assert_null(img);
+    tb_scene_free(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -581,6 +603,7 @@ int main(void)
         cmocka_unit_test(test_materials),      cmocka_unit_test(test_materials_control),
         cmocka_unit_test(test_surfaces),
         cmocka_unit_test(test_controls),       cmocka_unit_test(test_refused),
+        cmocka_unit_test(test_refused_uv),
     };
     return cmocka_run_group_tests(tests, gpu_test_setup, gpu_test_teardown);
 }
