@@ -4,7 +4,8 @@
  * computes the CPU path tracer's radiance (host/render/pathtrace.h) for the
  * scenes whose materials and lights it implements: the composite BSDF's
  * Lambert, Phong, Blinn, GGX and smooth dielectric lobes, emission, point,
- * spot, directional and area lights, CSG trees. The path state stays on the
+ * spot, directional and area lights, CSG trees, checker and noise patterns
+ * and noise bump maps on spheres, cubes and polygons. The path state stays on the
  * device; the host records init, then extend -> shade -> shadow per bounce,
  * TB_GPU_PT_BOUNCES_PER_SUBMIT bounces to a command buffer, and reads back
  * one word (the live paths) between command buffers, not per bounce.
@@ -42,7 +43,8 @@ typedef struct tb_gpu_pt_stats {
 } tb_gpu_pt_stats;
 
 /* Why the kernel cannot render `s` (a phrase naming the first missing
- * feature: a texture, pattern or bump map, an IES light, more than 31 delta
+ * feature: a texture, an image bump map, a pattern on a kind whose (u, v) is
+ * not ported, an IES light, more than 31 delta
  * lights, an emitter kind, an emitting CSG object), or NULL when it can. */
 const char *tb_gpu_pt_unsupported(const tb_scene *s);
 
@@ -63,6 +65,20 @@ void tb_gpu_pt_destroy(tb_gpu_pathtracer *pt);
  * nchannels ..]) with the device stream seeded by seeds[2 i], seeds[2 i + 1].
  * An unbiased estimate of what tb_pt_radiance estimates. */
 tb_status tb_gpu_pt_radiance(tb_gpu_pathtracer *pt, const tb_ray *rays, const uint32_t *seeds, size_t n,
+                             float *out);
+/* tb_gpu_pt_radiance with the camera rays' offset rays rx[i], ry[i] (of the
+ * film points one pixel along x and y; NULL: none), from which patterns are
+ * filtered over the first hit's footprint, as tb_pt_sample does. */
+tb_status tb_gpu_pt_radiance_diff(tb_gpu_pathtracer *pt, const tb_ray *rays, const tb_ray *rx, const tb_ray *ry,
+                                  const uint32_t *seeds, size_t n, float *out);
+
+/* The surface at the first hit of each ray as the shade stage sees it, for
+ * tests against tb_surface_at: per ray 5 + 2 nchannels floats at out[i *
+ * (5 + 2 nch)]: the hit's (u, v), the shading normal (bump-mapped, on the
+ * ray's side), the diffuse and the specular colours (patterns applied); NaN
+ * for a miss. rx, ry as tb_gpu_pt_radiance_diff (NULL: none). At least 3
+ * channels. */
+tb_status tb_gpu_pt_surfaces(tb_gpu_pathtracer *pt, const tb_ray *rays, const tb_ray *rx, const tb_ray *ry, size_t n,
                              float *out);
 
 /* The stats so far. */

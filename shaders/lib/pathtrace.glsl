@@ -54,6 +54,8 @@ layout(constant_id = 11) const bool TB_HAS_PLANAR = false;
 layout(constant_id = 12) const bool TB_HAS_TORI = false;
 layout(constant_id = 13) const int NLIGHTS = 0;    // point, spot and directional lights (shadow slots 1..)
 layout(constant_id = 14) const bool HAS_CSG = false;
+layout(constant_id = 15) const bool HAS_PATTERNS = false; // a material with a colour pattern or a noise bump
+layout(constant_id = 16) const uint PATTERN_KINDS = 0u;   // bit k: patterns of kind k (TB_GPU_PATTERN_*)
 
 layout(std430, binding = 0) buffer Rays { tb_gpu_ray rays[]; };
 layout(binding = 1) uniform usamplerBuffer node_texels;
@@ -84,6 +86,10 @@ layout(push_constant) uniform Push {
     uint max_bounces;
     uint count;
     uint light_base;
+    uint perm;
+    uint diffs;
+    float diff_scale;
+    uint probe;
     uint pad1;
 } pc;
 
@@ -117,6 +123,10 @@ const int OBJ_BASE = EOBJ_BASE + NEMIT; // per object TB_GPU_PT_O_WORDS words
 
 uint g_i;  // this invocation's path
 uint g_n;  // paths
+// The hit's diffuse and specular colours: the material's, or its patterns'
+// (bsdf_load, then surface_patterns).
+float g_kd[NCH];
+float g_ks[NCH];
 
 float tab(int i) { return uintBitsToFloat(texelFetch(table_texels, i).x); }
 uint utab(int i) { return texelFetch(table_texels, i).x; }
@@ -180,6 +190,128 @@ uint hit_material(uint obj, uint face)
         if (face >= utab(lb + 3 * r) && face - utab(lb + 3 * r) < utab(lb + 3 * r + 1))
             return utab(lb + 3 * r + 2);
     return 0xffffffffu;
+}
+
+// ------------------------------------------------------ surface parameters
+// (u, v), tangents and the object-space point of a hit, as host/object/param.c
+// gives them (tb_param_from_point, tb_param_eval_world) for the kinds whose
+// parameterisation is ported (spheres, cubes, polygons: the record of
+// shared/pathtrace.h, TB_GPU_PT_Q_*); the host refuses a patterned material
+// on any other kind. In float; the CPU works in double.
+
+const float PT_PI = 3.14159265358979323846;
+
+// The object's parameterisation record, or -1.
+int param_record(uint obj)
+{
+    return HAS_PATTERNS ? int(utab(OBJ_BASE + int(TB_GPU_PT_O_WORDS) * int(obj) + int(TB_GPU_PT_O_PARAM))) : -1;
+}
+
+// Row k of the 3 x 4 (affine) or 3 x 3 (linear) map at table word b.
+vec3 q_vec(int b) { return vec3(tab(b), tab(b + 1), tab(b + 2)); }
+
+vec3 q_to_object(int q, vec3 p)
+{
+    int b = q + int(TB_GPU_PT_Q_TO_OBJECT);
+    return vec3(dot(q_vec(b), p) + tab(b + 3), dot(q_vec(b + 4), p) + tab(b + 7), dot(q_vec(b + 8), p) + tab(b + 11));
+}
+
+vec3 q_to_object_vector(int q, vec3 v)
+{
+    int b = q + int(TB_GPU_PT_Q_TO_OBJECT);
+    return vec3(dot(q_vec(b), v), dot(q_vec(b + 4), v), dot(q_vec(b + 8), v));
+}
+
+vec3 q_to_world_vector(int q, vec3 v)
+{
+    int b = q + int(TB_GPU_PT_Q_TO_WORLD);
+    return vec3(dot(q_vec(b), v), dot(q_vec(b + 3), v), dot(q_vec(b + 6), v));
+}
+
+// u = phi / 2 pi in [0, 1) of the direction (x, y); 0 on the axis (tb__angle_u).
+float angle_u(float x, float y)
+{
+    if (x == 0.0 && y == 0.0)
+        return 0.0;
+    float phi = atan(y, x);
+    if (phi < 0.0)
+        phi += 2.0 * PT_PI;
+    float u = phi * (0.5 / PT_PI);
+    return u < 1.0 ? u : 0.0;
+}
+
+// The outward axis a and lateral axis b of cube side `face` (0..3: -x, +x,
+// -y, +y; tb__side_axes).
+void side_axes(int face, out vec3 a, out vec3 b)
+{
+    if (face == 0) {
+        a = vec3(-1.0, 0.0, 0.0);
+        b = vec3(0.0, -1.0, 0.0);
+    } else if (face == 1) {
+        a = vec3(1.0, 0.0, 0.0);
+        b = vec3(0.0, 1.0, 0.0);
+    } else if (face == 2) {
+        a = vec3(0.0, -1.0, 0.0);
+        b = vec3(1.0, 0.0, 0.0);
+    } else {
+        a = vec3(0.0, 1.0, 0.0);
+        b = vec3(-1.0, 0.0, 0.0);
+    }
+}
+
+// (u, v) in [0, 1]^2 of world point p on face `face` (the hit's face ID) of
+// record q (tb_param_from_point on the hit's face).
+vec2 param_uv(int q, uint face, vec3 p)
+{
+    uint kind = utab(q + int(TB_GPU_PT_Q_KIND));
+    int f = int(face - utab(q + int(TB_GPU_PT_Q_FACE_BASE)));
+    vec2 uv;
+    if (kind == TB_GPU_PT_PARAM_POLYGONS) {
+        int fb = q + int(TB_GPU_PT_Q_FACES) + f * int(TB_GPU_PT_Q_FACE_WORDS);
+        uv = vec2(dot(q_vec(fb), p) + tab(fb + 3), dot(q_vec(fb + 4), p) + tab(fb + 7));
+    } else {
+        vec3 o = q_to_object(q, p);
+        if (kind == TB_GPU_PT_PARAM_SPHERE) {
+            uv = vec2(angle_u(o.x, o.y), atan(length(o.xy), -o.z) * (1.0 / PT_PI));
+        } else if (f < 4) { // cube side (tb__pyr_side_project with t = 1)
+            vec3 a, b;
+            side_axes(f, a, b);
+            uv = vec2(0.5 * (dot(o, b) + 1.0), 0.5 * (o.z + 1.0));
+        } else { // cube bottom (4) or top (5) (tb__rect_z_uv over [-1, 1]^2)
+            uv = vec2(0.5 * (o.x + 1.0), f == 5 ? 0.5 * (o.y + 1.0) : 0.5 * (1.0 - o.y));
+        }
+    }
+    return clamp(uv, 0.0, 1.0);
+}
+
+// The world tangents dp/du, dp/dv at (u, v) of the hit's face (tb_param_eval_world).
+void param_tangents(int q, uint face, float u, float v, out vec3 dpdu, out vec3 dpdv)
+{
+    uint kind = utab(q + int(TB_GPU_PT_Q_KIND));
+    int f = int(face - utab(q + int(TB_GPU_PT_Q_FACE_BASE)));
+    if (kind == TB_GPU_PT_PARAM_POLYGONS) {
+        int fb = q + int(TB_GPU_PT_Q_FACES) + f * int(TB_GPU_PT_Q_FACE_WORDS);
+        dpdu = q_vec(fb + 8);
+        dpdv = q_vec(fb + 11);
+        return;
+    }
+    vec3 du, dv;
+    if (kind == TB_GPU_PT_PARAM_SPHERE) { // tb__sphere_eval
+        float phi = 2.0 * PT_PI * u, th = PT_PI * v;
+        float cp = cos(phi), sp = sin(phi), ct = cos(th), st = sin(th);
+        du = (v == 0.0 || v == 1.0) ? vec3(0.0) : vec3(-2.0 * PT_PI * st * sp, 2.0 * PT_PI * st * cp, 0.0);
+        dv = vec3(PT_PI * ct * cp, PT_PI * ct * sp, PT_PI * st);
+    } else if (f < 4) {
+        vec3 a, b;
+        side_axes(f, a, b);
+        du = 2.0 * b;
+        dv = vec3(0.0, 0.0, 2.0);
+    } else {
+        du = vec3(2.0, 0.0, 0.0);
+        dv = vec3(0.0, f == 5 ? 2.0 : -2.0, 0.0);
+    }
+    dpdu = q_to_world_vector(q, du);
+    dpdv = q_to_world_vector(q, dv);
 }
 
 // ------------------------------------------------------------- emitter pdf
@@ -282,6 +414,7 @@ struct bsdf_t {
     uint glossy;   // TB_GPU_PT_GLOSSY_*
     float pick[4]; // selection probabilities per slot
     float dielectric, expo, ior, alpha;
+    vec3 nv;       // the geometric normal on wo's side (n may be bumped): the same-side tests
 };
 
 bsdf_t bsdf_load(int m)
@@ -297,10 +430,68 @@ bsdf_t bsdf_load(int m)
     b.glossy = utab(sc + int(TB_GPU_PT_M_GLOSSY));
     b.lobes = utab(sc + int(TB_GPU_PT_M_LOBES));
     b.alpha = tab(sc + int(TB_GPU_PT_M_ALPHA));
+    for (int c = 0; c < NCH; c++) {
+        g_kd[c] = tab(b.mb + c);
+        g_ks[c] = tab(b.mb + 2 * NCH + c);
+    }
     return b;
 }
 
 bool has_lobe(bsdf_t b, uint k) { return (b.lobes & (1u << k)) != 0u; }
+
+// True if wo and wi are on different sides of the geometric surface
+// (tb__same_side) or of the shading normal n (the lobes' own test).
+bool sides_differ(bsdf_t b, vec3 n, vec3 wo, vec3 wi)
+{
+    return (dot(wo, b.nv) > 0.0) != (dot(wi, b.nv) > 0.0) || (dot(wo, n) > 0.0) != (dot(wi, n) > 0.0);
+}
+
+// The mean of the positive channels (tb__weight: a lobe's selection weight).
+float lobe_weight(float k[NCH])
+{
+    float s = 0.0;
+    for (int c = 0; c < NCH; c++)
+        s += max(k[c], 0.0);
+    return s / float(NCH);
+}
+
+// The lobes and their selection probabilities from the hit's colours
+// g_kd, g_ks (tb_surface_bsdf_init, TB_SURFACE_PHYSICAL), for a material
+// whose patterns change them from point to point; b.glossy is the model's
+// lobe kind whatever the specular colour (pathtrace.c).
+void bsdf_reinit(inout bsdf_t b)
+{
+    float w[4] = float[4](0.0, 0.0, 0.0, 0.0);
+    uint lobes = 0u;
+    bool kd = false, ks = false, kt = false;
+    float dmax = 0.0, wt[NCH];
+    for (int c = 0; c < NCH; c++) {
+        kd = kd || g_kd[c] != 0.0;
+        ks = ks || g_ks[c] != 0.0;
+        wt[c] = tab(b.mb + 3 * NCH + c);
+        kt = kt || wt[c] != 0.0;
+        dmax = c == 0 ? g_kd[0] : max(dmax, g_kd[c]);
+    }
+    if (kd) {
+        lobes |= 1u << TB_GPU_PT_LOBE_DIFFUSE;
+        w[TB_GPU_PT_LOBE_DIFFUSE] = lobe_weight(g_kd);
+    }
+    if (!kt && ks && b.glossy != TB_GPU_PT_GLOSSY_NONE) {
+        lobes |= 1u << TB_GPU_PT_LOBE_GLOSSY;
+        w[TB_GPU_PT_LOBE_GLOSSY] = lobe_weight(g_ks);
+    }
+    if (kt) {
+        b.dielectric = dmax > 0.0 ? (dmax < 1.0 ? 1.0 - dmax : 0.0) : 1.0;
+        if (b.dielectric > 0.0) {
+            lobes |= 1u << TB_GPU_PT_LOBE_DIELECTRIC;
+            w[TB_GPU_PT_LOBE_DIELECTRIC] = b.dielectric * max(lobe_weight(wt), 0.5);
+        }
+    }
+    float sum = w[0] + w[1] + w[2] + w[3];
+    for (int k = 0; k < 4; k++)
+        b.pick[k] = sum > 0.0 ? w[k] / sum : 0.0;
+    b.lobes = sum > 0.0 ? lobes : 0u;
+}
 
 const uint NONDELTA = (1u << TB_GPU_PT_LOBE_DIFFUSE) | (1u << TB_GPU_PT_LOBE_GLOSSY);
 
@@ -354,7 +545,7 @@ void glossy_eval(bsdf_t b, vec3 n, vec3 wo, vec3 wi, out float scalar, out float
 // The mixture's density of direction wi (tb_surface_bsdf_pdf).
 float bsdf_pdf(bsdf_t b, vec3 n, vec3 wo, vec3 wi)
 {
-    if ((b.lobes & NONDELTA) == 0u || (dot(wo, n) > 0.0) != (dot(wi, n) > 0.0))
+    if ((b.lobes & NONDELTA) == 0u || sides_differ(b, n, wo, wi))
         return 0.0;
     float pdf = 0.0;
     if (has_lobe(b, TB_GPU_PT_LOBE_DIFFUSE))
@@ -373,14 +564,14 @@ bool bsdf_eval(bsdf_t b, vec3 n, vec3 wo, vec3 wi, out float f[NCH])
 {
     for (int c = 0; c < NCH; c++)
         f[c] = 0.0;
-    if ((b.lobes & NONDELTA) == 0u || (dot(wo, n) > 0.0) != (dot(wi, n) > 0.0) || dot(wi, n) == 0.0)
+    if ((b.lobes & NONDELTA) == 0u || sides_differ(b, n, wo, wi) || dot(wi, n) == 0.0)
         return false;
     float kd = has_lobe(b, TB_GPU_PT_LOBE_DIFFUSE) ? INV_PI : 0.0, ks = 0.0, y = 0.0, gp;
     if (has_lobe(b, TB_GPU_PT_LOBE_GLOSSY))
         glossy_eval(b, n, wo, wi, ks, y, gp);
     bool any = false;
     for (int c = 0; c < NCH; c++) {
-        f[c] = tab(b.mb + c) * kd + (tab(b.mb + 2 * NCH + c) * (1.0 - y) + y) * ks;
+        f[c] = g_kd[c] * kd + (g_ks[c] * (1.0 - y) + y) * ks;
         any = any || f[c] > 0.0;
     }
     return any;
@@ -480,8 +671,8 @@ bool bsdf_sample(bsdf_t b, vec3 n, vec3 ng, vec3 wo, float uc, float u1, float u
     }
     wi = normalize(wi);
     float ci = dot(wi, n);
-    if (ci == 0.0 || (ci > 0.0) != (dot(wo, n) > 0.0))
-        return false;
+    if (ci == 0.0 || sides_differ(b, n, wo, wi))
+        return false; // a bumped normal can send the ray into the surface: no light there
     pdf = bsdf_pdf(b, n, wo, wi);
     if (!(pdf > 0.0) || isinf(pdf))
         return false;
@@ -495,6 +686,142 @@ bool bsdf_sample(bsdf_t b, vec3 n, vec3 ng, vec3 wo, float uc, float u1, float u
     }
     return any;
 }
+
+#ifndef TB_PT_TRACE
+// ---------------------------------------------------------------- patterns
+// The CPU path tracer's surface record for patterns and bump maps
+// (host/render/surface.c, tb_surface_at): tangents and object-space point
+// at the hit, at the camera ray's hit the footprint of its offset rays; the
+// patterns' values and the bumped normal by lib/pattern_eval.glsl.
+
+int tb_perm(int i) { return int(utab(int(pc.perm) + (i & 255))); }
+#include "pattern_eval.glsl"
+
+// Where the line o + t d (t >= 0) meets the plane dot(n, x) = dist (texture.c's tb__plane_hit).
+bool plane_hit(vec3 n, float dist, vec3 o, vec3 d, out vec3 x)
+{
+    x = vec3(0.0);
+    float den = dot(n, d);
+    if (den == 0.0 || isinf(den) || isnan(den))
+        return false;
+    float t = (dist - dot(n, o)) / den;
+    if (!(t >= 0.0) || isinf(t))
+        return false;
+    x = o + d * t;
+    return !any(isinf(x)) && !any(isnan(x));
+}
+
+float clamp_deriv(float x) { return clamp(x, -1e8, 1e8); }
+
+// The (u, v) footprint of the camera ray's offset rays rx, ry at p on the
+// tangent plane of normal n, and the point's change per pixel dx, dy
+// (tb_tex_footprint_from_rays, scaled as tb__rt_footprint); false: none.
+bool footprint(vec3 p, vec3 n, vec3 du, vec3 dv, tb_gpu_ray rx, tb_gpu_ray ry, out vec4 fp, out vec3 dx,
+               out vec3 dy)
+{
+    fp = vec4(0.0);
+    dx = vec3(0.0);
+    dy = vec3(0.0);
+    float dist = dot(n, p);
+    vec3 px, py;
+    if (!plane_hit(n, dist, rx.o, rx.d, px) || !plane_hit(n, dist, ry.o, ry.d, py))
+        return false;
+    vec3 ex = px - p, ey = py - p;
+    float uu = dot(du, du), uv = dot(du, dv), vv = dot(dv, dv);
+    float det = uu * vv - uv * uv;
+    if (!(det > 1e-12 * uu * vv) || isinf(det))
+        return false;
+    float bxu = dot(du, ex), bxv = dot(dv, ex), byu = dot(du, ey), byv = dot(dv, ey);
+    float k = pc.diff_scale;
+    fp = vec4(clamp_deriv((vv * bxu - uv * bxv) / det), clamp_deriv((uu * bxv - uv * bxu) / det),
+              clamp_deriv((vv * byu - uv * byv) / det), clamp_deriv((uu * byv - uv * byu) / det)) * k;
+    dx = ex * k;
+    dy = ey * k;
+    return true;
+}
+
+// Pattern record k (TB_GPU_PATTERN_DIFFUSE, _SPECULAR, _BUMP) at table word pw.
+tb_gpu_pattern load_pattern(int pw, int k)
+{
+    int b = pw + k * int(TB_GPU_PT_P_WORDS);
+    tb_gpu_pattern pt;
+    pt.kind = utab(b);
+    pt.su = tab(b + 1);
+    pt.sv = tab(b + 2);
+    pt.solid = utab(b + 3);
+    pt.octaves = int(utab(b + 4));
+    pt.height = tab(b + 5);
+    pt.col = utab(b + 6);
+    pt.pad0 = 0u;
+    return pt;
+}
+
+// The surface record of hit h of ray r at p (tb__surface_fill): record q's
+// (u, v) and tangents, the object-space point and its derivatives, and at
+// the camera ray's hit (camera) the footprint of its offset rays.
+tb_gpu_surface surface_at(int q, tb_gpu_hit h, vec3 p, vec3 ng, bool camera)
+{
+    tb_gpu_surface g;
+    vec3 dpdu, dpdv;
+    param_tangents(q, h.face, h.u, h.v, dpdu, dpdv);
+    g.u = h.u;
+    g.v = h.v;
+    g.dpdu = dpdu;
+    g.dpdv = dpdv;
+    g.po = q_to_object(q, p);
+    g.po_du = q_to_object_vector(q, dpdu);
+    g.po_dv = q_to_object_vector(q, dpdv);
+    g.po_dx = vec3(0.0);
+    g.po_dy = vec3(0.0);
+    g.has_fp = 0u;
+    vec4 fp = vec4(0.0);
+    vec3 dx, dy;
+    if (camera && pc.diffs != 0u && footprint(p, ng, dpdu, dpdv, rays[g_n + g_i], rays[2u * g_n + g_i], fp, dx, dy)) {
+        g.has_fp = 1u;
+        g.po_dx = q_to_object_vector(q, dx);
+        g.po_dy = q_to_object_vector(q, dy);
+    }
+    g.fp0 = fp.x;
+    g.fp1 = fp.y;
+    g.fp2 = fp.z;
+    g.fp3 = fp.w;
+    return g;
+}
+
+// The patterns of the hit's material (tb_surface_at): the bump-mapped
+// shading normal into n (on its side), the diffuse and specular colours into
+// g_kd, g_ks, and the lobes they give. Nothing without a record (the host
+// gives one to every object with a patterned material).
+void surface_patterns(inout bsdf_t b, tb_gpu_hit h, vec3 p, vec3 ng, bool camera, inout vec3 n)
+{
+    int pw = int(utab(b.mb + 4 * NCH + int(TB_GPU_PT_M_PATTERNS)));
+    int q = param_record(h.object);
+    if (pw < 0 || q < 0)
+        return;
+    tb_gpu_surface g = surface_at(q, h, p, ng, camera);
+    tb_gpu_pattern bp = load_pattern(pw, TB_GPU_PATTERN_BUMP);
+    if (bp.kind != TB_GPU_PATTERN_NONE)
+        n = bump_normal(bp, g, n); // rays still leave by ng
+    vec4 fp = vec4(g.fp0, g.fp1, g.fp2, g.fp3);
+    bool any = false;
+    for (int k = 0; k < 2; k++) {
+        tb_gpu_pattern pt = load_pattern(pw, k);
+        if (pt.kind == TB_GPU_PATTERN_NONE)
+            continue;
+        any = true;
+        float f = clamp(pattern_value(pt, false, g.u, g.v, fp, g.po, g.po_dx, g.po_dy), 0.0, 1.0);
+        for (int c = 0; c < NCH; c++) {
+            float a = tab(int(pt.col) + c), bb = tab(int(pt.col) + NCH + c);
+            if (k == 0)
+                g_kd[c] = a + f * (bb - a);
+            else
+                g_ks[c] = a + f * (bb - a);
+        }
+    }
+    if (any)
+        bsdf_reinit(b);
+}
+#endif
 
 // ------------------------------------------------------------------ stages
 
@@ -601,6 +928,22 @@ void stage_shade()
     for (int c = 0; c < NCH; c++)
         beta[c] = val(TB_GPU_PT_BETA, c);
 
+#ifndef TB_PT_TRACE
+    if (pc.probe != 0u) { // tb_gpu_pt_surfaces: the hit's colours and shading normal; the path ends
+        vec3 n = front ? ng : -ng;
+        b.nv = n;
+        if (HAS_PATTERNS)
+            surface_patterns(b, h, p, ng, st.depth == 0u, n);
+        for (int c = 0; c < NCH; c++) {
+            set_val(TB_GPU_PT_PROBE_DIFFUSE, c, g_kd[c]);
+            set_val(TB_GPU_PT_PROBE_SPECULAR, c, g_ks[c]);
+            set_val(TB_GPU_PT_PROBE_NORMAL, c, c < 3 ? n[c] : 0.0);
+        }
+        st.alive = 0u;
+        states[g_i] = st;
+        return;
+    }
+#endif
     // Emission of a front face, weighted against the light sample the
     // previous vertex took of the same point unless the ray left the camera
     // or a delta lobe.
@@ -620,13 +963,26 @@ void stage_shade()
                 set_val(TB_GPU_PT_L, c, val(TB_GPU_PT_L, c) + beta[c] * tab(b.mb + NCH + c) * w);
         }
     }
-    if ((pc.max_depth > 0u && st.depth >= pc.max_depth) || st.depth >= pc.max_bounces || b.lobes == 0u) {
+    // (a patterned material's lobes are known at the point only: below)
+    bool patterned = HAS_PATTERNS && utab(b.mb + 4 * NCH + int(TB_GPU_PT_M_PATTERNS)) != TB_GPU_PT_NONE;
+    if ((pc.max_depth > 0u && st.depth >= pc.max_depth) || st.depth >= pc.max_bounces ||
+        (b.lobes == 0u && !patterned)) {
         st.alive = 0u;
         states[g_i] = st;
         return;
     }
     vec3 n = front ? ng : -ng; // the normal facing the incoming ray
     vec3 wo = -d;
+    b.nv = n;
+#ifndef TB_PT_TRACE
+    if (HAS_PATTERNS)
+        surface_patterns(b, h, p, ng, st.depth == 0u, n);
+#endif
+    if (b.lobes == 0u) { // a pattern can make every colour black
+        st.alive = 0u;
+        states[g_i] = st;
+        return;
+    }
 
     // Next-event estimation at vertices with a non-delta lobe: every delta
     // light, then one sample of the area light, weighted against the BSDF's
@@ -740,6 +1096,12 @@ void stage_extend()
     h.face = b.face;
     h.u = 0.0;
     h.v = 0.0;
+    int q = param_record(b.object);
+    if (q >= 0) { // (u, v) only for the objects whose materials have patterns
+        vec2 uv = param_uv(q, b.face, r.o + b.t * r.d);
+        h.u = uv.x;
+        h.v = uv.y;
+    }
     vec3 ng = tb_bvh_normal(r, b);
     h.ng[0] = ng.x;
     h.ng[1] = ng.y;

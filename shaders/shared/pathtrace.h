@@ -52,12 +52,40 @@
 #define TB_GPU_PT_M_GLOSSY 7u
 #define TB_GPU_PT_M_LOBES 8u
 #define TB_GPU_PT_M_ALPHA 9u /* GGX: the roughness, at least TB_GGX_ALPHA_MIN */
-#define TB_GPU_PT_M_SCALARS 10u
+#define TB_GPU_PT_M_PATTERNS 10u /* uint: the table word of its 3 pattern records, TB_GPU_PT_NONE without */
+#define TB_GPU_PT_M_SCALARS 11u
+/* A table word that refers to nothing. */
+#define TB_GPU_PT_NONE 0xffffffffu
+/* A material's pattern records (diffuse, specular, bump: shared/shade.h's
+ * TB_GPU_PATTERN_* slots), each the 8 words of a tb_gpu_pattern whose `col`
+ * is the table word of its colours a then b (nch each); kind
+ * TB_GPU_PATTERN_NONE where the material has none. */
+#define TB_GPU_PT_P_WORDS 8u
 /* The scene table's words per object: its material (UINT32_MAX: none),
- * first emitter, emitter count, and for a CSG tree the table word of its
+ * first emitter, emitter count, for a CSG tree the table word of its
  * first leaf record and its leaf count (a leaf record: first face, face
- * count, material; the hit's face picks the leaf, as tb_scene_hit_leaf). */
-#define TB_GPU_PT_O_WORDS 5u
+ * count, material; the hit's face picks the leaf, as tb_scene_hit_leaf),
+ * and the table word of its parameterisation record (TB_GPU_PT_NONE: no
+ * (u, v) on the device; only objects with a patterned material have one). */
+#define TB_GPU_PT_O_WORDS 6u
+#define TB_GPU_PT_O_PARAM 5u
+/* A parameterisation record (host/object/param.h's (u, v) and tangents for
+ * the kinds the kernel ports): kind, face base, the world-to-object affine
+ * map (3 rows of 4 floats), the object-to-world linear part (3 rows of 3);
+ * for polygons the face count, then per face the affine maps from the world
+ * point to u and to v (4 floats each) and the world tangents dp/du, dp/dv
+ * (3 each), fitted on the host from tb_param_from_point_world and checked
+ * there (a face whose (u, v) is not affine over it is refused). */
+#define TB_GPU_PT_Q_KIND 0u
+#define TB_GPU_PT_Q_FACE_BASE 1u
+#define TB_GPU_PT_Q_TO_OBJECT 2u
+#define TB_GPU_PT_Q_TO_WORLD 14u
+#define TB_GPU_PT_Q_NFACES 23u
+#define TB_GPU_PT_Q_FACES 24u
+#define TB_GPU_PT_Q_FACE_WORDS 14u
+#define TB_GPU_PT_PARAM_SPHERE 1u
+#define TB_GPU_PT_PARAM_CUBE 2u
+#define TB_GPU_PT_PARAM_POLYGONS 3u
 
 /* Lobe slots (the order of host/render/surface.c's tb_surface_bsdf.pick). */
 #define TB_GPU_PT_LOBE_DIFFUSE 0u
@@ -69,6 +97,13 @@
 #define TB_GPU_PT_GLOSSY_PHONG 1u /* normalised Phong (TB_BSDF_PHONG_NORMALIZED) */
 #define TB_GPU_PT_GLOSSY_BLINN 2u /* exactly normalised Blinn (TB_BSDF_BLINN_NORMALIZED_EXACT) */
 #define TB_GPU_PT_GLOSSY_GGX 3u   /* GGX with Schlick's Fresnel of the specular colour (TB_BSDF_GGX) */
+
+/* With the push constant `probe` (tb_gpu_pt_surfaces), the value arrays
+ * that receive the first hit's diffuse and specular colours (channels) and
+ * its shading normal (channels 0..2). */
+#define TB_GPU_PT_PROBE_DIFFUSE 0u
+#define TB_GPU_PT_PROBE_SPECULAR 1u
+#define TB_GPU_PT_PROBE_NORMAL 2u
 
 /* Kernel stages (specialization constant 1 of pathtrace.comp). */
 #define TB_GPU_PT_STAGE_INIT 0u       /* radiance 0 */
@@ -108,7 +143,7 @@ struct tb_gpu_pt_state {
                                (offset 44) */
 };
 
-/* Push constants of every stage; size 32. */
+/* Push constants of every stage; size 48. */
 struct tb_gpu_pt_push {
     TB_GPU_UINT n;          /* paths */
     TB_GPU_UINT nnodes;     /* BVH nodes (0: nothing on the device) */
@@ -117,6 +152,11 @@ struct tb_gpu_pt_push {
     TB_GPU_UINT max_bounces; /* the hard cap (TB_PT_MAX_BOUNCES) */
     TB_GPU_UINT count;      /* shade: 1 to count the live paths into the state buffer's header */
     TB_GPU_UINT light_base; /* the table word of the first delta light */
+    TB_GPU_UINT perm;       /* the table word of Perlin's permutation (256 uints) */
+    TB_GPU_UINT diffs;      /* 1: the rays buffer holds each camera ray's offset rays (x + 1 at n + i, y + 1 at
+                               2n + i) for the footprint of the patterns at the first hit */
+    float diff_scale;       /* their scale, max(1/8, 1/sqrt(spp)) (tb_surfaces') */
+    TB_GPU_UINT probe;      /* 1: shade writes the first hit's surface (TB_GPU_PT_PROBE_*) and ends the path */
     TB_GPU_UINT pad1;
 };
 
@@ -126,7 +166,8 @@ _Static_assert(sizeof(tb_gpu_pt_state) == 48 && offsetof(tb_gpu_pt_state, counte
                    offsetof(tb_gpu_pt_state, shadow) == 20 && offsetof(tb_gpu_pt_state, prev_pdf) == 28 &&
                    offsetof(tb_gpu_pt_state, prev_px) == 32 && offsetof(tb_gpu_pt_state, clear) == 44,
                "tb_gpu_pt_state follows the std430 offsets of its GLSL twin");
-_Static_assert(sizeof(tb_gpu_pt_push) == 32 && offsetof(tb_gpu_pt_push, max_bounces) == 16 &&
+_Static_assert(sizeof(tb_gpu_pt_push) == 48 && offsetof(tb_gpu_pt_push, perm) == 28 &&
+                   offsetof(tb_gpu_pt_push, diff_scale) == 36 && offsetof(tb_gpu_pt_push, max_bounces) == 16 &&
                    offsetof(tb_gpu_pt_push, count) == 20 && offsetof(tb_gpu_pt_push, light_base) == 24,
                "tb_gpu_pt_push follows the std430 offsets of its GLSL twin");
 #endif

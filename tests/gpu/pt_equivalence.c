@@ -15,18 +15,29 @@
  * Negative controls (the test must be able to fail): the same procedure
  * rejects the CPU path tracer capped at one bounce (direct light only)
  * against the GPU's uncapped render, per pixel and in the mean; and the
- * capped renders of both backends agree (the --max-depth path of the kernel).
+ * capped renders of both backends agree (the --max-depth path of the kernel);
+ * and the CPU's materials scene without its patterns and bump maps is
+ * rejected against the GPU's with them.
+ *
+ * Patterns without statistics: tb_gpu_pt_surfaces (the kernel's surface at
+ * the first hit: (u, v), bumped normal, patterned colours) against the CPU
+ * path tracer's tb_surface_at on a grid of camera rays of the materials
+ * scene, with and without the camera rays' footprints: equal to float
+ * rounding.
  * Validation layer on; any message fails. */
 #include "gpu_test.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "host/gpu/pathtrace.h"
+#include "host/render/camera.h"
 #include "host/render/pathtrace.h"
 #include "host/render/render.h"
 #include "host/render/scene.h"
+#include "host/render/surface.h"
 
 #define TB__W 32
 #define TB__H 24
@@ -362,6 +373,136 @@ static void test_delta_lights(void **state)
     tb__equivalent_scene(*state, s, "delta lights (point, spot, directional)", TB__SPP);
 }
 
+/* Checker and noise patterns in (u, v) on polygons and spheres and in
+ * object space on a sphere and a cube, noise bump maps in (u, v) on a
+ * polygon and a sphere, GGX metals, the four models (the bundled scene
+ * scenes/materials.mid). */
+static void test_materials(void **state) { tb__equivalent(*state, "materials.mid", TB__SPP); }
+
+/* The control for the patterns: the CPU's materials scene without its
+ * patterns and bump maps (the materials' plain colours, as a kernel that
+ * ignored them would render) is rejected against the GPU's with them, per
+ * pixel and in the mean. */
+static void test_materials_control(void **state)
+{
+    gpu_test_env *env = *state;
+    tb_scene *s = tb__scene("materials.mid"), *plain = tb__scene("materials.mid");
+    int patterned = 0;
+    static const tb_material_pattern none = {.kind = TB_MID_PATTERN_NONE}; /* as the scene's own */
+    for (int i = 0; i < plain->nmaterials; i++) {
+        tb_material *m = &plain->materials[i];
+        patterned += m->diffuse_pattern->kind != TB_MID_PATTERN_NONE || m->bump->kind != TB_MID_PATTERN_NONE;
+        m->diffuse_pattern = m->specular_pattern = m->bump = &none;
+    }
+    assert_int_equal(patterned, 5); /* ground, wall, marble, solid checker, hammered */
+    float *cpu[TB__K], *gpu[TB__K];
+    tb__renders(env, plain, false, 0, TB__SPP, 6000, cpu);
+    tb__renders(env, s, true, 0, TB__SPP, 7000, gpu);
+    tb__verdict v = tb__compare(gpu, cpu);
+    tb__print("control: GPU patterns vs CPU without", &v);
+    assert_true(v.rejected > 0);
+    assert_true(fabs(v.mean_z[0]) > 4.0 || fabs(v.mean_z[1]) > 4.0 || fabs(v.mean_z[2]) > 4.0);
+    tb__free(cpu);
+    tb__free(gpu);
+    tb_scene_free(plain);
+    tb_scene_free(s);
+}
+
+/* Largest differences of the kernel's surfaces from the CPU's. */
+typedef struct tb__surf_err {
+    double uv, n, colour; /* (u, v), shading normal, colours (absolute) */
+    int hits, patterned, bumped, outliers;
+} tb__surf_err;
+
+/* The kernel's first-hit surfaces against tb_surface_at on a grid of nx x ny
+ * camera rays of s (with their offset rays when `diffs`); a ray is an
+ * outlier when (u, v) differ by more than 5e-5, the normal or a colour by
+ * more than 5e-4 (float against double: measured at most 2.6e-6, 4.6e-5
+ * and 2.7e-5). */
+static tb__surf_err tb__surfaces(gpu_test_env *env, const tb_scene *s, int nx, int ny, bool diffs)
+{
+    tb_pt_options po = {.spp = TB__SPP};
+    tb_gpu_pathtracer *gpt = NULL;
+    tb_pathtracer *cpt = NULL;
+    if (tb_gpu_pt_create(env->dev, s, &po, &gpt) || tb_pt_create(s, &po, &cpt))
+        fail_msg("path tracer: %s", tb_last_error());
+    const size_t n = (size_t)nx * (size_t)ny, nch = (size_t)s->nchannels, stride = 5 + 2 * nch;
+    tb_ray *rays = malloc(3 * n * sizeof *rays);
+    tb_vec3 *rd = malloc(4 * n * sizeof *rd);
+    float *out = malloc(n * stride * sizeof *out);
+    assert_true(rays && rd && out);
+    for (size_t i = 0; i < n; i++) {
+        /* film points off the pixel centres by an irrational step */
+        const double x = ((double)(i % (size_t)nx) + 0.5 + 0.1234 * (double)(i % 7)) * s->camera.width / nx;
+        const double y = ((double)(i / (size_t)nx) + 0.5 + 0.0617 * (double)(i % 5)) * s->camera.height / ny;
+        tb_camera_ray_diff cd;
+        tb_camera_ray_differential(&s->camera, x, y, 0.5f, 0.5f, &cd);
+        rays[i] = cd.ray;
+        rays[n + i] = (tb_ray){cd.rx_o, 0.0f, cd.rx_d, INFINITY};
+        rays[2 * n + i] = (tb_ray){cd.ry_o, 0.0f, cd.ry_d, INFINITY};
+        const tb_vec3 r4[4] = {cd.rx_o, cd.rx_d, cd.ry_o, cd.ry_d};
+        memcpy(rd + 4 * i, r4, sizeof r4);
+    }
+    if (tb_gpu_pt_surfaces(gpt, rays, diffs ? rays + n : NULL, diffs ? rays + 2 * n : NULL, n, out))
+        fail_msg("tb_gpu_pt_surfaces: %s", tb_last_error());
+    gpu_assert_clean(env->inst);
+    tb__surf_err e = {0};
+    for (size_t i = 0; i < n; i++) {
+        const float *o = out + i * stride;
+        tb_hit hit;
+        tb_surface sf;
+        const bool hc = tb_scene_intersect(s, &rays[i], &hit) &&
+                        tb_surface_at(tb_pt_surfaces(cpt), &rays[i], &hit, diffs ? rd + 4 * i : NULL, &sf);
+        if (hc != !isnan(o[0])) {
+            e.outliers++; /* a silhouette: one backend hit, the other missed */
+            continue;
+        }
+        if (!hc)
+            continue;
+        e.hits++;
+        const tb_material *m = &s->materials[sf.material];
+        e.patterned += m->diffuse_pattern->kind != TB_MID_PATTERN_NONE;
+        e.bumped += m->bump->kind != TB_MID_PATTERN_NONE;
+        /* (u, v) on the device only where a pattern needs them */
+        double duv = sf.has_tangents ? fmax(fabs(o[0] - sf.u), fabs(o[1] - sf.v)) : 0.0, dn = 0.0, dc = 0.0;
+        const float nc[3] = {sf.n.x, sf.n.y, sf.n.z};
+        for (int c = 0; c < 3; c++)
+            dn = fmax(dn, fabs(o[2 + c] - nc[c]));
+        for (size_t c = 0; c < nch; c++)
+            dc = fmax(dc, fmax(fabs(o[5 + c] - sf.diffuse.v[c]), fabs(o[5 + nch + c] - sf.specular.v[c])));
+        if (!(duv <= 5e-5 && dn <= 5e-4 && dc <= 5e-4)) {
+            e.outliers++;
+            continue;
+        }
+        e.uv = fmax(e.uv, duv), e.n = fmax(e.n, dn), e.colour = fmax(e.colour, dc);
+    }
+    printf("[ pt-equiv ] surfaces %s: %d hits (%d patterned, %d bumped), %d outliers; largest differences: "
+           "(u, v) %.2g, normal %.2g, colour %.2g\n",
+           diffs ? "with footprints" : "point sampled", e.hits, e.patterned, e.bumped, e.outliers, e.uv, e.n, e.colour);
+    free(rays), free(rd), free(out);
+    tb_gpu_pt_destroy(gpt);
+    tb_pt_free(cpt);
+    return e;
+}
+
+/* The kernel's patterns, bump maps, (u, v) and tangents against the CPU's
+ * at 96 x 54 camera rays of the materials scene (at the test's 32 x 24
+ * pixels, so that the footprints span several checker cells): every hit
+ * within the tolerances of tb__surfaces but at most 1 % (edges of objects
+ * and, point sampled, of checker cells, where float and double may round
+ * to different sides; none measured). */
+static void test_surfaces(void **state)
+{
+    gpu_test_env *env = *state;
+    tb_scene *s = tb__scene("materials.mid");
+    for (int d = 1; d >= 0; d--) {
+        tb__surf_err e = tb__surfaces(env, s, 96, 54, d != 0);
+        assert_true(e.hits > 3000 && e.patterned > 1500 && e.bumped > 300); /* the test sees the patterns */
+        assert_true(e.outliers <= e.hits / 100);
+    }
+    tb_scene_free(s);
+}
+
 /* The controls on the RGB Cornell box: direct light only on both backends
  * agrees; the CPU's direct light against the GPU's full render is rejected
  * per pixel and in the mean. */
@@ -392,10 +533,28 @@ static void test_refused(void **state)
     static const struct {
         const char *scene, *why;
     } cases[] = {
-        {"materials.mid", "procedural patterns"},
+        {"torus", "patterns or bump maps on objects other than spheres, cubes and polygons"},
+        {"image bump", "bump maps from images"},
     };
+    static const char *const texts[] = {
+        "mid 1.1\ncamera \"c\" { eye = [0 -6 3] look_at = [0 0 0] up = [0 0 1] fov = 45 resolution = [8 8] }\n"
+        "point_light \"l\" { position = [0 -3 4] intensity = 10 }\n"
+        "torus \"t\" { geometry = { major = 1 minor = 0.3 }\n"
+        "  rendering = { diffuse = 0.5 diffuse_pattern = checker(8, 0.2, 0.8) } }\n",
+        "mid 1.1\ncamera \"c\" { eye = [0 -6 3] look_at = [0 0 0] up = [0 0 1] fov = 45 resolution = [8 8] }\n"
+        "point_light \"l\" { position = [0 -3 4] intensity = 10 }\n"
+        "sphere \"s\" { rendering = { diffuse = 0.5 bump = image(file(\"grey.pgm\"), 0.01) } }\n",
+    };
+    /* the bump image, in a directory of its own */
+    char dir[] = "/tmp/tb_pt_equiv_XXXXXX", img_path[64];
+    assert_non_null(mkdtemp(dir));
+    snprintf(img_path, sizeof img_path, "%s/grey.pgm", dir);
+    FILE *fp = fopen(img_path, "w");
+    assert_non_null(fp);
+    fputs("P2\n2 2\n255\n0 255\n255 0\n", fp);
+    fclose(fp);
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
-        tb_scene *s = tb__scene(cases[i].scene);
+        tb_scene *s = gpu_test_load(texts[i], cases[i].scene, dir);
         const char *why = tb_gpu_pt_unsupported(s);
         printf("[ pt-equiv ] %-44s refused: %s\n", cases[i].scene, why ? why : "(not refused)");
         assert_non_null(why);
@@ -408,6 +567,31 @@ static void test_refused(void **state)
         assert_null(img);
         tb_scene_free(s);
     }
+    remove(img_path);
+    remove(dir);
+}
+
+/* A patterned polygon whose (u, v) the kernel cannot reproduce (texture
+ * coordinates past 1, which the CPU clamps: not affine over the face) is
+ * refused when the tables are built, naming the object and face. */
+static void test_refused_uv(void **state)
+{
+    gpu_test_env *env = *state;
+    static const char text[] =
+        "mid 1.1\ncamera \"c\" { eye = [0 -6 3] look_at = [0 0 0] up = [0 0 1] fov = 45 resolution = [8 8] }\n"
+        "point_light \"l\" { position = [0 -3 4] intensity = 10 }\n"
+        "polygons \"p\" { geometry = { vertices = [[-2 -2 0] [2 -2 0] [2 2 0] [-2 2 0]] faces = [[0 1 2 3]]\n"
+        "  uvs = [[0 0] [2 0] [2 2] [0 2]] } rendering = { diffuse = 0.5 diffuse_pattern = checker(4, 0.2, 0.8) } }\n";
+    tb_scene *s = gpu_test_load(text, "uv past 1", NULL);
+    assert_null(tb_gpu_pt_unsupported(s));
+    tb_render_options ro = tb_render_defaults();
+    ro.aa.spp = 1;
+    ro.progress = false;
+    tb_image *img = NULL;
+    gpu_assert_error(tb_gpu_render_path(env->dev, s, NULL, &ro, &img, NULL, NULL), TB_ERR_UNSUPPORTED,
+                     "object 0, face 0: its (u, v) is not an affine map over the face");
+    assert_null(img);
+    tb_scene_free(s);
 }
 
 int main(void)
@@ -417,7 +601,10 @@ int main(void)
         cmocka_unit_test(test_cornell_box_rgb), cmocka_unit_test(test_radiosity_room),
         cmocka_unit_test(test_cornell_box_spheres), cmocka_unit_test(test_showcase), cmocka_unit_test(test_lobes),
         cmocka_unit_test(test_delta_lights),
+        cmocka_unit_test(test_materials),      cmocka_unit_test(test_materials_control),
+        cmocka_unit_test(test_surfaces),
         cmocka_unit_test(test_controls),       cmocka_unit_test(test_refused),
+        cmocka_unit_test(test_refused_uv),
     };
     return cmocka_run_group_tests(tests, gpu_test_setup, gpu_test_teardown);
 }
