@@ -128,9 +128,18 @@ def main():
     check(stats(scene, "--method", "raytrace", "--backend", "cpu")["vulkan_probe"] == 0, "... not with cpu")
     check("is not modelled" in run("predict", scene, "--backend", "vulkan", expect=2).stderr,
           "--backend vulkan is refused")
-    # materials.mid: point lights and GGX (the kernel refuses it: no probe); noise patterns and bump maps
+    # materials.mid: noise patterns and bump maps, which the Vulkan path tracer takes: auto probes
     s = stats(os.path.join(here, "..", "..", "scenes", "materials.mid"), "--method", "path", "--spp", "1")
-    check(s["vulkan_probe"] == 0 and s["noise_octaves"] > s["hits"], "materials: noise octaves counted: %r" % s)
+    check(s["vulkan_probe"] == 1 and s["noise_octaves"] > s["hits"], "materials: noise octaves counted: %r" % s)
+    # a pattern on a torus: the kernel refuses it (its (u, v) is not on the device), so render never probes
+    refused = os.path.join(TMP, "refused.mid")
+    with open(refused, "w") as f:
+        f.write('mid 1.1\ncamera "c" { eye = [0 -6 3] look_at = [0 0 0] up = [0 0 1] fov = 45 resolution = [24 24] }\n'
+                'point_light "l" { position = [0 -3 4] intensity = 10 }\n'
+                'torus "t" { geometry = { major = 1 minor = 0.3 } rendering = { diffuse = 0.5 '
+                'diffuse_pattern = checker(8, 0.2, 0.8) } }\n')
+    check(stats(refused, "--method", "path", "--spp", "1")["vulkan_probe"] == 0,
+          "a scene the Vulkan path tracer refuses: no probe")
     # the radiosity image traces ceil(sqrt(spp))^2 rays per pixel; the pilot image counts its leaf tests
     s = stats(scene, "--method", "radiosity", "--max-edge", "3", "--spp", "2")
     check(abs(s["rad_pixel_rays"] - 4 * s["pixels"]) <= 1e-5 * s["rad_pixel_rays"] and s["rad_pixel_leaf_tests"] > 0 and s["vulkan_probe"] == 0,
