@@ -58,10 +58,12 @@ bool tb_object_hit_point(const tb_object *obj, const tb_ray *ray, const tb_hit *
 bool tb_object_triangle_crossing(const tb_object *obj, uint32_t tri, const tb_ray *ray, double *t);
 
 /* Unit world-space geometric normal of triangle `tri`, as tb_object_intersect
- * reports it for a hit on that triangle: its object-space normal (from the
- * object's float vertices) by the inverse transpose, normalised in double,
- * negated for a flipped CSG leaf. Computed on each call (not stored). */
-tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t tri);
+ * reports it for a hit on that triangle (kept per triangle: a load; inline,
+ * as it ends every closest-hit query on a mesh). */
+static inline tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t tri)
+{
+    return obj->mesh->wnormal[tri];
+}
 
 /* (u, v) of a crossing of triangle `tri` of a polygons object's mesh from
  * the edge functions U V W the watertight test gave for it (tb_wt_triangle's

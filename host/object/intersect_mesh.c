@@ -53,6 +53,7 @@ void tb__mesh_free(tb_object_mesh *m)
     free(m->tris);
     free(m->tri_face);
     free(m->tri_uv);
+    free(m->wnormal);
     free(m->nodes);
     free(m);
 }
@@ -302,6 +303,20 @@ static bool tb__corner_uv(const tb_geom_polygons *g, int f, const uint32_t *tv, 
     return true;
 }
 
+static tb_dvec3 tb__tri_normal(const tb_object_mesh *m, uint32_t i);
+
+/* Triangle tri's unit world normal: its object-space normal by the inverse
+ * transpose, normalised in double, negated for a flipped leaf. */
+static tb_vec3 tb__tri_world_normal(const tb_object *o, uint32_t tri)
+{
+    tb_dvec3 nw = tb_transform_dnormal(&o->to_world, tb__tri_normal(o->mesh, tri));
+    double len = tb_dvec3_length(nw);
+    if (!(len > 0.0) || !isfinite(len))
+        return (tb_vec3){0.0f, 0.0f, 1.0f};
+    double s = (o->flip ? -1.0 : 1.0) / len;
+    return (tb_vec3){(float)(nw.x * s), (float)(nw.y * s), (float)(nw.z * s)};
+}
+
 tb_status tb__mesh_build(tb_object *o)
 {
     const tb_geom_polygons *g = &o->geom.polygons;
@@ -456,6 +471,12 @@ tb_status tb__mesh_build(tb_object *o)
     tb_array_free(&tris);
     tb_array_free(&faces);
     o->closed = m->closed;
+    /* Hits report the normal of the triangle they land on: computed once. */
+    m->wnormal = malloc(sizeof *m->wnormal * (nt ? nt : 1));
+    if (!m->wnormal)
+        return tb_error(TB_ERR_NOMEM, "polygons: out of memory for %zu triangles", nt);
+    for (size_t i = 0; i < nt; i++)
+        m->wnormal[i] = tb__tri_world_normal(o, (uint32_t)i);
     return TB_OK;
 }
 
@@ -733,15 +754,6 @@ bool tb_object_triangle_crossing(const tb_object *o, uint32_t tri, const tb_ray 
                    &m->wvertices[3 * (size_t)tv[2]], t, &dir, NULL);
 }
 
-tb_vec3 tb_object_triangle_normal(const tb_object *o, uint32_t tri)
-{
-    tb_dvec3 nw = tb_transform_dnormal(&o->to_world, tb__tri_normal(o->mesh, tri));
-    double len = tb_dvec3_length(nw);
-    if (!(len > 0.0) || !isfinite(len))
-        return (tb_vec3){0.0f, 0.0f, 1.0f};
-    double s = (o->flip ? -1.0 : 1.0) / len;
-    return (tb_vec3){(float)(nw.x * s), (float)(nw.y * s), (float)(nw.z * s)};
-}
 
 bool tb__mesh_tri_weights(const tb_object *o, uint32_t tri, const tb_ray *ray, double uvw[3])
 {

@@ -28,6 +28,7 @@ static size_t tb__mesh_bytes(const tb_object_mesh *m)
     size_t nv = m->nvertices, nt = m->ntris;
     return tb__alloc(sizeof *m) + tb__alloc(nv * 3 * sizeof(double)) + tb__alloc(nt * 3 * sizeof(uint32_t)) +
            tb__alloc(nt * sizeof(uint32_t)) + (m->tri_uv ? tb__alloc(nt * 6 * sizeof(float)) : 0) +
+           tb__alloc(nt * sizeof(tb_vec3)) +
            tb__alloc((size_t)m->nnodes * sizeof(tb_object_bvh_node));
 }
 
@@ -172,7 +173,8 @@ static void tb__predict_node(const tb_mid_object *m, tb_scene_memory_use *u, siz
         /* The triangulated mesh as tb__mesh_bytes counts it, with one BVH node per triangle (an upper bound). */
         size_t mesh = geom + tb__alloc(sizeof(tb_object_mesh)) + tb__alloc(nv * 3 * sizeof(double)) +
                       tb__alloc(nt * 3 * sizeof(uint32_t)) + tb__alloc(nt * sizeof(uint32_t)) +
-                      (g->uvs ? 0 : tb__alloc(nt * 6 * sizeof(float))) + tb__alloc(nt * sizeof(tb_object_bvh_node));
+                      (g->uvs ? 0 : tb__alloc(nt * 6 * sizeof(float))) + tb__alloc(nt * sizeof(tb_vec3)) +
+                      tb__alloc(nt * sizeof(tb_object_bvh_node));
         if (top) {
             u->meshes += n + mesh;
             u->triangles += nt;
