@@ -798,28 +798,26 @@ tb_status tb__bvh_build(tb_accel *acc, const tb_accel_options *opt)
     b.nodes = NULL;
 
     /* Leaf ranges already are positions in the build order: the references
-     * move into it in place, one cycle of the permutation at a time (a new
-     * array for them would be 36 more bytes per reference at the peak).
-     * refs[i].id is the input position of output i; a visited slot's id is
-     * set to i itself. */
-    for (size_t i = 0; i < n; i++) {
-        if (b.refs[i].id == (uint32_t)i)
-            continue;
-        tb_accel_prim p0 = acc->prims[i];
-        uint32_t x0 = acc->index[i];
-        size_t j = i;
-        for (;;) {
-            size_t from = b.refs[j].id;
-            b.refs[j].id = (uint32_t)j;
-            if (from == i) {
-                acc->prims[j] = p0;
-                acc->index[j] = x0;
-                break;
-            }
-            acc->prims[j] = acc->prims[from];
-            acc->index[j] = acc->index[from];
-            j = from;
+     * are gathered into it (new arrays: 36 bytes per reference more at this
+     * point than a permutation in place, whose random writes made the whole
+     * build about 20 % slower on 3*10^5 references). */
+    {
+        tb_accel_prim *prims = malloc(n * sizeof *prims);
+        uint32_t *index = malloc(n * sizeof *index);
+        if (!prims || !index) {
+            free(prims);
+            free(index);
+            st = tb_error(TB_ERR_NOMEM, "BVH: out of memory for %zu references", n);
+            goto done;
         }
+        for (size_t i = 0; i < n; i++) {
+            prims[i] = acc->prims[b.refs[i].id];
+            index[i] = acc->index[b.refs[i].id];
+        }
+        free(acc->prims);
+        free(acc->index);
+        acc->prims = prims;
+        acc->index = index;
     }
     acc->nodes = nodes;
     acc->nnodes = nnodes;
