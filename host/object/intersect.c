@@ -193,7 +193,7 @@ static inline bool tb__object_intersect(const tb_object *obj, const tb_ray *ray,
     hit->face = leaf->face_base + x.face;
     hit->u = (float)u;
     hit->v = (float)v;
-    /* A triangle's normal: the same formula, from its mesh. */
+    /* A triangle's normal is kept by its mesh (the same formula). */
     hit->ng = leaf->kind == TB_PRIM_POLYGONS ? tb_object_triangle_normal(leaf, x.tri) : tb__world_normal(&x);
     return true;
 }

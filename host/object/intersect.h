@@ -69,8 +69,8 @@ static inline tb_vec3 tb_object_triangle_normal(const tb_object *obj, uint32_t t
  * the edge functions U V W the watertight test gave for it (tb_wt_triangle's
  * uvw): the mix of the face's (u, v) at the triangle's corners, which is
  * tb_param_from_point's (u, v) of the crossing up to rounding (clamped to
- * [0, 1]). The corners' (u, v) are the vertices' uvs, or without uvs the
- * face's frame projection, derived on each call (not stored). False, with u
+ * [0, 1]). The corners' (u, v) are the vertices' uvs (read per call), or
+ * without uvs the face's frame projection (kept per triangle). False, with u
  * and v untouched, for a triangle of a face of more than 3 corners with uvs
  * (param splits those its own way): use the point. */
 bool tb_object_triangle_uv(const tb_object *obj, uint32_t tri, const double uvw[3], double *u, double *v);
